@@ -1,0 +1,106 @@
+"""Simulation parameters (mm, N, MPa) and fidelity levels."""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+
+from .heightmap import Heightmap, InputError
+from .mesh import MeshSpec
+
+# Contact-face spacing (mm) per fidelity; ``auto`` picks from this ladder.
+FIDELITY_SPACING_MM = {"coarse": 0.3, "default": 0.2, "fine": 0.14}
+FIDELITIES = ("coarse", "default", "fine", "auto")
+CONTACT_MODES = ("stick", "frictionless")
+BONE_MODELS = ("rigid", "elastic")
+ELEMENTS = ("p1", "p2")
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Everything that defines one FEM roughness evaluation except the texture."""
+
+    young_mpa: float = 0.042
+    poisson: float = 0.45
+    tissue_mm: float = 2.5
+    width_mm: float = 10.0
+    bone: str = "rigid"
+    bone_young_mpa: float = 18000.0
+    bone_poisson: float = 0.3
+    bone_mm: float = 2.5
+    force_n: float = 10.0
+    contact: str = "stick"
+    fidelity: str = "default"
+    element: str = "p1"
+    h_contact_mm: float | None = None
+    depth_mm: float = 0.75
+    window_mm: float = 8.0
+    grid_mm: float = 0.05
+    pairs: int = 8000
+    pair_distance_mm: float = 0.8
+    disk_radius_mm: float = 0.8
+    seed: int = 0
+    max_rounds: int = 30
+
+    def __post_init__(self) -> None:
+        _choice("fidelity", self.fidelity, FIDELITIES)
+        _choice("contact", self.contact, CONTACT_MODES)
+        _choice("bone", self.bone, BONE_MODELS)
+        _choice("element", self.element, ELEMENTS)
+        for name in ("young_mpa", "tissue_mm", "width_mm", "bone_young_mpa", "bone_mm", "force_n",
+                     "depth_mm", "window_mm", "grid_mm", "pair_distance_mm", "disk_radius_mm"):
+            _positive(name, getattr(self, name))
+        for name in ("poisson", "bone_poisson"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and -1.0 < value < 0.5):
+                raise InputError(f"{name} must lie in (-1, 0.5), got {value}")
+        if self.h_contact_mm is not None:
+            _positive("h_contact_mm", self.h_contact_mm)
+        if self.depth_mm >= self.tissue_mm:
+            raise InputError(f"receptor depth {self.depth_mm} mm must be inside the {self.tissue_mm} mm tissue")
+        if self.window_mm > self.width_mm:
+            raise InputError(f"sampling window {self.window_mm} mm exceeds the {self.width_mm} mm footprint")
+        if self.window_mm / 2 <= self.pair_distance_mm / 2 + self.disk_radius_mm:
+            raise InputError("disk pairs (d/2 + r) do not fit in the sampling window")
+        if self.pairs < 2 or self.max_rounds < 1:
+            raise InputError("pairs must be >= 2 and max_rounds >= 1")
+
+    def spacing_mm(self, heightmap: Heightmap | None = None) -> float:
+        """Contact-face spacing for this fidelity (``auto`` needs the heightmap)."""
+        if self.h_contact_mm is not None:
+            return self.h_contact_mm
+        if self.fidelity != "auto":
+            return FIDELITY_SPACING_MM[self.fidelity]
+        feature = heightmap.feature_size_mm() if heightmap is not None else math.inf
+        ladder = sorted(FIDELITY_SPACING_MM.values(), reverse=True)
+        return next((h for h in ladder if h <= feature / 4), ladder[-1])
+
+    def resolved(self, heightmap: Heightmap | None = None) -> SimConfig:
+        """The same configuration with the mesh spacing fixed (for caching and records)."""
+        return replace(self, h_contact_mm=self.spacing_mm(heightmap))
+
+    def mesh_spec(self) -> MeshSpec:
+        if self.h_contact_mm is None:
+            raise ValueError("resolve the configuration first")
+        h = self.h_contact_mm
+        return MeshSpec(
+            width_mm=self.width_mm,
+            tissue_mm=self.tissue_mm,
+            bone_mm=self.bone_mm if self.bone == "elastic" else 0.0,
+            h_contact_mm=h,
+            fine_depth_mm=min(self.depth_mm + max(0.25, 2 * h), self.tissue_mm),
+            h_max_mm=max(h, min(1.0, self.tissue_mm / 2)),
+            order=2 if self.element == "p2" else 1,
+        )
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def _choice(name: str, value: str, options: tuple[str, ...]) -> None:
+    if value not in options:
+        raise InputError(f"{name} must be one of {', '.join(options)}; got {value!r}")
+
+
+def _positive(name: str, value: float) -> None:
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+        raise InputError(f"{name} must be a positive finite number, got {value!r}")

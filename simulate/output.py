@@ -1,0 +1,59 @@
+"""Writers for simulation results: strain-map image and ParaView mesh."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .elasticity import strain_tensors, vertex_strain_operator
+from .model import Block, Result
+
+
+def save_strain_png(result: Result, path: str | Path) -> None:
+    """Image of lambda3 at receptor depth and its fluctuation (strain, dimensionless)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    a = result.grid_axis_mm
+    extent = (a[0], a[-1], a[0], a[-1])
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.4), constrained_layout=True)
+    for ax, field, title in ((axes[0], result.lambda3, "max. compressive strain $\\lambda_3$"),
+                             (axes[1], result.fluctuation, "fluctuation (minus untextured base)")):
+        im = ax.imshow(field, origin="lower", extent=extent, cmap="viridis")
+        ax.set(title=title, xlabel="x (mm)", ylabel="y (mm)")
+        fig.colorbar(im, ax=ax, shrink=0.85)
+    c = result.config
+    fig.suptitle(f"V = {result.roughness:.4g} ± {result.roughness_stderr:.2g}   "
+                 f"(depth {c.depth_mm} mm, F = {c.force_n} N, contact {100 * result.contact_fraction:.0f}%)")
+    _atomic(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
+    plt.close(fig)
+
+
+def save_vtu(result: Result, block: Block, path: str | Path) -> None:
+    """Deformed mesh with displacement, element strain and lambda3 for ParaView."""
+    import meshio
+
+    mesh = block.mesh
+    u = result.state.u
+    g, dofs, _ = vertex_strain_operator(mesh)
+    eps = strain_tensors(g, dofs, u).mean(axis=1)
+    lam = np.linalg.eigvalsh(eps)
+    voigt = eps.reshape(-1, 9)[:, [0, 4, 8, 5, 2, 1]]
+    cell = "tetra" if mesh.order == 1 else "tetra10"
+    m = meshio.Mesh(
+        mesh.points + u.reshape(-1, 3),
+        [(cell, mesh.tets)],
+        point_data={"displacement": u.reshape(-1, 3)},
+        cell_data={"strain": [voigt], "lambda3": [lam[:, 0]], "region": [mesh.region.astype(np.int32)]},
+    )
+    _atomic(path, lambda tmp: meshio.write(tmp, m, file_format="vtu"))
+
+
+def _atomic(path: str | Path, write) -> None:
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp")
+    write(str(tmp))
+    os.replace(tmp, path)
