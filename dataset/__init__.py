@@ -1,0 +1,1 @@
+"""Parametric texture datasets (heightmaps in mm)."""

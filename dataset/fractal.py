@@ -1,0 +1,29 @@
+"""Rough random (fractional Brownian) surfaces by spectral synthesis."""
+from __future__ import annotations
+
+import numpy as np
+
+from simulate.heightmap import Heightmap, InputError
+
+
+def fbm_surface(size_mm: float = 12.0, pixel_mm: float = 0.05, hurst: float = 0.8, rms_mm: float = 0.15,
+                cutoff_mm: float = 0.4, seed: int = 0) -> Heightmap:
+    """Isotropic fBm heightmap with RMS height ``rms_mm``, rescaled to start at 0.
+
+    The power spectrum falls as k^-(2 + 2 hurst) and is cut off below wavelength ``cutoff_mm``
+    (features finer than a fingertip or a printer resolves are not generated).
+    """
+    if not 0.0 < hurst < 1.0:
+        raise InputError(f"hurst exponent must lie in (0, 1), got {hurst}")
+    if min(size_mm, pixel_mm, rms_mm, cutoff_mm) <= 0:
+        raise InputError("size, pixel, rms and cutoff must be positive")
+    n = int(round(size_mm / pixel_mm))
+    rng = np.random.default_rng(seed)
+    f = np.fft.fftfreq(n, d=pixel_mm)
+    k = np.hypot(*np.meshgrid(f, f))
+    k[0, 0] = np.inf
+    amplitude = np.where(k <= 1.0 / cutoff_mm, k ** (-(1.0 + hurst)), 0.0)
+    spectrum = amplitude * np.exp(2j * np.pi * rng.random((n, n)))
+    h = np.real(np.fft.ifft2(spectrum))
+    h *= rms_mm / h.std()
+    return Heightmap(h - h.min(), pixel_mm)

@@ -1,0 +1,122 @@
+"""Exact properties of the mesh, the elasticity operators and the variation measure."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simulate.elasticity import rigid_body_modes, stiffness, strain_tensors, vertex_strain_operator
+from simulate.mesh import MeshSpec, build, surface
+from simulate.strain import StrainSampler
+from simulate.variation import PairSampling, variation
+
+SMALL = MeshSpec(width_mm=4.0, tissue_mm=2.0, h_contact_mm=0.4, fine_depth_mm=1.0, h_max_mm=0.8)
+
+
+@pytest.fixture(scope="module", params=[1, 2], ids=["P1", "P2"])
+def mesh(request):
+    return build(MeshSpec(**{**SMALL.__dict__, "order": request.param}))
+
+
+def test_mesh_is_graded_with_structured_contact_face():
+    m = build(SMALL)
+    bottom = m.points[m.bottom]
+    n_side = int(round(SMALL.width_mm / SMALL.h_contact_mm)) + 1
+    assert len(bottom) == n_side**2
+    assert len(m.top) < len(bottom)
+    p = m.points[m.tets]
+    vol = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p[:, 3] - p[:, 0]) / 6
+    assert vol.min() > 0
+    assert np.isclose(vol.sum(), SMALL.width_mm**2 * SMALL.tissue_mm)
+    low = m.points[m.tets].mean(axis=1)[:, 2] < 0.5
+    assert vol[low].mean() < vol[~low].mean()
+
+
+def test_surface_is_closed():
+    _, tris, _ = surface(SMALL)
+    edges = np.sort(np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [0, 2]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    assert counts.min() >= 2  # every edge shared (internal facets make some 3- or 4-fold)
+
+
+def test_mesh_cache_returns_identical_mesh():
+    a, b = build(SMALL), build(SMALL)
+    assert np.array_equal(a.points, b.points) and np.array_equal(a.tets, b.tets)
+
+
+def test_rigid_body_modes_are_in_the_stiffness_null_space(mesh):
+    k = stiffness(mesh, np.full(len(mesh.tets), 0.042), np.full(len(mesh.tets), 0.45))
+    b = rigid_body_modes(mesh.points)
+    assert abs(k - k.T).max() < 1e-12 * abs(k).max()
+    assert np.abs(k @ b).max() < 1e-9 * abs(k).max() * np.abs(b).max()
+
+
+def test_affine_displacement_gives_exact_constant_strain(mesh):
+    grad = np.array([[0.01, 0.02, -0.03], [0.0, -0.02, 0.01], [0.04, 0.0, -0.05]])
+    u = (mesh.points @ grad.T).ravel()
+    g, dofs, _ = vertex_strain_operator(mesh)
+    eps = strain_tensors(g, dofs, u)
+    assert np.allclose(eps, 0.5 * (grad + grad.T), atol=1e-12)
+    sampler = StrainSampler(mesh, 0.75, 2.0, 0.25)
+    assert np.allclose(sampler.strain(u), 0.5 * (grad + grad.T), atol=1e-10)
+
+
+def test_recovery_of_a_linear_strain_field(mesh):
+    """Exact for P2 (quadratic u is in the space); within a few % of the value for P1."""
+    m = mesh
+    x, y, z = m.points.T
+    u = np.c_[0.01 * x * z, 0.02 * y * x, 0.005 * z**2].ravel()  # strain linear in x, y, z
+    sampler = StrainSampler(m, 0.75, 2.0, 0.25)
+    a = sampler.axis
+    gx, gy = np.meshgrid(a, a)
+    exact_zz = 0.01 * 0.75 * np.ones_like(gx)
+    exact_xy = 0.5 * 0.02 * gy
+    eps = sampler.strain(u)
+    tol = 1e-10 if m.order == 2 else 0.05 * 0.0075
+    assert np.abs(eps[..., 2, 2] - exact_zz).max() < tol
+    assert np.abs(eps[..., 0, 1] - exact_xy).max() < tol
+
+
+def test_uniaxial_compression_matches_hookes_law():
+    from simulate.linsolve import ConstrainedSystem
+
+    m = build(SMALL)
+    e, nu = 0.042, 0.45
+    k = stiffness(m, np.full(len(m.tets), e), np.full(len(m.tets), nu))
+    system = ConstrainedSystem(k, rigid_body_modes(m.points))
+    fixed = np.zeros(k.shape[0], dtype=bool)
+    fixed[3 * m.bottom + 2] = fixed[3 * m.top + 2] = True
+    corner = m.bottom[np.argmin(np.abs(m.points[m.bottom, :2]).sum(axis=1))]
+    fixed[3 * corner] = fixed[3 * corner + 1] = True
+    x_axis = m.bottom[np.argmin(np.abs(m.points[m.bottom, 1]) + np.abs(m.points[m.bottom, 0] - 2.0))]
+    fixed[3 * x_axis + 1] = True
+    system.set_constraints(fixed)
+    values = np.zeros(k.shape[0])
+    values[3 * m.top + 2] = -0.02
+    u, reaction = system.solve(values)
+    force = reaction[3 * m.top + 2].sum()
+    expected = e * (0.02 / SMALL.tissue_mm) * SMALL.width_mm**2
+    assert force == pytest.approx(-expected, rel=1e-6)
+    lateral = u.reshape(-1, 3)[:, 0] / m.points[:, 0].clip(1e-9)
+    assert np.median(lateral[m.points[:, 0] > 1]) == pytest.approx(nu * 0.02 / SMALL.tissue_mm, rel=1e-6)
+
+
+def test_variation_of_constant_and_linear_fields():
+    s = PairSampling(window_mm=8.0, distance_mm=0.8, radius_mm=0.8, pairs=8000, seed=3)
+    axis = np.linspace(-4, 4, 161)
+    assert variation(np.full((161, 161), 0.3), axis, s) == pytest.approx((0.0, 0.0), abs=1e-15)
+    gx, _ = np.meshgrid(axis, axis)
+    v, se = variation(2.0 * gx, axis, s)
+    # E|x1 - x2| for the disk-pair construction, by direct Monte Carlo on the same points
+    p1, p2 = s.points()
+    assert v == pytest.approx(2.0 * np.abs(p1[:, 0] - p2[:, 0]).mean(), rel=1e-9)
+    assert 0 < se < 0.05 * v
+    assert variation(2.0 * gx, axis, s) == (v, se)
+    assert variation(2.0 * gx, axis, PairSampling(seed=4))[0] != v
+
+
+def test_pair_points_stay_in_window_with_the_stated_geometry():
+    p1, p2 = PairSampling(pairs=20000, seed=1).points()
+    assert np.abs(np.r_[p1, p2]).max() <= 4.0
+    dist = np.linalg.norm(p1 - p2, axis=1)
+    assert dist.max() <= 0.8 + 2 * 0.8
+    assert 0.95 < dist.mean() < 1.3  # 0.72 if the centres were not 0.8 mm apart
