@@ -2,7 +2,9 @@
 
 Each round solves the linear problem for a fixed contact set, twice (texture gaps
 with the bone held, and a unit bone displacement), and combines the two so that the
-total contact reaction equals the force. Nodes whose normal reaction pulls the skin
+total contact reaction equals the force. Contact nodes stick (u_x = u_y = 0) or slide
+(frictionless, in the small-slope model of rough-surface contact: the texture pushes
+along z only, u_z = H(x + u_x, y + u_y) - z0, iterated as the nodes slide). Nodes whose contact pressure pulls the skin
 toward the texture are released; free nodes that penetrate the texture are added.
 A node may change state at most ``MAX_FLIPS`` times; after that it is held in contact
 (the state that cannot penetrate), so the loop terminates. It is also capped at
@@ -16,13 +18,15 @@ from typing import Callable
 
 import numpy as np
 
-from .linsolve import ConstrainedSystem, nodal_rotation
+from .face import ContactFace
+from .linsolve import ConstrainedSystem
 
 # height(x, y) -> texture height (mm) relative to the undeformed contact face, and its gradient
 Surface = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
 MAX_FLIPS = 2
+SLIDE_TOL_MM = 1e-4  # frictionless: largest height mismatch of a sliding contact node
 
 
 class ContactError(RuntimeError):
@@ -43,7 +47,7 @@ class ContactState:
     cycled: bool
     contact_history: list[int] = field(default_factory=list)
     max_penetration_mm: float = 0.0
-    max_tension_n: float = 0.0
+    max_tension_mpa: float = 0.0
 
 
 @dataclass
@@ -55,17 +59,16 @@ class ContactProblem:
     bottom_xy: np.ndarray
     top: np.ndarray
     n_dofs: int
+    face: ContactFace
 
-    def _constraints(self, contact: np.ndarray, frictionless: bool, normals: np.ndarray | None):
+    def constraints(self, contact: np.ndarray, frictionless: bool) -> np.ndarray:
+        """Prescribed DOFs: the bone face, and z (frictionless) or x, y, z (stick) of contact nodes."""
         fixed = np.zeros(self.n_dofs, dtype=bool)
         for a in range(3):
             fixed[3 * self.top + a] = True
-        nodes = self.bottom[contact]
-        comps = (2,) if frictionless else (0, 1, 2)
-        for a in comps:
-            fixed[3 * nodes + a] = True
-        rotation = nodal_rotation(self.n_dofs, nodes, normals[contact]) if frictionless else None
-        return fixed, rotation
+        for a in (2,) if frictionless else (0, 1, 2):
+            fixed[3 * self.bottom[contact] + a] = True
+        return fixed
 
 
 def solve_contact(
@@ -88,67 +91,56 @@ def solve_contact(
     lateral = np.zeros((nb, 2))
     flips = np.zeros(nb, dtype=int)
     tol_gap = 1e-6
-    tol_force = 1e-4 * force_n / nb
-    seen: dict[bytes, int] = {}
+    tol_pressure = 1e-4 * force_n / problem.face.area.sum()
+    seen: set[bytes] = set()
     history: list[int] = []
     cycled = False
     u_tex, u_unit = warm if warm is not None else (None, None)
+    unit = np.zeros(problem.n_dofs)
+    unit[3 * problem.top + 2] = -1.0
     for rounds in range(1, max_rounds + 1):
-        xy = problem.bottom_xy + lateral
-        height, grad = surface(xy[:, 0], xy[:, 1])
-        normals = np.c_[-grad, np.ones(nb)] / np.sqrt(1 + (grad**2).sum(axis=1))[:, None]
-        fixed, rotation = problem._constraints(contact, frictionless, normals)
-        problem.system.set_constraints(fixed, rotation)
-        values = np.zeros(problem.n_dofs)
+        problem.system.set_constraints(problem.constraints(contact, frictionless))
         idx = problem.bottom[contact]
-        if frictionless:
-            n = normals[contact]
-            values[3 * idx + 2] = n[:, 0] * lateral[contact, 0] + n[:, 1] * lateral[contact, 1] + n[:, 2] * height[contact]
-        else:
-            values[3 * idx + 2] = height[contact]
+        moved = problem.bottom_xy + lateral
+        values = np.zeros(problem.n_dofs)
+        values[3 * idx + 2] = surface(moved[contact, 0], moved[contact, 1])[0]
         u_tex, r_tex = problem.system.solve(values, x0=u_tex)
-        unit = np.zeros(problem.n_dofs)
-        unit[3 * problem.top + 2] = -1.0
-        u_unit, r_unit = problem.system.solve(_local(unit, rotation), x0=u_unit)
+        u_unit, r_unit = problem.system.solve(unit, x0=u_unit)
         r_unit_z = r_unit[3 * idx + 2].sum()
         if not r_unit_z > 0:
             raise ContactError("the skin does not touch the texture: no force can be transmitted")
         delta = (force_n - r_tex[3 * idx + 2].sum()) / r_unit_z
         u = u_tex + delta * u_unit
-        reaction = (r_tex + delta * r_unit).reshape(-1, 3)[problem.bottom]
+        normal_reaction = np.where(contact, (r_tex + delta * r_unit)[3 * problem.bottom + 2], 0.0)
+        pressure = problem.face.pressure(normal_reaction)
         disp = u.reshape(-1, 3)[problem.bottom]
-        normal_reaction = np.einsum("ij,ij->i", reaction, normals) if frictionless else reaction[:, 2]
-        normal_reaction = np.where(contact, normal_reaction, 0.0)
         moved = problem.bottom_xy + disp[:, :2]
         penetration = surface(moved[:, 0], moved[:, 1])[0] - disp[:, 2]
         settled = flips >= MAX_FLIPS
-        release = contact & ~settled & (normal_reaction < -tol_force)
+        release = contact & ~settled & (pressure < -tol_pressure)
         add = ~contact & (penetration > tol_gap)
+        # Frictionless nodes slide: their prescribed height follows their new position.
+        drift = frictionless and bool(np.any(np.abs(penetration[contact]) > SLIDE_TOL_MM))
         history.append(int(contact.sum()))
         key = np.packbits(contact).tobytes()
-        cycled |= key in seen
-        seen[key] = rounds
-        lateral = disp[:, :2] if frictionless else lateral
-        if not (release.any() or add.any()) or rounds == max_rounds:
+        cycled |= key in seen and (release.any() or add.any())
+        seen.add(key)
+        if not (release.any() or add.any() or drift) or rounds == max_rounds:
             break
+        lateral = disp[:, :2] if frictionless else lateral
         flips += release | add
         contact = (contact & ~release) | add
-    unresolved = int(np.count_nonzero((contact & (normal_reaction < -tol_force)) | (~contact & (penetration > tol_gap))))
+    violated = (contact & (pressure < -tol_pressure)) | (~contact & (penetration > tol_gap))
     return ContactState(
         u=u,
         indentation_mm=float(delta),
         in_contact=contact,
         normal_reaction=normal_reaction,
         rounds=rounds,
-        converged=not (release.any() or add.any()),
-        unresolved=unresolved,
+        converged=not (release.any() or add.any() or drift),
+        unresolved=int(np.count_nonzero(violated)),
         cycled=cycled,
         contact_history=history,
         max_penetration_mm=float(max(0.0, penetration[~contact].max(initial=0.0))),
-        max_tension_n=float(max(0.0, -normal_reaction[contact].min(initial=0.0))),
+        max_tension_mpa=float(max(0.0, -pressure[contact].min(initial=0.0))),
     ), (u_tex, u_unit)
-
-
-def _local(values: np.ndarray, rotation) -> np.ndarray:
-    """Global prescribed values expressed in the local frames (top nodes are unrotated)."""
-    return values if rotation is None else rotation.T @ values

@@ -1,7 +1,6 @@
 """Constrained linear elasticity solves: AMG-preconditioned CG with a reusable hierarchy.
 
-A solve prescribes some degrees of freedom, possibly in rotated nodal frames
-(frictionless contact fixes only the normal component). The system keeps its
+A solve prescribes some degrees of freedom. The system keeps its
 smoothed-aggregation hierarchy (pyamg) across solves and rebuilds it only when the set
 of prescribed DOFs has drifted or CG needed clearly more iterations than on a fresh
 hierarchy, so that a contact loop pays the set-up cost about once per texture.
@@ -31,7 +30,7 @@ class SolveStats:
 
 
 class ConstrainedSystem:
-    """K u = f with u prescribed on a subset of DOFs, in optional rotated frames."""
+    """K u = f with u prescribed on a subset of DOFs."""
 
     def __init__(
         self,
@@ -52,11 +51,10 @@ class ConstrainedSystem:
         self._fresh_iterations = 0
         self._matrix: sp.csr_matrix | None = None
 
-    def set_constraints(self, fixed: np.ndarray, rotation: sp.csr_matrix | None = None) -> None:
-        """Prescribe the DOFs in ``fixed`` (bool mask) of the frame ``rotation`` (Q: local -> global)."""
+    def set_constraints(self, fixed: np.ndarray) -> None:
+        """Prescribe the DOFs in the boolean mask ``fixed``."""
         self.fixed = fixed
-        self.rotation = rotation
-        a = self.k if rotation is None else (rotation.T @ self.k @ rotation).tocsr()
+        a = self.k
         keep = sp.diags((~fixed).astype(float))
         self._a = a
         # Prescribed rows keep their stiffness diagonal (not 1): a hierarchy built for a
@@ -68,8 +66,7 @@ class ConstrainedSystem:
             self._build()
 
     def _build(self) -> None:
-        b = self.near_null if self.rotation is None else self.rotation.T @ self.near_null
-        self._amg = pyamg.smoothed_aggregation_solver(self._matrix, B=b, symmetry="symmetric")
+        self._amg = pyamg.smoothed_aggregation_solver(self._matrix, B=self.near_null, symmetry="symmetric")
         self._amg_fixed = self.fixed.copy()
         self._fresh_iterations = 0
         self.stats.setups += 1
@@ -77,23 +74,19 @@ class ConstrainedSystem:
     def solve(
         self, values: np.ndarray, load: np.ndarray | None = None, x0: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Displacements u (global frame) and reactions K u - f for prescribed local ``values``.
+        """Displacements u (mm) and reactions K u - f (N) for prescribed ``values`` (mm).
 
-        ``values`` holds the prescribed local components (read where fixed); ``load``
-        the external nodal forces f (N, global frame); ``x0`` a global warm start.
+        ``values`` is read where fixed; ``load`` holds external nodal forces f (N);
+        ``x0`` is a warm start.
         """
         fixed = self.fixed
-        q = self.rotation
         vp = np.where(fixed, values, 0.0)
-        f = np.zeros_like(vp) if load is None else (load if q is None else q.T @ load)
+        f = np.zeros_like(vp) if load is None else load
         b = np.where(fixed, self._diag * vp, f - self._a @ vp)
-        v0 = None if x0 is None else np.where(fixed, vp, x0 if q is None else q.T @ x0)
-        v = self._cg(b, v0)
+        u = self._cg(b, None if x0 is None else np.where(fixed, vp, x0))
         if self._fresh_iterations and self.stats.history[-1] > 2 * self._fresh_iterations + 5:
             self._build()
-        u = v if q is None else q @ v
-        reaction = self.k @ u - (np.zeros_like(u) if load is None else load)
-        return u, reaction
+        return u, self.k @ u - f
 
     def _cg(self, b: np.ndarray, x0: np.ndarray | None) -> np.ndarray:
         count = [0]
@@ -116,24 +109,3 @@ class ConstrainedSystem:
                 "the system is ill-conditioned (Poisson ratio close to 0.5 with P1 elements? try --element p2)"
             )
         return x
-
-
-def nodal_rotation(n_dofs: int, nodes: np.ndarray, normals: np.ndarray) -> sp.csr_matrix:
-    """Block-diagonal Q (local -> global) whose third local axis is ``normals`` at ``nodes``."""
-    nrm = normals / np.linalg.norm(normals, axis=1, keepdims=True)
-    helper = np.where(np.abs(nrm[:, [0]]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]])
-    t1 = np.cross(nrm, helper)
-    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
-    t2 = np.cross(nrm, t1)
-    frames = np.stack([t1, t2, nrm], axis=2)  # columns: local axes in global coordinates
-    rotated = np.zeros(n_dofs // 3, dtype=bool)
-    rotated[nodes] = True
-    ident = np.flatnonzero(~rotated)
-    rows = [3 * ident + a for a in range(3)]
-    data = [np.ones(len(ident))] * 3
-    r = (3 * nodes[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
-    c = (3 * nodes[:, None, None] + np.arange(3)[None, None, :]).repeat(3, axis=1)
-    rows = np.concatenate(rows + [r.ravel()])
-    cols = np.concatenate([3 * ident + a for a in range(3)] + [c.ravel()])
-    vals = np.concatenate(data + [frames.ravel()])
-    return sp.csr_matrix((vals, (rows, cols)), shape=(n_dofs, n_dofs))

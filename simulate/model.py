@@ -12,6 +12,7 @@ from . import mesh as meshing
 from .config import SimConfig
 from .contact import ContactError, ContactProblem, ContactState, solve_contact
 from .elasticity import rigid_body_modes, stiffness
+from .face import ContactFace
 from .heightmap import Heightmap, InputError
 from .linsolve import ConstrainedSystem, SolverError
 from .strain import StrainSampler
@@ -81,8 +82,9 @@ class Block:
             bottom_xy=self.mesh.points[bottom, :2],
             top=self.mesh.top,
             n_dofs=3 * len(self.mesh.points),
+            face=ContactFace(self.mesh, bottom),
         )
-        self.area = _nodal_areas(self.mesh, bottom)
+        self.area = self.problem.face.area
         t = time.perf_counter()
         self.sampler = StrainSampler(self.mesh, config.depth_mm, config.window_mm, config.grid_mm)
         self.seconds["sampler"] = time.perf_counter() - t
@@ -100,17 +102,6 @@ class Block:
 
 def _flat(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.zeros_like(x), np.zeros((len(x), 2))
-
-
-def _nodal_areas(mesh: meshing.Mesh, bottom: np.ndarray) -> np.ndarray:
-    """Tributary area (mm^2) of each contact-face vertex; 0 for P2 mid-side nodes."""
-    faces = np.concatenate([mesh.tets[:, f] for f in ([0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3])])
-    on_face = np.isin(faces, bottom).all(axis=1)
-    faces = faces[on_face]
-    p = mesh.points[faces]
-    area = 0.5 * np.abs(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])[:, 2])
-    nodal = np.bincount(faces.ravel(), np.repeat(area / 3, 3), minlength=len(mesh.points))
-    return nodal[bottom]
 
 
 def texture_surface(heightmap: Heightmap, centre_mm: tuple[float, float], z0: float, periodic: bool):
@@ -217,7 +208,7 @@ def _regime_warnings(config: SimConfig, state: ContactState) -> list[str]:
                    "linear small-strain elasticity far past its range (as in the paper's model)")
     if not state.converged:
         out.append(f"contact did not settle in {state.rounds} rounds: {state.unresolved} nodes still violate "
-                   f"(max penetration {state.max_penetration_mm:.2e} mm, max tension {state.max_tension_n:.2e} N)")
+                   f"(max penetration {state.max_penetration_mm:.2e} mm, max tension {state.max_tension_mpa:.2e} MPa)")
     if state.cycled:
         out.append("the contact set revisited an earlier state (cycling) before settling")
     return out

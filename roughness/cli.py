@@ -1,0 +1,133 @@
+"""The ``roughness`` command line."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+
+def _float_pair(text: str) -> tuple[float, float]:
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y in mm, got {text!r}") from None
+    return x, y
+
+
+def _add_heightmap_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("heightmap", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .h5")
+    p.add_argument("--pixel-mm", type=float, help="pixel size in mm (required unless the file states it)")
+    p.add_argument("--height-mm", type=float, help="height of full-scale white in mm (PNG/TIFF)")
+    p.add_argument("--tile", action="store_true", help="repeat a small heightmap as a periodic texture")
+    p.add_argument("--centre", type=_float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from simulate.config import BONE_MODELS, CONTACT_MODES, ELEMENTS, FIDELITIES
+
+    parser = argparse.ArgumentParser(prog="roughness", description=__doc__)
+    parser.add_argument("--version", action="version", version=_version())
+    sub = parser.add_subparsers(dest="command", required=True)
+    sim = sub.add_parser("simulate", help="FEM roughness of a heightmap (reference engine)")
+    _add_heightmap_args(sim)
+    sim.add_argument("--fidelity", choices=FIDELITIES, default="default",
+                     help="mesh resolution: coarse 0.3 mm, default 0.2 mm, fine 0.14 mm, auto from feature size")
+    sim.add_argument("--force", type=float, default=10.0, help="normal force in N (default 10)")
+    sim.add_argument("--poisson", type=float, default=0.45, help="tissue Poisson ratio (default 0.45)")
+    sim.add_argument("--contact", choices=CONTACT_MODES, default="stick")
+    sim.add_argument("--element", choices=ELEMENTS, default="p1", help="p2 for Poisson ratio close to 0.5")
+    sim.add_argument("--bone", choices=BONE_MODELS, default="rigid")
+    sim.add_argument("--seed", type=int, default=0, help="seed of the disk-pair sampling")
+    sim.add_argument("--json", action="store_true", help="print one JSON object")
+    sim.add_argument("--save-strain", metavar="PNG", help="image of the strain map at receptor depth")
+    sim.add_argument("--save-vtu", metavar="FILE", help="deformed mesh with strain for ParaView")
+    sim.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
+    sim.set_defaults(run=_simulate)
+    return parser
+
+
+def _version() -> str:
+    from roughness import __version__
+
+    return f"roughness {__version__}"
+
+
+def _log(args: argparse.Namespace, message: str) -> None:
+    if not getattr(args, "quiet", False):
+        print(message, file=sys.stderr, flush=True)
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from simulate.io import load_heightmap
+    from simulate.model import Simulator
+    from simulate.config import SimConfig
+
+    hm = load_heightmap(args.heightmap, pixel_mm=args.pixel_mm, height_mm=args.height_mm)
+    config = SimConfig(fidelity=args.fidelity, force_n=args.force, poisson=args.poisson, contact=args.contact,
+                       element=args.element, bone=args.bone, seed=args.seed)
+    for path in (args.save_strain, args.save_vtu):
+        if path and not os.path.isdir(os.path.dirname(os.path.abspath(path))):
+            from simulate.heightmap import InputError
+
+            raise InputError(f"cannot write {path}: its folder does not exist")
+    _log(args, f"{args.heightmap}: {hm.shape[1]} x {hm.shape[0]} px of {hm.pixel_mm} mm; "
+               f"{config.resolved(hm).fidelity} fidelity, contact spacing {config.spacing_mm(hm)} mm; "
+               "preparing the skin block (cached after the first run) ...")
+    sim = Simulator(config)
+    result = sim.run(hm, centre_mm=args.centre, tile=args.tile)
+    if args.save_strain:
+        from simulate.output import save_strain_png
+
+        save_strain_png(result, args.save_strain)
+        _log(args, f"strain map written to {args.save_strain}")
+    if args.save_vtu:
+        from simulate.output import save_vtu
+
+        save_vtu(result, sim.block(result.config), args.save_vtu)
+        _log(args, f"deformed mesh written to {args.save_vtu}")
+    if args.json:
+        print(json.dumps({"input": args.heightmap, **result.summary()}))
+    else:
+        _print_result(result)
+    for w in result.warnings:
+        _log(args, f"note: {w}")
+    return 0
+
+
+def _print_result(r) -> None:
+    print(f"roughness V        {r.roughness:.5f} ± {r.roughness_stderr:.5f} (strain variation at "
+          f"{r.config.depth_mm} mm depth, d = r = {r.config.pair_distance_mm} mm)")
+    print(f"contact fraction   {100 * r.contact_fraction:.1f}%")
+    print(f"indentation        {r.indentation_mm:.3f} mm at {r.config.force_n} N")
+    print(f"contact rounds     {r.iterations} ({'converged' if r.converged else 'NOT converged'}"
+          f"{', ' + str(r.unresolved_nodes) + ' nodes unresolved' if r.unresolved_nodes else ''})")
+    print(f"mesh               {r.nodes} nodes, {r.config.element.upper()}, h = {r.config.h_contact_mm} mm")
+    print(f"time               {r.seconds:.2f} s")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    from simulate.heightmap import InputError
+    from simulate.model import SimulationError
+
+    try:
+        return args.run(args)
+    except InputError as err:
+        print(f"roughness: error: {err}", file=sys.stderr)
+        return 2
+    except SimulationError as err:
+        print(f"roughness: simulation failed: {err}", file=sys.stderr)
+        return 3
+    except OSError as err:
+        print(f"roughness: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("roughness: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

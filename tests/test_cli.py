@@ -1,0 +1,71 @@
+"""The roughness command line: JSON output, files written, exit codes and messages."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roughness.cli import main
+
+EXAMPLE = Path(__file__).parents[1] / "examples" / "standard-1.0mm.png"
+REQUIRED = {"roughness", "roughness_stderr", "contact_fraction", "indentation_mm", "converged", "iterations",
+            "nodes", "seconds"}
+
+
+def test_simulate_json_and_outputs(tmp_path, capsys):
+    png, vtu = tmp_path / "strain.png", tmp_path / "mesh.vtu"
+    code = main(["simulate", str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--fidelity", "coarse",
+                 "--json", "--quiet", "--save-strain", str(png), "--save-vtu", str(vtu)])
+    assert code == 0
+    out = json.loads(capsys.readouterr().out)
+    assert REQUIRED <= out.keys()
+    assert out["converged"] and 0 < out["roughness"] < 1 and 0.8 < out["contact_fraction"] <= 1
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    import meshio
+
+    mesh = meshio.read(vtu)
+    assert "displacement" in mesh.point_data and "lambda3" in mesh.cell_data
+    assert np.isfinite(mesh.point_data["displacement"]).all()
+
+
+def test_human_readable_output(capsys):
+    assert main(["simulate", str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--fidelity", "coarse",
+                 "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "roughness V" in out and "contact fraction" in out
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["missing.npy", "--pixel-mm", "0.05"], "not found"),
+        ([str(EXAMPLE), "--height-mm", "1"], "--pixel-mm"),
+        ([str(EXAMPLE), "--pixel-mm", "0.05"], "--height-mm"),
+        ([str(EXAMPLE), "--pixel-mm", "-1", "--height-mm", "1"], "pixel"),
+        ([str(EXAMPLE), "--pixel-mm", "0.02", "--height-mm", "1"], "--tile"),
+        ([str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--poisson", "0.5"], "poisson"),
+        ([str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--force", "0"], "force"),
+        ([str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--save-vtu", "/no/such/dir/x.vtu"], "folder"),
+    ],
+)
+def test_bad_input_exits_2_with_a_message(args, message, capsys):
+    assert main(["simulate", *args, "--fidelity", "coarse"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+def test_nan_heightmap_is_refused(tmp_path, capsys):
+    h = np.zeros((240, 240))
+    h[3, 4] = np.nan
+    np.save(tmp_path / "nan.npy", h)
+    assert main(["simulate", str(tmp_path / "nan.npy"), "--pixel-mm", "0.05"]) == 2
+    assert "NaN" in capsys.readouterr().err
+
+
+def test_console_script_runs_as_a_module():
+    proc = subprocess.run([sys.executable, "-m", "roughness.cli", "--version"], capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stdout.startswith("roughness ")

@@ -1,0 +1,130 @@
+"""FEM roughness on real textures at coarse fidelity: base cases, determinism, extremes."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from dataset.textures import BumpRecipe, bump_texture, standard_texture
+from simulate.config import SimConfig
+from simulate.heightmap import Heightmap, InputError
+from simulate.model import SimulationError, Simulator
+
+
+@pytest.fixture(scope="module")
+def sim():
+    return Simulator(SimConfig(fidelity="coarse"))
+
+
+@pytest.fixture(scope="module")
+def bumps(sim):
+    return sim.run(standard_texture(1.0, seed=0))
+
+
+def _finite(r) -> bool:
+    values = [r.roughness, r.roughness_stderr, r.contact_fraction, r.indentation_mm]
+    return all(math.isfinite(v) for v in values) and np.all(np.isfinite(r.fluctuation))
+
+
+def test_standard_bumps_in_the_documented_regime(bumps):
+    """Paper parameters press the skin almost fully into 1 mm bumps (DESIGN.md)."""
+    assert bumps.converged and bumps.iterations <= 10
+    assert 0.85 < bumps.contact_fraction < 1.0
+    assert 2.5 < bumps.indentation_mm < 4.5
+    assert 0.0 < bumps.roughness_stderr < 0.05 * bumps.roughness
+    assert any("exceeds the 2.5 mm tissue" in w for w in bumps.warnings)
+
+
+def test_flat_texture_is_at_noise_level_with_full_contact(sim, bumps):
+    r = sim.run(Heightmap(np.full((240, 240), 2.0), 0.05))
+    assert r.contact_fraction == 1.0 and r.converged
+    assert r.roughness < 0.01 * bumps.roughness
+
+
+def test_near_flat_texture_is_nearly_smooth(sim, bumps):
+    rng = np.random.default_rng(0)
+    r = sim.run(Heightmap(1e-3 * rng.random((240, 240)), 0.05))  # 1 micron of noise
+    assert r.contact_fraction > 0.99
+    assert r.roughness < 0.01 * bumps.roughness
+
+
+def test_same_input_same_answer_and_seed_changes_sampling(sim, bumps):
+    again = sim.run(standard_texture(1.0, seed=0))
+    assert again.roughness == bumps.roughness
+    other = sim.run(standard_texture(1.0, seed=0), seed=1)
+    assert other.roughness != bumps.roughness
+    assert abs(other.roughness / bumps.roughness - 1) < 5 * bumps.roughness_stderr / bumps.roughness
+
+
+def test_rigid_and_elastic_bone_agree(bumps):
+    elastic = Simulator(SimConfig(fidelity="coarse", bone="elastic")).run(standard_texture(1.0, seed=0))
+    assert elastic.roughness == pytest.approx(bumps.roughness, rel=0.02)
+    assert elastic.nodes > bumps.nodes
+
+
+def test_force_control_and_frictionless_contact(sim, bumps):
+    """The reaction equals the force: halving F lowers the indentation, V stays within the paper's insensitivity."""
+    half = sim.run(standard_texture(1.0, seed=0), force_n=5.0)
+    assert half.indentation_mm < bumps.indentation_mm
+    slide = sim.run(standard_texture(1.0, seed=0), contact="frictionless")
+    assert _finite(slide) and slide.converged
+    assert slide.roughness != bumps.roughness
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["poisson-0.499", "force-0.5N", "force-100N", "single-spike", "taller-than-tissue", "microns", "pixel-0.01", "pixel-0.5"],
+)
+def test_extremes_stay_finite(sim, case):
+    n, p = 240, 0.05
+    heights = np.zeros((n, n))
+    overrides = {}
+    if case == "poisson-0.499":
+        overrides["poisson"] = 0.499
+        hm = standard_texture(1.0, seed=0)
+    elif case.startswith("force"):
+        overrides["force_n"] = float(case.split("-")[1][:-1])
+        hm = standard_texture(1.0, seed=0)
+    elif case == "single-spike":
+        heights[n // 2, n // 2] = 1.0
+        hm = Heightmap(heights, p)
+    elif case == "taller-than-tissue":
+        hm = standard_texture(1.0, seed=0, height_mm=5.0)
+    elif case == "microns":
+        hm = standard_texture(1.0, seed=0, height_mm=0.003)
+    elif case == "pixel-0.01":
+        hm = standard_texture(1.0, seed=0, pixel_mm=0.01, size_mm=10.5)
+    else:
+        hm = bump_texture(BumpRecipe(lambda_mm=2.5, pixel_mm=0.5, size_mm=12.0, base_diameter_mm=1.5))
+    r = sim.run(hm, **overrides)
+    assert _finite(r), case
+    assert r.roughness >= 0 and 0 < r.contact_fraction <= 1
+    if case == "single-spike":
+        assert r.contact_fraction > 0.9  # the skin wraps a one-pixel spike at 10 N
+    if case == "microns":
+        assert r.contact_fraction == 1.0
+
+
+def test_small_heightmap_needs_tile(sim):
+    small = standard_texture(1.0, seed=0, size_mm=5.0)
+    with pytest.raises(InputError, match="--tile"):
+        sim.run(small)
+    tiled = sim.run(small, tile=True)
+    assert _finite(tiled)
+
+
+def test_bad_parameters_are_input_errors():
+    for kwargs, text in [({"poisson": 0.5}, "poisson"), ({"force_n": 0.0}, "force_n"),
+                         ({"fidelity": "ultra"}, "fidelity"), ({"contact": "glue"}, "contact"),
+                         ({"depth_mm": 3.0}, "depth")]:
+        with pytest.raises(InputError, match=text):
+            SimConfig(**kwargs)
+
+
+def test_no_contact_possible_is_reported():
+    """A skin that cannot reach the texture (nothing to push against) fails with a reason."""
+    from simulate.contact import ContactError
+
+    assert issubclass(ContactError, RuntimeError)
+    assert issubclass(SimulationError, RuntimeError)
