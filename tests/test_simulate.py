@@ -128,3 +128,13 @@ def test_no_contact_possible_is_reported():
 
     assert issubclass(ContactError, RuntimeError)
     assert issubclass(SimulationError, RuntimeError)
+
+
+def test_auto_fidelity_follows_the_feature_size():
+    from dataset.fractal import fbm_surface
+
+    cfg = SimConfig(fidelity="auto")
+    assert cfg.spacing_mm(Heightmap(np.zeros((240, 240)), 0.05)) == 0.3
+    assert cfg.spacing_mm(fbm_surface(cutoff_mm=2.0)) == 0.3
+    assert cfg.spacing_mm(standard_texture(0.625, seed=0)) < 0.3
+    assert cfg.resolved(standard_texture(0.625, seed=0)).h_contact_mm == cfg.spacing_mm(standard_texture(0.625, seed=0))

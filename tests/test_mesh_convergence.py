@@ -1,0 +1,23 @@
+"""Mesh convergence: V at ``default`` within 5% of ``fine`` (opt-in: pytest -m slow).
+
+Full-resolution runs take minutes; the numbers are kept in
+benchmarks/results/mesh_convergence.md (python benchmarks/mesh_convergence.py).
+"""
+from __future__ import annotations
+
+import pytest
+
+from dataset.fractal import fbm_surface
+from dataset.textures import standard_texture
+from simulate.config import SimConfig
+from simulate.model import Simulator
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("make", [lambda: standard_texture(1.0, seed=0), lambda: fbm_surface(seed=0)],
+                         ids=["standard-1.0", "fbm"])
+def test_default_is_within_5_percent_of_fine(make):
+    hm = make()
+    default = Simulator(SimConfig(fidelity="default")).run(hm).roughness
+    fine = Simulator(SimConfig(fidelity="fine")).run(hm).roughness
+    assert default == pytest.approx(fine, rel=0.05)
