@@ -10,6 +10,9 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
+import sys
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -183,6 +186,20 @@ def _tet_volume(h: float) -> float:
     return h**3 / (6.0 * np.sqrt(2.0))
 
 
+@contextmanager
+def _quiet_stdout():
+    """Silence C-level writes to stdout (TetGen prints even with -Q), keeping JSON output clean."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    with open(os.devnull, "w") as null:
+        os.dup2(null.fileno(), 1)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 1)
+            os.close(saved)
+
+
 def tetrahedralize(spec: MeshSpec) -> Mesh:
     """Mesh the block with TetGen (quality 1.5, boundary preserved, layer volumes)."""
     import tetgen
@@ -193,7 +210,8 @@ def tetrahedralize(spec: MeshSpec) -> Mesh:
         h = float(spec.spacing(z1))
         region = BONE if z0 >= spec.tissue_mm - 1e-12 else TISSUE
         tg.add_region(10 * k + region, (0.1234, -0.0987, 0.5 * (z0 + z1)), 1.3 * _tet_volume(h))
-    nodes, elems, attrib, _ = tg.tetrahedralize(switches="pq1.5/12YAaQ")
+    with _quiet_stdout():
+        nodes, elems, attrib, _ = tg.tetrahedralize(switches="pq1.5/12YAaQ")
     region = (np.asarray(attrib).ravel().astype(int) % 10).astype(np.int8)
     tets = _orient(np.asarray(nodes, float), np.asarray(elems, np.int64))
     mesh = Mesh(np.asarray(nodes, float), tets, region, spec)
@@ -222,8 +240,6 @@ def to_quadratic(mesh: Mesh) -> Mesh:
 
 
 def cache_dir() -> Path:
-    import os
-
     root = os.environ.get("ROUGHNESS_CACHE") or Path.home() / ".cache" / "roughness"
     path = Path(root)
     path.mkdir(parents=True, exist_ok=True)

@@ -69,3 +69,16 @@ def test_nan_heightmap_is_refused(tmp_path, capsys):
 def test_console_script_runs_as_a_module():
     proc = subprocess.run([sys.executable, "-m", "roughness.cli", "--version"], capture_output=True, text=True)
     assert proc.returncode == 0 and proc.stdout.startswith("roughness ")
+
+
+def test_cold_run_prints_only_json_on_stdout(tmp_path):
+    """Meshing (TetGen) must not write to stdout: --json output stays parseable."""
+    import os
+
+    env = {**os.environ, "ROUGHNESS_CACHE": str(tmp_path)}
+    proc = subprocess.run([sys.executable, "-m", "roughness.cli", "simulate", str(EXAMPLE), "--pixel-mm", "0.05",
+                           "--height-mm", "1", "--fidelity", "coarse", "--json"],
+                          capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert REQUIRED <= json.loads(proc.stdout).keys()
+    assert "preparing the skin block" in proc.stderr
