@@ -21,8 +21,8 @@ import numpy as np
 from .face import ContactFace
 from .linsolve import ConstrainedSystem
 
-# height(x, y) -> texture height (mm) relative to the undeformed contact face, and its gradient
-Surface = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+# height(x, y) -> texture height (mm) relative to the undeformed contact face, block coordinates (mm)
+Surface = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
 MAX_FLIPS = 2
@@ -87,7 +87,7 @@ def solve_contact(
     nb = len(problem.bottom)
     contact = np.ones(nb, dtype=bool) if initial is None else initial.copy()
     if not contact.any():
-        contact[np.argmax(surface(*problem.bottom_xy.T)[0])] = True
+        contact[np.argmax(surface(*problem.bottom_xy.T))] = True
     lateral = np.zeros((nb, 2))
     flips = np.zeros(nb, dtype=int)
     tol_gap = 1e-6
@@ -103,7 +103,7 @@ def solve_contact(
         idx = problem.bottom[contact]
         moved = problem.bottom_xy + lateral
         values = np.zeros(problem.n_dofs)
-        values[3 * idx + 2] = surface(moved[contact, 0], moved[contact, 1])[0]
+        values[3 * idx + 2] = surface(moved[contact, 0], moved[contact, 1])
         u_tex, r_tex = problem.system.solve(values, x0=u_tex)
         u_unit, r_unit = problem.system.solve(unit, x0=u_unit)
         r_unit_z = r_unit[3 * idx + 2].sum()
@@ -115,7 +115,7 @@ def solve_contact(
         pressure = problem.face.pressure(normal_reaction)
         disp = u.reshape(-1, 3)[problem.bottom]
         moved = problem.bottom_xy + disp[:, :2]
-        penetration = surface(moved[:, 0], moved[:, 1])[0] - disp[:, 2]
+        penetration = surface(moved[:, 0], moved[:, 1]) - disp[:, 2]
         settled = flips >= MAX_FLIPS
         release = contact & ~settled & (pressure < -tol_pressure)
         add = ~contact & (penetration > tol_gap)

@@ -54,13 +54,11 @@ class ConstrainedSystem:
     def set_constraints(self, fixed: np.ndarray) -> None:
         """Prescribe the DOFs in the boolean mask ``fixed``."""
         self.fixed = fixed
-        a = self.k
         keep = sp.diags((~fixed).astype(float))
-        self._a = a
         # Prescribed rows keep their stiffness diagonal (not 1): a hierarchy built for a
         # slightly different set then stays well scaled on the DOFs that changed.
-        self._diag = np.where(fixed, a.diagonal(), 0.0)
-        self._matrix = (keep @ a @ keep + sp.diags(self._diag)).tocsr()
+        self._diag = np.where(fixed, self.k.diagonal(), 0.0)
+        self._matrix = (keep @ self.k @ keep + sp.diags(self._diag)).tocsr()
         drift = 0 if self._amg_fixed is None else int(np.count_nonzero(fixed != self._amg_fixed))
         if self._amg is None or drift > self.rebuild_drift * len(fixed):
             self._build()
@@ -82,7 +80,7 @@ class ConstrainedSystem:
         fixed = self.fixed
         vp = np.where(fixed, values, 0.0)
         f = np.zeros_like(vp) if load is None else load
-        b = np.where(fixed, self._diag * vp, f - self._a @ vp)
+        b = np.where(fixed, self._diag * vp, f - self.k @ vp)
         u = self._cg(b, None if x0 is None else np.where(fixed, vp, x0))
         if self._fresh_iterations and self.stats.history[-1] > 2 * self._fresh_iterations + 5:
             self._build()
