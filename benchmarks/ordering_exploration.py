@@ -92,9 +92,9 @@ def summarise(rows: list[dict], fidelity: str) -> None:
     lines = [f"Standard scale ordering at {fidelity} fidelity (Spearman of lambda vs per-lambda mean V)", "",
              "| setting | Spearman | V(0.625) | V(1.0) | V(1.625) | contact fraction | indentation (mm) | not converged |",
              "|---|---|---|---|---|---|---|---|"]
-    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(10, 6), constrained_layout=True)
     summary = []
-    for s in settings():
+    for i, s in enumerate(settings()):
         sub = [r for r in rows if r["setting"] == label(s)]
         if not sub:
             continue
@@ -109,10 +109,11 @@ def summarise(rows: list[dict], fidelity: str) -> None:
         lines.append(f"| {label(s)} | {rho:.3f} | {v.get(0.625, np.nan):.4f} | {v.get(1.0, np.nan):.4f} | "
                      f"{v.get(1.625, np.nan):.4f} | {100 * cf:.1f}% | {ind:.2f} | {bad}/{len(sub)} |")
         ax.errorbar(lams, mean / mean.max(), yerr=sd / mean.max(), marker="o", ms=3, capsize=2,
+                    color=plt.cm.tab20(i % 20), linestyle="--" if s["contact"] == "frictionless" else "-",
                     label=f"{label(s)} (rho={rho:.2f})")
         summary.append({"setting": label(s), "spearman": rho, "lambdas": lams, "mean_V": mean.tolist()})
     ax.set(xlabel="bump spacing lambda (mm)", ylabel="V / max V", title=f"Standard scale, {fidelity} fidelity")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.savefig(OUT / f"ordering_{fidelity}.png", dpi=110)
     (OUT / f"ordering_{fidelity}.md").write_text("\n".join(lines) + "\n")
     (OUT / f"ordering_{fidelity}.json").write_text(json.dumps(summary, indent=1))
