@@ -101,8 +101,12 @@ def _print_result(r) -> None:
           f"{r.config.depth_mm} mm depth, d = r = {r.config.pair_distance_mm} mm)")
     print(f"contact fraction   {100 * r.contact_fraction:.1f}%")
     print(f"indentation        {r.indentation_mm:.3f} mm at {r.config.force_n} N")
-    print(f"contact rounds     {r.iterations} ({'converged' if r.converged else 'NOT converged'}"
-          f"{', ' + str(r.unresolved_nodes) + ' nodes unresolved' if r.unresolved_nodes else ''})")
+    if r.converged:
+        status = "converged" + (f"; {r.unresolved_nodes} nodes held in contact under slight tension"
+                                if r.unresolved_nodes else "")
+    else:
+        status = f"NOT converged; {r.unresolved_nodes} nodes unresolved"
+    print(f"contact rounds     {r.iterations} ({status})")
     print(f"mesh               {r.nodes} nodes, {r.config.element.upper()}, h = {r.config.h_contact_mm} mm")
     print(f"time               {r.seconds:.2f} s")
 
