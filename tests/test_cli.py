@@ -82,3 +82,25 @@ def test_cold_run_prints_only_json_on_stdout(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert REQUIRED <= json.loads(proc.stdout).keys()
     assert "preparing the skin block" in proc.stderr
+
+
+@pytest.mark.parametrize("name, params", [("standard-0.75", []), ("flattop-0.3", []), ("grating", ["period_mm=1.5"]),
+                                          ("bumps", ["lambda_mm=2.0", "top=flat", "top_diameter_mm=0.4"])])
+def test_texture_make_writes_heightmaps_in_mm(tmp_path, capsys, name, params):
+    from simulate.io import load_heightmap
+
+    out = tmp_path / "t.npy"
+    args = ["texture", "make", name, "--out", str(out), "--seed", "2", "--pixel-mm", "0.04", "--size-mm", "11"]
+    assert main(args + [a for p in params for a in ("--param", p)]) == 0
+    hm = load_heightmap(out, pixel_mm=0.04)
+    assert hm.shape == (275, 275) and hm.heights.min() == 0.0 and 0 < hm.heights.max() <= 1.0
+    recipe = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert recipe["name"] == name and recipe["seed"] == 2
+
+
+@pytest.mark.parametrize("args, message", [(["nope"], "unknown texture"), (["grating", "--param", "period"], "key=value"),
+                                           (["grating", "--param", "speed=3"], "unknown grating parameter"),
+                                           (["standard-0.7"], "not on the standard scale")])
+def test_texture_make_bad_input(tmp_path, capsys, args, message):
+    assert main(["texture", "make", *args, "--out", str(tmp_path / "x.npy")]) == 2
+    assert message in capsys.readouterr().err

@@ -1,0 +1,65 @@
+"""Every texture the project can make, by name: standard bumps, flat tops, bump recipes, natural families."""
+from __future__ import annotations
+
+from dataclasses import fields
+
+from simulate.heightmap import Heightmap, InputError
+
+from . import natural, textures
+
+
+def names() -> list[str]:
+    """Named textures and family names accepted by ``make_texture``."""
+    return textures.texture_names() + ["bumps"] + list(natural.FAMILIES)
+
+
+def parse_params(items: list[str]) -> dict[str, float | str]:
+    """``key=value`` strings to a dict; numbers become floats."""
+    out: dict[str, float | str] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise InputError(f"parameter {item!r} is not of the form key=value")
+        try:
+            out[key] = float(value)
+        except ValueError:
+            out[key] = value
+    return out
+
+
+def make_texture(name: str, seed: int = 0, size_mm: float = 12.0, pixel_mm: float = 0.05,
+                 params: dict | None = None) -> tuple[Heightmap, dict]:
+    """The heightmap (mm) and its recipe (JSON-ready) for a texture name or family."""
+    params = dict(params or {})
+    recipe = {"name": name, "seed": seed, "size_mm": size_mm, "pixel_mm": pixel_mm, "params": params}
+    if name in natural.FAMILIES:
+        return natural.make(name, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm, **params), recipe
+    if name == "bumps":
+        allowed = {f.name for f in fields(textures.BumpRecipe)} - {"size_mm", "pixel_mm", "seed"}
+        unknown = sorted(set(params) - allowed)
+        if unknown or "lambda_mm" not in params:
+            raise InputError(f"bumps needs lambda_mm=...; valid parameters: {', '.join(sorted(allowed))}"
+                             + (f" (unknown: {', '.join(unknown)})" if unknown else ""))
+        r = textures.BumpRecipe(size_mm=size_mm, pixel_mm=pixel_mm, seed=seed, **params)
+        return textures.bump_texture(r), recipe
+    if params:
+        raise InputError(f"{name} takes no parameters (use 'bumps' with lambda_mm=... for custom bumps)")
+    if name.startswith("standard-"):
+        lam = _number(name, "standard-")
+        return textures.standard_texture(lam, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm), recipe
+    if name.startswith("flattop-"):
+        d = _number(name, "flattop-")
+        return textures.flat_top_texture(d, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm), recipe
+    if name == "flat":
+        n = round(size_mm / pixel_mm)
+        import numpy as np
+
+        return Heightmap(np.zeros((n, n)), pixel_mm), recipe
+    raise InputError(f"unknown texture {name!r}; valid: {', '.join(names())}")
+
+
+def _number(name: str, prefix: str) -> float:
+    try:
+        return float(name[len(prefix):])
+    except ValueError:
+        raise InputError(f"unknown texture {name!r}; valid: {', '.join(names())}") from None
