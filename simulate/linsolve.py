@@ -36,7 +36,7 @@ class ConstrainedSystem:
         self,
         stiffness: sp.csr_matrix,
         near_null: np.ndarray,
-        rtol: float = 1e-7,
+        rtol: float = 1e-6,
         maxiter: int = 2000,
         rebuild_drift: float = 0.01,
     ) -> None:
