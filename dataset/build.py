@@ -1,0 +1,126 @@
+"""Parallel dataset generation on Dask: workers simulate, this process writes (one writer).
+
+Samples already in the file are skipped, so an interrupted build resumes where it
+stopped. Each worker process runs one BLAS/OpenMP thread and keeps one prepared
+``Simulator`` per configuration, so the block is meshed and assembled once per worker.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from simulate.config import SimConfig
+from simulate.heightmap import InputError
+
+from .recipe import Recipe, expand, realise
+from .store import DatasetWriter, result_fields, sample_id
+
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+_SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration
+
+
+def simulate_record(record: dict, config: dict) -> dict:
+    """Run the FEM for one sample record (on a worker); failures come back as data."""
+    from simulate.model import Simulator
+
+    key = json.dumps(config, sort_keys=True)
+    if key not in _SIMULATORS:
+        _SIMULATORS[key] = Simulator(SimConfig(**config))
+    out: dict = {"record": record, "heights": None, "pixel_mm": record["pixel_mm"]}
+    try:  # a failure is recorded with its reason, never stops the run
+        hm = realise(record)
+        out.update(heights=hm.heights.astype(np.float32), pixel_mm=hm.pixel_mm)
+        result = _SIMULATORS[key].run(hm)
+    except Exception as err:
+        return {**out, "error": f"{type(err).__name__}: {err}"}
+    return {**out, "fields": result_fields(result), "fluctuation": result.fluctuation.astype(np.float32)}
+
+
+@dataclass
+class Progress:
+    """Progress line on stderr: done/total, rate, ETA, failures."""
+
+    total: int
+    start: float
+    done: int = 0
+    failed: int = 0
+    every: int = 1
+
+    def update(self, failed: bool) -> None:
+        self.done += 1
+        self.failed += failed
+        if self.done % self.every and self.done != self.total:
+            return
+        elapsed = time.perf_counter() - self.start
+        rate = self.done / elapsed if elapsed > 0 else 0.0
+        eta = (self.total - self.done) / rate if rate > 0 else float("inf")
+        end = "\n" if self.done == self.total or not sys.stderr.isatty() else "\r"
+        print(f"  {self.done}/{self.total} samples  {3600 * rate:.0f}/h  ETA {_duration(eta)}  "
+              f"failed {self.failed}", end=end, file=sys.stderr, flush=True)
+
+
+def _duration(seconds: float) -> str:
+    if not np.isfinite(seconds):
+        return "?"
+    m, s = divmod(int(seconds), 60)
+    h, m = divmod(m, 60)
+    return f"{h}h{m:02d}m" if h else f"{m}m{s:02d}s"
+
+
+def build(out: str, n: int, recipe: Recipe, config: SimConfig, workers: int = 2,
+          scheduler: str | None = None, quiet: bool = False) -> dict:
+    """Simulate the first ``n`` samples of ``recipe`` into ``out``; returns counts."""
+    records = expand(recipe, n)
+    ids = [sample_id(r) for r in records]
+    if len(set(ids)) != len(ids):
+        raise InputError("the recipe produced duplicate samples; change its seed or ranges")
+    file_config = {"simulation": config.as_dict(), "recipe": json.loads(recipe.to_json())}
+    with DatasetWriter(out, config=file_config, version=_version()) as writer:
+        pending = [r for r, i in zip(records, ids) if i not in writer.ids]
+        counts = {"requested": n, "already_done": n - len(pending), "written": 0, "failed": 0}
+        if not quiet:
+            print(f"{out}: {counts['already_done']} of {n} samples present; simulating {len(pending)} on "
+                  f"{scheduler or f'{workers} local workers'}", file=sys.stderr, flush=True)
+        if pending:
+            _run(writer, pending, config.as_dict(), workers, scheduler, counts, quiet)
+    return counts
+
+
+def _run(writer: DatasetWriter, pending: list[dict], config: dict, workers: int, scheduler: str | None,
+         counts: dict, quiet: bool) -> None:
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    for name in THREAD_VARIABLES:  # inherited by the worker processes
+        os.environ[name] = "1"
+    cluster = None if scheduler else LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                                  dashboard_address=None)
+    client = Client(scheduler or cluster)
+    progress = Progress(total=len(pending), start=time.perf_counter(), every=1 if not quiet else len(pending))
+    try:
+        futures = [client.submit(simulate_record, r, config, pure=False) for r in pending]
+        for future in as_completed(futures):
+            res = future.result()
+            if "error" in res:
+                writer.write_failure(res["record"], res["heights"], res["pixel_mm"], res["error"])
+                counts["failed"] += 1
+            else:
+                writer.write_result(res["record"], res["heights"], res["pixel_mm"], res["fields"],
+                                    res["fluctuation"])
+                counts["written"] += 1
+            if not quiet:
+                progress.update("error" in res)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _version() -> str:
+    from roughness import __version__
+
+    return __version__
