@@ -46,6 +46,8 @@ class Recipe:
     max_perturb_steps: int = 3
     size_mm: float = 12.0
     pixel_mm: float = 0.05
+    holdout_family: str | None = None  # never trained on: the out-of-family score
+    test_fraction: float = 0.1  # share of base recipes (by sample id) held out for testing
 
     def __post_init__(self) -> None:
         if not self.families or min(self.families.values()) <= 0:
@@ -54,6 +56,10 @@ class Recipe:
             default_ranges(family)
         if not 0.0 <= self.perturb_probability <= 1.0:
             raise InputError("perturb_probability must lie in [0, 1]")
+        if self.holdout_family is not None and self.holdout_family not in self.families:
+            raise InputError(f"holdout_family {self.holdout_family!r} is not among the recipe's families")
+        if not 0.0 <= self.test_fraction < 1.0:
+            raise InputError("test_fraction must lie in [0, 1)")
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), sort_keys=True)

@@ -13,6 +13,7 @@ import pytest
 
 from dataset.build import build
 from dataset.recipe import Recipe, expand, realise
+import dataset
 from dataset.store import open_dataset, sample_id, verify
 from simulate.config import SimConfig
 
@@ -50,7 +51,8 @@ def test_failed_samples_are_recorded_and_do_not_stop_the_run(tmp_path):
     assert any("footprint" in r for r in reasons)  # texture made, simulation refused
 
 
-def test_killed_build_resumes_to_exactly_n_distinct_samples(tmp_path):
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT], ids=["SIGKILL", "SIGINT"])
+def test_killed_build_resumes_to_exactly_n_distinct_samples(tmp_path, sig):
     out = tmp_path / "k.h5"
     cmd = [sys.executable, "-m", "roughness.cli", "dataset", "build", "--out", str(out), "--n", "8",
            "--fidelity", "coarse", "--workers", "2", "--seed", "3", "--quiet"]
@@ -58,15 +60,15 @@ def test_killed_build_resumes_to_exactly_n_distinct_samples(tmp_path):
     deadline = time.time() + 240
     while time.time() < deadline and _count(out) < 2:
         time.sleep(0.5)
-    os.killpg(proc.pid, signal.SIGKILL)
-    proc.wait()
+    os.killpg(proc.pid, sig)
+    proc.wait(timeout=60)
     first = _count(out)
     assert 2 <= first < 8, "the kill should land mid-run"
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     counts = json.loads(done.stdout)
     assert counts["already_done"] == first and counts["written"] + counts["failed"] == 8 - first
-    with open_dataset(out) as ds:
+    with dataset.open(out) as ds:
         assert len(ds) == 8 and len(set(ds.ids)) == 8
     assert verify(out) == []
 
