@@ -20,25 +20,26 @@ Schema ("roughness.dataset", version 1)
 
 Crash safety
 ------------
-HDF5 updates its metadata in place, so a process killed while HDF5 writes can leave a file that
-no longer opens (about 1 in 200 SIGKILLs of a plain flush-per-sample h5py writer did so in our
-trials). HDF5 therefore never writes the file directly: h5py runs on ``_PagedView``, an in-memory
-page buffer over the file (h5py's file-object driver). Each sample is built as
-``samples/.tmp-<id>``, renamed to ``samples/<id>`` and then committed: the changed pages go to
-the redo journal ``<file>-journal`` as one SHA-256-sealed record (fsync), are copied into the
-file (fsync), and the journal is emptied. A torn record is ignored; a complete one is replayed
-by the next writer and overlaid in memory by readers.
+HDF5 updates its metadata in place: a plain flush-per-sample h5py writer killed at most of the
+write calls of one flush left a file in which earlier, complete samples were unreachable, or one
+that no longer opened (fault injection while developing this module). So HDF5 never writes the
+file directly here: h5py runs on ``_PagedView``, an in-memory page buffer over the file (h5py's
+file-object driver). Each sample is built as ``samples/.tmp-<id>``, renamed to ``samples/<id>``
+and committed: the changed pages go to the redo journal ``<file>-journal`` as one SHA-256-sealed
+record (fsync), are copied into the file (fsync), and the journal is emptied. A torn record is
+ignored; a complete one is replayed by the next writer and overlaid in memory by readers.
 
-Guarantee: whenever the writer stops (SIGKILL, SIGINT, an exception; at any instruction), the
-dataset holds every sample whose ``write_*`` call returned, possibly the one being committed,
-each complete, and nothing else; after an exception the writer rolls back to its last commit.
-Readers (``open_dataset``, ``info``, ``verify``) hold a shared ``flock`` on the file while they
-read and the writer an exclusive one while it copies, so they may run beside a writer. Plain h5py
-sees a consistent file except while a commit is copied (HDF5's own flock keeps the two apart) or
-after a writer died during that copy, until the next ``DatasetWriter`` opens the file: move or
-copy the file together with its journal, if one is left. The default HDF5 format (libver
-"earliest") is used on purpose: "latest" marks the file open-for-write in its superblock, a mark
-that would outlive a crash. POSIX only (``fcntl``).
+Guarantee: whenever the writer stops (SIGKILL, SIGINT or an exception, at any point), the dataset
+holds every sample whose ``write_*`` call returned, possibly the one being committed, each
+complete, and nothing else; after an exception the writer rolls back to its last commit. The
+fsync order also covers power loss where the file system honours fsync (not tested).
+Readers of this module hold a shared ``flock`` on the file while they read and a commit holds an
+exclusive one while it copies, so reading beside a running writer is safe. HDF5 flocks the files
+it opens, so a plain ``h5py.File`` is kept apart from commits too (a commit waits for it, warning
+after LOCK_PATIENCE_S); it sees a consistent file except after a writer died while copying,
+until the next ``DatasetWriter`` opens the file. Move or copy a file with its leftover journal.
+The default HDF5 format (libver "earliest") is used on purpose: "latest" marks the file
+open-for-write in its superblock, a mark that would outlive a crash. POSIX only (``fcntl``).
 """
 from __future__ import annotations
 
@@ -56,7 +57,7 @@ from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Callable, Iterator, NamedTuple
+from typing import BinaryIO, Callable, Iterator, NamedTuple
 
 import h5py
 import numpy as np
@@ -299,7 +300,7 @@ def _journal_bytes(path: Path) -> bytes:
         return b""
 
 
-def _claim_journal(path: Path) -> object:
+def _claim_journal(path: Path) -> BinaryIO:
     """Open and exclusively lock the journal of dataset ``path``; InputError if a writer holds it."""
     journal = journal_path(path)
     while True:

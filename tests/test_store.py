@@ -5,6 +5,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -333,3 +334,16 @@ def test_torn_journal_record_is_ignored(tmp_path):
     assert stored_indices(path) == [0, 1, 2]
     assert fill(path, range(5)) == [False] * 3 + [True] * 2
     assert stored_indices(path) == [0, 1, 2, 3, 4]
+
+
+def test_commits_wait_for_plain_h5py_readers(tmp_path, monkeypatch):
+    path = tmp_path / "d.h5"
+    fill(path, range(1))
+    monkeypatch.setattr(store, "LOCK_PATIENCE_S", 0.05)
+    plain = h5py.File(path, "r")  # HDF5 holds a shared flock until closed
+    closer = threading.Timer(0.5, plain.close)
+    closer.start()
+    with pytest.warns(UserWarning, match="an open h5py.File"):
+        assert fill(path, range(2)) == [False, True]
+    closer.join()
+    assert stored_indices(path) == [0, 1]
