@@ -49,13 +49,10 @@ class Progress:
     start: float
     done: int = 0
     failed: int = 0
-    every: int = 1
 
     def update(self, failed: bool) -> None:
         self.done += 1
         self.failed += failed
-        if self.done % self.every and self.done != self.total:
-            return
         elapsed = time.perf_counter() - self.start
         rate = self.done / elapsed if elapsed > 0 else 0.0
         eta = (self.total - self.done) / rate if rate > 0 else float("inf")
@@ -100,7 +97,7 @@ def _run(writer: DatasetWriter, pending: list[dict], config: dict, workers: int,
     cluster = None if scheduler else LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                                   dashboard_address=None)
     client = Client(scheduler or cluster)
-    progress = Progress(total=len(pending), start=time.perf_counter(), every=1 if not quiet else len(pending))
+    progress = Progress(total=len(pending), start=time.perf_counter())
     try:
         futures = [client.submit(simulate_record, r, config, pure=False) for r in pending]
         for future in as_completed(futures):
