@@ -21,8 +21,9 @@ from simulate.config import SimConfig  # noqa: E402
 from simulate.model import Simulator  # noqa: E402
 
 OUT = Path(__file__).parent / "results"
-GEOMETRIES = {"base 1.5 mm": lambda d: 1.5, "base = top + 1.2 mm": lambda d: d + 1.2,
-              "base = top + 0.6 mm": lambda d: d + 0.6}
+GEOMETRIES = {"base 1.5 mm": lambda d: 1.5, "base = top + 0.6 mm": lambda d: d + 0.6,
+              "base = top + 1.2 mm": lambda d: d + 1.2, "base = top + 1.6 mm (default)": lambda d: d + 1.6,
+              "base = top + 2.0 mm": lambda d: d + 2.0}
 
 
 def main() -> None:

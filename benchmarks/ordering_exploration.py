@@ -30,7 +30,7 @@ BASELINE = {"force_n": 10.0, "poisson": 0.45, "base_diameter_mm": 0.9, "contact"
 VARIATIONS = {
     "force_n": [2.0, 5.0, 20.0],
     "poisson": [0.3, 0.49],
-    "base_diameter_mm": [0.6, 1.2, 1.5, 1.8],
+    "base_diameter_mm": [0.6, 1.2, 1.5, 1.8, 1.9],
     "contact": ["frictionless"],
 }
 # Robustness of a wider cone base (the parameter the paper leaves open) to the others.

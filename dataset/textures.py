@@ -24,15 +24,19 @@ TOPS = ("cap", "flat")
 RING_FACTOR = 0.884
 RING_WIDTH = 0.1  # Gaussian sigma of the ring, as a fraction of its radius
 MIN_PIXELS_PER_LAMBDA = 4
+FLANK_RUN_MM = 0.8  # default horizontal run of the cone flank (base = top + 1.6 mm)
 
 
 @dataclass(frozen=True)
 class BumpRecipe:
     """Parameters of one bump texture; all lengths in mm.
 
-    ``base_diameter_mm`` is not given in the paper: 1.5 mm is our default, chosen because
-    the paper's ordering (V grows with lambda) then holds at its 10 N (see
-    benchmarks/results/ordering_coarse.md; 0.9 mm breaks it at 10 N). For ``top="cap"``,
+    The cone base is not given in the paper. By default (``base_diameter_mm=None``) the flank
+    has a fixed horizontal run of FLANK_RUN_MM, so base = top + 2 * FLANK_RUN_MM (1.9 mm for
+    the standard 0.3 mm caps). With it both of the paper's orderings hold at its 10 N: V grows
+    with lambda over the standard scale and falls as the flat top widens (see
+    benchmarks/results/ordering_coarse.md and flat_top.md; a 0.9 mm base breaks the first,
+    a fixed 1.5 mm base the second). ``base_mm`` is the base in use. For ``top="cap"``,
     ``top_diameter_mm`` is the footprint diameter of a spherical cap tangent to the cone flank;
     for ``top="flat"`` it is the diameter of the plateau (0.1..0.5 mm).
     """
@@ -41,10 +45,17 @@ class BumpRecipe:
     top: str = "cap"
     top_diameter_mm: float = 0.3
     height_mm: float = 1.0
-    base_diameter_mm: float = 1.5
+    base_diameter_mm: float | None = None
     size_mm: float = 12.0
     pixel_mm: float = 0.05
     seed: int = 0
+
+    @property
+    def base_mm(self) -> float:
+        """Cone base diameter (mm): given, or top + 2 * FLANK_RUN_MM."""
+        if self.base_diameter_mm is not None:
+            return self.base_diameter_mm
+        return self.top_diameter_mm + 2 * FLANK_RUN_MM
 
 
 def _check_grid(lambda_mm: float, size_mm: float, pixel_mm: float) -> None:
@@ -69,15 +80,15 @@ def _check_recipe(recipe: BumpRecipe) -> None:
         raise InputError(f"top must be one of {TOPS}, got {recipe.top!r}")
     if not recipe.height_mm > 0:
         raise InputError(f"height_mm must be positive, got {recipe.height_mm}")
-    if not recipe.base_diameter_mm > 0:
+    if not recipe.base_mm > 0:
         raise InputError(f"base_diameter_mm must be positive, got {recipe.base_diameter_mm}")
-    if recipe.size_mm <= recipe.base_diameter_mm:
-        raise InputError(f"size_mm={recipe.size_mm} must exceed base_diameter_mm={recipe.base_diameter_mm}")
+    if recipe.size_mm <= recipe.base_mm:
+        raise InputError(f"size_mm={recipe.size_mm} must exceed base_diameter_mm={recipe.base_mm}")
     d = recipe.top_diameter_mm
     if recipe.top == "flat" and not 0.1 - 1e-9 <= d <= 0.5 + 1e-9:
         raise InputError(f"flat top_diameter_mm must be within 0.1..0.5 mm, got {d}")
-    if not 0 < d < recipe.base_diameter_mm:
-        raise InputError(f"top_diameter_mm={d} must be positive and below base_diameter_mm={recipe.base_diameter_mm}")
+    if not 0 < d < recipe.base_mm:
+        raise InputError(f"top_diameter_mm={d} must be positive and below base_diameter_mm={recipe.base_mm}")
 
 
 def _ring_field(lambda_mm: float, n: int, pixel_mm: float, rng: np.random.Generator) -> np.ndarray:
@@ -121,7 +132,7 @@ def _cap_slope(height_mm: float, base_radius_mm: float, top_radius_mm: float) ->
 
 def _bump_profile(recipe: BumpRecipe, r: np.ndarray) -> np.ndarray:
     """Bump height (mm) at radial distance r (mm) from its centre; 0 beyond the base."""
-    big_r, a, h = recipe.base_diameter_mm / 2, recipe.top_diameter_mm / 2, recipe.height_mm
+    big_r, a, h = recipe.base_mm / 2, recipe.top_diameter_mm / 2, recipe.height_mm
     if recipe.top == "flat":
         z = np.minimum(h, h * (big_r - r) / (big_r - a))
     else:
@@ -136,7 +147,7 @@ def _bump_profile(recipe: BumpRecipe, r: np.ndarray) -> np.ndarray:
 def _render(recipe: BumpRecipe, centres: np.ndarray, n: int) -> np.ndarray:
     """Periodic (n, n) heightmap (mm): the maximum over bumps at the given centres (mm)."""
     p = recipe.pixel_mm
-    reach = math.ceil(recipe.base_diameter_mm / 2 / p)
+    reach = math.ceil(recipe.base_mm / 2 / p)
     offsets = np.arange(-reach, reach + 1)
     local = _bump_profile(recipe, p * np.hypot(offsets[:, None], offsets[None, :]))
     heights = np.zeros((n, n))

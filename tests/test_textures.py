@@ -81,7 +81,7 @@ def test_cap_top_is_rounded_and_tangent_to_the_flank():
     inner_slope, outer_slope = (z[2] - z[1]) / eps, (z[5] - z[4]) / eps
     assert z[3] == pytest.approx(z[2], abs=1e-4)
     assert inner_slope == pytest.approx(outer_slope, rel=1e-3)
-    assert _bump_profile(recipe, np.array([recipe.base_diameter_mm / 2]))[0] == pytest.approx(0.0, abs=1e-12)
+    assert _bump_profile(recipe, np.array([recipe.base_mm / 2]))[0] == pytest.approx(0.0, abs=1e-12)
 
 
 def test_named_textures_exist_with_mm_units():
