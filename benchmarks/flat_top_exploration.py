@@ -28,16 +28,20 @@ GEOMETRIES = {"base 1.5 mm": lambda d: 1.5, "base = top + 0.6 mm": lambda d: d +
 
 def main() -> None:
     sim = Simulator(SimConfig(fidelity="coarse"))
+    path = OUT / "flat_top.json"
+    done = {(r["force_n"], r["geometry"]): r for r in json.loads(path.read_text())} if path.exists() else {}
     rows = []
     for force in (2.0, 5.0, 10.0):
         for geometry, base in GEOMETRIES.items():
+            if (force, geometry) in done:  # resume: settings already measured are kept
+                rows.append(done[(force, geometry)])
+                continue
             means = [float(np.mean([sim.run(flat_top_texture(d, seed=s, base_diameter_mm=base(d)), force_n=force).roughness
                                     for s in (0, 1, 2)])) for d in FLAT_TOP_DIAMETERS_MM]
             rho = float(spearmanr(FLAT_TOP_DIAMETERS_MM, means).statistic)
             rows.append({"force_n": force, "geometry": geometry, "mean_V": means, "spearman": rho})
             print(rows[-1], flush=True)
-    OUT.mkdir(exist_ok=True)
-    (OUT / "flat_top.json").write_text(json.dumps(rows, indent=1))
+            path.write_text(json.dumps(rows + [r for k, r in done.items() if r not in rows], indent=1))
     lines = ["Flat-top textures (lambda 1.0 mm): Spearman of top diameter vs mean V (paper: negative)", "",
              "| force (N) | geometry | V at top 0.1 / 0.2 / 0.3 / 0.4 / 0.5 mm | Spearman |", "|---|---|---|---|"]
     lines += [f"| {r['force_n']:g} | {r['geometry']} | {' / '.join(f'{v:.4f}' for v in r['mean_V'])} | {r['spearman']:+.2f} |"
