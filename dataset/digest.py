@@ -1,0 +1,33 @@
+"""Checksums of a dataset file: the bytes, and the inputs in a form that regeneration reproduces.
+
+The file's own SHA-256 identifies one artifact; it changes with every build (creation times,
+completion order). ``inputs_sha256`` hashes, in id order, each sample's id, recipe and
+heightmap bytes: a rebuild from the same recipe gives the same value.
+"""
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+from .store import open_dataset
+
+
+def file_sha256(path: str | Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def inputs_sha256(path: str | Path) -> str:
+    h = hashlib.sha256()
+    with open_dataset(path) as ds:
+        for sid, recipe in sorted(zip(ds.ids, ds.recipes), key=lambda pair: pair[0]):
+            h.update(sid.encode())
+            h.update(repr(sorted(recipe.items())).encode())
+            try:
+                h.update(ds.heightmap(sid).heights.astype("<f4").tobytes())
+            except KeyError:  # a failed sample whose texture could not be made
+                h.update(b"no heightmap")
+    return h.hexdigest()
