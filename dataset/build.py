@@ -95,7 +95,7 @@ def _run(writer: DatasetWriter, pending: list[dict], config: dict, workers: int,
     for name in THREAD_VARIABLES:  # inherited by the worker processes
         os.environ[name] = "1"
     cluster = None if scheduler else LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                                  dashboard_address=None)
+                                                  dashboard_address=":0")
     client = Client(scheduler or cluster)
     progress = Progress(total=len(pending), start=time.perf_counter())
     try:
