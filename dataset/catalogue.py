@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import fields
 
-from simulate.heightmap import Heightmap, InputError
+from simulate.heightmap import Heightmap, InputError, flat
 
 from . import natural, textures
 
@@ -51,10 +51,7 @@ def make_texture(name: str, seed: int = 0, size_mm: float = 12.0, pixel_mm: floa
         d = _number(name, "flattop-")
         return textures.flat_top_texture(d, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm), recipe
     if name == "flat":
-        n = round(size_mm / pixel_mm)
-        import numpy as np
-
-        return Heightmap(np.zeros((n, n)), pixel_mm), recipe
+        return flat(size_mm, pixel_mm), recipe
     raise InputError(f"unknown texture {name!r}; valid: {', '.join(names())}")
 
 

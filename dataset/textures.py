@@ -14,7 +14,7 @@ import numpy as np
 from scipy import ndimage, optimize
 from scipy.spatial import cKDTree
 
-from simulate.heightmap import Heightmap, InputError
+from simulate.heightmap import Heightmap, InputError, flat
 
 STANDARD_LAMBDAS_MM = (0.625, 0.6875, 0.75, 0.8125, 0.875, 0.9375, 1.0, 1.0625, 1.125, 1.25, 1.375, 1.5, 1.625)
 FLAT_TOP_DIAMETERS_MM = (0.1, 0.2, 0.3, 0.4, 0.5)
@@ -191,8 +191,7 @@ def named_texture(name: str, seed: int = 0) -> Heightmap:
         raise InputError(f"unknown texture {name!r}; valid names: {', '.join(texture_names())}")
     if name == "flat":
         recipe = BumpRecipe(lambda_mm=1.0)
-        n = round(recipe.size_mm / recipe.pixel_mm)
-        return Heightmap(heights=np.zeros((n, n)), pixel_mm=recipe.pixel_mm)
+        return flat(recipe.size_mm, recipe.pixel_mm)
     kind, value = name.split("-")
     if kind == "standard":
         return standard_texture(float(value), seed=seed)

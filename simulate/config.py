@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-from .heightmap import Heightmap, InputError
+from .heightmap import Heightmap, InputError, positive_mm
 from .mesh import MeshSpec
 
 # Contact-face spacing (mm) per fidelity; ``auto`` picks from this ladder.
@@ -48,13 +48,13 @@ class SimConfig:
         _choice("element", self.element, ELEMENTS)
         for name in ("young_mpa", "tissue_mm", "width_mm", "bone_young_mpa", "bone_mm", "force_n",
                      "depth_mm", "window_mm", "grid_mm", "pair_distance_mm", "disk_radius_mm"):
-            _positive(name, getattr(self, name))
+            positive_mm(name, getattr(self, name))
         for name in ("poisson", "bone_poisson"):
             value = getattr(self, name)
             if not (math.isfinite(value) and -1.0 < value < 0.5):
                 raise InputError(f"{name} must lie in (-1, 0.5), got {value}")
         if self.h_contact_mm is not None:
-            _positive("h_contact_mm", self.h_contact_mm)
+            positive_mm("h_contact_mm", self.h_contact_mm)
         if self.depth_mm >= self.tissue_mm:
             raise InputError(f"receptor depth {self.depth_mm} mm must be inside the {self.tissue_mm} mm tissue")
         if self.window_mm > self.width_mm:
@@ -100,7 +100,3 @@ def _choice(name: str, value: str, options: tuple[str, ...]) -> None:
     if value not in options:
         raise InputError(f"{name} must be one of {', '.join(options)}; got {value!r}")
 
-
-def _positive(name: str, value: float) -> None:
-    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-        raise InputError(f"{name} must be a positive finite number, got {value!r}")

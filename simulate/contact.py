@@ -4,8 +4,9 @@ Each round solves the linear problem for a fixed contact set, twice (texture gap
 with the bone held, and a unit bone displacement), and combines the two so that the
 total contact reaction equals the force. Contact nodes stick (u_x = u_y = 0) or slide
 (frictionless, in the small-slope model of rough-surface contact: the texture pushes
-along z only, u_z = H(x + u_x, y + u_y) - z0, iterated as the nodes slide). Nodes whose contact pressure pulls the skin
-toward the texture are released; free nodes that penetrate the texture are added.
+along z only, u_z = H(x + u_x, y + u_y) - z0, iterated as the nodes slide). Nodes whose
+contact pressure pulls the skin toward the texture are released; free nodes that penetrate
+the texture are added.
 A node may change state at most ``MAX_FLIPS`` times; after that it is held in contact
 (the state that cannot penetrate), so the loop terminates. It is also capped at
 ``max_rounds``. Nodes held with a tensile reaction, repeated contact sets (cycling)

@@ -6,6 +6,7 @@ Pixel (i, j) holds the height at x = (j + 0.5) * pixel_mm, y = (i + 0.5) * pixel
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -138,12 +139,11 @@ def flat(size_mm: float = 12.0, pixel_mm: float = 0.05, height_mm: float = 0.0) 
 
 
 def positive_mm(name: str, value: float) -> float:
-    """``value`` as a float, or InputError unless it is a positive finite number."""
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a positive finite number, got {value!r}") from None
-    if isinstance(value, bool) or not (math.isfinite(number) and number > 0):
+    """``value`` as a float, or InputError unless it is a positive finite real number (not a string)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise InputError(f"{name} must be a positive finite number, got {value!r}")
+    number = float(value)
+    if not (math.isfinite(number) and number > 0):
         raise InputError(f"{name} must be a positive finite number, got {value!r}")
     return number
 
