@@ -1,8 +1,17 @@
-"""FEM reference engine: skin block on a rigid texture, strain at receptor depth, variation V."""
-from .config import SimConfig
-from .heightmap import Heightmap, InputError
-from .io import load_heightmap, save_heightmap
-from .model import Result, SimulationError, Simulator, roughness
+"""FEM reference engine: skin block on a rigid texture, strain at receptor depth, variation V.
 
-__all__ = ["Heightmap", "InputError", "Result", "SimConfig", "SimulationError", "Simulator",
-           "load_heightmap", "roughness", "save_heightmap"]
+Names are imported on first use, so ``simulate.heightmap`` loads without the FEM stack.
+"""
+from importlib import import_module
+
+_HOMES = {"SimConfig": "config", "Heightmap": "heightmap", "InputError": "heightmap", "load_heightmap": "io",
+          "save_heightmap": "io", "Result": "model", "SimulationError": "errors", "Simulator": "model",
+          "roughness": "model"}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str) -> object:
+    if name not in _HOMES:
+        raise AttributeError(f"module 'simulate' has no attribute {name!r}")
+    return getattr(import_module(f".{_HOMES[name]}", __name__), name)

@@ -11,6 +11,7 @@ import numpy as np
 from . import mesh as meshing
 from .config import SimConfig
 from .contact import ContactError, ContactProblem, ContactState, solve_contact
+from .errors import SimulationError
 from .elasticity import rigid_body_modes, stiffness
 from .face import ContactFace
 from .heightmap import Heightmap, InputError
@@ -193,10 +194,6 @@ class Simulator:
             config=config,
             state=state,
         )
-
-
-class SimulationError(RuntimeError):
-    """The FEM model could not produce an answer; the message says why."""
 
 
 def _regime_warnings(config: SimConfig, state: ContactState) -> list[str]:
