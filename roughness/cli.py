@@ -79,6 +79,38 @@ def build_parser() -> argparse.ArgumentParser:
     v = data_sub.add_parser("verify", help="check schema, ids and finite values; exit 1 if anything is wrong")
     v.add_argument("file")
     v.set_defaults(run=_dataset_verify)
+    tr = sub.add_parser("train", help="train the CNN surrogate on a dataset file (CPU, needs torch)")
+    tr.add_argument("data", help="HDF5 dataset from `roughness dataset build`")
+    tr.add_argument("--out", required=True, help="folder for checkpoint.pt, metrics.json, history.csv")
+    tr.add_argument("--seed", type=int, default=0)
+    tr.add_argument("--holdout-family", help="family never trained on, scored as out-of-family (default: the "
+                    "dataset recipe's; 'none' to train on all)")
+    tr.add_argument("--max-epochs", type=int, default=200)
+    tr.add_argument("--max-minutes", type=float, default=25.0, help="wall-clock budget for the epochs")
+    tr.add_argument("--threads", type=int, default=2, help="torch threads")
+    tr.set_defaults(run=_train)
+    ex = sub.add_parser("export", help="export a training checkpoint to ONNX, checked against PyTorch")
+    ex.add_argument("checkpoint")
+    ex.add_argument("--out", required=True, help="ONNX file to write")
+    ex.set_defaults(run=_export)
+
+    pr = sub.add_parser("predict", help="roughness in milliseconds (surrogate), FEM where out of domain")
+    pr.add_argument("inputs", nargs="+", metavar="HEIGHTMAP",
+                    help="heightmap files, folders of them, or roughness dataset files (.h5)")
+    pr.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
+    pr.add_argument("--engine", choices=("surrogate", "fem", "auto"), default="auto",
+                    help="auto (default): surrogate, FEM for inputs outside its domain")
+    pr.add_argument("--fidelity", choices=("coarse", "default", "fine"),
+                    help="FEM fidelity (default: that of the model's training labels)")
+    pr.add_argument("--pixel-mm", type=float, help="pixel size in mm (required unless the file states it)")
+    pr.add_argument("--height-mm", type=float, help="height of full-scale white in mm (PNG/TIFF)")
+    pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures")
+    pr.add_argument("--centre", type=_float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
+    pr.add_argument("--batch-size", type=int, default=256)
+    pr.add_argument("--threads", type=int, default=1, help="onnxruntime threads (default 1)")
+    pr.add_argument("--json", action="store_true", help="one JSON object per input and line")
+    pr.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
+    pr.set_defaults(run=_predict)
     return parser
 
 
@@ -202,6 +234,97 @@ def _dataset_verify(args: argparse.Namespace) -> int:
     return 1 if problems else 0
 
 
+def _train(args: argparse.Namespace) -> int:
+    from simulate.heightmap import InputError
+
+    _require_torch("train")
+    from surrogate.train import TrainConfig, train
+
+    if not os.path.isfile(args.data):
+        raise InputError(f"dataset file not found: {args.data}")
+    for name in ("max_epochs", "threads"):
+        if getattr(args, name) < 1:
+            raise InputError(f"--{name.replace('_', '-')} must be at least 1")
+    train(TrainConfig(data=args.data, out=args.out, seed=args.seed, holdout_family=args.holdout_family,
+                      max_epochs=args.max_epochs, max_minutes=args.max_minutes, threads=args.threads))
+    return 0
+
+
+def _export(args: argparse.Namespace) -> int:
+    from simulate.heightmap import InputError
+
+    _require_torch("export")
+    from surrogate.export import ExportError, export
+
+    try:
+        report = export(args.checkpoint, args.out)
+    except ValueError as err:
+        raise InputError(str(err)) from None
+    except ExportError as err:
+        print(f"roughness: export check failed, nothing written: {err}", file=sys.stderr)
+        return 1
+    print(json.dumps(report))
+    return 0
+
+
+def _require_torch(command: str) -> None:
+    from importlib.util import find_spec
+
+    from simulate.heightmap import InputError
+
+    if find_spec("torch") is None or find_spec("onnx") is None:
+        raise InputError(f"`roughness {command}` needs PyTorch and onnx: pip install \".[train]\" "
+                         "(torch==2.13.0 is the CPU build)")
+
+
+def _predict(args: argparse.Namespace) -> int:
+    from surrogate.inputs import InputReader
+    from surrogate.predictor import SurrogateModel, predict
+
+    model = SurrogateModel(args.model or _default_model(), threads=_at_least_one("--threads", args.threads))
+    reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, model.footprint_mm, args.centre, args.tile)
+    start, done = time.monotonic(), 0
+
+    def show(p) -> None:
+        nonlocal done
+        done += 1
+        print(json.dumps(p.as_dict()) if args.json else _prediction_line(p), flush=True)
+        if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
+            _log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
+
+    predict(reader.heightmaps(), engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
+            fidelity=args.fidelity, batch_size=_at_least_one("--batch-size", args.batch_size),
+            sources=reader.sources(), on_result=show)
+    for source, error in reader.errors:
+        print(f"roughness: error: {error}", file=sys.stderr)
+        if args.json:
+            print(json.dumps({"input": source, "error": error}))
+    return 2 if reader.errors else 0
+
+
+def _default_model() -> str:
+    from surrogate.predictor import DEFAULT_MODEL
+
+    return str(DEFAULT_MODEL)
+
+
+def _at_least_one(flag: str, value: int) -> int:
+    from simulate.heightmap import InputError
+
+    if value < 1:
+        raise InputError(f"{flag} must be at least 1, got {value}")
+    return value
+
+
+def _prediction_line(p) -> str:
+    where = p.placement
+    scale = (f"~ lambda {where.equivalent_lambda_mm:.3f} mm on the standard scale, {where.jnd_from_nearest:+.1f} JND "
+             f"from {where.nearest_standard}" if where.on_scale else
+             f"off the standard scale ({where.jnd_from_nearest:+.1f} JND from {where.nearest_standard})")
+    domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
+    return f"{p.source}: V = {p.roughness:.4f} ({p.engine}, {domain}, {1e3 * p.seconds:.1f} ms), {scale}"
+
+
 def _print_result(r) -> None:
     print(f"roughness V        {r.roughness:.5f} ± {r.roughness_stderr:.5f} (strain variation at "
           f"{r.config.depth_mm} mm depth, d = r = {r.config.pair_distance_mm} mm)")
@@ -221,7 +344,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     from simulate.heightmap import InputError
-    from simulate.model import SimulationError
+    from simulate.errors import SimulationError
 
     try:
         return args.run(args)

@@ -1,0 +1,108 @@
+"""Surrogate latency and throughput with onnxruntime, and the ratio to FEM, in one run.
+
+Model-only latency at batch 1 on one thread (the graph alone), end-to-end time per heightmap
+(footprint patch, descriptors, domain check and the graph, via surrogate.predict), batched
+throughput on 1 and 2 threads, and FEM `default` and `coarse` per texture (warm block: the
+mesh, assembly and base field are excluded, as they are paid once per process).
+
+    python benchmarks/surrogate_latency.py [--model models/roughness-cnn.onnx]
+    # writes benchmarks/results/surrogate_latency.{md,json}
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import time
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+OUT = Path(__file__).parent / "results"
+
+
+def timed(fn, repeats: int) -> list[float]:
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return times
+
+
+def main() -> None:
+    from dataset.recipe import Recipe, realise, sample_record
+    from dataset.textures import standard_texture
+    from simulate.config import SimConfig
+    from simulate.model import Simulator
+    from surrogate.predictor import DEFAULT_MODEL, SurrogateModel, predict
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--model", default=str(DEFAULT_MODEL))
+    args = parser.parse_args()
+    families = {f: 1.0 for f in ("bumps", "cellular", "dots", "fbm", "grains", "grating", "knit", "woven")}
+    maps = [realise(sample_record(Recipe(seed=99, families=families), i)) for i in range(64)]
+    one = SurrogateModel(args.model, threads=1)
+    patches = np.stack([one.patch(hm) for hm in maps])
+    for p in patches[:20]:
+        one.run(p[None])  # warm-up
+
+    model_only = [t for p in np.tile(patches, (8, 1, 1)) for t in timed(lambda: one.session.run(
+        None, {"heights": p[None, None]}), 1)]
+    end_to_end = timed(lambda: predict(maps[0], engine="surrogate", model=one), 200)
+    batched = {}
+    for threads in (1, 2):
+        model = SurrogateModel(args.model, threads=threads)
+        batch = np.tile(patches, (4, 1, 1))[:, None]  # 256 patches
+        model.session.run(None, {"heights": batch})
+        seconds = min(timed(lambda: model.session.run(None, {"heights": batch}), 5))
+        batched[threads] = len(batch) / seconds
+    e2e_batched = len(maps) / min(timed(lambda: predict(maps, engine="surrogate", model=SurrogateModel(
+        args.model, threads=2), batch_size=64), 3))
+
+    fem = {}
+    for fidelity in ("coarse", "default"):
+        sim = Simulator(SimConfig(fidelity=fidelity))
+        sim.run(standard_texture(1.0, seed=0))  # cold: mesh and base field
+        fem[fidelity] = statistics.mean(sim.run(standard_texture(lam, seed=s)).seconds
+                                        for lam, s in ((0.75, 1), (1.0, 2), (1.25, 3)))
+
+    lat = statistics.median(model_only)
+    e2e = statistics.median(end_to_end)
+    result = {
+        "model": Path(args.model).name, "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+        "batch1_1thread_ms_median": 1e3 * lat, "batch1_1thread_ms_p95": 1e3 * float(np.percentile(model_only, 95)),
+        "end_to_end_1thread_ms_median": 1e3 * e2e,
+        "batched_patches_per_s": {str(k): v for k, v in batched.items()},
+        "end_to_end_batched_2threads_per_s": e2e_batched,
+        "fem_warm_seconds": fem,
+        "speedup_vs_fem_default_end_to_end": fem["default"] / e2e,
+        "speedup_vs_fem_coarse_end_to_end": fem["coarse"] / e2e,
+    }
+    OUT.mkdir(exist_ok=True)
+    (OUT / "surrogate_latency.json").write_text(json.dumps(result, indent=1))
+    rows = [
+        ("graph only, batch 1, 1 thread (median / p95)", f"{1e3 * lat:.2f} ms / "
+                                                          f"{result['batch1_1thread_ms_p95']:.2f} ms"),
+        ("end to end per heightmap, 1 thread (median)", f"{1e3 * e2e:.2f} ms"),
+        ("graph only, batch 256, 1 thread", f"{batched[1]:,.0f} patches/s"),
+        ("graph only, batch 256, 2 threads", f"{batched[2]:,.0f} patches/s"),
+        ("end to end, batch 64, 2 threads", f"{e2e_batched:,.0f} heightmaps/s"),
+        ("FEM coarse, warm, per texture", f"{fem['coarse']:.2f} s"),
+        ("FEM default, warm, per texture", f"{fem['default']:.2f} s"),
+        ("speed-up over FEM default (end to end, batch 1)", f"{result['speedup_vs_fem_default_end_to_end']:,.0f}x"),
+        ("speed-up over FEM coarse (end to end, batch 1)", f"{result['speedup_vs_fem_coarse_end_to_end']:,.0f}x"),
+    ]
+    table = "| measure | value |\n|---|---|\n" + "".join(f"| {a} | {b} |\n" for a, b in rows)
+    (OUT / "surrogate_latency.md").write_text(
+        f"# Surrogate latency ({result['model']}, {result['machine']})\n\n"
+        "Regenerate: `python benchmarks/surrogate_latency.py`. All numbers from one run.\n\n" + table)
+    print(table)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,16 @@
+"""CNN surrogate of the FEM roughness: training (torch), ONNX export, prediction (numpy + onnxruntime).
+
+``surrogate.predict(heightmaps, engine="auto")`` needs no torch; names load on first use.
+"""
+from importlib import import_module
+
+_HOMES = {"predict": "predictor", "Prediction": "predictor", "SurrogateModel": "predictor",
+          "DEFAULT_MODEL": "predictor", "StandardScale": "calibration", "load_scale": "calibration"}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str) -> object:
+    if name not in _HOMES:
+        raise AttributeError(f"module 'surrogate' has no attribute {name!r}")
+    return getattr(import_module(f".{_HOMES[name]}", __name__), name)

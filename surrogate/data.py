@@ -1,0 +1,83 @@
+"""Training data for the surrogate: footprint patches, targets and splits from a dataset file (torch-free).
+
+Splits are drawn per *base texture* (family, parameters, texture seed; perturbation ignored),
+so no perturbed sibling of a test texture is trained on; the held-out family goes to "ood".
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from dataset.store import open_dataset
+from simulate.heightmap import InputError
+
+from .patch import descriptors, footprint_patch
+
+SPLITS = ("train", "val", "test", "ood")
+LOG_OFFSET = 1e-3  # the network predicts log(V + LOG_OFFSET): finite for flat textures (V = 0)
+
+
+def base_key(record: dict) -> str:
+    """Identity of the unperturbed texture a sample was made from."""
+    base = {k: record[k] for k in ("family", "params", "seed")}
+    return hashlib.sha1(json.dumps(base, sort_keys=True).encode()).hexdigest()
+
+
+def split_of(record: dict, test_fraction: float, val_fraction: float, holdout_family: str | None) -> str:
+    """Which split a sample belongs to: a fixed function of its base texture."""
+    if record["family"] == holdout_family:
+        return "ood"
+    u = int(base_key(record)[:8], 16) / 2**32
+    return "test" if u < test_fraction else "val" if u < test_fraction + val_fraction else "train"
+
+
+@dataclass
+class Samples:
+    """Patches (n, P, P) in mm (max 0), FEM V, and per-sample labels."""
+
+    ids: np.ndarray
+    patches: np.ndarray
+    roughness: np.ndarray
+    family: np.ndarray
+    split: np.ndarray
+    descriptors: np.ndarray  # (n, len(DESCRIPTOR_NAMES))
+
+    def subset(self, split: str) -> "Samples":
+        keep = self.split == split
+        return Samples(*(getattr(self, f)[keep] for f in ("ids", "patches", "roughness", "family", "split",
+                                                          "descriptors")))
+
+    def __len__(self) -> int:
+        return len(self.ids)
+
+
+def target(roughness: np.ndarray) -> np.ndarray:
+    """Network target from V."""
+    return np.log(np.asarray(roughness, dtype=np.float64) + LOG_OFFSET).astype(np.float32)
+
+
+def load_samples(path: str, test_fraction: float = 0.1, val_fraction: float = 0.1,
+                 holdout_family: str | None = "knit", progress: bool = True) -> Samples:
+    """Every ok sample of a dataset file as a footprint patch, with its split."""
+    rows: dict[str, list] = {k: [] for k in ("ids", "patches", "roughness", "family", "split", "descriptors")}
+    with open_dataset(path) as data:
+        total, start = len(data), time.monotonic()
+        for i, sample in enumerate(data.iter_samples("ok")):
+            patch = footprint_patch(sample.heightmap)
+            for key, value in (("ids", sample.id), ("patches", patch), ("roughness", sample.values["V"]),
+                               ("family", sample.recipe["family"]), ("descriptors", descriptors(patch)),
+                               ("split", split_of(sample.recipe, test_fraction, val_fraction, holdout_family))):
+                rows[key].append(value)
+            if progress and (i + 1) % 250 == 0:
+                print(f"\rreading {path}: {i + 1}/{total} samples ({time.monotonic() - start:.0f} s)",
+                      end="", file=sys.stderr, flush=True)
+    if progress:
+        print(file=sys.stderr)
+    if not rows["ids"]:
+        raise InputError(f"{path} holds no ok samples to train on")
+    return Samples(*(np.asarray(rows[k]) for k in ("ids", "patches", "roughness", "family", "split", "descriptors")))

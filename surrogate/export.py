@@ -1,0 +1,110 @@
+"""Export a training checkpoint to one self-contained ONNX file and check it against PyTorch.
+
+    roughness export runs/cnn/checkpoint.pt --out models/roughness-cnn.onnx
+
+The graph takes ``heights`` (batch, 1, P, P) float32 with a dynamic batch axis and returns
+``log_roughness`` (batch,) and ``embedding`` (batch, E). Everything prediction needs besides the
+weights (pixel size, log offset, input domain, label fidelity, metrics, data checksum) is stored
+as JSON under the model's metadata key ``roughness``. The file is written only if onnxruntime
+agrees with PyTorch on real textures (relative difference of V below ``RTOL``) for batch sizes
+1 and 16, and the batch axis is really dynamic.
+"""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import onnx
+import onnxruntime as ort
+import torch
+
+from .network import RoughnessNet
+from .patch import footprint_patch
+
+RTOL = 1e-4
+METADATA_KEY = "roughness"
+INPUT, OUTPUTS = "heights", ("log_roughness", "embedding")
+
+
+class ExportError(RuntimeError):
+    """The exported graph disagrees with PyTorch or lacks a dynamic batch axis."""
+
+
+def load_checkpoint(path: str | Path) -> tuple[RoughnessNet, dict]:
+    """The network (eval mode) and the checkpoint's metadata."""
+    try:
+        checkpoint = torch.load(path, map_location="cpu", weights_only=False)
+    except FileNotFoundError:
+        raise ValueError(f"checkpoint not found: {path}") from None
+    except Exception as err:
+        raise ValueError(f"{path} is not a roughness training checkpoint: {err}") from None
+    if not isinstance(checkpoint, dict) or "state_dict" not in checkpoint:
+        raise ValueError(f"{path} is not a roughness training checkpoint (no state_dict)")
+    model = RoughnessNet(tuple(checkpoint["widths"]), checkpoint["hidden"])
+    model.load_state_dict(checkpoint["state_dict"])
+    return model.eval(), {k: v for k, v in checkpoint.items() if k != "state_dict"}
+
+
+def check_patches(n: int = 16) -> np.ndarray:
+    """Footprint patches of ``n`` textures drawn as the default recipe draws them (all families)."""
+    from dataset.natural import FAMILIES
+    from dataset.recipe import Recipe, realise, sample_record
+
+    recipe = Recipe(name="export-check", seed=7, families={f: 1.0 for f in ("bumps", *FAMILIES)})
+    return np.stack([footprint_patch(realise(sample_record(recipe, i))) for i in range(n)])[:, None]
+
+
+def export(checkpoint_path: str | Path, out: str | Path, patches: np.ndarray | None = None) -> dict:
+    """Write the ONNX model to ``out`` after checking it; returns the check's numbers."""
+    model, meta = load_checkpoint(checkpoint_path)
+    patches = check_patches() if patches is None else patches.astype(np.float32)
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(suffix=".onnx", dir=out.parent)
+    os.close(fd)
+    try:
+        batch = torch.export.Dim("batch", min=1)
+        torch.onnx.export(model, (torch.from_numpy(patches[:2]),), tmp, input_names=[INPUT], output_names=list(OUTPUTS),
+                          dynamic_shapes=({0: batch},), external_data=False, dynamo=True)
+        graph = onnx.load(tmp)
+        graph.metadata_props.add(key=METADATA_KEY, value=json.dumps(meta, default=_plain))
+        onnx.save(graph, tmp)
+        report = verify(model, tmp, patches)
+        os.replace(tmp, out)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+    return report | {"path": str(out), "bytes": out.stat().st_size}
+
+
+def verify(model: RoughnessNet, onnx_path: str, patches: np.ndarray) -> dict:
+    """Dynamic batch axis present, and onnxruntime matches PyTorch at batch 1 and the full batch."""
+    dim = onnx.load(onnx_path).graph.input[0].type.tensor_type.shape.dim[0]
+    if not dim.dim_param:
+        raise ExportError(f"the exported batch axis is fixed at {dim.dim_value}, not dynamic")
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = 1
+    session = ort.InferenceSession(onnx_path, options, providers=["CPUExecutionProvider"])
+    offset = json.loads(onnx.load(onnx_path).metadata_props[-1].value)["log_offset"]
+    with torch.no_grad():
+        ref_log, ref_emb = (t.numpy() for t in model(torch.from_numpy(patches)))
+    got_log = np.concatenate([session.run(list(OUTPUTS), {INPUT: patches[i:i + 1]})[0] for i in range(len(patches))])
+    batch_log, batch_emb = session.run(list(OUTPUTS), {INPUT: patches})
+    ref_v = np.exp(ref_log) - offset
+    worst = max(float(np.max(np.abs(np.exp(got) - offset - ref_v) / np.abs(ref_v))) for got in (got_log, batch_log))
+    emb_diff = float(np.max(np.abs(batch_emb - ref_emb)) / max(np.max(np.abs(ref_emb)), 1e-12))
+    if not worst < RTOL or not emb_diff < RTOL:
+        raise ExportError(f"onnxruntime differs from PyTorch: relative difference {worst:.2e} in V and "
+                          f"{emb_diff:.2e} in the embedding (limit {RTOL:.0e})")
+    return {"max_rel_diff_V": worst, "max_rel_diff_embedding": emb_diff, "checked_inputs": len(patches),
+            "batch_axis": dim.dim_param}
+
+
+def _plain(value: object) -> object:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"cannot store {type(value).__name__} in model metadata")

@@ -1,0 +1,86 @@
+"""Inputs of `roughness predict`: heightmap files, folders of them, and roughness dataset files.
+
+Each input is loaded when it is needed, so a large folder or dataset streams through in
+batches. An input that cannot be used (unreadable, too small for the footprint, ...) is
+recorded in ``errors`` with its reason and skipped; the others are still predicted.
+"""
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Iterator
+from pathlib import Path
+
+import h5py
+
+from simulate.heightmap import Heightmap, InputError
+from simulate.io import SUFFIXES, load_heightmap
+
+DATASET_SCHEMA = "roughness.dataset"
+
+
+class InputReader:
+    """Heightmaps named by the paths given, in order; folders sorted by file name."""
+
+    def __init__(self, paths: list[str], pixel_mm: float | None, height_mm: float | None, footprint_mm: float,
+                 centre_mm: tuple[float, float] | None, tile: bool) -> None:
+        self.pixel_mm, self.height_mm = pixel_mm, height_mm
+        self.footprint_mm, self.centre_mm, self.tile = footprint_mm, centre_mm, tile
+        self.errors: list[tuple[str, str]] = []
+        self._items: list[tuple[str, Path, str | None]] = []  # (name, file, sample id in a dataset)
+        for path in map(Path, paths):
+            self._items += self._expand(path)
+        self.total = len(self._items)
+        self._names: deque[str] = deque()
+
+    def _expand(self, path: Path) -> list[tuple[str, Path, str | None]]:
+        if path.is_dir():
+            files = sorted(p for p in path.iterdir() if p.suffix.lower() in SUFFIXES and p.is_file())
+            if not files:
+                raise InputError(f"{path} holds no heightmap files ({', '.join(SUFFIXES)})")
+            return [item for f in files for item in self._expand(f)]
+        if path.suffix.lower() in (".h5", ".hdf5") and _is_dataset(path):
+            from dataset.store import open_dataset
+
+            with open_dataset(path) as data:
+                ids = [sid for sid, status in zip(data.ids, data.table()["status"]) if status == "ok"]
+            return [(f"{path}:{sid}", path, sid) for sid in ids]
+        return [(str(path), path, None)]
+
+    def heightmaps(self) -> Iterator[Heightmap]:
+        """The usable heightmaps; the name of each is queued for ``sources``."""
+        datasets: dict[Path, object] = {}
+        try:
+            for name, path, sid in self._items:
+                try:
+                    hm = self._load(path, sid, datasets)
+                    hm.require_footprint(self.footprint_mm, self.centre_mm, self.tile)
+                except InputError as err:
+                    self.errors.append((name, str(err) if str(path) in str(err) else f"{name}: {err}"))
+                    continue
+                self._names.append(name)
+                yield hm
+        finally:
+            for data in datasets.values():
+                data.close()
+
+    def sources(self) -> Iterator[str]:
+        """Names of the heightmaps yielded so far, in order (consume in step with ``heightmaps``)."""
+        while True:
+            yield self._names.popleft()
+
+    def _load(self, path: Path, sid: str | None, datasets: dict) -> Heightmap:
+        if sid is None:
+            return load_heightmap(path, self.pixel_mm, self.height_mm)
+        if path not in datasets:
+            from dataset.store import open_dataset
+
+            datasets[path] = open_dataset(path)
+        return datasets[path].heightmap(sid)
+
+
+def _is_dataset(path: Path) -> bool:
+    try:
+        with h5py.File(path, "r") as h5:
+            return h5.attrs.get("schema") == DATASET_SCHEMA
+    except OSError:
+        return False  # not HDF5: load_heightmap reports it

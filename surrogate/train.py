@@ -1,0 +1,173 @@
+"""Train the surrogate CNN on a dataset file, on the CPU: one loop, top to bottom.
+
+    roughness train training.h5 --out runs/cnn
+
+Reads every ok sample as a footprint patch, splits by base texture (train / val / test, and
+the held-out family as "ood"), trains with random 90-degree rotations and mirrorings (the
+skin block is square and the tissue isotropic, so V changes under them only by mesh and sampling noise), keeps the checkpoint with the best
+validation loss, stops early when it stops improving, and writes ``checkpoint.pt``,
+``metrics.json`` (scores per split and per family), ``history.csv`` (losses per epoch) and
+``predictions.csv`` (FEM and predicted V of every sample) to the output folder.
+"""
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from dataset.digest import inputs_sha256
+from dataset.store import open_dataset
+
+from .data import LOG_OFFSET, load_samples, target
+from .domain import Domain
+from .metrics import scores
+from .network import RoughnessNet, parameter_count
+from .patch import PATCH_PIXEL_MM, FOOTPRINT_MM
+
+
+@dataclass
+class TrainConfig:
+    data: str
+    out: str
+    seed: int = 0
+    holdout_family: str | None = None  # None: the dataset recipe's; "none": no family held out
+    test_fraction: float | None = None  # None: the dataset recipe's
+    val_fraction: float = 0.1
+    widths: tuple[int, ...] = (16, 32, 64, 96)
+    hidden: int = 64
+    batch_size: int = 32
+    learning_rate: float = 3e-3
+    weight_decay: float = 1e-4
+    max_epochs: int = 200
+    patience: int = 30  # epochs without a better validation loss before stopping
+    max_minutes: float = 25.0  # wall-clock budget; the best checkpoint so far is kept
+    threads: int = 2
+
+
+def augment(x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
+    """A random element of the square's symmetry group (rotations, mirrors) per batch."""
+    k = int(torch.randint(4, (1,), generator=generator))
+    x = torch.rot90(x, k, dims=(2, 3))
+    return x.flip(3) if bool(torch.randint(2, (1,), generator=generator)) else x
+
+
+@torch.no_grad()
+def infer(model: RoughnessNet, patches: np.ndarray, batch: int = 256) -> tuple[np.ndarray, np.ndarray]:
+    """Predicted V and embeddings for patches (n, P, P)."""
+    model.eval()
+    logs, embeddings = [], []
+    for i in range(0, len(patches), batch):
+        log_v, emb = model(torch.from_numpy(patches[i:i + batch, None]))
+        logs.append(log_v.numpy())
+        embeddings.append(emb.numpy())
+    return np.maximum(np.exp(np.concatenate(logs)) - LOG_OFFSET, 0.0), np.concatenate(embeddings)
+
+
+def train(cfg: TrainConfig) -> Path:
+    torch.manual_seed(cfg.seed)
+    torch.set_num_threads(cfg.threads)
+    out = Path(cfg.out)
+    out.mkdir(parents=True, exist_ok=True)
+    start = time.monotonic()
+
+    # data: patches in mm (max 0) and log-V targets, split by base texture
+    with open_dataset(cfg.data) as data:
+        recipe, simulation = data.config.get("recipe", {}), data.config.get("simulation", data.config)
+    holdout = recipe.get("holdout_family") if cfg.holdout_family is None else cfg.holdout_family
+    holdout = None if holdout == "none" else holdout
+    test_fraction = recipe.get("test_fraction", 0.1) if cfg.test_fraction is None else cfg.test_fraction
+    samples = load_samples(cfg.data, test_fraction, cfg.val_fraction, holdout)
+    tr, va = samples.subset("train"), samples.subset("val")
+    if len(tr) < cfg.batch_size or len(va) == 0:
+        raise ValueError(f"{cfg.data}: {len(tr)} training and {len(va)} validation samples are too few to train on")
+    x_train, y_train = torch.from_numpy(tr.patches[:, None]), torch.from_numpy(target(tr.roughness))
+    x_val, y_val = torch.from_numpy(va.patches[:, None]), torch.from_numpy(target(va.roughness))
+    log(f"samples: {', '.join(f'{s} {int((samples.split == s).sum())}' for s in ('train', 'val', 'test', 'ood'))}")
+
+    # model and optimiser: AdamW, linear warm-up then cosine decay over max_epochs
+    model = RoughnessNet(cfg.widths, cfg.hidden)
+    log(f"model: {parameter_count(model):,} parameters")
+    optimizer = torch.optim.AdamW(model.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
+    steps_per_epoch = math.ceil(len(tr) / cfg.batch_size)
+    total_steps, warmup = cfg.max_epochs * steps_per_epoch, 3 * steps_per_epoch
+    schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, lambda s: min((s + 1) / warmup, 0.5 * (
+        1 + math.cos(math.pi * min(s / total_steps, 1.0)))))
+    generator = torch.Generator().manual_seed(cfg.seed)
+
+    best_val, best_epoch, history = math.inf, -1, []
+    for epoch in range(cfg.max_epochs):
+        model.train()
+        order, train_loss = torch.randperm(len(tr), generator=generator), 0.0
+        for i in range(0, len(tr), cfg.batch_size):
+            idx = order[i:i + cfg.batch_size]
+            pred, _ = model(augment(x_train[idx], generator))
+            loss = F.mse_loss(pred, y_train[idx])
+            optimizer.zero_grad(set_to_none=True)
+            loss.backward()
+            optimizer.step()
+            schedule.step()
+            train_loss += loss.item() * len(idx) / len(tr)
+
+        model.eval()
+        with torch.no_grad():
+            val_loss = F.mse_loss(model(x_val)[0], y_val).item()
+        minutes = (time.monotonic() - start) / 60
+        history.append((epoch, train_loss, val_loss, schedule.get_last_lr()[0], minutes))
+        improved = val_loss < best_val
+        if improved:
+            best_val, best_epoch = val_loss, epoch
+            torch.save(model.state_dict(), out / "best.pt")
+        log(f"epoch {epoch:3d}  train {train_loss:.4f}  val {val_loss:.4f}  lr {history[-1][3]:.2e}  "
+            f"{minutes:5.1f} min{'  *' if improved else ''}")
+        if epoch - best_epoch >= cfg.patience:
+            log(f"early stop: no better validation loss for {cfg.patience} epochs")
+            break
+        if minutes > cfg.max_minutes:
+            log(f"time budget of {cfg.max_minutes} min reached")
+            break
+
+    # evaluate the best model on every split; fit its input domain on the training inputs
+    model.load_state_dict(torch.load(out / "best.pt"))
+    predicted, embeddings = infer(model, samples.patches)
+    domain = Domain.fit(samples.descriptors[samples.split == "train"], embeddings[samples.split == "train"])
+    flagged = np.array([bool(r) for r in domain.check(samples.descriptors, embeddings)])
+    metrics = {}
+    for split in ("train", "val", "test", "ood"):
+        part = samples.split == split
+        if part.any():
+            metrics[split] = scores(samples.roughness[part], predicted[part]) | {"out_of_domain": float(flagged[part].mean())}
+            log(f"{split:5s} " + "  ".join(f"{k} {v:.4g}" for k, v in metrics[split].items()))
+    test = samples.split == "test"
+    by_family = {f: scores(samples.roughness[test & (samples.family == f)], predicted[test & (samples.family == f)])
+                 for f in np.unique(samples.family[test])}
+    (out / "predictions.csv").write_text("id,family,split,V_fem,V_predicted,out_of_domain\n" + "".join(
+        f"{i},{f},{s},{v:.6g},{p:.6g},{int(o)}\n" for i, f, s, v, p, o in zip(
+            samples.ids, samples.family, samples.split, samples.roughness, predicted, flagged)))
+    checkpoint = {
+        "state_dict": model.state_dict(), "widths": list(cfg.widths), "hidden": cfg.hidden,
+        "patch_pixel_mm": PATCH_PIXEL_MM, "footprint_mm": FOOTPRINT_MM, "log_offset": LOG_OFFSET,
+        "label_fidelity": simulation.get("fidelity", "default"), "simulation": simulation, "domain": domain.to_dict(),
+        "metrics": metrics, "test_by_family": by_family, "holdout_family": holdout, "test_fraction": test_fraction,
+        "data": {"file": Path(cfg.data).name, "recipe": recipe.get("name"), "inputs_sha256": inputs_sha256(cfg.data)},
+        "train_config": asdict(cfg), "best_epoch": best_epoch, "epochs": len(history),
+        "minutes": (time.monotonic() - start) / 60, "parameters": parameter_count(model),
+    }
+    torch.save(checkpoint, out / "checkpoint.pt")
+    (out / "metrics.json").write_text(json.dumps({k: v for k, v in checkpoint.items() if k not in (
+        "state_dict", "domain")}, indent=1))
+    (out / "history.csv").write_text("epoch,train_loss,val_loss,lr,minutes\n" + "".join(
+        ",".join(f"{v:.6g}" for v in row) + "\n" for row in history))
+    (out / "best.pt").unlink()
+    log(f"wrote {out / 'checkpoint.pt'} (best epoch {best_epoch}, {checkpoint['minutes']:.1f} min)")
+    return out / "checkpoint.pt"
+
+
+def log(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)

@@ -1,0 +1,251 @@
+"""The CNN surrogate: splits, training outputs, ONNX export round trip, torch-free prediction,
+the domain flag, batch/single agreement, the standard scale, and errors for bad inputs."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import onnx
+import pytest
+import torch
+
+from dataset.digest import inputs_sha256
+from dataset.recipe import Recipe, realise, sample_record
+from dataset.store import DatasetWriter
+from dataset.textures import standard_texture
+from simulate.heightmap import Heightmap, InputError
+from simulate.io import save_heightmap
+from surrogate.calibration import StandardScale, load_scale
+from surrogate.data import split_of
+from surrogate.export import ExportError, check_patches, export, load_checkpoint, verify
+from surrogate.patch import descriptors, footprint_patch
+from surrogate.predictor import DEFAULT_MODEL, SurrogateModel, predict
+from surrogate.train import TrainConfig, train
+
+ROOT = Path(__file__).parents[1]
+EXAMPLE = ROOT / "examples" / "standard-1.0mm.png"
+CONFIG = {"recipe": {"name": "tiny", "holdout_family": "knit", "test_fraction": 0.2},
+          "simulation": {"fidelity": "coarse", "force_n": 10.0}}
+
+
+def fake_fields(v: float) -> dict:
+    return {"roughness": v, "roughness_stderr": 1e-4, "contact_fraction": 0.9, "indentation_mm": 3.4,
+            "converged": True, "iterations": 3, "unresolved_nodes": 0, "cycled": False, "seconds": 1.0,
+            "contact_history": [10, 12], "grid_axis_mm": np.linspace(-4, 4, 5)}
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    """A 40-sample dataset of real textures with a synthetic label (V = 0.05 rms slope), a short
+    training run on it, and its export: the machinery, not the accuracy, is under test here."""
+    root = tmp_path_factory.mktemp("surrogate")
+    data = root / "tiny.h5"
+    recipe = Recipe(name="tiny", seed=5, families={"bumps": 1, "fbm": 1, "grating": 1, "knit": 1},
+                    holdout_family="knit")
+    with DatasetWriter(data, CONFIG, "test") as writer:
+        for i in range(40):
+            record = sample_record(recipe, i)
+            hm = realise(record)
+            v = 0.05 * descriptors(footprint_patch(hm))[2]
+            writer.write_result(record, hm.heights, hm.pixel_mm, fake_fields(v), np.zeros((5, 5)))
+    torch.manual_seed(0)
+    checkpoint = train(TrainConfig(data=str(data), out=str(root / "run"), max_epochs=3, batch_size=8,
+                                   val_fraction=0.2))
+    model_path = root / "model.onnx"
+    report = export(checkpoint, model_path, patches=check_patches(4))
+    return SimpleNamespace(root=root, data=data, checkpoint=checkpoint, model=model_path, report=report)
+
+
+def test_split_follows_the_base_texture():
+    record = {"family": "bumps", "params": {"lambda_mm": 1.0}, "seed": 3, "perturbation": None}
+    splits = {split_of({**record, "perturbation": p}, 0.3, 0.3, "knit")
+              for p in (None, [{"kind": "blur"}], [{"kind": "noise"}])}
+    assert len(splits) == 1  # perturbed siblings share their base texture's split
+    assert split_of({**record, "family": "knit"}, 0.3, 0.3, "knit") == "ood"
+    seen = {split_of({**record, "seed": s}, 0.3, 0.3, None) for s in range(50)}
+    assert seen == {"train", "val", "test"}
+
+
+def test_training_writes_checkpoint_metrics_and_history(tiny):
+    run = tiny.root / "run"
+    metrics = json.loads((run / "metrics.json").read_text())
+    assert {"train", "val", "ood"} <= metrics["metrics"].keys()
+    assert metrics["data"]["inputs_sha256"] == inputs_sha256(tiny.data)
+    assert metrics["label_fidelity"] == "coarse" and metrics["parameters"] < 1_000_000
+    history = (run / "history.csv").read_text().splitlines()
+    assert history[0].startswith("epoch,train_loss,val_loss") and len(history) == 1 + metrics["epochs"]
+    assert np.isfinite(metrics["metrics"]["val"]["spearman"])
+
+
+def test_export_round_trip(tiny):
+    assert tiny.report["max_rel_diff_V"] < 1e-4 and tiny.report["batch_axis"]
+    graph = onnx.load(tiny.model)
+    assert graph.graph.input[0].type.tensor_type.shape.dim[0].dim_param  # dynamic batch
+    assert not any(t.data_location == onnx.TensorProto.EXTERNAL for t in graph.graph.initializer)
+    model, meta = load_checkpoint(tiny.checkpoint)
+    patches = check_patches(5)
+    with torch.no_grad():
+        expected = np.exp(model(torch.from_numpy(patches))[0].numpy()) - meta["log_offset"]
+    surrogate = SurrogateModel(tiny.model)
+    for batch in (patches[:1], patches):
+        got, _ = surrogate.run(batch[:, 0])
+        np.testing.assert_allclose(got, expected[:len(batch)], rtol=1e-4)
+
+
+def test_export_refuses_a_graph_that_disagrees(tiny):
+    model, _ = load_checkpoint(tiny.checkpoint)
+    with torch.no_grad():
+        model.head[-1].bias += 0.01
+    with pytest.raises(ExportError, match="differs from PyTorch"):
+        verify(model, str(tiny.model), check_patches(2))
+
+
+def test_export_of_a_missing_or_foreign_checkpoint_fails_clearly(tmp_path, capsys):
+    from roughness.cli import main
+
+    assert main(["export", str(tmp_path / "none.pt"), "--out", str(tmp_path / "m.onnx")]) == 2
+    junk = tmp_path / "junk.pt"
+    junk.write_text("not a checkpoint")
+    assert main(["export", str(junk), "--out", str(tmp_path / "m.onnx")]) == 2
+    err = capsys.readouterr().err
+    assert "checkpoint not found" in err and "not a roughness training checkpoint" in err
+    assert not (tmp_path / "m.onnx").exists() and "Traceback" not in err
+
+
+def test_prediction_imports_no_torch(tiny):
+    code = f"""
+import importlib.abc, sys
+class Block(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.split('.')[0] in ('torch', 'onnx', 'sklearn'):
+            raise ImportError('blocked: ' + name)
+sys.meta_path.insert(0, Block())
+from dataset.textures import standard_texture
+from surrogate import predict
+[p] = predict(standard_texture(1.0, seed=1), engine='surrogate', model={str(tiny.model)!r})
+assert p.roughness > 0 and p.engine == 'surrogate'
+print('ok', sorted(m for m in sys.modules if m.split('.')[0] in ('torch', 'onnx', 'sklearn')))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok []"
+
+
+def test_batch_and_single_predictions_agree(tiny):
+    maps = [realise(sample_record(Recipe(seed=11, families={"bumps": 1, "woven": 1}), i)) for i in range(6)]
+    one = predict(maps, engine="surrogate", model=tiny.model, batch_size=1)
+    many = predict(maps, engine="surrogate", model=tiny.model, batch_size=4)
+    np.testing.assert_allclose([p.roughness for p in one], [p.roughness for p in many], rtol=1e-5)
+    assert [p.source for p in many] == [f"heightmap {i}" for i in range(6)]
+
+
+def test_shipped_model_flags_inputs_unlike_its_training_data():
+    model = SurrogateModel()
+    typical = predict(standard_texture(1.0, seed=21), engine="surrogate", model=model)[0]
+    assert typical.in_domain and typical.domain_notes == []
+    tall = Heightmap(standard_texture(1.0, seed=21).heights * 6, 0.05)  # 6 mm bumps: taller than the tissue
+    spiky = Heightmap(np.where(np.random.default_rng(0).random((240, 240)) < 0.01, 0.8, 0.0), 0.05)
+    for hm in (tall, spiky):
+        p = predict(hm, engine="surrogate", model=model)[0]
+        assert not p.in_domain and p.domain_notes and np.isfinite(p.roughness)
+
+
+def test_auto_runs_fem_outside_the_domain():
+    tall = Heightmap(standard_texture(1.0, seed=21).heights * 3, 0.05)
+    [p] = predict(tall, engine="auto")
+    assert p.engine == "fem" and not p.in_domain and p.fidelity == "coarse" and 0 < p.roughness < 1
+
+
+def test_shipped_model_agrees_with_fem_on_the_bundled_example(capsys):
+    from roughness.cli import main
+    from simulate.io import load_heightmap
+    from simulate.model import Simulator
+    from simulate.config import SimConfig
+
+    assert main(["predict", str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert {"roughness", "engine", "in_domain", "seconds", "equivalent_lambda_mm", "jnd_from_nearest"} <= out.keys()
+    assert out["engine"] == "surrogate" and out["in_domain"] and out["seconds"] < 1
+    fem = Simulator(SimConfig(fidelity="coarse")).run(load_heightmap(EXAMPLE, 0.05, 1.0)).roughness
+    assert abs(out["roughness"] - fem) / fem < 0.15
+    assert 0.75 < out["equivalent_lambda_mm"] < 1.25  # a lambda = 1 mm texture sits near 1 mm on the scale
+
+
+def test_predict_folder_and_dataset(tiny, tmp_path, capsys):
+    from roughness.cli import main
+
+    folder = tmp_path / "maps"
+    folder.mkdir()
+    for i in range(3):
+        save_heightmap(realise(sample_record(Recipe(seed=12), i)), folder / f"m{i}.npy")
+    assert main(["predict", str(folder), str(tiny.data), "--model", str(tiny.model), "--engine", "surrogate",
+                 "--pixel-mm", "0.05", "--json", "--batch-size", "16"]) == 0
+    rows = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert len(rows) == 3 + 40
+    assert rows[0]["input"].endswith("m0.npy") and rows[3]["input"].startswith(str(tiny.data) + ":")
+
+
+def test_predict_bad_inputs_exit_2_and_keep_the_good_ones(tmp_path, capsys):
+    from roughness.cli import main
+
+    small = tmp_path / "small.npy"
+    np.save(small, np.zeros((40, 40)))
+    text = tmp_path / "model.onnx"
+    text.write_text("not onnx")
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    cases = [
+        ([str(EXAMPLE), str(tmp_path / "missing.npy"), "--pixel-mm", "0.05", "--height-mm", "1"], "not found"),
+        ([str(small), "--pixel-mm", "0.05"], "--tile"),
+        ([str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--model", str(text)], "not a loadable ONNX"),
+        ([str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--model", str(tmp_path / "no.onnx")],
+         "model not found"),
+        ([str(empty)], "holds no heightmap files"),
+        ([str(EXAMPLE), "--pixel-mm", "-1", "--height-mm", "1"], "pixel"),
+        ([str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--batch-size", "0"], "--batch-size"),
+    ]
+    for argv, message in cases:
+        assert main(["predict", *argv, "--engine", "surrogate"]) == 2, argv
+        captured = capsys.readouterr()
+        assert message in captured.err and "Traceback" not in captured.err, (argv, captured.err)
+    assert main(["predict", str(EXAMPLE), str(tmp_path / "missing.npy"), "--pixel-mm", "0.05", "--height-mm", "1",
+                 "--engine", "surrogate"]) == 2
+    assert "standard-1.0mm.png: V = " in capsys.readouterr().out  # the good input is still answered
+
+
+def test_onnx_without_roughness_metadata_is_refused(tiny, tmp_path):
+    graph = onnx.load(tiny.model)
+    del graph.metadata_props[:]
+    bare = tmp_path / "bare.onnx"
+    onnx.save(graph, bare)
+    with pytest.raises(InputError, match="without roughness metadata"):
+        SurrogateModel(bare)
+
+
+def test_standard_scale_placement():
+    scale = StandardScale((0.5, 1.0, 1.5), (0.05, 0.1, 0.2), "test")
+    mid = scale.place(0.1)
+    assert mid.equivalent_lambda_mm == pytest.approx(1.0) and mid.on_scale and mid.nearest_standard == "standard-1"
+    assert scale.place(0.1 * 1.19).jnd_from_nearest == pytest.approx(1.0)
+    assert scale.place(0.05 * np.sqrt(2)).equivalent_lambda_mm == pytest.approx(0.75)
+    low = scale.place(0.0)
+    assert not low.on_scale and low.equivalent_lambda_mm == 0.5 and np.isfinite(low.jnd_from_nearest)
+    with pytest.raises(ValueError):
+        scale.place(float("nan"))
+    with pytest.raises(ValueError, match="rise with lambda"):
+        StandardScale((0.5, 1.0), (0.2, 0.1), "test")
+    for fidelity in ("coarse", "default"):
+        assert len(load_scale(fidelity).lambdas_mm) == 13
+
+
+def test_shipped_model_matches_its_card_and_data():
+    assert DEFAULT_MODEL.stat().st_size < 5e6
+    meta = SurrogateModel().meta
+    shipped = json.loads((ROOT / "datasets" / "training-v1.sha256.json").read_text())
+    assert meta["data"]["inputs_sha256"] == shipped["inputs_sha256"]
+    assert shipped["inputs_sha256"] in (ROOT / "models" / "MODEL_CARD.md").read_text()
+    assert meta["parameters"] < 1_000_000 and meta["label_fidelity"] == "coarse"
