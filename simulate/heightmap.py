@@ -60,8 +60,8 @@ class Heightmap:
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
             raise ValueError("sample coordinates must be finite")
         ny, nx = self.shape
-        j0, j1, fx = _bracket(x / self.pixel_mm - 0.5, nx, periodic)
-        i0, i1, fy = _bracket(y / self.pixel_mm - 0.5, ny, periodic)
+        j0, j1, fx = bracket(x / self.pixel_mm - 0.5, nx, periodic)
+        i0, i1, fy = bracket(y / self.pixel_mm - 0.5, ny, periodic)
         h = self.heights
         top = h[i0, j0] * (1 - fx) + h[i0, j1] * fx
         bottom = h[i1, j0] * (1 - fx) + h[i1, j1] * fx
@@ -168,7 +168,7 @@ def _checked_heights(heights: np.ndarray) -> np.ndarray:
     return out
 
 
-def _bracket(u: np.ndarray, n: int, periodic: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def bracket(u: np.ndarray, n: int, periodic: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Neighbouring indices and weight of the upper one for continuous pixel indices ``u`` on an axis of n."""
     if periodic:
         base = np.floor(u)

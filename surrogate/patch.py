@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from simulate.heightmap import Heightmap
+from simulate.heightmap import Heightmap, bracket
 
 FOOTPRINT_MM = 10.0  # the skin block's width (simulate.config default)
 PATCH_PIXEL_MM = 0.1  # model pixel size
@@ -23,19 +23,31 @@ def footprint_patch(heightmap: Heightmap, centre_mm: tuple[float, float] | None 
                     pixel_mm: float = PATCH_PIXEL_MM, width_mm: float = FOOTPRINT_MM) -> np.ndarray:
     """Heights (mm, max 0) of the footprint square centred at ``centre_mm`` on ``pixel_mm`` pixels.
 
-    Raises InputError (from the heightmap) if the footprint leaves a non-tiled map.
+    Each patch pixel is the mean of sub x sub bilinear samples of the map (sub = ceil(pixel_mm /
+    map pixel)); bilinear sampling is separable, so the patch is Wy @ H @ Wx.T with sparse-banded
+    averaging matrices. Raises InputError (from the heightmap) if the footprint leaves a non-tiled map.
     """
     heightmap.require_footprint(width_mm, centre_mm, tile)
     cx, cy = centre_mm or heightmap.centre_mm
     n = round(width_mm / pixel_mm)
-    sub = max(1, math.ceil(pixel_mm / heightmap.pixel_mm - 1e-9))  # sub-samples per patch pixel and axis
-    offsets = (np.arange(sub) + 0.5) / sub * pixel_mm
-    corner = np.arange(n) * pixel_mm - width_mm / 2
-    x = (cx + corner[:, None] + offsets[None, :]).ravel()
-    y = (cy + corner[:, None] + offsets[None, :]).ravel()
-    fine = heightmap.sample(x[None, :], y[:, None], periodic=tile)
-    patch = fine.reshape(n, sub, n, sub).mean(axis=(1, 3))
+    sub = max(1, math.ceil(pixel_mm / heightmap.pixel_mm - 1e-9))
+    ny, nx = heightmap.shape
+    rows, wy = _averaging(cy - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, ny, tile)
+    cols, wx = _averaging(cx - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, nx, tile)
+    patch = wy @ heightmap.heights[np.ix_(rows, cols)] @ wx.T
     return (patch - patch.max()).astype(np.float32)
+
+
+def _averaging(start_mm: float, n: int, pixel_mm: float, sub: int, map_pixel_mm: float, size: int,
+               periodic: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Map indices used along one axis and the (n, len(indices)) weights averaging their bilinear samples."""
+    offsets = (np.arange(sub) + 0.5) / sub * pixel_mm
+    u = ((start_mm + np.arange(n)[:, None] * pixel_mm + offsets) / map_pixel_mm - 0.5).ravel()
+    lower, upper, frac = bracket(u, size, periodic)
+    used, index = np.unique(np.concatenate([lower, upper]), return_inverse=True)
+    row = np.tile(np.arange(n * sub) // sub, 2)  # patch pixel of each sub-sample
+    weights = np.bincount(row * len(used) + index, np.concatenate([1 - frac, frac]) / sub, n * len(used))
+    return used, weights.reshape(n, len(used))
 
 
 def descriptors(patch: np.ndarray, pixel_mm: float = PATCH_PIXEL_MM) -> np.ndarray:

@@ -75,6 +75,8 @@ class SurrogateModel:
         self.pixel_mm = float(self.meta["patch_pixel_mm"])
         self.footprint_mm = float(self.meta["footprint_mm"])
         self.fidelity = str(self.meta["label_fidelity"])
+        n = round(self.footprint_mm / self.pixel_mm)
+        self.session.run(None, {"heights": np.zeros((1, 1, n, n), np.float32)})  # one-time allocations
 
     def patch(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False) -> np.ndarray:
         """The model's input for a heightmap: footprint heights (mm, max 0) on its pixel grid."""

@@ -60,6 +60,34 @@ def tiny(tmp_path_factory):
     return SimpleNamespace(root=root, data=data, checkpoint=checkpoint, model=model_path, report=report)
 
 
+def bilinear_mean_patch(hm: Heightmap, centre, tile: bool, pixel_mm: float = 0.1, n: int = 100) -> np.ndarray:
+    """The definition footprint_patch implements: the mean of sub x sub bilinear samples per pixel."""
+    sub = int(np.ceil(pixel_mm / hm.pixel_mm - 1e-9))
+    cx, cy = centre or hm.centre_mm
+    axis = (np.arange(n)[:, None] * pixel_mm + (np.arange(sub) + 0.5) / sub * pixel_mm - n * pixel_mm / 2).ravel()
+    fine = hm.sample((cx + axis)[None, :], (cy + axis)[:, None], periodic=tile)
+    patch = fine.reshape(n, sub, n, sub).mean(axis=(1, 3))
+    return patch - patch.max()
+
+
+@pytest.mark.parametrize("shape, pixel_mm, centre, tile", [
+    ((240, 250), 0.05, (5.3, 6.1), False), ((300, 300), 0.034, None, False), ((40, 40), 0.3, None, False),
+    ((70, 70), 0.05, (1.0, 2.0), True), ((120, 130), 0.1, None, False)])
+def test_footprint_patch_is_the_mean_of_bilinear_samples(shape, pixel_mm, centre, tile):
+    hm = Heightmap(np.random.default_rng(1).random(shape), pixel_mm)
+    patch = footprint_patch(hm, centre, tile)
+    assert patch.shape == (100, 100) and patch.max() == 0
+    np.testing.assert_allclose(patch, bilinear_mean_patch(hm, centre, tile), atol=1e-6)
+
+
+def test_footprint_patch_of_a_005mm_map_averages_2x2_pixels():
+    heights = np.random.default_rng(2).random((240, 240))
+    expected = heights[20:220, 20:220].reshape(100, 2, 100, 2).mean(axis=(1, 3))
+    np.testing.assert_allclose(footprint_patch(Heightmap(heights, 0.05)), expected - expected.max(), atol=1e-6)
+    with pytest.raises(InputError, match="--tile"):
+        footprint_patch(Heightmap(heights[:150, :150], 0.05))
+
+
 def test_split_follows_the_base_texture():
     record = {"family": "bumps", "params": {"lambda_mm": 1.0}, "seed": 3, "perturbation": None}
     splits = {split_of({**record, "perturbation": p}, 0.3, 0.3, "knit")
@@ -249,3 +277,27 @@ def test_shipped_model_matches_its_card_and_data():
     assert meta["data"]["inputs_sha256"] == shipped["inputs_sha256"]
     assert shipped["inputs_sha256"] in (ROOT / "models" / "MODEL_CARD.md").read_text()
     assert meta["parameters"] < 1_000_000 and meta["label_fidelity"] == "coarse"
+
+
+def test_extreme_inputs_give_finite_answers_or_are_flagged():
+    model = SurrogateModel()
+    rng = np.random.default_rng(3)
+    spike = np.zeros((240, 240))
+    spike[120, 120] = 1.0
+    cases = {
+        "flat": (np.zeros((240, 240)), 0.05, False),
+        "near-flat": (1e-3 * rng.random((240, 240)), 0.05, False),
+        "single spike": (spike, 0.05, False),
+        "tiny pixels": (standard_texture(1.0, seed=4).resampled(0.01).heights, 0.01, True),
+        "huge pixels": (standard_texture(1.0, seed=4).resampled(0.5).heights, 0.5, True),
+    }
+    answers = {name: predict(Heightmap(h, px), engine="surrogate", model=model)[0]
+               for name, (h, px, _) in cases.items()}
+    for name, p in answers.items():
+        assert np.isfinite(p.roughness) and p.roughness >= 0, name
+        assert np.isfinite(p.placement.jnd_from_nearest), name
+    for name in ("flat", "near-flat", "single spike"):
+        assert not answers[name].in_domain, name  # nothing like these was trained on
+    assert answers["tiny pixels"].in_domain  # the same texture, finer sampled: the same patch
+    [fem] = predict(Heightmap(np.zeros((240, 240)), 0.05), engine="auto", model=model)
+    assert fem.engine == "fem" and fem.roughness == pytest.approx(0.0, abs=1e-9)
