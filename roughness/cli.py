@@ -7,6 +7,8 @@ import os
 import sys
 import time
 
+COMPARE_ENGINES = ("fem:coarse", "fem:default", "surrogate", "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance")
+
 
 def _float_pair(text: str) -> tuple[float, float]:
     try:
@@ -111,6 +113,18 @@ def build_parser() -> argparse.ArgumentParser:
     pr.add_argument("--json", action="store_true", help="one JSON object per input and line")
     pr.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
     pr.set_defaults(run=_predict)
+    cmp = sub.add_parser("compare", help="time and score engines against a reference engine (resumable)")
+    cmp.add_argument("input", help="dataset file (.h5), folder of heightmaps, or recipe (.json, with --n)")
+    cmp.add_argument("--out", required=True, help="folder for results.jsonl (the cache), tables, plots, report.md")
+    cmp.add_argument("--engines", nargs="+", default=list(COMPARE_ENGINES), metavar="ENGINE",
+                     help="fem:coarse fem:default fem:fine surrogate[:MODEL.onnx] ra p90 glcm_sum_of_squares "
+                          "glcm_sum_variance (default: all but fem:fine)")
+    cmp.add_argument("--reference", default="fem:fine", help="engine the others are scored against")
+    cmp.add_argument("--n", type=int, help="number of textures (the first n; required for a recipe)")
+    cmp.add_argument("--pixel-mm", type=float, help="pixel size of a folder's heightmaps (mm)")
+    cmp.add_argument("--height-mm", type=float, help="full-scale height of a folder's PNG/TIFF heightmaps (mm)")
+    cmp.add_argument("--quiet", action="store_true")
+    cmp.set_defaults(run=_compare)
     return parser
 
 
@@ -323,6 +337,39 @@ def _prediction_line(p) -> str:
              f"off the standard scale ({where.jnd_from_nearest:+.1f} JND from {where.nearest_standard})")
     domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
     return f"{p.source}: V = {p.roughness:.4f} ({p.engine}, {domain}, {1e3 * p.seconds:.1f} ms), {scale}"
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from roughness.compare import ResultCache, run, textures_of
+    from roughness.engines import make_engine
+    from roughness.report import write_report
+
+    if args.n is not None:
+        _at_least_one("--n", args.n)
+    specs = list(dict.fromkeys([args.reference, *args.engines]))
+    engines = [make_engine(spec) for spec in specs]
+    textures, stored = textures_of(args.input, args.n, args.pixel_mm, args.height_mm)
+    out = Path(args.out)
+    cache = ResultCache(out)
+    try:
+        run(textures, engines, cache, stored, quiet=args.quiet)
+    except KeyboardInterrupt:
+        print(f"roughness: interrupted; results so far are kept in {cache.path}; run the same command again to "
+              "resume", file=sys.stderr)
+        return 130
+    cost = next((_model_cost(e) for e in engines if e.kind == "surrogate"), None)
+    table = write_report(textures, {e.spec: e.kind for e in engines}, args.reference, cache, out, cost, args.input)
+    print(table)
+    _log(args, f"report written to {out / 'report.md'}")
+    return 0
+
+
+def _model_cost(engine) -> dict | None:
+    from surrogate.predictor import DEFAULT_MODEL, SurrogateModel
+
+    return SurrogateModel(engine.model_path or DEFAULT_MODEL).meta.get("cost_core_seconds")
 
 
 def _print_result(r) -> None:

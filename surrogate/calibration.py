@@ -15,6 +15,7 @@ import argparse
 import json
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -65,6 +66,7 @@ class StandardScale:
         return Placement(lam, bool(log_v[0] <= x <= log_v[-1]), f"standard-{self.lambdas_mm[nearest]:g}", float(jnd))
 
 
+@lru_cache(maxsize=8)
 def load_scale(fidelity: str, path: str | Path = SCALE_PATH) -> StandardScale:
     """The shipped standard scale for a FEM fidelity ("coarse", "default", "fine")."""
     tables = json.loads(Path(path).read_text())["tables"]

@@ -24,13 +24,13 @@ class Domain:
     @classmethod
     def fit(cls, descriptors: np.ndarray, embeddings: np.ndarray, quantile: float = 0.995,
             margin: float = 0.05) -> "Domain":
-        """Domain of training inputs: descriptor quantiles widened by ``margin`` of their span."""
+        """Domain of training inputs: descriptor quantiles widened by ``margin`` of their span (not below 0)."""
         from sklearn.covariance import LedoitWolf
 
         lo, hi = np.quantile(descriptors, [1 - quantile, quantile], axis=0)
         pad = margin * (hi - lo)
         cov = LedoitWolf().fit(embeddings)
-        domain = cls(lo - pad, hi + pad, cov.location_, cov.precision_, np.inf)
+        domain = cls(np.maximum(lo - pad, 0.0), hi + pad, cov.location_, cov.precision_, np.inf)  # descriptors >= 0
         threshold = float(np.quantile(domain.distance(embeddings), quantile))
         return cls(domain.low, domain.high, domain.mean, domain.precision, threshold)
 

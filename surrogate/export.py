@@ -73,6 +73,7 @@ def export(checkpoint_path: str | Path, out: str | Path, patches: np.ndarray | N
         graph.metadata_props.add(key=METADATA_KEY, value=json.dumps(meta, default=_plain))
         onnx.save(graph, tmp)
         report = verify(model, tmp, patches)
+        os.chmod(tmp, 0o644)  # mkstemp makes it private
         os.replace(tmp, out)
     finally:
         Path(tmp).unlink(missing_ok=True)

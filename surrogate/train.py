@@ -80,6 +80,7 @@ def train(cfg: TrainConfig) -> Path:
     # data: patches in mm (max 0) and log-V targets, split by base texture
     with open_dataset(cfg.data) as data:
         recipe, simulation = data.config.get("recipe", {}), data.config.get("simulation", data.config)
+        data_fem_seconds = float(np.nansum(data.table()["seconds"]))  # FEM solve time of every sample (one core each)
     holdout = recipe.get("holdout_family") if cfg.holdout_family is None else cfg.holdout_family
     holdout = None if holdout == "none" else holdout
     test_fraction = recipe.get("test_fraction", 0.1) if cfg.test_fraction is None else cfg.test_fraction
@@ -158,6 +159,7 @@ def train(cfg: TrainConfig) -> Path:
         "data": {"file": Path(cfg.data).name, "recipe": recipe.get("name"), "inputs_sha256": inputs_sha256(cfg.data)},
         "train_config": asdict(cfg), "best_epoch": best_epoch, "epochs": len(history),
         "minutes": (time.monotonic() - start) / 60, "parameters": parameter_count(model),
+        "cost_core_seconds": {"data_fem": data_fem_seconds, "training": (time.monotonic() - start) * cfg.threads},
     }
     torch.save(checkpoint, out / "checkpoint.pt")
     (out / "metrics.json").write_text(json.dumps({k: v for k, v in checkpoint.items() if k not in (

@@ -1,0 +1,254 @@
+"""The comparison report: per-engine table (CSV, Markdown), plots, disagreements, break-even.
+
+Estimators of V (FEM fidelities, the surrogate) are scored directly against the reference.
+Classical measures are not in units of V: they are mapped to V by a power law fitted on the same
+textures (least squares of log V on log measure), which flatters them; their Spearman needs no fit.
+"""
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.stats import spearmanr
+
+from .compare import SETUP_KEY, ResultCache, Texture
+
+COLUMNS = ("engine", "kind", "n", "failures", "median_s", "p95_s", "median_rel_err", "p95_rel_err", "spearman",
+           "r2_log")
+
+
+@dataclass
+class EngineScore:
+    engine: str
+    kind: str
+    keys: list[str]  # textures scored (both engine and reference answered, reference V > 0)
+    reference: np.ndarray
+    estimate: np.ndarray  # V, or the fitted power law of a classical measure
+    raw: np.ndarray
+    seconds: np.ndarray
+    failures: int
+
+    def row(self) -> dict:
+        row = {"engine": self.engine, "kind": self.kind, "n": len(self.keys), "failures": self.failures,
+               "median_s": _q(self.seconds, 50), "p95_s": _q(self.seconds, 95)}
+        if len(self.keys) < 3:
+            return row | {k: math.nan for k in ("median_rel_err", "p95_rel_err", "spearman", "r2_log")}
+        rel = np.abs(self.estimate - self.reference) / self.reference
+        log_ref, log_est = np.log(self.reference), np.log(np.maximum(self.estimate, 1e-12))
+        r2 = 1 - np.sum((log_est - log_ref) ** 2) / np.sum((log_ref - log_ref.mean()) ** 2)
+        return row | {"median_rel_err": float(np.median(rel)), "p95_rel_err": float(np.percentile(rel, 95)),
+                      "spearman": float(spearmanr(self.reference, self.raw).statistic), "r2_log": float(r2)}
+
+
+def _q(values: np.ndarray, q: float) -> float:
+    return float(np.percentile(values, q)) if len(values) else math.nan
+
+
+def score(textures: list[Texture], kinds: dict[str, str], reference: str, cache: ResultCache) -> list[EngineScore]:
+    """Scores of every engine (the reference first) on the textures."""
+    ref = {t.key: cache.get(reference, t.key) for t in textures}
+    ref_ok = {k: e["value"] for k, e in ref.items() if e and e.get("error") is None and e["value"] > 0}
+    scores = []
+    for engine, kind in kinds.items():
+        entries = {t.key: cache.get(engine, t.key) for t in textures}
+        done = {k: e for k, e in entries.items() if e and e.get("error") is None}
+        keys = [k for k in done if k in ref_ok and (kind != "classical" or done[k]["value"] > 0)]
+        reference_v = np.array([ref_ok[k] for k in keys])
+        raw = np.array([done[k]["value"] for k in keys], dtype=float)
+        estimate = _power_law(raw, reference_v) if kind == "classical" else raw
+        seconds = np.array([e["seconds"] for e in done.values() if e.get("seconds") is not None], dtype=float)
+        failures = sum(1 for e in entries.values() if e and e.get("error") is not None)
+        scores.append(EngineScore(engine, kind, keys, reference_v, estimate, raw, seconds, failures))
+    return scores
+
+
+def _power_law(measure: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    if len(measure) < 2 or np.ptp(np.log(measure)) == 0:
+        return np.full_like(reference, np.exp(np.mean(np.log(reference))) if len(reference) else np.nan)
+    slope, intercept = np.polyfit(np.log(measure), np.log(reference), 1)
+    return np.exp(intercept + slope * np.log(measure))
+
+
+def write_tables(rows: list[dict], folder: Path) -> str:
+    """table.csv and table.md; returns the Markdown."""
+    with open(folder / "table.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, COLUMNS)
+        writer.writeheader()
+        writer.writerows({k: row[k] for k in COLUMNS} for row in rows)
+    head = ("| engine | kind | n | failures | median s | p95 s | median rel. error | p95 rel. error | Spearman | "
+            "R² (log V) |\n|---|---|---|---|---|---|---|---|---|---|\n")
+    lines = "".join(
+        f"| {r['engine']} | {r['kind']} | {r['n']} | {r['failures']} | {_sec(r['median_s'])} | {_sec(r['p95_s'])} | "
+        f"{_pct(r['median_rel_err'])} | {_pct(r['p95_rel_err'])} | {r['spearman']:.3f} | {r['r2_log']:.3f} |\n"
+        for r in rows)
+    (folder / "table.md").write_text(head + lines)
+    return head + lines
+
+
+def _sec(s: float) -> str:
+    return "-" if math.isnan(s) else f"{1e3 * s:.2f} ms" if s < 0.1 else f"{s:.2f} s"
+
+
+def _pct(x: float) -> str:
+    return "-" if math.isnan(x) else f"{100 * x:.1f}%"
+
+
+def pareto_front(points: list[tuple[float, float]]) -> list[int]:
+    """Indices of the points no other point beats in both time and error, by increasing time."""
+    order = sorted(range(len(points)), key=lambda i: (points[i][0], points[i][1]))
+    front, best = [], math.inf
+    for i in order:
+        if points[i][1] < best:
+            front.append(i)
+            best = points[i][1]
+    return front
+
+
+def plot_pareto(rows: list[dict], reference: str, out: Path) -> None:
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.8))
+    rows = [r for r in rows if not math.isnan(r["median_s"]) and not math.isnan(r["median_rel_err"])]
+    points = [(r["median_s"], 100 * r["median_rel_err"]) for r in rows]
+    marker = {"fem": "s", "surrogate": "o", "classical": "^"}
+    for r, (x, y) in zip(rows, points):
+        ax.scatter(x, y, marker=marker.get(r["kind"], "o"), s=60, zorder=3)
+        ax.annotate(r["engine"], (x, y), textcoords="offset points", xytext=(6, 4), fontsize=8)
+    front = pareto_front(points)
+    ax.plot([points[i][0] for i in front], [points[i][1] for i in front], "k--", lw=1, label="Pareto front")
+    ax.set(xscale="log", xlabel="median seconds per texture (one core)", ylabel=f"median relative error vs {reference} (%)",
+           title="Speed / accuracy trade")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def plot_scatter(scores: list[EngineScore], reference: str, out: Path) -> None:
+    plt = _pyplot()
+    shown = [s for s in scores if s.engine != reference and len(s.keys)]
+    cols = min(4, max(len(shown), 1))
+    rows = math.ceil(len(shown) / cols) or 1
+    fig, axes = plt.subplots(rows, cols, figsize=(3.4 * cols, 3.2 * rows), squeeze=False)
+    for ax, s in zip(axes.ravel(), shown):
+        ax.scatter(s.reference, s.estimate, s=8, alpha=0.7)
+        lo, hi = min(s.reference.min(), s.estimate.min()), max(s.reference.max(), s.estimate.max())
+        ax.plot([lo, hi], [lo, hi], "k--", lw=0.8)
+        fitted = " (power-law fit)" if s.kind == "classical" else ""
+        ax.set(xscale="log", yscale="log", title=f"{s.engine}{fitted}", xlabel=f"{reference} V", ylabel="estimate")
+        ax.title.set_fontsize(9)
+    for ax in axes.ravel()[len(shown):]:
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+    plt.close(fig)
+
+
+def family_errors(scores: list[EngineScore], families: dict[str, str], reference: str) -> dict[str, dict[str, float]]:
+    """Median relative error per engine and family."""
+    out: dict[str, dict[str, float]] = {}
+    for s in scores:
+        if s.engine == reference or not len(s.keys):
+            continue
+        rel = np.abs(s.estimate - s.reference) / s.reference
+        fam = np.array([families[k] for k in s.keys])
+        out[s.engine] = {f: float(np.median(rel[fam == f])) for f in sorted(set(fam))}
+    return out
+
+
+def plot_family_errors(errors: dict[str, dict[str, float]], out: Path) -> None:
+    plt = _pyplot()
+    families = sorted({f for e in errors.values() for f in e})
+    fig, ax = plt.subplots(figsize=(max(6, 1.1 * len(families) + 2), 4.2))
+    width = 0.8 / max(len(errors), 1)
+    for i, (engine, per_family) in enumerate(errors.items()):
+        x = np.arange(len(families)) + i * width
+        ax.bar(x, [100 * per_family.get(f, np.nan) for f in families], width, label=engine)
+    ax.set_xticks(np.arange(len(families)) + 0.4 - width / 2, families, rotation=20)
+    ax.set(yscale="log", ylabel="median relative error (%)", title="Error by texture family")
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+
+
+def disagreements(s: EngineScore, families: dict[str, str], count: int = 8) -> list[dict]:
+    """The textures where an engine is furthest from the reference (by |log ratio|)."""
+    ratio = s.estimate / s.reference
+    order = np.argsort(-np.abs(np.log(np.maximum(ratio, 1e-12))))[:count]
+    return [{"key": s.keys[i], "family": families[s.keys[i]], "reference": float(s.reference[i]),
+             "estimate": float(s.estimate[i]), "ratio": float(ratio[i])} for i in order]
+
+
+def break_even(rows: list[dict], cost_core_seconds: dict | None) -> list[dict]:
+    """Predictions after which generating data and training paid for themselves, per FEM engine."""
+    if not cost_core_seconds:
+        return []
+    surrogate = next((r for r in rows if r["kind"] == "surrogate"), None)
+    if surrogate is None:
+        return []
+    fixed = sum(cost_core_seconds.values())
+    out = []
+    for r in rows:
+        if r["kind"] == "fem" and r["median_s"] > surrogate["median_s"]:
+            out.append({"engine": r["engine"], "fixed_core_hours": fixed / 3600,
+                        "saving_s_per_prediction": r["median_s"] - surrogate["median_s"],
+                        "predictions": math.ceil(fixed / (r["median_s"] - surrogate["median_s"]))})
+    return out
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def write_report(textures: list[Texture], kinds: dict[str, str], reference: str, cache: ResultCache, out: Path,
+                 cost_core_seconds: dict | None, source: str) -> str:
+    """Tables, plots and report.md in ``out``; returns the Markdown table."""
+    setup_seconds = {e: entry["seconds"] for e in kinds if (entry := cache.get(e, SETUP_KEY))}
+    families = {t.key: t.family for t in textures}
+    scores = score(textures, kinds, reference, cache)
+    rows = [s.row() for s in scores]
+    table = write_tables(rows, out)
+    plot_pareto(rows, reference, out / "pareto.png")
+    plot_scatter(scores, reference, out / "predicted_vs_reference.png")
+    errors = family_errors(scores, families, reference)
+    plot_family_errors(errors, out / "error_by_family.png")
+    counts = {f: sum(1 for t in textures if t.family == f) for f in sorted(set(families.values()))}
+    text = [f"# Speed / accuracy: engines against `{reference}`\n",
+            f"Input: `{source}`; {len(textures)} textures ({', '.join(f'{f} {n}' for f, n in counts.items())}).",
+            "Regenerate with the same `roughness compare` command: cached results are reused.\n",
+            table,
+            "Times are per texture on one core: FEM with its block prepared (one-time set-up per process: "
+            + (", ".join(f"{k} {v:.2f} s" for k, v in setup_seconds.items()) or "not measured here")
+            + "); the surrogate end to end "
+            "(patch, domain check, network) at batch 1. Classical measures are not in units of V: their errors "
+            "are those of a power law fitted to the reference on these same textures (flattering them); "
+            "Spearman needs no fit. Relative errors and R² leave out textures whose reference V is 0.\n",
+            "![Pareto](pareto.png)\n", "![predicted vs reference](predicted_vs_reference.png)\n",
+            "![error by family](error_by_family.png)\n", "## Textures that disagree most\n"]
+    for s in scores:
+        if s.kind in ("fem", "surrogate") and s.engine != reference and len(s.keys):
+            text.append(f"`{s.engine}`:\n\n| texture | family | {reference} V | estimate | ratio |\n|---|---|---|---|---|")
+            text += [f"| {d['key']} | {d['family']} | {d['reference']:.4f} | {d['estimate']:.4f} | {d['ratio']:.2f} |"
+                     for d in disagreements(s, families)]
+            text.append("")
+    even = break_even(rows, cost_core_seconds)
+    if even:
+        fixed = even[0]["fixed_core_hours"]
+        text += ["## Break-even\n",
+                 f"Generating the training data and training the surrogate cost {fixed:.2f} core-hours "
+                 f"({', '.join(f'{k} {v / 3600:.2f} h' for k, v in cost_core_seconds.items())}). Each prediction "
+                 "by the surrogate instead of FEM saves the difference in median time per texture:\n",
+                 "| instead of | saving per prediction | predictions to break even |\n|---|---|---|"]
+        text += [f"| {e['engine']} | {e['saving_s_per_prediction']:.2f} s | {e['predictions']:,} |" for e in even]
+        text.append("")
+    (out / "report.md").write_text("\n".join(text))
+    return table

@@ -1,0 +1,157 @@
+"""`roughness compare` and its report on a tiny set: tables, numbers consistent with the cached
+results, plots, resuming, failures; the classical measures and the Pareto / break-even arithmetic."""
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dataset.recipe import Recipe, realise, sample_record
+from dataset.store import DatasetWriter
+from roughness import classical
+from roughness.cli import main
+from roughness.compare import SETUP_KEY
+from roughness.engines import make_engine
+from roughness.report import break_even, pareto_front
+from simulate.config import SimConfig
+from simulate.heightmap import Heightmap, InputError
+
+PNG = b"\x89PNG\r\n\x1a\n"
+ENGINES = ["surrogate", "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance"]
+
+
+def fields(v: float) -> dict:
+    return {"roughness": v, "roughness_stderr": 1e-4, "contact_fraction": 0.9, "indentation_mm": 3.4,
+            "converged": True, "iterations": 3, "unresolved_nodes": 0, "cycled": False, "seconds": 1.0 + v,
+            "contact_history": [10, 12], "grid_axis_mm": np.linspace(-4, 4, 5)}
+
+
+@pytest.fixture(scope="module")
+def tiny_set(tmp_path_factory):
+    """Twelve textures of four families with stored `coarse` labels (V = 0.4 Ra, synthetic)."""
+    path = tmp_path_factory.mktemp("compare") / "tiny.h5"
+    recipe = Recipe(name="tiny", seed=8, families={"bumps": 1, "fbm": 1, "woven": 1, "grating": 1})
+    config = {"recipe": {"name": "tiny"}, "simulation": SimConfig(fidelity="coarse").as_dict()}
+    with DatasetWriter(path, config, "test") as writer:
+        for i in range(12):
+            record = sample_record(recipe, i)
+            hm = realise(record)
+            v = 0.4 * classical.ra(classical.footprint(hm))
+            writer.write_result(record, hm.heights, hm.pixel_mm, fields(v), np.zeros((5, 5)))
+    return path
+
+
+def read_table(folder: Path) -> dict[str, dict]:
+    with open(folder / "table.csv", newline="") as f:
+        return {row["engine"]: row for row in csv.DictReader(f)}
+
+
+def test_report_tables_plots_and_numbers(tiny_set, tmp_path, capsys):
+    out = tmp_path / "report"
+    assert main(["compare", str(tiny_set), "--out", str(out), "--reference", "fem:coarse", "--engines", *ENGINES,
+                 "--quiet"]) == 0
+    table = read_table(out)
+    assert list(table) == ["fem:coarse", *ENGINES]
+    ref = table["fem:coarse"]
+    assert int(ref["n"]) == 12 and float(ref["median_rel_err"]) == 0 and float(ref["spearman"]) == 1
+    # stored labels come with their stored times (1 + V s): the reference's median time is theirs
+    results = [r for r in map(json.loads, (out / "results.jsonl").read_text().splitlines()) if r["key"] != SETUP_KEY]
+    stored = {r["key"]: r for r in results if r["engine"] == "fem:coarse"}
+    assert float(ref["median_s"]) == pytest.approx(np.median([r["seconds"] for r in stored.values()]))
+    # the surrogate's numbers follow from the cached results
+    mine = {r["key"]: r["value"] for r in results if r["engine"] == "surrogate"}
+    rel = [abs(mine[k] - stored[k]["value"]) / stored[k]["value"] for k in mine]
+    assert float(table["surrogate"]["median_rel_err"]) == pytest.approx(np.median(rel))
+    # the labels are 0.4 Ra exactly: a power law fits Ra perfectly
+    assert float(table["ra"]["median_rel_err"]) < 1e-6 and float(table["ra"]["spearman"]) == pytest.approx(1)
+    for name in ("pareto.png", "predicted_vs_reference.png", "error_by_family.png"):
+        assert (out / name).read_bytes()[:8] == PNG
+    report = (out / "report.md").read_text()
+    assert "Textures that disagree most" in report and "| engine |" in report
+    assert "fem:coarse" in capsys.readouterr().out
+
+
+def test_compare_resumes_from_its_cache(tiny_set, tmp_path, capsys):
+    out = tmp_path / "report"
+    args = ["compare", str(tiny_set), "--out", str(out), "--reference", "fem:coarse", "--engines", "ra", "p90"]
+    assert main(args) == 0
+    first = (out / "table.csv").read_text()
+    lines = (out / "results.jsonl").read_text().splitlines()
+    (out / "results.jsonl").write_text("\n".join(lines[:-1]) + "\n" + lines[-1][:10])  # torn last line
+    capsys.readouterr()
+    assert main(args) == 0
+    assert "1 results to compute" in capsys.readouterr().err
+    assert main(args) == 0
+    assert "0 results to compute" in capsys.readouterr().err
+    rows = lambda text: [r.split(",")[:4] for r in text.splitlines()]  # noqa: E731 (times differ per run)
+    assert rows((out / "table.csv").read_text()) == rows(first)
+
+
+def test_fem_results_are_computed_once(tmp_path, capsys, monkeypatch):
+    recipe = tmp_path / "r.json"
+    recipe.write_text(json.dumps({"name": "r", "seed": 3, "families": {"bumps": 1}}))
+    args = ["compare", str(recipe), "--n", "2", "--out", str(tmp_path / "o"), "--reference", "fem:coarse",
+            "--engines", "ra", "--quiet"]
+    assert main(args) == 0
+    from roughness import engines
+
+    monkeypatch.setattr(engines.FemEngine, "measure", lambda *a: pytest.fail("FEM ran again"))
+    assert main(args) == 0
+    table = read_table(tmp_path / "o")
+    assert int(table["fem:coarse"]["n"]) == 2 and float(table["fem:coarse"]["median_s"]) > 0
+
+
+def test_failures_are_counted_not_fatal(tmp_path, capsys):
+    folder = tmp_path / "maps"
+    folder.mkdir()
+    rng = np.random.default_rng(0)
+    for i in range(4):
+        np.save(folder / f"ok{i}.npy", 0.3 * rng.random((240, 240)))
+    np.save(folder / "small.npy", np.zeros((20, 20)))
+    out = tmp_path / "o"
+    assert main(["compare", str(folder), "--pixel-mm", "0.05", "--out", str(out), "--reference", "ra",
+                 "--engines", "p90", "--quiet"]) == 0
+    table = read_table(out)
+    assert table["p90"]["failures"] == "1" and table["p90"]["n"] == "4"
+    errors = [json.loads(x) for x in (out / "results.jsonl").read_text().splitlines()]
+    assert any("small.npy" in e["key"] and "footprint" in (e["error"] or "") for e in errors)
+
+
+def test_bad_compare_arguments_exit_2(tmp_path, capsys):
+    assert main(["compare", str(tmp_path / "nothing.h5"), "--out", str(tmp_path / "o")]) == 2
+    assert main(["compare", "datasets/validation.json", "--out", str(tmp_path / "o")]) == 2
+    assert main(["compare", "datasets/validation.json", "--n", "2", "--engines", "fem:huge",
+                 "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "not found" in err and "needs --n" in err and "unknown engine 'fem:huge'" in err
+    assert "Traceback" not in err
+
+
+def test_classical_measures():
+    x = (np.arange(200) + 0.5) * 0.05
+    sine = np.tile(0.1 * np.sin(2 * np.pi * x / 1.0), (200, 1))
+    assert classical.ra(sine) == pytest.approx(0.1 * 2 / np.pi, rel=0.01)  # 20 samples per period
+    assert classical.p90(sine) == pytest.approx(0.1 + 0.1 * np.sin(0.4 * np.pi), rel=0.05)  # P(sin <= s) = 0.9
+    flat = np.zeros((200, 200))
+    assert classical.glcm_sum_of_squares(flat) == 0 and classical.glcm_sum_variance(flat) == 0
+    noise = np.random.default_rng(0).random((200, 200))
+    # independent uniform levels: variance of one level (32^2 - 1) / 12, of a sum of two twice that
+    assert classical.glcm_sum_of_squares(noise) == pytest.approx((32**2 - 1) / 12, rel=0.03)
+    assert classical.glcm_sum_variance(noise) == pytest.approx(2 * (32**2 - 1) / 12, rel=0.03)
+    hm = Heightmap(np.zeros((240, 240)), 0.05)
+    assert make_engine("ra").measure(hm)[0] == 0
+    with pytest.raises(InputError, match="valid"):
+        make_engine("glcm")
+
+
+def test_pareto_front_and_break_even():
+    points = [(10.0, 0.0), (1.0, 0.05), (3.0, 0.02), (2.0, 0.1), (0.001, 0.04), (0.01, 0.5)]
+    assert pareto_front(points) == [4, 2, 0]
+    rows = [{"engine": "fem:default", "kind": "fem", "median_s": 3.0}, {"engine": "surrogate", "kind": "surrogate",
+                                                                       "median_s": 0.002}]
+    [even] = break_even(rows, {"data_fem": 3600.0, "training": 1800.0})
+    assert even["predictions"] == int(np.ceil(5400 / 2.998)) and even["fixed_core_hours"] == 1.5
+    assert break_even(rows, None) == []
