@@ -111,6 +111,9 @@ def build_parser() -> argparse.ArgumentParser:
     pr.add_argument("--batch-size", type=int, default=256)
     pr.add_argument("--threads", type=int, default=1, help="onnxruntime threads (default 1)")
     pr.add_argument("--json", action="store_true", help="one JSON object per input and line")
+    pr.add_argument("--map", metavar="FILE", help="roughness map of a whole object (one input): the footprint slid "
+                    "over the map, saved as .png (figure) or .npy (V per position)")
+    pr.add_argument("--step-mm", type=float, default=1.0, help="--map: distance between footprint positions (mm)")
     pr.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
     pr.set_defaults(run=_predict)
     cmp = sub.add_parser("compare", help="time and score engines against a reference engine (resumable)")
@@ -296,6 +299,8 @@ def _predict(args: argparse.Namespace) -> int:
     from surrogate.predictor import SurrogateModel, predict
 
     model = SurrogateModel(args.model or _default_model(), threads=_at_least_one("--threads", args.threads))
+    if args.map:
+        return _predict_map(args, model)
     reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, model.footprint_mm, args.centre, args.tile)
     start, done = time.monotonic(), 0
 
@@ -314,6 +319,27 @@ def _predict(args: argparse.Namespace) -> int:
         if args.json:
             print(json.dumps({"input": source, "error": error}))
     return 2 if reader.errors else 0
+
+
+def _predict_map(args: argparse.Namespace, model) -> int:
+    from simulate.heightmap import InputError
+    from simulate.io import load_heightmap
+    from surrogate.roughness_map import roughness_map, save_map
+
+    if len(args.inputs) != 1 or os.path.isdir(args.inputs[0]):
+        raise InputError("--map takes exactly one heightmap file")
+    if args.engine == "fem":
+        raise InputError("--map runs the surrogate (thousands of footprints); use --engine surrogate or auto")
+    hm = load_heightmap(args.inputs[0], args.pixel_mm, args.height_mm)
+    start = time.perf_counter()
+    result = roughness_map(model, hm, args.step_mm, args.tile, _at_least_one("--batch-size", args.batch_size))
+    save_map(result, args.map)
+    summary = {"input": args.inputs[0], "map": args.map, **result.summary(), "seconds": time.perf_counter() - start}
+    print(json.dumps(summary) if args.json else
+          f"{args.inputs[0]}: {summary['positions']} footprint positions, V {summary['roughness_min']:.4f} to "
+          f"{summary['roughness_max']:.4f} (median {summary['roughness_median']:.4f}), "
+          f"{100 * summary['in_domain_fraction']:.0f}% in domain, {summary['seconds']:.2f} s; map written to {args.map}")
+    return 0
 
 
 def _default_model() -> str:

@@ -1,0 +1,86 @@
+"""Roughness maps of whole objects: the surrogate at every footprint position on a grid.
+
+The 10 mm footprint slides over the heightmap in steps of ``step_mm``; each position gets V and
+its domain flag. Positions are footprint centres from half a footprint inside one edge to half a
+footprint inside the other (the whole map, wrapping, if ``tile``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from simulate.heightmap import Heightmap, InputError, positive_mm
+
+from .predictor import SurrogateModel
+
+
+@dataclass
+class RoughnessMap:
+    x_mm: np.ndarray  # footprint centres along x (columns)
+    y_mm: np.ndarray  # footprint centres along y (rows)
+    roughness: np.ndarray  # (len(y_mm), len(x_mm)) V
+    in_domain: np.ndarray  # same shape, bool
+
+    def summary(self) -> dict:
+        v = self.roughness
+        return {"positions": int(v.size), "step_mm": float(self.x_mm[1] - self.x_mm[0]) if len(self.x_mm) > 1 else None,
+                "roughness_min": float(v.min()), "roughness_median": float(np.median(v)),
+                "roughness_max": float(v.max()), "in_domain_fraction": float(self.in_domain.mean())}
+
+
+def centres(size_mm: float, footprint_mm: float, step_mm: float, tile: bool) -> np.ndarray:
+    if tile:
+        return np.arange(0.0, size_mm, step_mm) + step_mm / 2
+    span = size_mm - footprint_mm
+    return footprint_mm / 2 + np.arange(0.0, span + 1e-9, step_mm) + (span % step_mm) / 2
+
+
+def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False,
+                  batch_size: int = 256) -> RoughnessMap:
+    """V at footprint centres ``step_mm`` apart over the whole map."""
+    step_mm = positive_mm("--step-mm", step_mm)
+    heightmap.require_footprint(model.footprint_mm, None, tile)
+    width, height = heightmap.size_mm
+    xs, ys = centres(width, model.footprint_mm, step_mm, tile), centres(height, model.footprint_mm, step_mm, tile)
+    grid = [(x, y) for y in ys for x in xs]
+    if len(grid) > 1_000_000:
+        raise InputError(f"{len(grid):,} footprint positions: choose a larger --step-mm")
+    values, flags = [], []
+    for i in range(0, len(grid), batch_size):
+        patches = np.stack([model.patch(heightmap, c, tile) for c in grid[i:i + batch_size]])
+        v, reasons = model.run(patches)
+        values.append(v)
+        flags += [not r for r in reasons]
+    shape = (len(ys), len(xs))
+    return RoughnessMap(xs, ys, np.concatenate(values).reshape(shape), np.array(flags).reshape(shape))
+
+
+def save_map(result: RoughnessMap, path: str | Path) -> None:
+    """.npy: the V array (rows = y); .png: a figure with axes in mm, out-of-domain positions hatched."""
+    path = Path(path)
+    if not path.parent.is_dir():
+        raise InputError(f"cannot write {path}: its folder does not exist")
+    if path.suffix.lower() == ".npy":
+        np.save(path, result.roughness)
+        return
+    if path.suffix.lower() != ".png":
+        raise InputError(f"cannot write {path}: a roughness map is saved as .npy or .png")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    x, y = result.x_mm, result.y_mm
+    half = (x[1] - x[0]) / 2 if len(x) > 1 else 0.5
+    extent = (x[0] - half, x[-1] + half, y[-1] + half, y[0] - half)
+    fig, ax = plt.subplots(figsize=(6, 5))
+    image = ax.imshow(result.roughness, extent=extent, cmap="magma")
+    if not result.in_domain.all():
+        ax.contourf(x, y, (~result.in_domain).astype(float), levels=[0.5, 1.5], hatches=["//"], colors="none")
+    ax.set(xlabel="x (mm)", ylabel="y (mm)", title="V per footprint centre (hatched: out of domain)")
+    fig.colorbar(image, ax=ax, label="V")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
