@@ -94,6 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
     ex = sub.add_parser("export", help="export a training checkpoint to ONNX, checked against PyTorch")
     ex.add_argument("checkpoint")
     ex.add_argument("--out", required=True, help="ONNX file to write")
+    ex.add_argument("--int8", metavar="FILE", help="also write an int8 model (static QDQ, per-channel weights)")
     ex.set_defaults(run=_export)
 
     pr = sub.add_parser("predict", help="roughness in milliseconds (surrogate), FEM where out of domain")
@@ -281,6 +282,14 @@ def _export(args: argparse.Namespace) -> int:
         print(f"roughness: export check failed, nothing written: {err}", file=sys.stderr)
         return 1
     print(json.dumps(report))
+    if args.int8:
+        from surrogate.quantize import QuantizationError, quantize
+
+        try:
+            print(json.dumps(quantize(args.out, args.int8)))
+        except QuantizationError as err:
+            print(f"roughness: int8 check failed, {args.int8} not written: {err}", file=sys.stderr)
+            return 1
     return 0
 
 

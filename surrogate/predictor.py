@@ -107,7 +107,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     if batch_size < 1:
         raise InputError(f"batch size must be at least 1, got {batch_size}")
     model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
-    fem = FemEngine({**model.meta["simulation"], "fidelity": fidelity or model.fidelity}, centre_mm, tile)
+    fem = FemFallback({**model.meta["simulation"], "fidelity": fidelity or model.fidelity}, centre_mm, tile)
     scale = load_scale(model.fidelity)
     names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
     results: list[Prediction] = []
@@ -137,7 +137,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     return results
 
 
-class FemEngine:
+class FemFallback:
     """The FEM reference with the model's simulation parameters, built on first use."""
 
     def __init__(self, config: dict, centre_mm: tuple[float, float] | None, tile: bool) -> None:

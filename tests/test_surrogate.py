@@ -328,3 +328,17 @@ def test_roughness_map_matches_single_predictions(tmp_path, capsys):
         args = ["predict", *map(str, inputs), "--pixel-mm", "0.05", "--map", str(tmp_path / "m.npy"), *argv]
         assert main(args) == 2
         assert message in capsys.readouterr().err
+
+
+def test_int8_export_is_static_qdq_and_close_to_fp32(tiny, tmp_path):
+    from surrogate.quantize import quantize
+
+    report = quantize(tiny.model, tmp_path / "int8.onnx", calibration=16, check=8)
+    graph = onnx.load(tmp_path / "int8.onnx")
+    ops = {node.op_type for node in graph.graph.node}
+    assert {"QuantizeLinear", "DequantizeLinear", "Conv"} <= ops and "ConvInteger" not in ops
+    assert report["max_rel_diff_vs_fp32"] < 0.1
+    q = SurrogateModel(tmp_path / "int8.onnx")
+    assert q.meta["int8"]["checked_inputs"] == 8
+    patches = check_patches(4)[:, 0]
+    np.testing.assert_allclose(q.run(patches)[0], SurrogateModel(tiny.model).run(patches)[0], rtol=0.1)
