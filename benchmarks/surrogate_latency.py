@@ -63,6 +63,17 @@ def main() -> None:
         batched[threads] = len(batch) / seconds
     e2e_batched = len(maps) / min(timed(lambda: predict(maps, engine="surrogate", model=SurrogateModel(
         args.model, threads=2), batch_size=64), 3))
+    int8 = {}
+    int8_path = Path(args.model).with_name(Path(args.model).stem + "-int8.onnx")
+    if int8_path.exists():
+        q1, q2 = SurrogateModel(int8_path, threads=1), SurrogateModel(int8_path, threads=2)
+        batch = np.tile(patches, (4, 1, 1))[:, None]
+        q2.session.run(None, {"heights": batch})
+        int8 = {"path": int8_path.name,
+                "batch1_1thread_ms_median": 1e3 * statistics.median(
+                    [t for p in np.tile(patches, (8, 1, 1)) for t in timed(lambda: q1.session.run(
+                        None, {"heights": p[None, None]}), 1)]),
+                "batched_2threads_per_s": len(batch) / min(timed(lambda: q2.session.run(None, {"heights": batch}), 5))}
 
     fem = {}
     for fidelity in ("coarse", "default"):
@@ -82,6 +93,7 @@ def main() -> None:
         "fem_warm_seconds": fem,
         "speedup_vs_fem_default_end_to_end": fem["default"] / e2e,
         "speedup_vs_fem_coarse_end_to_end": fem["coarse"] / e2e,
+        "int8": int8,
     }
     OUT.mkdir(exist_ok=True)
     (OUT / "surrogate_latency.json").write_text(json.dumps(result, indent=1))
@@ -97,6 +109,9 @@ def main() -> None:
         ("speed-up over FEM default (end to end, batch 1)", f"{result['speedup_vs_fem_default_end_to_end']:,.0f}x"),
         ("speed-up over FEM coarse (end to end, batch 1)", f"{result['speedup_vs_fem_coarse_end_to_end']:,.0f}x"),
     ]
+    if int8:
+        rows += [("int8 graph, batch 1, 1 thread (median)", f"{int8['batch1_1thread_ms_median']:.2f} ms"),
+                 ("int8 graph, batch 256, 2 threads", f"{int8['batched_2threads_per_s']:,.0f} patches/s")]
     table = "| measure | value |\n|---|---|\n" + "".join(f"| {a} | {b} |\n" for a, b in rows)
     (OUT / "surrogate_latency.md").write_text(
         f"# Surrogate latency ({result['model']}, {result['machine']})\n\n"

@@ -7,7 +7,8 @@ texture is counted in just-noticeable differences of Weber fraction 0.19: ln(V /
 
 Regenerate the shipped table (``models/standard_scale.json``, a few minutes on 2 cores)::
 
-    python -m surrogate.calibration --out models/standard_scale.json
+    python -m surrogate.calibration --fidelities coarse default          # 5 seeds each
+    python -m surrogate.calibration --fidelities fine --seeds 3          # about 10 min
 """
 from __future__ import annotations
 
@@ -94,13 +95,14 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--fidelities", nargs="+", default=["coarse", "default"])
     parser.add_argument("--seeds", type=int, default=5, help="realisations per lambda (seeds 100, 101, ...)")
     args = parser.parse_args(argv)
-    tables = {}
+    out = Path(args.out)
+    tables = json.loads(out.read_text())["tables"] if out.exists() else {}  # other fidelities are kept
     for fidelity in args.fidelities:
         tables[fidelity] = measure(fidelity, range(100, 100 + args.seeds))
         print(fidelity, tables[fidelity]["V_mean"], flush=True)
     note = ("Mean FEM V of the 13 standard cap-topped bump textures (paper parameters, 10 N, stick) over "
             "the seeds listed; regenerate with: python -m surrogate.calibration")
-    Path(args.out).write_text(json.dumps({"note": note, "weber_fraction": WEBER_FRACTION, "tables": tables}, indent=1))
+    out.write_text(json.dumps({"note": note, "weber_fraction": WEBER_FRACTION, "tables": tables}, indent=1))
 
 
 if __name__ == "__main__":

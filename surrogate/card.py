@@ -83,6 +83,23 @@ def metric_table(metrics: dict, names: dict) -> str:
     return "\n".join(lines)
 
 
+def int8_section(model_path: Path, latency: dict | None) -> str:
+    path = model_path.with_name(model_path.stem + "-int8.onnx")
+    if not path.exists():
+        return ""
+    report = SurrogateModel(path).meta["int8"]
+    speed = (f" Graph latency {latency['int8']['batch1_1thread_ms_median']:.2f} ms at batch 1 on one thread, "
+             f"{latency['int8']['batched_2threads_per_s']:,.0f} patches/s batched on 2 threads."
+             if latency and latency.get("int8") else "")
+    return f"""
+### int8 variant
+`{path.name}` ({path.stat().st_size / 1e6:.2f} MB): static QDQ quantisation with per-channel int8 weights,
+activations calibrated on {report['calibration_inputs']} recipe textures (`roughness export ... --int8 FILE`). On
+{report['checked_inputs']} other textures its V differs from this model's by {100 * report['median_rel_diff_vs_fp32']:.1f}% (median),
+{100 * report['max_rel_diff_vs_fp32']:.1f}% at most.{speed} Its domain check reuses the fp32 model's limits.
+"""
+
+
 def write_card(run: Path, model_path: Path, card: Path) -> None:
     model = SurrogateModel(model_path)
     meta = model.meta
@@ -167,7 +184,7 @@ benchmarks/results/surrogate_latency.md): {latency['batch1_1thread_ms_median']:.
 {latency['batched_patches_per_s']['2']:,.0f} patches/s batched on 2 threads. FEM `default` takes
 {latency['fem_warm_seconds']['default']:.2f} s per texture with a warm block in the same run: a speed-up of
 {latency['speedup_vs_fem_default_end_to_end']:,.0f}x.
-""" if latency else "Run `python benchmarks/surrogate_latency.py`.\n") + f"""
+""" if latency else "Run `python benchmarks/surrogate_latency.py`.\n") + int8_section(model_path, latency) + f"""
 ## Input domain
 An input is flagged `in_domain: false` (and `--engine auto` runs the FEM for it) when a descriptor of
 its footprint patch leaves the training range (0.5th to 99.5th percentile, widened by 5% of the span)
