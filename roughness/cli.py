@@ -387,7 +387,7 @@ def _compare(args: argparse.Namespace) -> int:
     engines = [make_engine(spec) for spec in specs]
     textures, stored = textures_of(args.input, args.n, args.pixel_mm, args.height_mm)
     out = Path(args.out)
-    cache = ResultCache(out)
+    cache = ResultCache(out, {e.spec: e.identity for e in engines})
     try:
         run(textures, engines, cache, stored, quiet=args.quiet)
     except KeyboardInterrupt:

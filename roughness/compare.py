@@ -19,7 +19,7 @@ from pathlib import Path
 
 from simulate.heightmap import Heightmap, InputError
 
-from .engines import FEM_FIDELITIES, Engine
+from .engines import FEM_FIDELITIES, Engine, fem_identity
 
 RESULTS_FILE = "results.jsonl"
 SETUP_KEY = "(set-up)"  # cache key of an engine's one-time preparation (FEM block, model loading)
@@ -50,7 +50,7 @@ def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dic
 
     textures = [Texture(str(table["id"][i]), recipes[i]["family"], loader(str(table["id"][i]))) for i in ok]
     stored: dict[str, dict[str, dict]] = {}
-    if fidelity in FEM_FIDELITIES and simulation == SimConfig(fidelity=fidelity).as_dict():
+    if fidelity in FEM_FIDELITIES and fem_identity(simulation) == fem_identity(SimConfig(fidelity=fidelity).as_dict()):
         stored[f"fem:{fidelity}"] = {str(table["id"][i]): {"value": float(table["V"][i]),
                                                           "seconds": float(table["seconds"][i]), "source": "dataset"}
                                      for i in ok}
@@ -92,9 +92,14 @@ def textures_of(source: str, n: int | None = None, pixel_mm: float | None = None
 
 
 class ResultCache:
-    """The output folder's results.jsonl: {engine, key, value, seconds, error, source} per line."""
+    """The output folder's results.jsonl: {engine, identity, key, value, seconds, error, source} per line.
 
-    def __init__(self, folder: Path) -> None:
+    ``identities`` maps each engine spec to what its results depend on (configuration digest, model
+    file digest); entries made under another identity (a retrained model, say) are ignored.
+    """
+
+    def __init__(self, folder: Path, identities: dict[str, str]) -> None:
+        self.identities = identities
         folder.mkdir(parents=True, exist_ok=True)
         self.path = folder / RESULTS_FILE
         self.entries: dict[tuple[str, str], dict] = {}
@@ -109,13 +114,14 @@ class ResultCache:
                     entry = json.loads(line)
                 except json.JSONDecodeError:
                     raise InputError(f"{self.path} line {number} is not JSON: remove that line to recompute it") from None
-                self.entries[(entry["engine"], entry["key"])] = entry
+                if entry.get("identity") == identities.get(entry["engine"]):
+                    self.entries[(entry["engine"], entry["key"])] = entry
 
     def get(self, engine: str, key: str) -> dict | None:
         return self.entries.get((engine, key))
 
     def put(self, engine: str, key: str, **fields) -> None:
-        entry = {"engine": engine, "key": key, **fields}
+        entry = {"engine": engine, "identity": self.identities[engine], "key": key, **fields}
         self.entries[(engine, key)] = entry
         with open(self.path, "a") as f:
             f.write(json.dumps(entry) + "\n")
@@ -127,6 +133,8 @@ def run(textures: list[Texture], engines: list[Engine], cache: ResultCache,
         stored: dict[str, dict[str, dict]], quiet: bool = False) -> None:
     """Fill the cache for every (engine, texture), and each engine's one-time set-up seconds (SETUP_KEY)."""
     for spec, results in stored.items():
+        if spec not in cache.identities:
+            continue
         for key, entry in results.items():
             if cache.get(spec, key) is None:
                 cache.put(spec, key, **entry)

@@ -8,8 +8,11 @@ its block prepared (mesh, assembly and base field are paid once per process and 
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Protocol
 
 from simulate.heightmap import Heightmap, InputError
@@ -23,6 +26,7 @@ class Engine(Protocol):
     spec: str
     kind: str  # "fem", "surrogate" or "classical" (a measure, not an estimate of V)
     setup_seconds: float
+    identity: str  # what the results depend on (configuration, model file): cached results must match it
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
         """(value, seconds) for one texture."""
@@ -35,6 +39,12 @@ class FemEngine:
     kind: str = "fem"
     setup_seconds: float = 0.0
     _simulator: object = field(default=None, repr=False)
+
+    @property
+    def identity(self) -> str:
+        from simulate.config import SimConfig
+
+        return fem_identity(SimConfig(fidelity=self.fidelity).as_dict())
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
         if self._simulator is None:
@@ -58,6 +68,16 @@ class SurrogateEngine:
     setup_seconds: float = 0.0
     _model: object = field(default=None, repr=False)
 
+    @property
+    def identity(self) -> str:
+        from dataset.digest import file_sha256
+        from surrogate.predictor import DEFAULT_MODEL
+
+        path = Path(self.model_path or DEFAULT_MODEL)
+        if not path.is_file():
+            raise InputError(f"surrogate model not found: {path}")
+        return "model-" + file_sha256(path)[:16]
+
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
         from surrogate.predictor import DEFAULT_MODEL, SurrogateModel, predict
 
@@ -75,11 +95,17 @@ class ClassicalEngine:
     spec: str
     kind: str = "classical"
     setup_seconds: float = 0.0
+    identity: str = "classical-1"  # bump when a measure's definition changes
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
         start = time.perf_counter()
         value = MEASURES[self.spec](footprint(heightmap))
         return value, time.perf_counter() - start
+
+
+def fem_identity(simulation: dict) -> str:
+    """Identity of FEM results: a digest of the full simulation configuration."""
+    return "fem-" + hashlib.sha1(json.dumps(simulation, sort_keys=True).encode()).hexdigest()[:16]
 
 
 def make_engine(spec: str) -> Engine:

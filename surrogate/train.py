@@ -46,7 +46,7 @@ class TrainConfig:
     learning_rate: float = 3e-3
     weight_decay: float = 1e-4
     max_epochs: int = 200
-    patience: int = 30  # epochs without a better validation loss before stopping
+    patience: int = 60  # epochs without a better validation loss before stopping (the cosine schedule runs to 0)
     max_minutes: float = 25.0  # wall-clock budget; the best checkpoint so far is kept
     threads: int = 2
 

@@ -155,3 +155,25 @@ def test_pareto_front_and_break_even():
     [even] = break_even(rows, {"data_fem": 3600.0, "training": 1800.0})
     assert even["predictions"] == int(np.ceil(5400 / 2.998)) and even["fixed_core_hours"] == 1.5
     assert break_even(rows, None) == []
+
+
+def test_cached_results_follow_the_engine_identity(tiny_set, tmp_path, capsys):
+    import shutil
+
+    import onnx
+
+    from surrogate.predictor import DEFAULT_MODEL
+
+    model = tmp_path / "m.onnx"
+    shutil.copy(DEFAULT_MODEL, model)
+    args = ["compare", str(tiny_set), "--out", str(tmp_path / "o"), "--reference", "fem:coarse",
+            "--engines", f"surrogate:{model}", "ra"]
+    assert main(args) == 0
+    capsys.readouterr()
+    assert main(args) == 0
+    assert "0 results to compute" in capsys.readouterr().err
+    graph = onnx.load(model)
+    graph.doc_string = "retrained"  # another model file: its results are not the old model's
+    onnx.save(graph, model)
+    assert main(args) == 0
+    assert "12 results to compute" in capsys.readouterr().err
