@@ -26,6 +26,8 @@ ROOT = Path(__file__).resolve().parents[1]
 RECIPE = ROOT / "datasets" / "validation.json"
 OUT = Path(__file__).parent / "results" / "trade"
 N = 160
+ENGINES = ("fem:coarse", "fem:default", "surrogate", "surrogate:models/roughness-cnn-int8.onnx", "ra", "p90",
+           "glcm_sum_of_squares", "glcm_sum_variance")
 
 
 def main() -> int:
@@ -34,8 +36,10 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--labels", help="the validation set built at fine fidelity (HDF5)")
     args = parser.parse_args()
-    source = [args.labels] if args.labels else [str(RECIPE), "--n", str(N)]
-    return cli(["compare", *source, "--out", str(OUT), "--reference", "fem:fine"])
+    source = [str(Path(args.labels).resolve())] if args.labels else [str(RECIPE.relative_to(ROOT)), "--n", str(N)]
+    os.chdir(ROOT)  # engine specs and the report name paths relative to the repository
+    return cli(["compare", *source, "--out", str(OUT.relative_to(ROOT)), "--reference", "fem:fine", "--engines",
+                *ENGINES])
 
 
 if __name__ == "__main__":

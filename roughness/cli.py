@@ -103,8 +103,9 @@ def build_parser() -> argparse.ArgumentParser:
     pr.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
     pr.add_argument("--engine", choices=("surrogate", "fem", "auto"), default="auto",
                     help="auto (default): surrogate, FEM for inputs outside its domain")
-    pr.add_argument("--fidelity", choices=("coarse", "default", "fine"),
-                    help="FEM fidelity (default: that of the model's training labels)")
+    pr.add_argument("--fidelity", choices=("coarse", "default"),
+                    help="FEM fidelity (default: that of the model's training labels; the standard scale "
+                         "is tabulated for these two)")
     pr.add_argument("--pixel-mm", type=float, help="pixel size in mm (required unless the file states it)")
     pr.add_argument("--height-mm", type=float, help="height of full-scale white in mm (PNG/TIFF)")
     pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures")

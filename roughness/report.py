@@ -113,9 +113,9 @@ def plot_pareto(rows: list[dict], reference: str, out: Path) -> None:
     rows = [r for r in rows if not math.isnan(r["median_s"]) and not math.isnan(r["median_rel_err"])]
     points = [(r["median_s"], 100 * r["median_rel_err"]) for r in rows]
     marker = {"fem": "s", "surrogate": "o", "classical": "^"}
-    for r, (x, y) in zip(rows, points):
+    for i, (r, (x, y)) in enumerate(zip(rows, points)):
         ax.scatter(x, y, marker=marker.get(r["kind"], "o"), s=60, zorder=3)
-        ax.annotate(r["engine"], (x, y), textcoords="offset points", xytext=(6, 4), fontsize=8)
+        ax.annotate(label(r["engine"]), (x, y), textcoords="offset points", xytext=(7, 9 if i % 2 else -12), fontsize=8)
     front = pareto_front(points)
     ax.plot([points[i][0] for i in front], [points[i][1] for i in front], "k--", lw=1, label="Pareto front")
     ax.set(xscale="log", xlabel="median seconds per texture (one core)", ylabel=f"median relative error vs {reference} (%)",
@@ -125,6 +125,12 @@ def plot_pareto(rows: list[dict], reference: str, out: Path) -> None:
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     plt.close(fig)
+
+
+def label(engine: str) -> str:
+    """Short engine name for plots: a model path becomes its file stem."""
+    kind, _, path = engine.partition(":")
+    return f"{kind}:{Path(path).stem}" if kind == "surrogate" and path else engine
 
 
 def plot_scatter(scores: list[EngineScore], reference: str, out: Path) -> None:
@@ -138,7 +144,8 @@ def plot_scatter(scores: list[EngineScore], reference: str, out: Path) -> None:
         lo, hi = min(s.reference.min(), s.estimate.min()), max(s.reference.max(), s.estimate.max())
         ax.plot([lo, hi], [lo, hi], "k--", lw=0.8)
         fitted = " (power-law fit)" if s.kind == "classical" else ""
-        ax.set(xscale="log", yscale="log", title=f"{s.engine}{fitted}", xlabel=f"{reference} V", ylabel="estimate")
+        ax.set(xscale="log", yscale="log", title=f"{label(s.engine)}{fitted}", xlabel=f"{reference} V",
+               ylabel="estimate")
         ax.title.set_fontsize(9)
     for ax in axes.ravel()[len(shown):]:
         ax.axis("off")
@@ -162,14 +169,14 @@ def family_errors(scores: list[EngineScore], families: dict[str, str], reference
 def plot_family_errors(errors: dict[str, dict[str, float]], out: Path) -> None:
     plt = _pyplot()
     families = sorted({f for e in errors.values() for f in e})
-    fig, ax = plt.subplots(figsize=(max(6, 1.1 * len(families) + 2), 4.2))
+    fig, ax = plt.subplots(figsize=(max(7, 1.1 * len(families) + 4), 4.2))
     width = 0.8 / max(len(errors), 1)
     for i, (engine, per_family) in enumerate(errors.items()):
         x = np.arange(len(families)) + i * width
-        ax.bar(x, [100 * per_family.get(f, np.nan) for f in families], width, label=engine)
+        ax.bar(x, [100 * per_family.get(f, np.nan) for f in families], width, label=label(engine))
     ax.set_xticks(np.arange(len(families)) + 0.4 - width / 2, families, rotation=20)
     ax.set(yscale="log", ylabel="median relative error (%)", title="Error by texture family")
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=7, bbox_to_anchor=(1.01, 1), loc="upper left")
     fig.tight_layout()
     fig.savefig(out, dpi=110)
     plt.close(fig)

@@ -8,7 +8,6 @@ texture is counted in just-noticeable differences of Weber fraction 0.19: ln(V /
 Regenerate the shipped table (``models/standard_scale.json``, a few minutes on 2 cores)::
 
     python -m surrogate.calibration --fidelities coarse default          # 5 seeds each
-    python -m surrogate.calibration --fidelities fine --seeds 3          # about 10 min
 """
 from __future__ import annotations
 

@@ -22,7 +22,7 @@ import numpy as np
 import onnxruntime as ort
 
 from models import MODELS_DIR
-from simulate.heightmap import Heightmap, InputError
+from simulate.heightmap import Heightmap, InputError, flat
 
 from .calibration import Placement, load_scale
 from .domain import Domain
@@ -75,8 +75,7 @@ class SurrogateModel:
         self.pixel_mm = float(self.meta["patch_pixel_mm"])
         self.footprint_mm = float(self.meta["footprint_mm"])
         self.fidelity = str(self.meta["label_fidelity"])
-        n = round(self.footprint_mm / self.pixel_mm)
-        self.session.run(None, {"heights": np.zeros((1, 1, n, n), np.float32)})  # one-time allocations
+        self.run(self.patch(flat(self.footprint_mm + 1.0, self.pixel_mm / 2))[None])  # one-time set-up costs
 
     def patch(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False) -> np.ndarray:
         """The model's input for a heightmap: footprint heights (mm, max 0) on its pixel grid."""
