@@ -179,7 +179,7 @@ relative error; they are counted in the metadata (`n_zero`).
 
 | target | wanted | reached |
 |---|---|---|
-""" + "".join(f"| {a} | {b} | {c} |\n" for a, b, c in target_rows) + f"""
+""" + "".join(f"| {a} | {b} | {c} |\n" for a, b, c in target_rows) + """
 ## Speed
 """ + (f"""From `python benchmarks/surrogate_latency.py` ({latency['machine']}; full table in
 benchmarks/results/surrogate_latency.md): {latency['batch1_1thread_ms_median']:.2f} ms per patch at batch 1 on one thread

@@ -18,7 +18,6 @@ from simulate.heightmap import InputError
 
 from .patch import descriptors, footprint_patch
 
-SPLITS = ("train", "val", "test", "ood")
 LOG_OFFSET = 1e-3  # the network predicts log(V + LOG_OFFSET): finite for flat textures (V = 0)
 
 

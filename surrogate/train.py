@@ -24,6 +24,7 @@ import torch.nn.functional as F
 
 from dataset.digest import inputs_sha256
 from dataset.store import open_dataset
+from simulate.heightmap import InputError
 
 from .data import LOG_OFFSET, load_samples, target
 from .domain import Domain
@@ -87,7 +88,7 @@ def train(cfg: TrainConfig) -> Path:
     samples = load_samples(cfg.data, test_fraction, cfg.val_fraction, holdout)
     tr, va = samples.subset("train"), samples.subset("val")
     if len(tr) < cfg.batch_size or len(va) == 0:
-        raise ValueError(f"{cfg.data}: {len(tr)} training and {len(va)} validation samples are too few to train on")
+        raise InputError(f"{cfg.data}: {len(tr)} training and {len(va)} validation samples are too few to train on")
     x_train, y_train = torch.from_numpy(tr.patches[:, None]), torch.from_numpy(target(tr.roughness))
     x_val, y_val = torch.from_numpy(va.patches[:, None]), torch.from_numpy(target(va.roughness))
     log(f"samples: {', '.join(f'{s} {int((samples.split == s).sum())}' for s in ('train', 'val', 'test', 'ood'))}")
