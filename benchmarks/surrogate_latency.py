@@ -39,7 +39,7 @@ def main() -> None:
     from dataset.textures import standard_texture
     from simulate.config import SimConfig
     from simulate.model import Simulator
-    from surrogate.predictor import DEFAULT_MODEL, SurrogateModel, predict
+    from surrogate.predictor import DEFAULT_MODEL, INPUT, SurrogateModel, predict
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--model", default=str(DEFAULT_MODEL))
@@ -52,14 +52,14 @@ def main() -> None:
         one.run(p[None])  # warm-up
 
     model_only = [t for p in np.tile(patches, (8, 1, 1)) for t in timed(lambda: one.session.run(
-        None, {"heights": p[None, None]}), 1)]
+        None, {INPUT: p[None, None]}), 1)]
     end_to_end = timed(lambda: predict(maps[0], engine="surrogate", model=one), 200)
     batched = {}
     for threads in (1, 2):
         model = SurrogateModel(args.model, threads=threads)
         batch = np.tile(patches, (4, 1, 1))[:, None]  # 256 patches
-        model.session.run(None, {"heights": batch})
-        seconds = min(timed(lambda: model.session.run(None, {"heights": batch}), 5))
+        model.session.run(None, {INPUT: batch})
+        seconds = min(timed(lambda: model.session.run(None, {INPUT: batch}), 5))
         batched[threads] = len(batch) / seconds
     e2e_batched = len(maps) / min(timed(lambda: predict(maps, engine="surrogate", model=SurrogateModel(
         args.model, threads=2), batch_size=64), 3))
@@ -68,12 +68,12 @@ def main() -> None:
     if int8_path.exists():
         q1, q2 = SurrogateModel(int8_path, threads=1), SurrogateModel(int8_path, threads=2)
         batch = np.tile(patches, (4, 1, 1))[:, None]
-        q2.session.run(None, {"heights": batch})
+        q2.session.run(None, {INPUT: batch})
         int8 = {"path": int8_path.name,
                 "batch1_1thread_ms_median": 1e3 * statistics.median(
                     [t for p in np.tile(patches, (8, 1, 1)) for t in timed(lambda: q1.session.run(
-                        None, {"heights": p[None, None]}), 1)]),
-                "batched_2threads_per_s": len(batch) / min(timed(lambda: q2.session.run(None, {"heights": batch}), 5))}
+                        None, {INPUT: p[None, None]}), 1)]),
+                "batched_2threads_per_s": len(batch) / min(timed(lambda: q2.session.run(None, {INPUT: batch}), 5))}
 
     fem = {}
     for fidelity in ("coarse", "default"):

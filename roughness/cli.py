@@ -216,10 +216,8 @@ def _dataset_build(args: argparse.Namespace) -> int:
     from dataset.build import build
     from dataset.recipe import Recipe, load_recipe
     from simulate.config import SimConfig
-    from simulate.heightmap import InputError
 
-    if args.workers < 1:
-        raise InputError("--workers must be at least 1")
+    _at_least_one("--workers", args.workers)
     recipe = load_recipe(args.recipe) if args.recipe else Recipe()
     if args.seed is not None:
         recipe = replace(recipe, seed=args.seed)
@@ -261,9 +259,8 @@ def _train(args: argparse.Namespace) -> int:
 
     if not os.path.isfile(args.data):
         raise InputError(f"dataset file not found: {args.data}")
-    for name in ("max_epochs", "threads"):
-        if getattr(args, name) < 1:
-            raise InputError(f"--{name.replace('_', '-')} must be at least 1")
+    _at_least_one("--max-epochs", args.max_epochs)
+    _at_least_one("--threads", args.threads)
     train(TrainConfig(data=args.data, out=args.out, seed=args.seed, holdout_family=args.holdout_family,
                       max_epochs=args.max_epochs, max_minutes=args.max_minutes, threads=args.threads))
     return 0
@@ -395,17 +392,11 @@ def _compare(args: argparse.Namespace) -> int:
         print(f"roughness: interrupted; results so far are kept in {cache.path}; run the same command again to "
               "resume", file=sys.stderr)
         return 130
-    cost = next((_model_cost(e) for e in engines if e.kind == "surrogate"), None)
+    cost = next((e.model.meta.get("cost_core_seconds") for e in engines if e.kind == "surrogate"), None)
     table = write_report(textures, {e.spec: e.kind for e in engines}, args.reference, cache, out, cost, args.input)
     print(table)
     _log(args, f"report written to {out / 'report.md'}")
     return 0
-
-
-def _model_cost(engine) -> dict | None:
-    from surrogate.predictor import DEFAULT_MODEL, SurrogateModel
-
-    return SurrogateModel(engine.model_path or DEFAULT_MODEL).meta.get("cost_core_seconds")
 
 
 def _print_result(r) -> None:

@@ -13,8 +13,10 @@ import json
 import os
 import sys
 import time
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 from simulate.heightmap import Heightmap, InputError
@@ -42,13 +44,9 @@ def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dic
     fidelity = simulation.get("fidelity")
     ok = [i for i, status in enumerate(table["status"]) if status == "ok"]
 
-    def loader(sid: str) -> Callable[[], Heightmap]:
-        def load() -> Heightmap:
-            with open_dataset(path) as data:
-                return data.heightmap(sid)
-        return load
-
-    textures = [Texture(str(table["id"][i]), recipes[i]["family"], loader(str(table["id"][i]))) for i in ok]
+    samples = _DatasetSamples(path)
+    textures = [Texture(str(table["id"][i]), recipes[i]["family"], partial(samples.heightmap, str(table["id"][i])))
+                for i in ok]
     stored: dict[str, dict[str, dict]] = {}
     if fidelity in FEM_FIDELITIES and fem_identity(simulation) == fem_identity(SimConfig(fidelity=fidelity).as_dict()):
         stored[f"fem:{fidelity}"] = {str(table["id"][i]): {"value": float(table["V"][i]),
@@ -57,13 +55,27 @@ def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dic
     return textures, stored
 
 
-def folder_textures(path: Path, pixel_mm: float | None, height_mm: float | None) -> list[Texture]:
-    from simulate.io import SUFFIXES, load_heightmap
+class _DatasetSamples:
+    """Heightmaps of one dataset file through one reader, opened on first use and closed with this object
+    (opening a dataset reads its whole index: once per texture would cost seconds each on a large file)."""
 
-    files = sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in SUFFIXES)
-    if not files:
-        raise InputError(f"{path} holds no heightmap files ({', '.join(SUFFIXES)})")
-    return [Texture(f.name, "file", lambda f=f: load_heightmap(f, pixel_mm, height_mm)) for f in files]
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self._data = None
+
+    def heightmap(self, sid: str) -> Heightmap:
+        if self._data is None:
+            from dataset.store import open_dataset
+
+            self._data = open_dataset(self.path)
+            weakref.finalize(self, self._data.close)
+        return self._data.heightmap(sid)
+
+
+def folder_textures(path: Path, pixel_mm: float | None, height_mm: float | None) -> list[Texture]:
+    from simulate.io import heightmap_files, load_heightmap
+
+    return [Texture(f.name, "file", lambda f=f: load_heightmap(f, pixel_mm, height_mm)) for f in heightmap_files(path)]
 
 
 def recipe_textures(path: Path, n: int | None) -> list[Texture]:

@@ -78,15 +78,23 @@ class SurrogateEngine:
             raise InputError(f"surrogate model not found: {path}")
         return "model-" + file_sha256(path)[:16]
 
-    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
-        from surrogate.predictor import DEFAULT_MODEL, SurrogateModel, predict
+    @property
+    def model(self):
+        """The loaded model (one onnxruntime thread), loaded on first use."""
+        from surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
         if self._model is None:
             start = time.perf_counter()
             self._model = SurrogateModel(self.model_path or DEFAULT_MODEL, threads=1)
             self.setup_seconds = time.perf_counter() - start
+        return self._model
+
+    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
+        from surrogate.predictor import predict
+
+        model = self.model
         start = time.perf_counter()
-        [p] = predict(heightmap, engine="surrogate", model=self._model)
+        [p] = predict(heightmap, engine="surrogate", model=model)
         return p.roughness, time.perf_counter() - start
 
 

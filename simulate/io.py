@@ -67,6 +67,15 @@ def load_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: f
     return _to_heightmap(path, raw, pixel_mm, height_mm)
 
 
+def heightmap_files(folder: str | Path) -> list[Path]:
+    """The heightmap files (by suffix) directly inside a folder, sorted by name; InputError if none."""
+    folder = Path(folder)
+    files = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in SUFFIXES)
+    if not files:
+        raise InputError(f"{folder} holds no heightmap files ({', '.join(SUFFIXES)})")
+    return files
+
+
 def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = None) -> None:
     """Write ``hm`` atomically: .npy (mm), 16-bit .png or float32 .tif/.tiff (mm).
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dataset.store import open_dataset
+from dataset.store import Dataset
 from simulate.heightmap import InputError
 
 from .patch import descriptors, footprint_patch
@@ -60,23 +60,22 @@ def target(roughness: np.ndarray) -> np.ndarray:
     return np.log(np.asarray(roughness, dtype=np.float64) + LOG_OFFSET).astype(np.float32)
 
 
-def load_samples(path: str, test_fraction: float = 0.1, val_fraction: float = 0.1,
+def load_samples(data: Dataset, test_fraction: float = 0.1, val_fraction: float = 0.1,
                  holdout_family: str | None = "knit", progress: bool = True) -> Samples:
-    """Every ok sample of a dataset file as a footprint patch, with its split."""
+    """Every ok sample of an open dataset as a footprint patch, with its split."""
     rows: dict[str, list] = {k: [] for k in ("ids", "patches", "roughness", "family", "split", "descriptors")}
-    with open_dataset(path) as data:
-        total, start = len(data), time.monotonic()
-        for i, sample in enumerate(data.iter_samples("ok")):
-            patch = footprint_patch(sample.heightmap)
-            for key, value in (("ids", sample.id), ("patches", patch), ("roughness", sample.values["V"]),
-                               ("family", sample.recipe["family"]), ("descriptors", descriptors(patch)),
-                               ("split", split_of(sample.recipe, test_fraction, val_fraction, holdout_family))):
-                rows[key].append(value)
-            if progress and (i + 1) % 250 == 0:
-                print(f"\rreading {path}: {i + 1}/{total} samples ({time.monotonic() - start:.0f} s)",
-                      end="", file=sys.stderr, flush=True)
+    total, start = len(data), time.monotonic()
+    for i, sample in enumerate(data.iter_samples("ok")):
+        patch = footprint_patch(sample.heightmap)
+        for key, value in (("ids", sample.id), ("patches", patch), ("roughness", sample.values["V"]),
+                           ("family", sample.recipe["family"]), ("descriptors", descriptors(patch)),
+                           ("split", split_of(sample.recipe, test_fraction, val_fraction, holdout_family))):
+            rows[key].append(value)
+        if progress and (i + 1) % 250 == 0:
+            print(f"\rreading {data.path}: {i + 1}/{total} samples ({time.monotonic() - start:.0f} s)",
+                  end="", file=sys.stderr, flush=True)
     if progress:
         print(file=sys.stderr)
     if not rows["ids"]:
-        raise InputError(f"{path} holds no ok samples to train on")
+        raise InputError(f"{data.path} holds no ok samples to train on")
     return Samples(*(np.asarray(rows[k]) for k in ("ids", "patches", "roughness", "family", "split", "descriptors")))

@@ -23,10 +23,10 @@ import torch
 
 from .network import RoughnessNet
 from .patch import footprint_patch
+from .predictor import INPUT, METADATA_KEY
 
 RTOL = 1e-4
-METADATA_KEY = "roughness"
-INPUT, OUTPUTS = "heights", ("log_roughness", "embedding")
+OUTPUTS = ("log_roughness", "embedding")
 
 
 class ExportError(RuntimeError):
@@ -82,13 +82,14 @@ def export(checkpoint_path: str | Path, out: str | Path, patches: np.ndarray | N
 
 def verify(model: RoughnessNet, onnx_path: str, patches: np.ndarray) -> dict:
     """Dynamic batch axis present, and onnxruntime matches PyTorch at batch 1 and the full batch."""
-    dim = onnx.load(onnx_path).graph.input[0].type.tensor_type.shape.dim[0]
+    graph = onnx.load(onnx_path)
+    dim = graph.graph.input[0].type.tensor_type.shape.dim[0]
     if not dim.dim_param:
         raise ExportError(f"the exported batch axis is fixed at {dim.dim_value}, not dynamic")
     options = ort.SessionOptions()
     options.intra_op_num_threads = 1
     session = ort.InferenceSession(onnx_path, options, providers=["CPUExecutionProvider"])
-    offset = json.loads(onnx.load(onnx_path).metadata_props[-1].value)["log_offset"]
+    offset = json.loads(next(p.value for p in graph.metadata_props if p.key == METADATA_KEY))["log_offset"]
     with torch.no_grad():
         ref_log, ref_emb = (t.numpy() for t in model(torch.from_numpy(patches)))
     got_log = np.concatenate([session.run(list(OUTPUTS), {INPUT: patches[i:i + 1]})[0] for i in range(len(patches))])

@@ -12,10 +12,9 @@ from pathlib import Path
 
 import h5py
 
+from dataset.store import SCHEMA, open_dataset
 from simulate.heightmap import Heightmap, InputError
-from simulate.io import SUFFIXES, load_heightmap
-
-DATASET_SCHEMA = "roughness.dataset"
+from simulate.io import heightmap_files, load_heightmap
 
 
 class InputReader:
@@ -34,13 +33,8 @@ class InputReader:
 
     def _expand(self, path: Path) -> list[tuple[str, Path, str | None]]:
         if path.is_dir():
-            files = sorted(p for p in path.iterdir() if p.suffix.lower() in SUFFIXES and p.is_file())
-            if not files:
-                raise InputError(f"{path} holds no heightmap files ({', '.join(SUFFIXES)})")
-            return [item for f in files for item in self._expand(f)]
+            return [item for f in heightmap_files(path) for item in self._expand(f)]
         if path.suffix.lower() in (".h5", ".hdf5") and _is_dataset(path):
-            from dataset.store import open_dataset
-
             with open_dataset(path) as data:
                 ids = [sid for sid, status in zip(data.ids, data.table()["status"]) if status == "ok"]
             return [(f"{path}:{sid}", path, sid) for sid in ids]
@@ -72,8 +66,6 @@ class InputReader:
         if sid is None:
             return load_heightmap(path, self.pixel_mm, self.height_mm)
         if path not in datasets:
-            from dataset.store import open_dataset
-
             datasets[path] = open_dataset(path)
         return datasets[path].heightmap(sid)
 
@@ -81,6 +73,6 @@ class InputReader:
 def _is_dataset(path: Path) -> bool:
     try:
         with h5py.File(path, "r") as h5:
-            return h5.attrs.get("schema") == DATASET_SCHEMA
+            return h5.attrs.get("schema") == SCHEMA
     except OSError:
         return False  # not HDF5: load_heightmap reports it

@@ -30,7 +30,8 @@ from .patch import descriptors, footprint_patch
 
 DEFAULT_MODEL = MODELS_DIR / "roughness-cnn.onnx"
 ENGINES = ("surrogate", "fem", "auto")
-METADATA_KEY = "roughness"
+METADATA_KEY = "roughness"  # ONNX metadata_props key of the model's JSON metadata
+INPUT = "heights"  # the graph's input: (batch, 1, P, P) float32 heights in mm
 
 
 @dataclass
@@ -86,7 +87,7 @@ class SurrogateModel:
         patches = np.ascontiguousarray(patches, dtype=np.float32)
         if patches.ndim != 3 or not np.all(np.isfinite(patches)):
             raise InputError(f"patches must be a finite (n, P, P) array, got shape {patches.shape}")
-        log_v, embedding = self.session.run(None, {"heights": patches[:, None]})
+        log_v, embedding = self.session.run(None, {INPUT: patches[:, None]})
         v = np.maximum(np.exp(log_v.astype(float)) - self.meta["log_offset"], 0.0)
         return v, self.domain.check(np.array([descriptors(p, self.pixel_mm) for p in patches]), embedding)
 

@@ -17,7 +17,8 @@ import numpy as np
 import onnx
 import onnxruntime as ort
 
-from .export import INPUT, METADATA_KEY, OUTPUTS, check_patches
+from .export import OUTPUTS, check_patches
+from .predictor import INPUT, METADATA_KEY
 
 MAX_REL_DIFF = 0.1  # int8 V may differ from fp32 V by at most 10% on the check textures
 

@@ -82,10 +82,10 @@ def train(cfg: TrainConfig) -> Path:
     with open_dataset(cfg.data) as data:
         recipe, simulation = data.config.get("recipe", {}), data.config.get("simulation", data.config)
         data_fem_seconds = float(np.nansum(data.table()["seconds"]))  # FEM solve time of every sample (one core each)
-    holdout = recipe.get("holdout_family") if cfg.holdout_family is None else cfg.holdout_family
-    holdout = None if holdout == "none" else holdout
-    test_fraction = recipe.get("test_fraction", 0.1) if cfg.test_fraction is None else cfg.test_fraction
-    samples = load_samples(cfg.data, test_fraction, cfg.val_fraction, holdout)
+        holdout = recipe.get("holdout_family") if cfg.holdout_family is None else cfg.holdout_family
+        holdout = None if holdout == "none" else holdout
+        test_fraction = recipe.get("test_fraction", 0.1) if cfg.test_fraction is None else cfg.test_fraction
+        samples = load_samples(data, test_fraction, cfg.val_fraction, holdout)
     tr, va = samples.subset("train"), samples.subset("val")
     if len(tr) < cfg.batch_size or len(va) == 0:
         raise InputError(f"{cfg.data}: {len(tr)} training and {len(va)} validation samples are too few to train on")
