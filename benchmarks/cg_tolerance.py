@@ -2,10 +2,14 @@
 
     python benchmarks/cg_tolerance.py 1e-7     # prints V of five standard textures, mean/max seconds, rounds
 """
-import time, sys, numpy as np
-from dataset.textures import standard_texture
-from simulate import Simulator, SimConfig
-import simulate.linsolve as ls
+import sys
+
+import numpy as np
+
+import roughness.simulate.linsolve as ls
+from roughness.dataset.textures import standard_texture
+from roughness.simulate import SimConfig, Simulator
+
 rtol=float(sys.argv[1])
 orig=ls.ConstrainedSystem.__init__
 def init(self,*a,**k):

@@ -14,9 +14,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from dataset.build import build
-from dataset.recipe import load_recipe
-from simulate.config import SimConfig
+from roughness.dataset.build import build
+from roughness.dataset.recipe import load_recipe
+from roughness.simulate.config import SimConfig
 
 ROOT = Path(__file__).parents[1]
 

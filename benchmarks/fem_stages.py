@@ -23,9 +23,9 @@ WARM_TEXTURES = [(0.75, 1), (1.0, 2), (1.25, 3), (1.5, 4), (0.625, 5)]
 
 
 def one_fidelity(fidelity: str) -> dict:
-    from dataset.textures import standard_texture
-    from simulate.config import SimConfig
-    from simulate.model import Simulator
+    from roughness.dataset.textures import standard_texture
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.model import Simulator
 
     sim = Simulator(SimConfig(fidelity=fidelity))
     t = time.perf_counter()
@@ -52,8 +52,8 @@ def solver_comparison() -> list[dict]:
     import pyamg
     import scipy.sparse.linalg as sla
 
-    from simulate.config import SimConfig
-    from simulate.model import Block
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.model import Block
 
     block = Block(SimConfig().resolved())
     p = block.problem

@@ -18,9 +18,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 from scipy.stats import spearmanr  # noqa: E402
 
-from dataset.textures import FLAT_TOP_DIAMETERS_MM, flat_top_texture  # noqa: E402
-from simulate.config import SimConfig  # noqa: E402
-from simulate.model import Simulator  # noqa: E402
+from roughness.dataset.textures import FLAT_TOP_DIAMETERS_MM, flat_top_texture  # noqa: E402
+from roughness.simulate.config import SimConfig  # noqa: E402
+from roughness.simulate.model import Simulator  # noqa: E402
 
 OUT = Path(__file__).parent / "results"
 GEOMETRIES = {"base 1.5 mm": lambda d: 1.5, "base = top + 0.6 mm": lambda d: d + 0.6,

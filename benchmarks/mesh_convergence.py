@@ -12,10 +12,10 @@ from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "2")
 
-from dataset.fractal import fbm_surface  # noqa: E402
-from dataset.textures import standard_texture  # noqa: E402
-from simulate.model import Simulator  # noqa: E402
-from simulate.config import SimConfig  # noqa: E402
+from roughness.dataset.fractal import fbm_surface  # noqa: E402
+from roughness.dataset.textures import standard_texture  # noqa: E402
+from roughness.simulate.config import SimConfig  # noqa: E402
+from roughness.simulate.model import Simulator  # noqa: E402
 
 OUT = Path(__file__).parent / "results"
 TEXTURES = {

@@ -21,9 +21,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 from scipy.stats import spearmanr  # noqa: E402
 
-from dataset.textures import STANDARD_LAMBDAS_MM, standard_texture  # noqa: E402
-from simulate.config import SimConfig  # noqa: E402
-from simulate.model import Simulator  # noqa: E402
+from roughness.dataset.textures import STANDARD_LAMBDAS_MM, standard_texture  # noqa: E402
+from roughness.simulate.config import SimConfig  # noqa: E402
+from roughness.simulate.model import Simulator  # noqa: E402
 
 OUT = Path(__file__).parent / "results"
 BASELINE = {"force_n": 10.0, "poisson": 0.45, "base_diameter_mm": 0.9, "contact": "stick"}

@@ -34,10 +34,10 @@ def sweep(sim, textures: dict, **override) -> tuple[np.ndarray, list]:
 
 
 def main() -> None:
-    from dataset.textures import STANDARD_LAMBDAS_MM, standard_texture
-    from simulate.config import SimConfig
-    from simulate.model import Simulator
-    from simulate.variation import PairSampling, variation
+    from roughness.dataset.textures import STANDARD_LAMBDAS_MM, standard_texture
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.model import Simulator
+    from roughness.simulate.variation import PairSampling, variation
 
     lambdas = np.array(STANDARD_LAMBDAS_MM)
     textures = {lam: [standard_texture(lam, seed=s) for s in SEEDS] for lam in lambdas}

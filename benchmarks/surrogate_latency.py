@@ -35,11 +35,16 @@ def timed(fn, repeats: int) -> list[float]:
 
 
 def main() -> None:
-    from dataset.recipe import Recipe, realise, sample_record
-    from dataset.textures import standard_texture
-    from simulate.config import SimConfig
-    from simulate.model import Simulator
-    from surrogate.predictor import DEFAULT_MODEL, INPUT, SurrogateModel, predict
+    from roughness.dataset.recipe import Recipe, realise, sample_record
+    from roughness.dataset.textures import standard_texture
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.model import Simulator
+    from roughness.surrogate.predictor import (
+        DEFAULT_MODEL,
+        INPUT,
+        SurrogateModel,
+        predict,
+    )
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--model", default=str(DEFAULT_MODEL))

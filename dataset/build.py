@@ -14,8 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simulate.config import SimConfig
-from simulate.heightmap import InputError
+from roughness.core.errors import InputError
+from roughness.core.version import package_version
+from roughness.simulate.config import SimConfig
 
 from .recipe import Recipe, expand, realise
 from .store import DatasetWriter, result_fields, sample_id
@@ -26,7 +27,7 @@ _SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configu
 
 def simulate_record(record: dict, config: dict) -> dict:
     """Run the FEM for one sample record (on a worker); failures come back as data."""
-    from simulate.model import Simulator
+    from roughness.simulate.model import Simulator
 
     key = json.dumps(config, sort_keys=True)
     if key not in _SIMULATORS:
@@ -77,7 +78,7 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig, workers: int = 2,
     if len(set(ids)) != len(ids):
         raise InputError("the recipe produced duplicate samples; change its seed or ranges")
     file_config = {"simulation": config.as_dict(), "recipe": json.loads(recipe.to_json())}
-    with DatasetWriter(out, config=file_config, version=_version()) as writer:
+    with DatasetWriter(out, config=file_config, version=package_version()) as writer:
         pending = [r for r, i in zip(records, ids) if i not in writer.ids]
         counts = {"requested": n, "already_done": n - len(pending), "written": 0, "failed": 0}
         if not quiet:
@@ -116,8 +117,3 @@ def _run(writer: DatasetWriter, pending: list[dict], config: dict, workers: int,
         if cluster is not None:
             cluster.close()
 
-
-def _version() -> str:
-    from roughness import __version__
-
-    return __version__

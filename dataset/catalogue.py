@@ -3,7 +3,8 @@ from __future__ import annotations
 
 from dataclasses import fields
 
-from simulate.heightmap import Heightmap, InputError, flat
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap, flat
 
 from . import natural, textures
 

@@ -12,14 +12,6 @@ from pathlib import Path
 from .store import open_dataset
 
 
-def file_sha256(path: str | Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
 def inputs_sha256(path: str | Path) -> str:
     h = hashlib.sha256()
     with open_dataset(path) as ds:

@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from simulate.heightmap import Heightmap, InputError
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap
 
 
 def fbm_surface(size_mm: float = 12.0, pixel_mm: float = 0.05, hurst: float = 0.8, rms_mm: float = 0.15,

@@ -18,8 +18,10 @@ from collections.abc import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-from dataset.fractal import fbm_surface
-from simulate.heightmap import Heightmap, InputError, positive_mm
+from roughness.core.checks import positive
+from roughness.core.errors import InputError
+from roughness.dataset.fractal import fbm_surface
+from roughness.simulate.heightmap import Heightmap
 
 PARAMETER_RANGES: dict[str, dict[str, tuple]] = {
     "cellular": {"cell_mm": (0.5, 3.0), "profile": ("dome", "wall"), "height_mm": (0.05, 1.0),
@@ -92,8 +94,8 @@ def _validated(func: Callable[..., Heightmap]) -> Callable[..., Heightmap]:
         bound = signature.bind(*args, **kwargs)
         bound.apply_defaults()
         arguments = bound.arguments
-        positive_mm("size_mm", arguments["size_mm"])
-        positive_mm("pixel_mm", arguments["pixel_mm"])
+        positive("size_mm", arguments["size_mm"])
+        positive("pixel_mm", arguments["pixel_mm"])
         _check_seed(arguments["seed"])
         for name in PARAMETER_RANGES[family]:
             _check_value(family, name, arguments[name])

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from simulate.heightmap import Heightmap, InputError
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap
 
 LAYER_MM = 0.03  # FDM/SLA layer height used by quantise
 # Ranges drawn by random_pipeline: each step's parameters are uniform in these bounds (mm, degrees

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from simulate.heightmap import Heightmap, InputError
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap
 
 from . import natural
 from .catalogue import make_texture

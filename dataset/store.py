@@ -62,7 +62,9 @@ from typing import BinaryIO, Callable, Iterator, NamedTuple
 import h5py
 import numpy as np
 
-from simulate.heightmap import Heightmap, InputError
+from roughness.core.errors import InputError
+from roughness.core.hashing import canonical_json, digest
+from roughness.simulate.heightmap import Heightmap
 
 SCHEMA = "roughness.dataset"
 SCHEMA_VERSION = 1
@@ -97,22 +99,11 @@ _DIGEST = hashlib.sha256().digest_size
 # Sample ids
 
 
-def canonical_json(value: object) -> str:
-    """Compact JSON with sorted keys; numpy scalars and arrays become plain numbers and lists."""
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), allow_nan=False, default=_plain_json)
-
-
-def _plain_json(value: object) -> object:
-    if isinstance(value, (np.generic, np.ndarray)):
-        return value.tolist()
-    raise TypeError(f"{type(value).__name__} is not JSON serialisable")
-
-
 def sample_id(recipe: dict) -> str:
     """16 hex digits of the SHA-1 of the recipe's canonical JSON: independent of key order."""
     if not isinstance(recipe, dict):
         raise TypeError(f"a recipe is a dict, got {type(recipe).__name__}")
-    return hashlib.sha1(canonical_json(recipe).encode()).hexdigest()[:16]
+    return digest(recipe)
 
 
 def result_fields(result: object) -> dict:

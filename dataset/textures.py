@@ -14,7 +14,8 @@ import numpy as np
 from scipy import ndimage, optimize
 from scipy.spatial import cKDTree
 
-from simulate.heightmap import Heightmap, InputError, flat
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap, flat
 
 STANDARD_LAMBDAS_MM = (0.625, 0.6875, 0.75, 0.8125, 0.875, 0.9375, 1.0, 1.0625, 1.125, 1.25, 1.375, 1.5, 1.625)
 FLAT_TOP_DIAMETERS_MM = (0.1, 0.2, 0.3, 0.4, 0.5)

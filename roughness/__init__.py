@@ -1,20 +1,57 @@
-"""roughness: predicted tactile roughness of surface textures (after Tymms, Gardner & Zorin 2018)."""
-from importlib.metadata import PackageNotFoundError, version
+"""roughness: predicted tactile roughness of surface textures (after Tymms, Gardner & Zorin 2018).
+
+The public Python API, loaded on first use (``import roughness`` is cheap; prediction loads
+no FEM stack and no torch)::
+
+    import roughness
+    hm = roughness.load_heightmap("texture.png", pixel_mm=0.05, height_mm=1.0)
+    [p] = roughness.predict(hm)                  # surrogate, FEM where out of domain
+    r = roughness.fem_roughness(hm)              # FEM reference: r.roughness, r.standard_error
+
+Subpackages: ``roughness.simulate`` (FEM), ``roughness.dataset`` (textures, HDF5 datasets),
+``roughness.surrogate`` (CNN, ONNX), ``roughness.models`` (shipped models).
+"""
+from __future__ import annotations
+
+from importlib import import_module
+from pathlib import Path
+
+from .core.version import package_version
+
+_SOURCE_ROOT = Path(__file__).resolve().parents[1]
+if (_SOURCE_ROOT / "pyproject.toml").is_file() and (_SOURCE_ROOT / "simulate" / "__init__.py").is_file():
+    # Running from a checkout: the top-level folders simulate/, dataset/, surrogate/ and models/
+    # are this package's subpackages (pyproject.toml maps them the same way when installing),
+    # so code and tests run in a checkout always import the checkout, never an installed copy.
+    __path__.append(str(_SOURCE_ROOT))  # noqa: F821 (package __path__)
+
+_HOMES = {
+    "Heightmap": "roughness.simulate.heightmap",
+    "InputError": "roughness.core.errors",
+    "SimulationError": "roughness.core.errors",
+    "load_heightmap": "roughness.simulate.io",
+    "save_heightmap": "roughness.simulate.io",
+    "SimConfig": "roughness.simulate.config",
+    "Simulator": "roughness.simulate.model",
+    "Result": "roughness.simulate.model",
+    "fem_roughness": "roughness.simulate.model:roughness",
+    "predict": "roughness.surrogate.predictor",
+    "Prediction": "roughness.surrogate.predictor",
+    "StandardScale": "roughness.surrogate.calibration",
+    "load_scale": "roughness.surrogate.calibration",
+    "standard_texture": "roughness.dataset.textures",
+    "named_texture": "roughness.dataset.textures",
+    "open_dataset": "roughness.dataset.store",
+}
+
+__all__ = sorted(_HOMES) + ["__version__"]
 
 
-def _source_version() -> str:
-    """Version from pyproject.toml when running from a source tree (not installed)."""
-    import tomllib
-    from pathlib import Path
-
-    try:
-        with open(Path(__file__).parents[1] / "pyproject.toml", "rb") as f:
-            return tomllib.load(f)["project"]["version"] + "+source"
-    except (OSError, KeyError, tomllib.TOMLDecodeError):
-        return "unknown"
+def __getattr__(name: str) -> object:
+    if name not in _HOMES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module, _, attr = _HOMES[name].partition(":")
+    return getattr(import_module(module), attr or name)
 
 
-try:
-    __version__ = version("roughness")
-except PackageNotFoundError:
-    __version__ = _source_version()
+__version__ = package_version()

@@ -14,8 +14,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from simulate.heightmap import Heightmap
-from surrogate.patch import FOOTPRINT_MM, footprint_patch
+from roughness.simulate.heightmap import Heightmap
+from roughness.surrogate.patch import FOOTPRINT_MM, footprint_patch
 
 PIXEL_MM = 0.05
 LEVELS = 32

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
-from simulate.heightmap import Heightmap, InputError
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap
 
 from .engines import FEM_FIDELITIES, Engine, fem_identity
 
@@ -36,8 +37,8 @@ class Texture:
 
 def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dict]]]:
     """Samples of a dataset file, and its stored FEM results if they are reusable."""
-    from dataset.store import open_dataset
-    from simulate.config import SimConfig
+    from roughness.dataset.store import open_dataset
+    from roughness.simulate.config import SimConfig
 
     with open_dataset(path) as data:
         table, recipes, simulation = data.table(), data.recipes, data.config.get("simulation", {})
@@ -65,7 +66,7 @@ class _DatasetSamples:
 
     def heightmap(self, sid: str) -> Heightmap:
         if self._data is None:
-            from dataset.store import open_dataset
+            from roughness.dataset.store import open_dataset
 
             self._data = open_dataset(self.path)
             weakref.finalize(self, self._data.close)
@@ -73,14 +74,14 @@ class _DatasetSamples:
 
 
 def folder_textures(path: Path, pixel_mm: float | None, height_mm: float | None) -> list[Texture]:
-    from simulate.io import heightmap_files, load_heightmap
+    from roughness.simulate.io import heightmap_files, load_heightmap
 
     return [Texture(f.name, "file", lambda f=f: load_heightmap(f, pixel_mm, height_mm)) for f in heightmap_files(path)]
 
 
 def recipe_textures(path: Path, n: int | None) -> list[Texture]:
-    from dataset.recipe import expand, load_recipe, realise
-    from dataset.store import sample_id
+    from roughness.dataset.recipe import expand, load_recipe, realise
+    from roughness.dataset.store import sample_id
 
     if n is None:
         raise InputError("a recipe input needs --n, the number of its samples to compare on")

@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Protocol
 
-from simulate.heightmap import Heightmap, InputError
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap
 
 from .classical import MEASURES, footprint
 
@@ -42,14 +43,14 @@ class FemEngine:
 
     @property
     def identity(self) -> str:
-        from simulate.config import SimConfig
+        from roughness.simulate.config import SimConfig
 
         return fem_identity(SimConfig(fidelity=self.fidelity).as_dict())
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
         if self._simulator is None:
-            from simulate.config import SimConfig
-            from simulate.model import Simulator
+            from roughness.simulate.config import SimConfig
+            from roughness.simulate.model import Simulator
 
             start = time.perf_counter()
             config = SimConfig(fidelity=self.fidelity)
@@ -70,8 +71,8 @@ class SurrogateEngine:
 
     @property
     def identity(self) -> str:
-        from dataset.digest import file_sha256
-        from surrogate.predictor import DEFAULT_MODEL
+        from roughness.dataset.digest import file_sha256
+        from roughness.surrogate.predictor import DEFAULT_MODEL
 
         path = Path(self.model_path or DEFAULT_MODEL)
         if not path.is_file():
@@ -81,7 +82,7 @@ class SurrogateEngine:
     @property
     def model(self):
         """The loaded model (one onnxruntime thread), loaded on first use."""
-        from surrogate.predictor import DEFAULT_MODEL, SurrogateModel
+        from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
         if self._model is None:
             start = time.perf_counter()
@@ -90,7 +91,7 @@ class SurrogateEngine:
         return self._model
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
-        from surrogate.predictor import predict
+        from roughness.surrogate.predictor import predict
 
         model = self.model
         start = time.perf_counter()

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
-from surrogate.metrics import scores
+from roughness.surrogate.metrics import scores
 
 from .compare import SETUP_KEY, ResultCache, Texture
 

@@ -5,7 +5,7 @@ Names are imported on first use, so ``simulate.heightmap`` loads without the FEM
 from importlib import import_module
 
 _HOMES = {"SimConfig": "config", "Heightmap": "heightmap", "InputError": "heightmap", "load_heightmap": "io",
-          "save_heightmap": "io", "Result": "model", "SimulationError": "errors", "Simulator": "model",
+          "save_heightmap": "io", "Result": "model", "SimulationError": "model", "Simulator": "model",
           "roughness": "model"}
 
 __all__ = sorted(_HOMES)
@@ -13,5 +13,5 @@ __all__ = sorted(_HOMES)
 
 def __getattr__(name: str) -> object:
     if name not in _HOMES:
-        raise AttributeError(f"module 'simulate' has no attribute {name!r}")
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     return getattr(import_module(f".{_HOMES[name]}", __name__), name)

@@ -4,7 +4,10 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-from .heightmap import Heightmap, InputError, positive_mm
+from roughness.core.checks import positive
+from roughness.core.errors import InputError
+
+from .heightmap import Heightmap
 from .mesh import MeshSpec
 
 # Contact-face spacing (mm) per fidelity; ``auto`` picks from this ladder.
@@ -48,13 +51,13 @@ class SimConfig:
         _choice("element", self.element, ELEMENTS)
         for name in ("young_mpa", "tissue_mm", "width_mm", "bone_young_mpa", "bone_mm", "force_n",
                      "depth_mm", "window_mm", "grid_mm", "pair_distance_mm", "disk_radius_mm"):
-            positive_mm(name, getattr(self, name))
+            positive(name, getattr(self, name))
         for name in ("poisson", "bone_poisson"):
             value = getattr(self, name)
             if not (math.isfinite(value) and -1.0 < value < 0.5):
                 raise InputError(f"{name} must lie in (-1, 0.5), got {value}")
         if self.h_contact_mm is not None:
-            positive_mm("h_contact_mm", self.h_contact_mm)
+            positive("h_contact_mm", self.h_contact_mm)
         if self.depth_mm >= self.tissue_mm:
             raise InputError(f"receptor depth {self.depth_mm} mm must be inside the {self.tissue_mm} mm tissue")
         if self.window_mm > self.width_mm:

@@ -6,16 +6,14 @@ Pixel (i, j) holds the height at x = (j + 0.5) * pixel_mm, y = (i + 0.5) * pixel
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
 
 import numpy as np
 
+from roughness.core.checks import positive
+from roughness.core.errors import InputError
+
 TOLERANCE_MM = 1e-9
-
-
-class InputError(ValueError):
-    """Bad user input: the CLI prints the message and exits with code 2."""
 
 
 @dataclass(frozen=True)
@@ -30,7 +28,7 @@ class Heightmap:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "heights", _checked_heights(self.heights))
-        object.__setattr__(self, "pixel_mm", positive_mm("pixel_mm", self.pixel_mm))
+        object.__setattr__(self, "pixel_mm", positive("pixel_mm", self.pixel_mm))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -69,7 +67,7 @@ class Heightmap:
 
     def covers(self, width_mm: float, centre_mm: tuple[float, float] | None = None) -> bool:
         """True if the square of side ``width_mm`` centred at ``centre_mm`` (default: map centre) lies on the map."""
-        half = positive_mm("footprint width", width_mm) / 2
+        half = positive("footprint width", width_mm) / 2
         cx, cy = centre_mm or self.centre_mm
         width, height = self.size_mm
         return (cx - half >= -TOLERANCE_MM and cx + half <= width + TOLERANCE_MM
@@ -98,7 +96,7 @@ class Heightmap:
 
         Periodic maps wrap the indices; if no pixel centre falls inside, the height at the centre.
         """
-        half = positive_mm("footprint width", width_mm) / 2
+        half = positive("footprint width", width_mm) / 2
         cx, cy = centre_mm or self.centre_mm
         ny, nx = self.shape
         cols = _indices_inside(cx - half, cx + half, self.pixel_mm, nx, periodic)
@@ -109,7 +107,7 @@ class Heightmap:
 
     def resampled(self, pixel_mm: float) -> Heightmap:
         """Bilinear resampling to ``pixel_mm``; same origin, sides rounded to whole new pixels."""
-        pixel_mm = positive_mm("pixel_mm", pixel_mm)
+        pixel_mm = positive("pixel_mm", pixel_mm)
         width, height = self.size_mm
         nx, ny = round(width / pixel_mm), round(height / pixel_mm)
         x = (np.arange(nx) + 0.5) * pixel_mm
@@ -134,18 +132,8 @@ class Heightmap:
 
 def flat(size_mm: float = 12.0, pixel_mm: float = 0.05, height_mm: float = 0.0) -> Heightmap:
     """Square flat map of side ``size_mm`` (rounded to whole pixels) at ``height_mm``."""
-    n = round(positive_mm("size_mm", size_mm) / positive_mm("pixel_mm", pixel_mm))
+    n = round(positive("size_mm", size_mm) / positive("pixel_mm", pixel_mm))
     return Heightmap(np.full((n, n), float(height_mm)), pixel_mm)
-
-
-def positive_mm(name: str, value: float) -> float:
-    """``value`` as a float, or InputError unless it is a positive finite real number (not a string)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise InputError(f"{name} must be a positive finite number, got {value!r}")
-    number = float(value)
-    if not (math.isfinite(number) and number > 0):
-        raise InputError(f"{name} must be a positive finite number, got {value!r}")
-    return number
 
 
 def _checked_heights(heights: np.ndarray) -> np.ndarray:

@@ -6,11 +6,8 @@ Every failure the user can cause is reported as an InputError naming the file an
 """
 from __future__ import annotations
 
-import os
 import struct
-import tempfile
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,7 +16,11 @@ import numpy as np
 import tifffile
 from PIL import Image
 
-from .heightmap import Heightmap, InputError, positive_mm
+from roughness.core.checks import positive
+from roughness.core.errors import InputError
+from roughness.core.files import atomic_write
+
+from .heightmap import Heightmap
 
 SUFFIXES = (".npy", ".png", ".tif", ".tiff", ".h5", ".hdf5")
 SAVE_SUFFIXES = (".npy", ".png", ".tif", ".tiff")
@@ -54,8 +55,8 @@ def load_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: f
                          f"supported: {', '.join(SUFFIXES)}")
     if dataset is not None and suffix not in (".h5", ".hdf5"):
         raise InputError(f"{path}: a dataset name applies only to .h5/.hdf5 files")
-    pixel_mm = None if pixel_mm is None else positive_mm("--pixel-mm", pixel_mm)
-    height_mm = None if height_mm is None else positive_mm("--height-mm", height_mm)
+    pixel_mm = None if pixel_mm is None else positive("--pixel-mm", pixel_mm)
+    height_mm = None if height_mm is None else positive("--height-mm", height_mm)
     if suffix == ".npy":
         raw = _read_npy(path)
     elif suffix == ".png":
@@ -92,12 +93,12 @@ def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = No
     if not path.parent.is_dir():
         raise InputError(f"cannot write {path}: its folder does not exist")
     if suffix == ".npy":
-        _write_atomically(path, lambda tmp: np.save(tmp, hm.heights))
+        atomic_write(path, lambda tmp: np.save(tmp, hm.heights))
     elif suffix == ".png":
         counts = _png_counts(hm.heights, height_mm)
-        _write_atomically(path, lambda tmp: Image.fromarray(counts).save(tmp, format="PNG"))
+        atomic_write(path, lambda tmp: Image.fromarray(counts).save(tmp, format="PNG"))
     else:
-        _write_atomically(path, lambda tmp: tifffile.imwrite(tmp, hm.heights.astype(np.float32)))
+        atomic_write(path, lambda tmp: tifffile.imwrite(tmp, hm.heights.astype(np.float32)))
 
 
 def _existing_file(path: Path) -> Path:
@@ -115,7 +116,7 @@ def _unreadable(path: Path, kind: str, err: BaseException) -> InputError:
 def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: float | None) -> Heightmap:
     """Apply units to ``raw``; InputError names any missing or misplaced flag."""
     if pixel_mm is None and raw.pixel_mm is not None:
-        pixel_mm = positive_mm(f"the pixel_mm attribute of {path}", raw.pixel_mm)
+        pixel_mm = positive(f"the pixel_mm attribute of {path}", raw.pixel_mm)
     missing = []
     if pixel_mm is None:
         missing.append("--pixel-mm (pixel size in mm)")
@@ -221,7 +222,7 @@ def _png_counts(heights: np.ndarray, height_mm: float | None) -> np.ndarray:
     """16-bit grey levels of (heights - min) over ``height_mm`` (default: the height range, mm)."""
     low = float(heights.min())
     span = float(heights.max()) - low
-    scale = span if height_mm is None else positive_mm("height_mm", height_mm)
+    scale = span if height_mm is None else positive("height_mm", height_mm)
     if span > scale:
         raise InputError(f"height_mm={height_mm} is below the map's height range {span:.6g} mm; the PNG would clip")
     if scale == 0:
@@ -229,20 +230,3 @@ def _png_counts(heights: np.ndarray, height_mm: float | None) -> np.ndarray:
     return np.clip(np.rint((heights - low) / scale * 65535), 0, 65535).astype(np.uint16)
 
 
-def _write_atomically(path: Path, write: Callable[[str], object]) -> None:
-    """Call ``write`` on a temporary file next to ``path`` (same suffix), then rename it over ``path``."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        os.chmod(tmp, 0o666 & ~_umask())
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask

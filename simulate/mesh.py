@@ -8,8 +8,6 @@ is meshed above z = T as a second region.
 """
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 import sys
 from contextlib import contextmanager
@@ -17,6 +15,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
+
+from roughness.core.hashing import digest
 
 TISSUE, BONE = 0, 1
 MESH_FORMAT_VERSION = 3
@@ -45,8 +45,7 @@ class MeshSpec:
         return np.minimum(grown, max(self.h_max_mm, self.h_contact_mm))
 
     def key(self) -> str:
-        text = json.dumps({**asdict(self), "format": MESH_FORMAT_VERSION}, sort_keys=True)
-        return hashlib.sha1(text.encode()).hexdigest()[:16]
+        return digest({**asdict(self), "format": MESH_FORMAT_VERSION})
 
 
 @dataclass

@@ -8,13 +8,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from roughness.core.errors import SimulationError
+
 from . import mesh as meshing
 from .config import SimConfig
 from .contact import ContactError, ContactProblem, ContactState, solve_contact
-from .errors import SimulationError
 from .elasticity import rigid_body_modes, stiffness
 from .face import ContactFace
-from .heightmap import Heightmap, InputError
+from .heightmap import Heightmap
 from .linsolve import ConstrainedSystem, SolverError
 from .strain import StrainSampler
 from .variation import PairSampling, variation

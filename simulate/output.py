@@ -1,10 +1,11 @@
 """Writers for simulation results: strain-map image and ParaView mesh."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
+
+from roughness.core.files import atomic_write
 
 from .elasticity import strain_tensors, vertex_strain_operator
 from .model import Block, Result
@@ -28,7 +29,7 @@ def save_strain_png(result: Result, path: str | Path) -> None:
     c = result.config
     fig.suptitle(f"V = {result.roughness:.4g} ± {result.roughness_stderr:.2g}   "
                  f"(depth {c.depth_mm} mm, F = {c.force_n} N, contact {100 * result.contact_fraction:.0f}%)")
-    _atomic(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
     plt.close(fig)
 
 
@@ -49,11 +50,5 @@ def save_vtu(result: Result, block: Block, path: str | Path) -> None:
         point_data={"displacement": u.reshape(-1, 3)},
         cell_data={"strain": [voigt], "lambda3": [lam[:, 0]], "region": [mesh.region.astype(np.int32)]},
     )
-    _atomic(path, lambda tmp: meshio.write(tmp, m, file_format="vtu"))
+    atomic_write(path, lambda tmp: meshio.write(tmp, m, file_format="vtu"))
 
-
-def _atomic(path: str | Path, write) -> None:
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    write(str(tmp))
-    os.replace(tmp, path)

@@ -7,7 +7,7 @@ texture is counted in just-noticeable differences of Weber fraction 0.19: ln(V /
 
 Regenerate the shipped table (``models/standard_scale.json``, a few minutes on 2 cores)::
 
-    python -m surrogate.calibration --fidelities coarse default          # 5 seeds each
+    python -m roughness.surrogate.calibration --fidelities coarse default          # 5 seeds each
 """
 from __future__ import annotations
 
@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from models import MODELS_DIR
-from simulate.heightmap import InputError
+from roughness.core.errors import InputError
+from roughness.models import MODELS_DIR
 
 WEBER_FRACTION = 0.19
 SCALE_PATH = MODELS_DIR / "standard_scale.json"
@@ -78,8 +78,8 @@ def load_scale(fidelity: str, path: str | Path = SCALE_PATH) -> StandardScale:
 
 def measure(fidelity: str, seeds: range) -> dict:
     """Run the FEM on every standard texture and seed; mean and spread of V per lambda."""
-    from dataset.textures import STANDARD_LAMBDAS_MM, standard_texture
-    from simulate import SimConfig, Simulator
+    from roughness.dataset.textures import STANDARD_LAMBDAS_MM, standard_texture
+    from roughness.simulate import SimConfig, Simulator
 
     sim = Simulator(SimConfig(fidelity=fidelity))
     values = np.array([[sim.run(standard_texture(lam, seed=s)).roughness for s in seeds]
@@ -100,7 +100,7 @@ def main(argv: list[str] | None = None) -> None:
         tables[fidelity] = measure(fidelity, range(100, 100 + args.seeds))
         print(fidelity, tables[fidelity]["V_mean"], flush=True)
     note = ("Mean FEM V of the 13 standard cap-topped bump textures (paper parameters, 10 N, stick) over "
-            "the seeds listed; regenerate with: python -m surrogate.calibration")
+            "the seeds listed; regenerate with: python -m roughness.surrogate.calibration")
     out.write_text(json.dumps({"note": note, "weber_fraction": WEBER_FRACTION, "tables": tables}, indent=1))
 
 

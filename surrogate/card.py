@@ -1,6 +1,6 @@
 """Model card and accuracy plots of an exported surrogate, from its training run.
 
-    python -m surrogate.card RUN_DIR MODEL.onnx --card models/MODEL_CARD.md
+    python -m roughness.surrogate.card RUN_DIR MODEL.onnx --card models/MODEL_CARD.md
 
 Reads the model's metadata, the run's ``predictions.csv`` and ``history.csv`` and the latency
 benchmark (benchmarks/results/surrogate_latency.json, if present); writes the card and

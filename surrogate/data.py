@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dataset.store import Dataset
-from simulate.heightmap import InputError
+from roughness.core.errors import InputError
+from roughness.dataset.store import Dataset
 
 from .patch import descriptors, footprint_patch
 

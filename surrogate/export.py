@@ -50,8 +50,8 @@ def load_checkpoint(path: str | Path) -> tuple[RoughnessNet, dict]:
 
 def check_patches(n: int = 16) -> np.ndarray:
     """Footprint patches of ``n`` textures drawn as the default recipe draws them (all families)."""
-    from dataset.natural import FAMILIES
-    from dataset.recipe import Recipe, realise, sample_record
+    from roughness.dataset.natural import FAMILIES
+    from roughness.dataset.recipe import Recipe, realise, sample_record
 
     recipe = Recipe(name="export-check", seed=7, families={f: 1.0 for f in ("bumps", *FAMILIES)})
     return np.stack([footprint_patch(realise(sample_record(recipe, i))) for i in range(n)])[:, None]

@@ -12,9 +12,10 @@ from pathlib import Path
 
 import h5py
 
-from dataset.store import SCHEMA, open_dataset
-from simulate.heightmap import Heightmap, InputError
-from simulate.io import heightmap_files, load_heightmap
+from roughness.core.errors import InputError
+from roughness.dataset.store import SCHEMA, open_dataset
+from roughness.simulate.heightmap import Heightmap
+from roughness.simulate.io import heightmap_files, load_heightmap
 
 
 class InputReader:

@@ -1,6 +1,6 @@
 """Roughness prediction with the ONNX surrogate (numpy + onnxruntime; torch is never imported).
 
-    from surrogate import predict
+    from roughness.surrogate import predict
     [p] = predict(heightmap)            # engine "auto": surrogate, FEM where out of domain
     p.roughness, p.in_domain, p.placement.equivalent_lambda_mm
 
@@ -21,8 +21,9 @@ from pathlib import Path
 import numpy as np
 import onnxruntime as ort
 
-from models import MODELS_DIR
-from simulate.heightmap import Heightmap, InputError, flat
+from roughness.core.errors import InputError
+from roughness.models import MODELS_DIR
+from roughness.simulate.heightmap import Heightmap, flat
 
 from .calibration import Placement, load_scale
 from .domain import Domain
@@ -146,8 +147,8 @@ class FemFallback:
         self._simulator = None
 
     def __call__(self, source: str, heightmap: Heightmap, in_domain: bool, notes: list[str]) -> Prediction:
-        from simulate.config import SimConfig
-        from simulate.model import Simulator
+        from roughness.simulate.config import SimConfig
+        from roughness.simulate.model import Simulator
 
         if self._simulator is None:
             self._simulator = Simulator(SimConfig(**self.config))

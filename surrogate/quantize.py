@@ -29,7 +29,12 @@ class QuantizationError(RuntimeError):
 
 def quantize(fp32_path: str | Path, out: str | Path, calibration: int = 64, check: int = 32) -> dict:
     """Write the int8 model next to the checks' numbers; nothing is written if the check fails."""
-    from onnxruntime.quantization import CalibrationDataReader, QuantFormat, QuantType, quantize_static
+    from onnxruntime.quantization import (
+        CalibrationDataReader,
+        QuantFormat,
+        QuantType,
+        quantize_static,
+    )
     from onnxruntime.quantization.shape_inference import quant_pre_process
 
     patches = check_patches(calibration + check)

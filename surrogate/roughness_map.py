@@ -11,7 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-from simulate.heightmap import Heightmap, InputError, positive_mm
+from roughness.core.checks import positive
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap
 
 from .predictor import SurrogateModel
 
@@ -40,7 +42,7 @@ def centres(size_mm: float, footprint_mm: float, step_mm: float, tile: bool) -> 
 def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False,
                   batch_size: int = 256) -> RoughnessMap:
     """V at footprint centres ``step_mm`` apart over the whole map."""
-    step_mm = positive_mm("--step-mm", step_mm)
+    step_mm = positive("--step-mm", step_mm)
     heightmap.require_footprint(model.footprint_mm, None, tile)
     width, height = heightmap.size_mm
     xs, ys = centres(width, model.footprint_mm, step_mm, tile), centres(height, model.footprint_mm, step_mm, tile)

@@ -22,15 +22,15 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from dataset.digest import inputs_sha256
-from dataset.store import open_dataset
-from simulate.heightmap import InputError
+from roughness.core.errors import InputError
+from roughness.dataset.digest import inputs_sha256
+from roughness.dataset.store import open_dataset
 
 from .data import LOG_OFFSET, load_samples, target
 from .domain import Domain
 from .metrics import scores
 from .network import RoughnessNet, parameter_count
-from .patch import PATCH_PIXEL_MM, FOOTPRINT_MM
+from .patch import FOOTPRINT_MM, PATCH_PIXEL_MM
 
 
 @dataclass

@@ -11,11 +11,11 @@ import time
 import numpy as np
 import pytest
 
-from dataset.build import build
-from dataset.recipe import Recipe, expand, realise
-import dataset
-from dataset.store import open_dataset, sample_id, verify
-from simulate.config import SimConfig
+from roughness import dataset
+from roughness.dataset.build import build
+from roughness.dataset.recipe import Recipe, expand, realise
+from roughness.dataset.store import open_dataset, sample_id, verify
+from roughness.simulate.config import SimConfig
 
 SMALL = SimConfig(width_mm=6.0, window_mm=4.0, h_contact_mm=0.5, pairs=2000)
 RECIPE = Recipe(name="test", seed=7, families={"bumps": 1.0, "grating": 1.0, "dots": 1.0}, size_mm=7.0)
@@ -84,7 +84,7 @@ def _count(path) -> int:
 
 
 def test_input_digest_is_reproducible_across_builds(tmp_path):
-    from dataset.digest import file_sha256, inputs_sha256
+    from roughness.dataset.digest import file_sha256, inputs_sha256
 
     a, b = tmp_path / "a.h5", tmp_path / "b.h5"
     build(str(a), 3, RECIPE, SMALL, workers=1, quiet=True)

@@ -9,15 +9,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dataset.recipe import Recipe, realise, sample_record
-from dataset.store import DatasetWriter
 from roughness import classical
 from roughness.cli import main
 from roughness.compare import SETUP_KEY
+from roughness.core.errors import InputError
+from roughness.dataset.recipe import Recipe, realise, sample_record
+from roughness.dataset.store import DatasetWriter
 from roughness.engines import make_engine
 from roughness.report import break_even, pareto_front
-from simulate.config import SimConfig
-from simulate.heightmap import Heightmap, InputError
+from roughness.simulate.config import SimConfig
+from roughness.simulate.heightmap import Heightmap
 
 PNG = b"\x89PNG\r\n\x1a\n"
 ENGINES = ["surrogate", "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance"]
@@ -162,7 +163,7 @@ def test_cached_results_follow_the_engine_identity(tiny_set, tmp_path, capsys):
 
     import onnx
 
-    from surrogate.predictor import DEFAULT_MODEL
+    from roughness.surrogate.predictor import DEFAULT_MODEL
 
     model = tmp_path / "m.onnx"
     shutil.copy(DEFAULT_MODEL, model)

@@ -4,10 +4,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simulate.elasticity import rigid_body_modes, stiffness, strain_tensors, vertex_strain_operator
-from simulate.mesh import MeshSpec, build, surface
-from simulate.strain import StrainSampler
-from simulate.variation import PairSampling, variation
+from roughness.simulate.elasticity import (
+    rigid_body_modes,
+    stiffness,
+    strain_tensors,
+    vertex_strain_operator,
+)
+from roughness.simulate.mesh import MeshSpec, build, surface
+from roughness.simulate.strain import StrainSampler
+from roughness.simulate.variation import PairSampling, variation
 
 SMALL = MeshSpec(width_mm=4.0, tissue_mm=2.0, h_contact_mm=0.4, fine_depth_mm=1.0, h_max_mm=0.8)
 
@@ -77,7 +82,7 @@ def test_recovery_of_a_linear_strain_field(mesh):
 
 
 def test_uniaxial_compression_matches_hookes_law():
-    from simulate.linsolve import ConstrainedSystem
+    from roughness.simulate.linsolve import ConstrainedSystem
 
     m = build(SMALL)
     e, nu = 0.042, 0.45

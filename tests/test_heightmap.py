@@ -10,8 +10,9 @@ import pytest
 import tifffile
 from PIL import Image
 
-from simulate.heightmap import Heightmap, InputError, flat
-from simulate.io import load_heightmap, save_heightmap
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap, flat
+from roughness.simulate.io import load_heightmap, save_heightmap
 
 RNG = np.random.default_rng(7)
 

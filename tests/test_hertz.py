@@ -14,9 +14,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simulate.config import SimConfig
-from simulate.heightmap import Heightmap
-from simulate.model import Simulator
+from roughness.simulate.config import SimConfig
+from roughness.simulate.heightmap import Heightmap
+from roughness.simulate.model import Simulator
 
 E, NU, R = 0.042, 0.45, 5.0
 

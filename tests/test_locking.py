@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from simulate.config import SimConfig
-from simulate.model import Simulator
 from test_hertz import R, sphere
+
+from roughness.simulate.config import SimConfig
+from roughness.simulate.model import Simulator
 
 NU, FORCE = 0.499, 0.02
 

@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import pytest
 
-from dataset.fractal import fbm_surface
-from dataset.textures import standard_texture
-from simulate.config import SimConfig
-from simulate.model import Simulator
+from roughness.dataset.fractal import fbm_surface
+from roughness.dataset.textures import standard_texture
+from roughness.simulate.config import SimConfig
+from roughness.simulate.model import Simulator
 
 
 @pytest.mark.slow

@@ -9,8 +9,8 @@ import pytest
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
-from dataset.natural import FAMILIES, PARAMETER_RANGES, grains, grating, make
-from simulate.heightmap import InputError
+from roughness.core.errors import InputError
+from roughness.dataset.natural import FAMILIES, PARAMETER_RANGES, grains, grating, make
 
 SMALL = {"size_mm": 6.0, "pixel_mm": 0.05}
 GRID_ARGS = ("size_mm", "pixel_mm", "seed")

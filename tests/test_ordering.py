@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import spearmanr
 
-from dataset.textures import STANDARD_LAMBDAS_MM, standard_texture
-from simulate.config import SimConfig
-from simulate.model import Simulator
+from roughness.dataset.textures import STANDARD_LAMBDAS_MM, standard_texture
+from roughness.simulate.config import SimConfig
+from roughness.simulate.model import Simulator
 
 
 def test_v_grows_with_lambda_over_the_standard_scale():
@@ -29,7 +29,7 @@ def test_v_grows_with_lambda_over_the_standard_scale():
 
 def test_v_falls_as_the_flat_top_widens():
     """At equal lambda (1 mm), smaller flat tops feel rougher (the paper's second ordering)."""
-    from dataset.textures import FLAT_TOP_DIAMETERS_MM, flat_top_texture
+    from roughness.dataset.textures import FLAT_TOP_DIAMETERS_MM, flat_top_texture
 
     sim = Simulator(SimConfig(fidelity="coarse"))
     mean_v = [np.mean([sim.run(flat_top_texture(d, seed=seed)).roughness for seed in (3, 4)])

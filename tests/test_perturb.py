@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from dataset.natural import dots, grains, grating
-from dataset.perturb import (
+from roughness.core.errors import InputError
+from roughness.dataset.natural import dots, grains, grating
+from roughness.dataset.perturb import (
     LAYER_MM,
     RANDOM_ORDER,
     RANDOM_RANGES,
@@ -25,7 +26,7 @@ from dataset.perturb import (
     rotate,
     shift,
 )
-from simulate.heightmap import Heightmap, InputError
+from roughness.simulate.heightmap import Heightmap
 
 GRAINS = grains(size_mm=6.0, seed=1)
 RNG = np.random.default_rng(0)

@@ -6,10 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from dataset.textures import BumpRecipe, bump_texture, standard_texture
-from simulate.config import SimConfig
-from simulate.heightmap import Heightmap, InputError
-from simulate.model import SimulationError, Simulator
+from roughness.core.errors import InputError
+from roughness.dataset.textures import BumpRecipe, bump_texture, standard_texture
+from roughness.simulate.config import SimConfig
+from roughness.simulate.heightmap import Heightmap
+from roughness.simulate.model import SimulationError, Simulator
 
 
 @pytest.fixture(scope="module")
@@ -124,14 +125,14 @@ def test_bad_parameters_are_input_errors():
 
 def test_no_contact_possible_is_reported():
     """A skin that cannot reach the texture (nothing to push against) fails with a reason."""
-    from simulate.contact import ContactError
+    from roughness.simulate.contact import ContactError
 
     assert issubclass(ContactError, RuntimeError)
     assert issubclass(SimulationError, RuntimeError)
 
 
 def test_auto_fidelity_follows_the_feature_size():
-    from dataset.fractal import fbm_surface
+    from roughness.dataset.fractal import fbm_surface
 
     cfg = SimConfig(fidelity="auto")
     assert cfg.spacing_mm(Heightmap(np.zeros((240, 240)), 0.05)) == 0.3

@@ -13,9 +13,17 @@ import h5py
 import numpy as np
 import pytest
 
-from dataset import store
-from dataset.store import DatasetWriter, info, journal_path, open_dataset, result_fields, sample_id, verify
-from simulate.heightmap import InputError
+from roughness.core.errors import InputError
+from roughness.dataset import store
+from roughness.dataset.store import (
+    DatasetWriter,
+    info,
+    journal_path,
+    open_dataset,
+    result_fields,
+    sample_id,
+    verify,
+)
 
 ROOT = Path(__file__).parents[1]
 CONFIG = {"force_n": 10.0, "fidelity": "coarse", "h_contact_mm": None, "seed": 0}
@@ -246,7 +254,7 @@ CHILD = """
 import os, sys
 sys.path[:0] = [{root!r}, {tests!r}]
 import test_store as t
-from dataset.store import DatasetWriter
+from roughness.dataset.store import DatasetWriter
 path, n, trap_at, crash_write = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
 with DatasetWriter(path, t.CONFIG, "test") as writer:
     for i in range(n):

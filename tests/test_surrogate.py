@@ -13,18 +13,25 @@ import onnx
 import pytest
 import torch
 
-from dataset.digest import inputs_sha256
-from dataset.recipe import Recipe, realise, sample_record
-from dataset.store import DatasetWriter
-from dataset.textures import standard_texture
-from simulate.heightmap import Heightmap, InputError
-from simulate.io import save_heightmap
-from surrogate.calibration import StandardScale, load_scale
-from surrogate.data import split_of
-from surrogate.export import ExportError, check_patches, export, load_checkpoint, verify
-from surrogate.patch import descriptors, footprint_patch
-from surrogate.predictor import DEFAULT_MODEL, SurrogateModel, predict
-from surrogate.train import TrainConfig, train
+from roughness.core.errors import InputError
+from roughness.dataset.digest import inputs_sha256
+from roughness.dataset.recipe import Recipe, realise, sample_record
+from roughness.dataset.store import DatasetWriter
+from roughness.dataset.textures import standard_texture
+from roughness.simulate.heightmap import Heightmap
+from roughness.simulate.io import save_heightmap
+from roughness.surrogate.calibration import StandardScale, load_scale
+from roughness.surrogate.data import split_of
+from roughness.surrogate.export import (
+    ExportError,
+    check_patches,
+    export,
+    load_checkpoint,
+    verify,
+)
+from roughness.surrogate.patch import descriptors, footprint_patch
+from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel, predict
+from roughness.surrogate.train import TrainConfig, train
 
 ROOT = Path(__file__).parents[1]
 EXAMPLE = ROOT / "examples" / "standard-1.0mm.png"
@@ -152,8 +159,8 @@ class Block(importlib.abc.MetaPathFinder):
         if name.split('.')[0] in ('torch', 'onnx', 'sklearn'):
             raise ImportError('blocked: ' + name)
 sys.meta_path.insert(0, Block())
-from dataset.textures import standard_texture
-from surrogate import predict
+from roughness.dataset.textures import standard_texture
+from roughness.surrogate import predict
 [p] = predict(standard_texture(1.0, seed=1), engine='surrogate', model={str(tiny.model)!r})
 assert p.roughness > 0 and p.engine == 'surrogate'
 print('ok', sorted(m for m in sys.modules if m.split('.')[0] in ('torch', 'onnx', 'sklearn')))
@@ -190,9 +197,9 @@ def test_auto_runs_fem_outside_the_domain():
 
 def test_shipped_model_agrees_with_fem_on_the_bundled_example(capsys):
     from roughness.cli import main
-    from simulate.io import load_heightmap
-    from simulate.model import Simulator
-    from simulate.config import SimConfig
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.io import load_heightmap
+    from roughness.simulate.model import Simulator
 
     assert main(["predict", str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
@@ -307,7 +314,7 @@ def test_extreme_inputs_give_finite_answers_or_are_flagged():
 
 def test_roughness_map_matches_single_predictions(tmp_path, capsys):
     from roughness.cli import main
-    from surrogate.roughness_map import roughness_map
+    from roughness.surrogate.roughness_map import roughness_map
 
     model = SurrogateModel()
     hm = standard_texture(1.0, seed=5, size_mm=14.0)
@@ -331,7 +338,7 @@ def test_roughness_map_matches_single_predictions(tmp_path, capsys):
 
 
 def test_int8_export_is_static_qdq_and_close_to_fp32(tiny, tmp_path):
-    from surrogate.quantize import quantize
+    from roughness.surrogate.quantize import quantize
 
     report = quantize(tiny.model, tmp_path / "int8.onnx", calibration=16, check=8)
     graph = onnx.load(tmp_path / "int8.onnx")

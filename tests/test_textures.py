@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from dataset.textures import (
+from roughness.core.errors import InputError
+from roughness.dataset.textures import (
     FLAT_TOP_DIAMETERS_MM,
     STANDARD_LAMBDAS_MM,
     BumpRecipe,
@@ -18,7 +19,6 @@ from dataset.textures import (
     standard_texture,
     texture_names,
 )
-from simulate.heightmap import InputError
 
 
 def plateau_diameters_mm(heights: np.ndarray, pixel_mm: float, top_mm: float) -> np.ndarray:

@@ -1,0 +1,46 @@
+"""The ``roughness`` command line: one module per subcommand, errors mapped to exit codes."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from . import compare, dataset, predict, simulate, texture, train
+
+DESCRIPTION = ("Predict how rough a surface texture feels to a fingertip (the FEM model of Tymms, Gardner & Zorin "
+               "2018, and a CNN surrogate of it). Units: mm, N, MPa.")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="roughness", description=DESCRIPTION)
+    parser.add_argument("--version", action="version", version=_version())
+    sub = parser.add_subparsers(dest="command", required=True)
+    for command in (simulate, texture, dataset, train, predict, compare):
+        command.add_parser(sub)
+    return parser
+
+
+def _version() -> str:
+    from roughness import __version__
+
+    return f"roughness {__version__}"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    from roughness.core.errors import InputError, SimulationError
+
+    try:
+        return args.run(args)
+    except InputError as err:
+        print(f"roughness: error: {err}", file=sys.stderr)
+        return 2
+    except SimulationError as err:
+        print(f"roughness: simulation failed: {err}", file=sys.stderr)
+        return 3
+    except OSError as err:
+        print(f"roughness: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("roughness: interrupted", file=sys.stderr)
+        return 130

@@ -1,0 +1,46 @@
+"""Helpers shared by the subcommands: argument types, progress messages, flag checks."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from roughness.core.errors import InputError
+
+
+def float_pair(text: str) -> tuple[float, float]:
+    """``X,Y`` in mm, for argparse."""
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y in mm, got {text!r}") from None
+    return x, y
+
+
+def add_heightmap_args(p: argparse.ArgumentParser) -> None:
+    """The heightmap input and how to read it (one file)."""
+    p.add_argument("heightmap", metavar="HEIGHTMAP", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .h5")
+    add_reading_args(p)
+    p.add_argument("--tile", action="store_true", help="repeat a small heightmap as a periodic texture")
+    p.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
+
+
+def add_reading_args(p: argparse.ArgumentParser) -> None:
+    """--pixel-mm and --height-mm."""
+    p.add_argument("--pixel-mm", type=float, help="pixel size in mm (required unless the file states it)")
+    p.add_argument("--height-mm", type=float, help="height of full-scale white in mm (PNG/TIFF)")
+
+
+def add_quiet(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
+
+
+def log(args: argparse.Namespace, message: str) -> None:
+    """A progress message on stderr unless --quiet."""
+    if not getattr(args, "quiet", False):
+        print(message, file=sys.stderr, flush=True)
+
+
+def at_least_one(flag: str, value: int) -> int:
+    if value < 1:
+        raise InputError(f"{flag} must be at least 1, got {value}")
+    return value

@@ -1,0 +1,97 @@
+"""`roughness predict`: roughness in milliseconds (surrogate), FEM where out of domain."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+from .common import at_least_one, float_pair, log
+
+
+def add_parser(sub) -> None:
+    pr = sub.add_parser("predict", help="roughness in milliseconds (surrogate), FEM where out of domain")
+    pr.add_argument("inputs", nargs="+", metavar="HEIGHTMAP",
+                    help="heightmap files, folders of them, or roughness dataset files (.h5)")
+    pr.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
+    pr.add_argument("--engine", choices=("surrogate", "fem", "auto"), default="auto",
+                    help="auto (default): surrogate, FEM for inputs outside its domain")
+    pr.add_argument("--fidelity", choices=("coarse", "default"),
+                    help="FEM fidelity (default: that of the model's training labels; the standard scale "
+                         "is tabulated for these two)")
+    pr.add_argument("--pixel-mm", type=float, help="pixel size in mm (required unless the file states it)")
+    pr.add_argument("--height-mm", type=float, help="height of full-scale white in mm (PNG/TIFF)")
+    pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures")
+    pr.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
+    pr.add_argument("--batch-size", type=int, default=256)
+    pr.add_argument("--threads", type=int, default=1, help="onnxruntime threads (default 1)")
+    pr.add_argument("--json", action="store_true", help="one JSON object per input and line")
+    pr.add_argument("--map", metavar="FILE", help="roughness map of a whole object (one input): the footprint slid "
+                    "over the map, saved as .png (figure) or .npy (V per position)")
+    pr.add_argument("--step-mm", type=float, default=1.0, help="--map: distance between footprint positions (mm)")
+    pr.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
+    pr.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from roughness.surrogate.inputs import InputReader
+    from roughness.surrogate.predictor import SurrogateModel, predict
+
+    model = SurrogateModel(args.model or _default_model(), threads=at_least_one("--threads", args.threads))
+    if args.map:
+        return _predict_map(args, model)
+    reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, model.footprint_mm, args.centre, args.tile)
+    start, done = time.monotonic(), 0
+
+    def show(p) -> None:
+        nonlocal done
+        done += 1
+        print(json.dumps(p.as_dict()) if args.json else _prediction_line(p), flush=True)
+        if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
+            log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
+
+    predict(reader.heightmaps(), engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
+            fidelity=args.fidelity, batch_size=at_least_one("--batch-size", args.batch_size),
+            sources=reader.sources(), on_result=show)
+    for source, error in reader.errors:
+        print(f"roughness: error: {error}", file=sys.stderr)
+        if args.json:
+            print(json.dumps({"input": source, "error": error}))
+    return 2 if reader.errors else 0
+
+
+def _predict_map(args: argparse.Namespace, model) -> int:
+    from roughness.core.errors import InputError
+    from roughness.simulate.io import load_heightmap
+    from roughness.surrogate.roughness_map import roughness_map, save_map
+
+    if len(args.inputs) != 1 or os.path.isdir(args.inputs[0]):
+        raise InputError("--map takes exactly one heightmap file")
+    if args.engine == "fem":
+        raise InputError("--map runs the surrogate (thousands of footprints); use --engine surrogate or auto")
+    hm = load_heightmap(args.inputs[0], args.pixel_mm, args.height_mm)
+    start = time.perf_counter()
+    result = roughness_map(model, hm, args.step_mm, args.tile, at_least_one("--batch-size", args.batch_size))
+    save_map(result, args.map)
+    summary = {"input": args.inputs[0], "map": args.map, **result.summary(), "seconds": time.perf_counter() - start}
+    print(json.dumps(summary) if args.json else
+          f"{args.inputs[0]}: {summary['positions']} footprint positions, V {summary['roughness_min']:.4f} to "
+          f"{summary['roughness_max']:.4f} (median {summary['roughness_median']:.4f}), "
+          f"{100 * summary['in_domain_fraction']:.0f}% in domain, {summary['seconds']:.2f} s; map written to {args.map}")
+    return 0
+
+
+def _default_model() -> str:
+    from roughness.surrogate.predictor import DEFAULT_MODEL
+
+    return str(DEFAULT_MODEL)
+
+
+def _prediction_line(p) -> str:
+    where = p.placement
+    scale = (f"~ lambda {where.equivalent_lambda_mm:.3f} mm on the standard scale, {where.jnd_from_nearest:+.1f} JND "
+             f"from {where.nearest_standard}" if where.on_scale else
+             f"off the standard scale ({where.jnd_from_nearest:+.1f} JND from {where.nearest_standard})")
+    domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
+    return f"{p.source}: V = {p.roughness:.4f} ({p.engine}, {domain}, {1e3 * p.seconds:.1f} ms), {scale}"

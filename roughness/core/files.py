@@ -1,0 +1,50 @@
+"""Writing files safely: refuse to replace outputs unasked, never leave a partial file."""
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+from .errors import InputError
+
+
+def check_output(path: str | Path, overwrite: bool = False, name: str = "output") -> Path:
+    """``path`` if it may be written: its folder exists and is writable, and it does not exist
+    unless ``overwrite``. Call before any computation, so that nothing is lost at the end."""
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise InputError(f"{name} {path} already exists (pass overwrite to replace it)")
+    if path.is_dir():
+        raise InputError(f"{name} {path} is a folder, not a file")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"{name} folder {parent} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"{name} folder {parent} is not writable")
+    return path
+
+
+def atomic_write(path: str | Path, write: Callable[[str], object]) -> Path:
+    """Call ``write`` on a temporary file beside ``path`` (same suffix), then rename it over ``path``.
+
+    Readers see the old file or the whole new one, never a partial one; the temporary file is
+    removed on any error (including KeyboardInterrupt). Permissions follow the umask.
+    """
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
+    os.close(fd)
+    try:
+        os.chmod(tmp, 0o666 & ~_umask())
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask

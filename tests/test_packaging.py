@@ -1,0 +1,109 @@
+"""One import name: the wheel installs ``roughness`` only, and the README's Python examples run."""
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+import sysconfig
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+GENERIC_NAMES = ("simulate", "dataset", "surrogate", "models")
+PUBLIC_API = ("Heightmap", "InputError", "SimulationError", "load_heightmap", "save_heightmap", "SimConfig",
+              "Simulator", "Result", "fem_roughness", "predict", "Prediction", "StandardScale", "load_scale",
+              "standard_texture", "named_texture", "open_dataset")
+
+
+def _source_copy(dest: Path) -> Path:
+    """The project's files as a fresh clone would have them (no build or cache folders)."""
+    ignore = shutil.ignore_patterns(".git", "build", "*.egg-info", "__pycache__", ".pytest_cache", "venv", "*.h5")
+    shutil.copytree(ROOT, dest, ignore=ignore)
+    return dest
+
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory) -> Path:
+    """A fresh virtual environment with the wheel installed (dependencies from the running environment)."""
+    root = tmp_path_factory.mktemp("wheel")
+    source = _source_copy(root / "src")
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "--no-build-isolation",
+                    "--no-index", "--wheel-dir", str(root / "dist"), str(source)], check=True, cwd=root)
+    [wheel] = (root / "dist").glob("roughness-*.whl")
+    venv = root / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
+    python = venv / "bin" / "python"
+    subprocess.run([str(python), "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", str(wheel)],
+                   check=True, cwd=root)
+    return python
+
+
+def _purelib(python: Path) -> Path:
+    out = subprocess.run([str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+                         check=True, capture_output=True, text=True)
+    return Path(out.stdout.strip())
+
+
+def test_wheel_installs_one_top_level_name(installed):
+    site = _purelib(installed)
+    assert site != Path(sysconfig.get_paths()["purelib"])
+    names = {p.name for p in site.iterdir() if not p.name.endswith((".dist-info", ".pth"))}
+    assert "roughness" in names
+    assert not names & set(GENERIC_NAMES), names
+    package = site / "roughness"
+    for sub in GENERIC_NAMES:
+        assert (package / sub / "__init__.py").is_file(), sub
+    assert (package / "models" / "roughness-cnn.onnx").is_file()
+    assert (package / "models" / "standard_scale.json").is_file()
+    top_level = next(site.glob("roughness-*.dist-info"))
+    record = (top_level / "RECORD").read_text().splitlines()
+    assert all(line.startswith(("roughness/", "roughness-", "../../../bin/")) for line in record), record[:5]
+
+
+def test_installed_public_api_runs_outside_the_checkout(installed, tmp_path):
+    code = f"""
+import roughness
+assert sorted(roughness.__all__) == sorted({list(PUBLIC_API)!r} + ["__version__"])
+for name in roughness.__all__:
+    getattr(roughness, name)
+assert roughness.__file__.startswith({str(_purelib(installed))!r}), roughness.__file__
+hm = roughness.load_heightmap({str(ROOT / "examples" / "standard-1.0mm.png")!r}, pixel_mm=0.05, height_mm=1.0)
+[p] = roughness.predict(hm, engine="surrogate")
+assert 0.03 < p.roughness < 0.3, p.roughness
+import importlib.util
+for name in {list(GENERIC_NAMES)!r}:
+    assert importlib.util.find_spec(name) is None or "roughness" not in str(importlib.util.find_spec(name).origin)
+print("ok", p.roughness)
+"""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    out = subprocess.run([str(installed), "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith("ok")
+
+
+def test_checkout_imports_the_checkout():
+    import roughness
+    import roughness.simulate
+
+    assert Path(roughness.simulate.__file__).resolve() == ROOT / "simulate" / "__init__.py"
+    assert Path(roughness.__file__).resolve() == ROOT / "roughness" / "__init__.py"
+
+
+def _readme_python_blocks() -> list[str]:
+    return re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
+
+
+def test_readme_has_python_examples():
+    blocks = _readme_python_blocks()
+    assert len(blocks) >= 2
+    assert all("import roughness" in b for b in blocks)
+
+
+@pytest.mark.parametrize("index", range(len(_readme_python_blocks())))
+def test_readme_python_example_runs(index):
+    code = _readme_python_blocks()[index]
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
