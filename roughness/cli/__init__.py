@@ -5,6 +5,7 @@ import argparse
 import sys
 
 from . import compare, dataset, predict, simulate, texture, train
+from .common import error_message
 
 DESCRIPTION = ("Predict how rough a surface texture feels to a fingertip (the FEM model of Tymms, Gardner & Zorin "
                "2018, and a CNN surrogate of it). Units: mm, N, MPa.")
@@ -33,7 +34,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.run(args)
     except InputError as err:
-        print(f"roughness: error: {err}", file=sys.stderr)
+        print(f"roughness: error: {error_message(err, getattr(args, 'flags', {}))}", file=sys.stderr)
         return 2
     except SimulationError as err:
         print(f"roughness: simulation failed: {err}", file=sys.stderr)

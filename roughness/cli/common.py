@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from roughness.core.errors import InputError
+from roughness.core.errors import InputError, OutputExists
 
 
 def float_pair(text: str) -> tuple[float, float]:
@@ -44,3 +44,25 @@ def at_least_one(flag: str, value: int) -> int:
     if value < 1:
         raise InputError(f"{flag} must be at least 1, got {value}")
     return value
+
+
+def add_overwrite(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--overwrite", action="store_true", help="replace existing output files (default: refuse)")
+
+
+def finish(p: argparse.ArgumentParser, run, **aliases: str) -> None:
+    """Set the subcommand's function and its map from Python parameter names to flags.
+
+    Flags map from their argparse ``dest`` (``--pixel-mm`` -> ``pixel_mm``); ``aliases`` add the
+    names lower layers use for the same value (``force_n="--force"``).
+    """
+    flags = {a.dest: a.option_strings[-1] for a in p._actions if a.option_strings and a.dest != "help"}
+    p.set_defaults(run=run, flags=flags | aliases)
+
+
+def error_message(err: InputError, flags: dict[str, str]) -> str:
+    """An InputError in the CLI's words: parameters named by their flags."""
+    if isinstance(err, OutputExists):
+        return f"{err.path} already exists; pass --overwrite to replace it"
+    flag = flags.get(err.parameter or "")
+    return f"{flag}: {err}" if flag else str(err)

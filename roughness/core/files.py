@@ -6,22 +6,22 @@ import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
-from .errors import InputError
+from .errors import InputError, OutputExists
 
 
-def check_output(path: str | Path, overwrite: bool = False, name: str = "output") -> Path:
+def check_output(path: str | Path, overwrite: bool = False, name: str = "out") -> Path:
     """``path`` if it may be written: its folder exists and is writable, and it does not exist
     unless ``overwrite``. Call before any computation, so that nothing is lost at the end."""
     path = Path(path)
-    if path.exists() and not overwrite:
-        raise InputError(f"{name} {path} already exists (pass overwrite to replace it)")
     if path.is_dir():
-        raise InputError(f"{name} {path} is a folder, not a file")
-    parent = path.parent if str(path.parent) else Path(".")
+        raise InputError(f"{path} is a folder, not a file", parameter=name)
+    if path.exists() and not overwrite:
+        raise OutputExists(path, name)
+    parent = path.parent
     if not parent.is_dir():
-        raise InputError(f"{name} folder {parent} does not exist")
+        raise InputError(f"cannot write {path}: folder {parent} does not exist", parameter=name)
     if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"{name} folder {parent} is not writable")
+        raise InputError(f"cannot write {path}: folder {parent} is not writable", parameter=name)
     return path
 
 
