@@ -249,17 +249,55 @@ def test_16bit_png_round_trip(tmp_path) -> None:
     hm = Heightmap(RNG.random((30, 25)) * 1.5 + 0.2, 0.05)
     span = float(np.ptp(hm.heights))
     save_heightmap(hm, tmp_path / "map.png")
-    back = load_heightmap(tmp_path / "map.png", pixel_mm=0.05, height_mm=span)
-    error = np.abs(back.heights - (hm.heights - hm.heights.min()))
-    assert error.max() <= 0.5 * span / 65535 + 1e-12
+    back = load_heightmap(tmp_path / "map.png")  # units from the file's text chunk
+    assert back.pixel_mm == 0.05
+    assert np.abs(back.heights - hm.heights).max() <= 0.5 * span / 65535 + 1e-12
     save_heightmap(hm, tmp_path / "tall.png", height_mm=2 * span)
-    back = load_heightmap(tmp_path / "tall.png", pixel_mm=0.05, height_mm=2 * span)
-    assert back.heights.max() == pytest.approx(span, abs=span / 65535)
+    back = load_heightmap(tmp_path / "tall.png", pixel_mm=0.05, height_mm=2 * span)  # agreeing flags are fine
+    assert back.heights.max() == pytest.approx(hm.heights.max(), abs=2 * span / 65535)
 
 
 def test_flat_map_saves_as_a_black_png(tmp_path) -> None:
     save_heightmap(flat(1.0, 0.1, height_mm=3.0), tmp_path / "flat.png")
-    assert not load_heightmap(tmp_path / "flat.png", pixel_mm=0.1, height_mm=1.0).heights.any()
+    back = load_heightmap(tmp_path / "flat.png")
+    assert np.all(back.heights == 3.0) and back.pixel_mm == 0.1
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".png", ".tif", ".tiff", ".h5", ".hdf5"])
+def test_written_files_carry_their_units(tmp_path, suffix) -> None:
+    hm = Heightmap(RNG.random((12, 9)) * 0.8 - 0.1, 0.037)
+    save_heightmap(hm, tmp_path / f"map{suffix}")
+    back = load_heightmap(tmp_path / f"map{suffix}")
+    assert back.pixel_mm == pytest.approx(0.037, rel=1e-12)
+    step = 0.5 * np.ptp(hm.heights) / 65535 if suffix == ".png" else 1e-7  # 16-bit levels, float32 TIFF
+    np.testing.assert_allclose(back.heights, hm.heights, atol=step + 1e-12)
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".png", ".tif", ".h5"])
+def test_a_flag_that_contradicts_the_file_is_an_error(tmp_path, suffix) -> None:
+    save_heightmap(Heightmap(RNG.random((6, 6)), 0.05), tmp_path / f"map{suffix}")
+    assert load_heightmap(tmp_path / f"map{suffix}", pixel_mm=0.05).pixel_mm == 0.05
+    with pytest.raises(InputError, match="states pixel_mm = 0.05 mm, but pixel_mm = 0.1 mm was given") as err:
+        load_heightmap(tmp_path / f"map{suffix}", pixel_mm=0.1)
+    assert err.value.parameter == "pixel_mm"
+
+
+def test_colour_images_are_refused(tmp_path) -> None:
+    rgb = np.zeros((4, 4, 3), dtype=np.uint8)
+    rgb[..., 0] = 200  # red: a plot, not a heightmap
+    Image.fromarray(rgb).save(tmp_path / "plot.png")
+    tifffile.imwrite(tmp_path / "plot.tif", rgb)
+    for name in ("plot.png", "plot.tif"):
+        with pytest.raises(InputError, match="is a colour image"):
+            load_heightmap(tmp_path / name, pixel_mm=0.1, height_mm=1.0)
+
+
+@pytest.mark.parametrize("dtype", [np.int32, np.int64, np.uint16, np.int8])
+def test_integer_heights_in_mm_formats_are_refused(tmp_path, dtype) -> None:
+    np.save(tmp_path / "map.npy", (np.arange(16).reshape(4, 4) * 60).astype(dtype))
+    with pytest.raises(InputError, match="holds integers") as err:
+        load_heightmap(tmp_path / "map.npy", pixel_mm=0.1)
+    assert "millimetres as floating-point" in str(err.value)
 
 
 def test_tiff_round_trip(tmp_path) -> None:
@@ -286,7 +324,8 @@ def test_h5_pixel_size_from_dataset_or_file_attribute(tmp_path) -> None:
     a = load_heightmap(tmp_path / "a.h5")
     np.testing.assert_array_equal(a.heights, heights)
     assert a.pixel_mm == 0.02
-    assert load_heightmap(tmp_path / "a.h5", pixel_mm=0.03).pixel_mm == 0.03
+    with pytest.raises(InputError, match="states pixel_mm = 0.02 mm, but pixel_mm = 0.03 mm was given"):
+        load_heightmap(tmp_path / "a.h5", pixel_mm=0.03)
     assert load_heightmap(tmp_path / "b.hdf5", dataset="scans/s1").pixel_mm == 0.04
     with pytest.raises(InputError, match="no dataset 'heightmap'; datasets in the file: scans/s1"):
         load_heightmap(tmp_path / "b.hdf5")
@@ -314,20 +353,20 @@ def _write(tmp_path, name: str, content) -> str:
     ("map.npy", np.zeros(8), {"pixel_mm": 0.1}, "must be 2-D"),
     ("map.npy", np.zeros((0, 0)), {"pixel_mm": 0.1}, "empty"),
     ("map.npy", np.array([[True, False], [False, True]]), {"pixel_mm": 0.1}, "real numbers"),
-    ("map.npy", np.zeros((4, 4)), {}, "heightmaps need --pixel-mm"),
-    ("map.npy", np.zeros((4, 4)), {"pixel_mm": 0.0}, "--pixel-mm must be a positive finite number"),
-    ("map.npy", np.zeros((4, 4)), {"pixel_mm": -1.0}, "--pixel-mm must be a positive finite number"),
+    ("map.npy", np.zeros((4, 4)), {}, "heightmaps need pixel_mm"),
+    ("map.npy", np.zeros((4, 4)), {"pixel_mm": 0.0}, "pixel_mm must be a positive finite number"),
+    ("map.npy", np.zeros((4, 4)), {"pixel_mm": -1.0}, "pixel_mm must be a positive finite number"),
     ("map.npy", np.zeros((4, 4)), {"pixel_mm": 0.1, "height_mm": 1.0}, "already in mm"),
     ("map.npy", b"not an array", {"pixel_mm": 0.1}, "as NPY"),
     ("map.png", b"\x89PNG\r\n\x1a\n" + b"corrupt" * 8, {"pixel_mm": 0.1, "height_mm": 1.0}, "as PNG"),
     ("map.png", b"", {"pixel_mm": 0.1, "height_mm": 1.0}, "as PNG"),
-    ("map.png", Image.new("L", (4, 4)), {"pixel_mm": 0.1}, "heightmaps need --height-mm"),
-    ("map.png", Image.new("L", (4, 4)), {"height_mm": 1.0}, "heightmaps need --pixel-mm"),
-    ("map.png", Image.new("L", (4, 4)), {"pixel_mm": 0.1, "height_mm": math.nan}, "--height-mm must be"),
+    ("map.png", Image.new("L", (4, 4)), {"pixel_mm": 0.1}, "heightmaps need height_mm"),
+    ("map.png", Image.new("L", (4, 4)), {"height_mm": 1.0}, "heightmaps need pixel_mm"),
+    ("map.png", Image.new("L", (4, 4)), {"pixel_mm": 0.1, "height_mm": math.nan}, "height_mm must be"),
     ("map.png", Image.new("P", (4, 4)), {"pixel_mm": 0.1, "height_mm": 1.0}, "palette"),
     ("map.tif", b"II*\x00garbage", {"pixel_mm": 0.1, "height_mm": 1.0}, "as TIFF"),
     ("map.h5", b"not hdf5", {"pixel_mm": 0.1}, "as HDF5"),
-    ("map.h5", np.zeros((4, 4)), {}, "heightmaps need --pixel-mm"),
+    ("map.h5", np.zeros((4, 4)), {}, "heightmaps need pixel_mm"),
     ("map.jpg", b"\xff\xd8", {"pixel_mm": 0.1}, "unsupported heightmap format '.jpg'"),
 ])
 def test_bad_files_raise_specific_input_errors(tmp_path, name, content, kwargs, message) -> None:
@@ -335,7 +374,7 @@ def test_bad_files_raise_specific_input_errors(tmp_path, name, content, kwargs, 
     with pytest.raises(InputError) as err:
         load_heightmap(path, **kwargs)
     assert message in str(err.value)
-    if not message.startswith("--"):  # errors about the file name it
+    if not message.startswith(("pixel_mm", "height_mm")):  # errors about the file name it
         assert name in str(err.value)
 
 

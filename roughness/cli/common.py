@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 
 from roughness.core.errors import InputError, OutputExists
@@ -64,5 +65,9 @@ def error_message(err: InputError, flags: dict[str, str]) -> str:
     """An InputError in the CLI's words: parameters named by their flags."""
     if isinstance(err, OutputExists):
         return f"{err.path} already exists; pass --overwrite to replace it"
+    message = str(err)
+    for name, flag in flags.items():
+        if "_" in name:  # Python names (pixel_mm) read as their flags (--pixel-mm) in the message
+            message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, message)
     flag = flags.get(err.parameter or "")
-    return f"{flag}: {err}" if flag else str(err)
+    return f"{flag}: {message}" if flag and flag not in message else message
