@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 
@@ -17,6 +18,56 @@ def float_pair(text: str) -> tuple[float, float]:
     return x, y
 
 
+class Number:
+    """An argparse type for a number with a declared domain; ``invalid`` lists values it refuses.
+
+    Every numeric option uses one (tests/test_bad_inputs.py sweeps each option's ``invalid``
+    values through the whole CLI), so no option accepts NaN, infinity or an out-of-range value.
+    """
+
+    def __init__(self, kind: type, low: float | None = None, high: float | None = None,
+                 low_open: bool = False, high_open: bool = False) -> None:
+        self.kind, self.low, self.high, self.low_open, self.high_open = kind, low, high, low_open, high_open
+        self.__name__ = self.describe()  # argparse names the type in its messages
+
+    def describe(self) -> str:
+        what = "an integer" if self.kind is int else "a number"
+        parts = []
+        if self.low is not None:
+            parts.append(f"{'>' if self.low_open else '>='} {self.low:g}")
+        if self.high is not None:
+            parts.append(f"{'<' if self.high_open else '<='} {self.high:g}")
+        return what + (" " + " and ".join(parts) if parts else "")
+
+    def __call__(self, text: str) -> int | float:
+        try:
+            value = self.kind(text)
+        except (TypeError, ValueError):
+            raise argparse.ArgumentTypeError(f"expected {self.describe()}, got {text!r}") from None
+        if self.kind is float and not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"expected a finite number, got {text!r}")
+        too_low = self.low is not None and (value <= self.low if self.low_open else value < self.low)
+        too_high = self.high is not None and (value >= self.high if self.high_open else value > self.high)
+        if too_low or too_high:
+            raise argparse.ArgumentTypeError(f"expected {self.describe()}, got {text!r}")
+        return value
+
+    @property
+    def invalid(self) -> list[str]:
+        """Values this type must refuse: not numbers, not finite, just outside the domain."""
+        out = ["abc", "", "nan", "inf"] + (["1.5"] if self.kind is int else [])
+        for bound, is_open, sign in ((self.low, self.low_open, -1), (self.high, self.high_open, 1)):
+            if bound is not None:
+                step = 1 if self.kind is int else 1e-9 * max(1.0, abs(bound))
+                out.append(f"{bound:g}" if is_open else f"{bound + sign * step:.12g}")
+        return out
+
+
+POSITIVE = Number(float, low=0, low_open=True)
+COUNT = Number(int, low=1)
+SEED = Number(int, low=0, high=2**32 - 1)
+
+
 def add_heightmap_args(p: argparse.ArgumentParser) -> None:
     """The heightmap input and how to read it (one file)."""
     p.add_argument("heightmap", metavar="HEIGHTMAP", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .h5")
@@ -27,8 +78,10 @@ def add_heightmap_args(p: argparse.ArgumentParser) -> None:
 
 def add_reading_args(p: argparse.ArgumentParser) -> None:
     """--pixel-mm and --height-mm."""
-    p.add_argument("--pixel-mm", type=float, help="pixel size in mm (required unless the file states it)")
-    p.add_argument("--height-mm", type=float, help="height of full-scale white in mm (PNG/TIFF)")
+    p.add_argument("--pixel-mm", type=POSITIVE, metavar="MM",
+                   help="pixel size in mm (required unless the file states it)")
+    p.add_argument("--height-mm", type=POSITIVE, metavar="MM",
+                   help="height of full-scale white in mm (8/16-bit PNG/TIFF; unless the file states it)")
 
 
 def add_quiet(p: argparse.ArgumentParser) -> None:
@@ -41,10 +94,6 @@ def log(args: argparse.Namespace, message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
 
-def at_least_one(flag: str, value: int) -> int:
-    if value < 1:
-        raise InputError(f"{flag} must be at least 1, got {value}")
-    return value
 
 
 def add_overwrite(p: argparse.ArgumentParser) -> None:
@@ -71,3 +120,9 @@ def error_message(err: InputError, flags: dict[str, str]) -> str:
             message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, message)
     flag = flags.get(err.parameter or "")
     return f"{flag}: {message}" if flag and flag not in message else message
+
+
+def at_least_one(flag: str, value: int) -> int:
+    if value < 1:
+        raise InputError(f"{flag} must be at least 1, got {value}")
+    return value

@@ -1,0 +1,205 @@
+"""Bad input never gives a traceback, a silent result or a changed file: a generated sweep over the CLI.
+
+For every subcommand the matrix is generated from the parser itself: each numeric option's
+declared domain (``common.Number.invalid``), each input file broken in the usual ways (missing,
+empty, truncated, a folder, the wrong kind of content), and each output that exists already or
+cannot be written. Every case must exit with 2, name the problem on stderr, print no traceback,
+and leave the working folder exactly as it was. Heavy computations are replaced by a tripwire,
+so a bad value that slips through fails at once instead of running an FEM.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roughness.cli import build_parser, main
+from roughness.cli.common import Number
+
+# A valid invocation per subcommand (paths relative to the case folder, made by ``_inputs``).
+BASE: dict[tuple[str, ...], list[str]] = {
+    ("simulate",): ["map.npy", "--pixel-mm", "0.05", "--fidelity", "coarse"],
+    ("texture", "make"): ["standard-1.0", "--out", "new.npy"],
+    ("texture", "list"): [],
+    ("dataset", "build"): ["--out", "new.h5", "--n", "2"],
+    ("dataset", "info"): ["data.h5"],
+    ("dataset", "verify"): ["data.h5"],
+    ("train",): ["data.h5", "--out", "run"],
+    ("export",): ["checkpoint.pt", "--out", "new.onnx"],
+    ("predict",): ["map.npy", "--pixel-mm", "0.05", "--engine", "surrogate"],
+    ("compare",): ["maps", "--pixel-mm", "0.05", "--out", "report", "--engines", "ra", "--reference", "p90"],
+}
+# Input files per subcommand: (position in BASE or flag, suffix the broken file gets).
+FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str]]] = {
+    ("simulate",): [(0, ".npy")],
+    ("dataset", "build"): [("--recipe", ".json")],
+    ("dataset", "info"): [(0, ".h5")],
+    ("dataset", "verify"): [(0, ".h5")],
+    ("train",): [(0, ".h5")],
+    ("export",): [(0, ".pt")],
+    ("predict",): [(0, ".npy"), ("--model", ".onnx")],
+    ("compare",): [(0, ".json")],
+}
+# Outputs that must not be replaced without --overwrite, nor fail after the work is done.
+FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
+    ("simulate",): ["--save-strain", "--save-vtu"],
+    ("texture", "make"): ["--out"],
+    ("train",): ["--out"],
+    ("export",): ["--out"],
+    ("predict",): ["--map"],
+}
+OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy"}
+
+
+def _subcommands(parser: argparse.ArgumentParser, path: tuple[str, ...] = ()):
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        yield path, parser
+        return
+    for name, sub in subs[0].choices.items():
+        yield from _subcommands(sub, (*path, name))
+
+
+PARSERS = dict(_subcommands(build_parser()))
+
+
+def _numeric_cases() -> list[tuple[tuple[str, ...], str, str]]:
+    cases = []
+    for path, parser in PARSERS.items():
+        for action in parser._actions:
+            if isinstance(action.type, Number):
+                cases += [(path, action.option_strings[-1], value) for value in action.type.invalid]
+    return cases
+
+
+def _file_cases() -> list[tuple[tuple[str, ...], int | str, str, str]]:
+    kinds = ("missing", "empty", "truncated", "folder", "garbage")
+    return [(path, where, suffix, kind) for path, inputs in FILE_INPUTS.items() for where, suffix in inputs
+            for kind in kinds]
+
+
+def _output_cases() -> list[tuple[tuple[str, ...], str, str]]:
+    return [(path, flag, kind) for path, flags in FILE_OUTPUTS.items() for flag in flags
+            for kind in ("exists", "no-folder")]
+
+
+@pytest.fixture()
+def workdir(tmp_path, monkeypatch):
+    """A case folder with valid inputs, the cwd of the case; heavy work replaced by a tripwire."""
+    rng = np.random.default_rng(0)
+    np.save(tmp_path / "map.npy", rng.random((240, 240)) * 0.5)
+    (tmp_path / "maps").mkdir()
+    np.save(tmp_path / "maps" / "a.npy", rng.random((240, 240)) * 0.5)
+    (tmp_path / "data.h5").write_bytes(b"placeholder")
+    (tmp_path / "checkpoint.pt").write_bytes(b"placeholder")
+    monkeypatch.chdir(tmp_path)
+    _tripwires(monkeypatch)
+    return tmp_path
+
+
+def _tripwires(monkeypatch) -> None:
+    def tripped(*args, **kwargs):
+        raise AssertionError("bad input reached a heavy computation")
+
+    from roughness.simulate.model import Simulator
+
+    monkeypatch.setattr(Simulator, "run", tripped)
+    import roughness.dataset.build
+
+    monkeypatch.setattr(roughness.dataset.build, "build", tripped)
+
+
+def _snapshot(folder: Path) -> dict[str, str]:
+    out = {}
+    for root, dirs, files in os.walk(folder):
+        for name in dirs:
+            out[os.path.relpath(os.path.join(root, name), folder) + "/"] = "dir"
+        for name in files:
+            p = os.path.join(root, name)
+            out[os.path.relpath(p, folder)] = hashlib.sha1(Path(p).read_bytes()).hexdigest()
+    return out
+
+
+def _run(argv: list[str], capsys) -> tuple[int, str]:
+    try:
+        code = main(argv)
+    except SystemExit as exit_:  # argparse
+        code = exit_.code
+    return code, capsys.readouterr().err
+
+
+def _expect_refusal(argv: list[str], workdir: Path, capsys, names: tuple[str, ...]) -> None:
+    before = _snapshot(workdir)
+    code, err = _run(argv, capsys)
+    assert code == 2, f"{argv}: exit {code}, stderr: {err[-500:]}"
+    assert "Traceback" not in err, err
+    assert any(n in err for n in names), f"{argv}: the message does not name {names}: {err[-500:]}"
+    assert _snapshot(workdir) == before, f"{argv} changed files"
+
+
+def test_every_numeric_option_declares_its_domain():
+    loose = [(" ".join(path), a.option_strings[-1]) for path, parser in PARSERS.items() for a in parser._actions
+             if a.type in (int, float)]
+    assert not loose, f"options typed plain int/float (use common.Number with a domain): {loose}"
+
+
+def test_every_option_has_help():
+    missing = [(" ".join(path), a.option_strings[-1] if a.option_strings else a.dest)
+               for path, parser in PARSERS.items() for a in parser._actions
+               if not a.help and not isinstance(a, argparse._SubParsersAction)]
+    assert not missing, f"options without help: {missing}"
+
+
+def test_the_sweep_covers_every_subcommand():
+    assert set(PARSERS) == set(BASE)
+
+
+@pytest.mark.parametrize("path, flag, value", _numeric_cases(), ids=lambda v: str(v))
+def test_numeric_option_out_of_domain(path, flag, value, workdir, capsys):
+    _expect_refusal([*path, *BASE[path], flag, value], workdir, capsys, (flag,))
+
+
+@pytest.mark.parametrize("path, where, suffix, kind", _file_cases(), ids=lambda v: str(v))
+def test_broken_input_file(path, where, suffix, kind, workdir, capsys):
+    name = f"broken{suffix}"
+    target = workdir / name
+    if kind == "empty":
+        target.write_bytes(b"")
+    elif kind == "truncated":
+        target.write_bytes({".json": b'{"seed": 1', ".npy": b"\x93NUMPY\x01\x00v\x00{'descr'"}.get(suffix, b"\x89HDF\r"))
+    elif kind == "folder":
+        target.mkdir()
+    elif kind == "garbage":
+        target.write_bytes(bytes(range(256)) * 4)
+    argv = list(BASE[path])
+    if isinstance(where, int):
+        argv[where] = name
+    else:
+        argv += [where, name]
+    _expect_refusal([*path, *argv], workdir, capsys, (name,))
+
+
+@pytest.mark.parametrize("path, flag, kind", _output_cases(), ids=lambda v: str(v))
+def test_output_that_exists_or_cannot_be_written(path, flag, kind, workdir, capsys):
+    argv = list(BASE[path])
+    suffix = OUTPUT_SUFFIX.get(flag, "")
+    if flag in argv:
+        name = argv[argv.index(flag) + 1]
+    else:
+        name = f"out{suffix}"
+        argv += [flag, name]
+    if kind == "exists":
+        target = workdir / name
+        if suffix or Path(name).suffix:
+            target.write_bytes(b"precious")
+        else:
+            target.mkdir()
+            (target / "precious.txt").write_text("precious")
+    else:
+        argv[argv.index(flag) + 1] = str(Path("no-such-folder") / Path(name).name)
+        name = "no-such-folder"
+    _expect_refusal([*path, *argv], workdir, capsys, (name,))
