@@ -5,8 +5,6 @@ so no perturbed sibling of a test texture is trained on; the held-out family goe
 """
 from __future__ import annotations
 
-import hashlib
-import json
 import sys
 import time
 from dataclasses import dataclass
@@ -14,17 +12,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from roughness.core.errors import InputError
+from roughness.core.hashing import digest
 from roughness.dataset.store import Dataset
 
 from .patch import descriptors, footprint_patch
 
-LOG_OFFSET = 1e-3  # the network predicts log(V + LOG_OFFSET): finite for flat textures (V = 0)
-
-
 def base_key(record: dict) -> str:
     """Identity of the unperturbed texture a sample was made from."""
-    base = {k: record[k] for k in ("family", "params", "seed")}
-    return hashlib.sha1(json.dumps(base, sort_keys=True).encode()).hexdigest()
+    return digest({k: record[k] for k in ("family", "params", "seed")}, length=40)
 
 
 def split_of(record: dict, test_fraction: float, val_fraction: float, holdout_family: str | None) -> str:
@@ -53,11 +48,6 @@ class Samples:
 
     def __len__(self) -> int:
         return len(self.ids)
-
-
-def target(roughness: np.ndarray) -> np.ndarray:
-    """Network target from V."""
-    return np.log(np.asarray(roughness, dtype=np.float64) + LOG_OFFSET).astype(np.float32)
 
 
 def load_samples(data: Dataset, test_fraction: float = 0.1, val_fraction: float = 0.1,

@@ -30,7 +30,8 @@ from roughness.surrogate.export import (
     verify,
 )
 from roughness.surrogate.patch import descriptors, footprint_patch
-from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel, predict
+from roughness.engines import predict
+from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 from roughness.surrogate.train import TrainConfig, train
 
 ROOT = Path(__file__).parents[1]
@@ -124,7 +125,7 @@ def test_export_round_trip(tiny):
     model, meta = load_checkpoint(tiny.checkpoint)
     patches = check_patches(5)
     with torch.no_grad():
-        expected = np.exp(model(torch.from_numpy(patches))[0].numpy()) - meta["log_offset"]
+        expected = np.exp(model(torch.from_numpy(patches))[0].numpy()) - meta.log_offset
     surrogate = SurrogateModel(tiny.model)
     for batch in (patches[:1], patches):
         got, _ = surrogate.run(batch[:, 0])
@@ -160,7 +161,7 @@ class Block(importlib.abc.MetaPathFinder):
             raise ImportError('blocked: ' + name)
 sys.meta_path.insert(0, Block())
 from roughness.dataset.textures import standard_texture
-from roughness.surrogate import predict
+from roughness import predict
 [p] = predict(standard_texture(1.0, seed=1), engine='surrogate', model={str(tiny.model)!r})
 assert p.roughness > 0 and p.engine == 'surrogate'
 print('ok', sorted(m for m in sys.modules if m.split('.')[0] in ('torch', 'onnx', 'sklearn')))
@@ -281,9 +282,9 @@ def test_shipped_model_matches_its_card_and_data():
     assert DEFAULT_MODEL.stat().st_size < 5e6
     meta = SurrogateModel().meta
     shipped = json.loads((ROOT / "datasets" / "training-v1.sha256.json").read_text())
-    assert meta["data"]["inputs_sha256"] == shipped["inputs_sha256"]
+    assert meta.data["inputs_sha256"] == shipped["inputs_sha256"]
     assert shipped["inputs_sha256"] in (ROOT / "models" / "MODEL_CARD.md").read_text()
-    assert meta["parameters"] < 1_000_000 and meta["label_fidelity"] == "coarse"
+    assert meta.parameters < 1_000_000 and meta.label_fidelity == "coarse"
 
 
 def test_extreme_inputs_give_finite_answers_or_are_flagged():
@@ -346,6 +347,6 @@ def test_int8_export_is_static_qdq_and_close_to_fp32(tiny, tmp_path):
     assert {"QuantizeLinear", "DequantizeLinear", "Conv"} <= ops and "ConvInteger" not in ops
     assert report["max_rel_diff_vs_fp32"] < 0.1
     q = SurrogateModel(tmp_path / "int8.onnx")
-    assert q.meta["int8"]["checked_inputs"] == 8
+    assert q.meta.int8["checked_inputs"] == 8
     patches = check_patches(4)[:, 0]
     np.testing.assert_allclose(q.run(patches)[0], SurrogateModel(tiny.model).run(patches)[0], rtol=0.1)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import inspect
 import sys
 
 from roughness.core.errors import InputError, OutputExists
@@ -44,6 +45,12 @@ def at_least_one(flag: str, value: int) -> int:
     if value < 1:
         raise InputError(f"{flag} must be at least 1, got {value}")
     return value
+
+
+def defaults(function) -> dict:
+    """The keyword defaults of a library function or dataclass: the CLI's one source of them."""
+    return {name: p.default for name, p in inspect.signature(function).parameters.items()
+            if p.default is not inspect.Parameter.empty}
 
 
 def add_overwrite(p: argparse.ArgumentParser) -> None:
