@@ -177,7 +177,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         domain=domain.to_dict(), metrics=metrics, test_by_family=by_family, holdout_family=holdout,
         test_fraction=test_fraction,
         data={"file": Path(cfg.data).name, "recipe": recipe.get("name"), "inputs_sha256": inputs_sha256(cfg.data)},
-        train_config=asdict(cfg), best_epoch=best_epoch, epochs=len(history),
+        train_config=asdict(cfg) | {"widths": list(cfg.widths)}, best_epoch=best_epoch, epochs=len(history),
         minutes=(time.monotonic() - start) / 60, parameters=parameter_count(model),
         cost_core_seconds={"data_fem": data_fem_seconds, "training": (time.monotonic() - start) * cfg.threads})
     atomic_write(out / "checkpoint.pt", lambda path: torch.save({"state_dict": model.state_dict(), **meta.to_dict()},
