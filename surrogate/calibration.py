@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from roughness.core.files import atomic_write
 from roughness.core.errors import InputError
+from roughness.core.files import atomic_write
 from roughness.models import MODELS_DIR
 
 WEBER_FRACTION = 0.19

@@ -445,3 +445,16 @@ def test_card_of_a_custom_model_describes_that_model(tiny, tmp_path):
     if not any("spearman" in m for m in families.values()):
         assert "Too few samples for scores" in text.split("Held-out textures by family:")[1].split("Relative")[0]
     assert "| family |" not in text or any("spearman" in m for m in families.values())
+
+
+def test_splits_are_those_the_shipped_model_was_trained_with():
+    from collections import Counter
+
+    from roughness.dataset.recipe import expand, load_recipe
+    from roughness.surrogate.metadata import onnx_metadata
+
+    meta = onnx_metadata(DEFAULT_MODEL)
+    records = expand(load_recipe(ROOT / "datasets" / "training.json"), 3000)
+    counts = Counter(split_of(r, meta.test_fraction, meta.train_config["val_fraction"], meta.holdout_family)
+                     for r in records)
+    assert counts == {split: m["n"] + m["n_zero"] for split, m in meta.metrics.items()}
