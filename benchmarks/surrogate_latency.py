@@ -45,9 +45,9 @@ def parse_args() -> argparse.Namespace:
 def main() -> None:
     from roughness.dataset.recipe import Recipe, realise, sample_record
     from roughness.dataset.textures import standard_texture
+    from roughness.engines import predict
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator
-    from roughness.engines import predict
     from roughness.surrogate.predictor import INPUT, SurrogateModel
 
     args = parse_args()

@@ -64,7 +64,7 @@ class FemEngine:
 
     @classmethod
     def of(cls, fidelity: str, simulation: dict | None = None, centre_mm: tuple[float, float] | None = None,
-           tile: bool = False) -> "FemEngine":
+           tile: bool = False) -> FemEngine:
         """FEM at ``fidelity`` with the other parameters of ``simulation`` (default: the defaults)."""
         from roughness.simulate.config import SimConfig
 

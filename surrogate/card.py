@@ -57,7 +57,9 @@ def plot_accuracy(rows: list[dict], holdout: str | None, fidelity: str, out: Pat
         ax.set(xscale="log", yscale="log", xlabel=f"FEM V ({fidelity} fidelity)",
                title=f"{SPLIT_NAMES[split]} (n = {len(part)})")
     axes[0].set_ylabel("surrogate V")
-    axes[0].legend(fontsize=7, loc="upper left")
+    for ax in axes:
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7, loc="upper left")
     fig.suptitle(f"Surrogate vs FEM (held-out family: {holdout})")
     fig.tight_layout()
     atomic_write(out, lambda tmp: fig.savefig(tmp, dpi=110))
@@ -155,6 +157,7 @@ def write_card(run: Path, model_path: Path, card: Path, plots: Path, latency_pat
             ("batched throughput, 2 threads", ">= 2,000 patches/s", f"{latency['batched_patches_per_s']['2']:,.0f}"),
         ]
     pixels = round(FOOTPRINT_MM / meta.patch_pixel_mm)
+    given = lambda key, unit="": f"{sim[key]}{unit}" if key in sim else "(not recorded)"  # noqa: E731
     coarse_note = (" The coarse labels sit a few %\n  below `default` FEM (benchmarks/results/mesh_convergence.md); the "
                    "standard scale used for the\n  equivalent wavelength is computed at the same fidelity, so "
                    "equivalent wavelengths and JNDs carry over." if meta.label_fidelity == "coarse" else "")
@@ -170,8 +173,8 @@ Tymms et al. 2018) of a texture from its heightmap, in about a millisecond inste
 - **Network**: {meta.parameters:,} parameters; strided 3x3 convolutions with batch norm
   (widths {list(meta.widths)}), global mean, two dense layers. ONNX, one self-contained file of
   {model_path.stat().st_size / 1e6:.2f} MB, dynamic batch axis; metadata key `roughness` holds everything below.
-- **Labels it imitates**: FEM at `{meta.label_fidelity}` fidelity with force {sim.get('force_n')} N, E = {sim.get('young_mpa')} MPa,
-  nu = {sim.get('poisson')}, {sim.get('contact')} contact, {str(sim.get('element', 'p1')).upper()} elements. Other forces, materials or contact
+- **Labels it imitates**: FEM at `{meta.label_fidelity}` fidelity with force {given('force_n', ' N')}, E = {given('young_mpa', ' MPa')},
+  nu = {given('poisson')}, {given('contact')} contact, {given('element').upper()} elements. Other forces, materials or contact
   models are outside what it was trained on: use `--engine fem` for them.{coarse_note}
 
 ## Training data

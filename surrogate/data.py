@@ -46,7 +46,7 @@ class Samples:
     split: np.ndarray
     descriptors: np.ndarray  # (n, len(DESCRIPTOR_NAMES))
 
-    def subset(self, split: str) -> "Samples":
+    def subset(self, split: str) -> Samples:
         keep = self.split == split
         return Samples(*(getattr(self, f)[keep] for f in ("ids", "patches", "roughness", "family", "split",
                                                           "descriptors")))

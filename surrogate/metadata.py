@@ -48,7 +48,7 @@ class ModelMetadata:
         return json.dumps(self.to_dict())
 
     @classmethod
-    def from_dict(cls, data: dict, source: str = "model metadata") -> "ModelMetadata":
+    def from_dict(cls, data: dict, source: str = "model metadata") -> ModelMetadata:
         """Metadata from a dict; InputError names missing and unknown keys."""
         if not isinstance(data, dict):
             raise InputError(f"{source}: metadata must be a JSON object, got {type(data).__name__}")
@@ -62,7 +62,7 @@ class ModelMetadata:
         return cls(**(data | {"widths": tuple(int(w) for w in data["widths"])}))
 
     @classmethod
-    def from_json(cls, text: str, source: str = "model metadata") -> "ModelMetadata":
+    def from_json(cls, text: str, source: str = "model metadata") -> ModelMetadata:
         try:
             data = json.loads(text)
         except json.JSONDecodeError as err:

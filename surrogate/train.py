@@ -36,8 +36,6 @@ from .network import RoughnessNet, parameter_count
 from .patch import FOOTPRINT_MM, PATCH_PIXEL_MM
 from .target import LOG_OFFSET, roughness_from_log, target
 
-__all__ = ["TrainConfig", "train", "infer", "augment", "check_out_folder"]
-
 
 def augment(x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
     """A random element of the square's symmetry group (rotations, mirrors) per batch."""

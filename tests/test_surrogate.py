@@ -18,6 +18,7 @@ from roughness.dataset.digest import inputs_sha256
 from roughness.dataset.recipe import Recipe, realise, sample_record
 from roughness.dataset.store import DatasetWriter
 from roughness.dataset.textures import standard_texture
+from roughness.engines import predict
 from roughness.simulate.heightmap import Heightmap
 from roughness.simulate.io import save_heightmap
 from roughness.surrogate.calibration import StandardScale, load_scale
@@ -30,7 +31,6 @@ from roughness.surrogate.export import (
     verify,
 )
 from roughness.surrogate.patch import descriptors, footprint_patch
-from roughness.engines import predict
 from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 from roughness.surrogate.train import TrainConfig, train
 
