@@ -62,6 +62,9 @@ def test_report_tables_plots_and_numbers(tiny_set, tmp_path, capsys):
     results = [r for r in map(json.loads, (out / "results.jsonl").read_text().splitlines()) if r["key"] != SETUP_KEY]
     stored = {r["key"]: r for r in results if r["engine"] == "fem:coarse"}
     assert float(ref["median_s"]) == pytest.approx(np.median([r["seconds"] for r in stored.values()]))
+    assert "| fem:coarse | fem | 12 | 0 |" in (out / "table.md").read_text().replace("†", "")
+    assert [line for line in (out / "table.md").read_text().splitlines() if "†" in line] == [
+        line for line in (out / "table.md").read_text().splitlines() if line.startswith("| fem:coarse")]
     # the surrogate's numbers follow from the cached results
     mine = {r["key"]: r["value"] for r in results if r["engine"] == "surrogate"}
     rel = [abs(mine[k] - stored[k]["value"]) / stored[k]["value"] for k in mine]
