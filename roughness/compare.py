@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
+import numpy as np
+
 from roughness.core.errors import InputError, OutputExists
 from roughness.core.files import atomic_write
 from roughness.core.hashing import array_digest
@@ -43,8 +45,12 @@ class Texture:
 
 
 def content_key(heightmap: Heightmap) -> str:
-    """What a result depends on besides the engine: the heights (mm) and the pixel size (mm)."""
-    return array_digest(heightmap.heights, heightmap.pixel_mm)
+    """What a result depends on besides the engine: the heights (mm) and the pixel size (mm).
+
+    Heights count at float32 precision (1e-7 relative, far below any engine's resolution), the
+    precision datasets store them in: a dataset sample has the key of the texture it was made from.
+    """
+    return array_digest(np.asarray(heightmap.heights, dtype=np.float32), heightmap.pixel_mm)
 
 
 def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dict]]]:

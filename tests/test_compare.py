@@ -252,3 +252,17 @@ def test_cached_results_follow_the_engine_identity(tiny_set, tmp_path, capsys):
     onnx.save(graph, model)
     assert main(args) == 0
     assert "12 results to compute" in capsys.readouterr().err
+
+
+def test_a_dataset_sample_has_the_content_key_of_its_texture(tiny_set):
+    from roughness.compare import content_key
+    from roughness.dataset.store import open_dataset, sample_id
+
+    recipe = Recipe(name="tiny", seed=8, families={"bumps": 1, "fbm": 1, "woven": 1, "grating": 1})
+    with open_dataset(tiny_set) as data:
+        for i in range(3):
+            record = sample_record(recipe, i)
+            hm = realise(record)
+            assert content_key(data.heightmap(sample_id(record))) == content_key(hm)
+            assert content_key(Heightmap(hm.heights, hm.pixel_mm * 1.01)) != content_key(hm)
+            assert content_key(Heightmap(hm.heights * 1.001, hm.pixel_mm)) != content_key(hm)
