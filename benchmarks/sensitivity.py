@@ -10,6 +10,7 @@ ordering by lambda survives (Spearman of lambda and V).
 """
 from __future__ import annotations
 
+import argparse
 import json
 import os
 from pathlib import Path
@@ -34,6 +35,7 @@ def sweep(sim, textures: dict, **override) -> tuple[np.ndarray, list]:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()
     from roughness.dataset.textures import STANDARD_LAMBDAS_MM, standard_texture
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator

@@ -1,7 +1,7 @@
 """Surrogate latency and throughput with onnxruntime, and the ratio to FEM, in one run.
 
 Model-only latency at batch 1 on one thread (the graph alone), end-to-end time per heightmap
-(footprint patch, descriptors, domain check and the graph, via surrogate.predict), batched
+(footprint patch, descriptors, domain check and the graph, via roughness.predict), batched
 throughput on 1 and 2 threads, and FEM `default` and `coarse` per texture (warm block: the
 mesh, assembly and base field are excluded, as they are paid once per process).
 
@@ -34,21 +34,23 @@ def timed(fn, repeats: int) -> list[float]:
     return times
 
 
+def parse_args() -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--model", default=str(Path(__file__).resolve().parents[1] / "models" / "roughness-cnn.onnx"),
+                        help="ONNX model to time (default: models/roughness-cnn.onnx; models/*-int8.onnx beside it "
+                             "is timed too)")
+    return parser.parse_args()
+
+
 def main() -> None:
     from roughness.dataset.recipe import Recipe, realise, sample_record
     from roughness.dataset.textures import standard_texture
+    from roughness.engines import predict
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator
-    from roughness.surrogate.predictor import (
-        DEFAULT_MODEL,
-        INPUT,
-        SurrogateModel,
-        predict,
-    )
+    from roughness.surrogate.predictor import INPUT, SurrogateModel
 
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--model", default=str(DEFAULT_MODEL))
-    args = parser.parse_args()
+    args = parse_args()
     families = {f: 1.0 for f in ("bumps", "cellular", "dots", "fbm", "grains", "grating", "knit", "woven")}
     maps = [realise(sample_record(Recipe(seed=99, families=families), i)) for i in range(64)]
     one = SurrogateModel(args.model, threads=1)

@@ -31,12 +31,14 @@ ENGINES = ("fem:coarse", "fem:default", "surrogate", "surrogate:models/roughness
 
 
 def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--labels", help="the validation set built at fine fidelity (HDF5); the committed report "
+                                         "(of the recipe) is replaced by the report of this file")
+    args = parser.parse_args()
     from roughness.cli import main as cli
 
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--labels", help="the validation set built at fine fidelity (HDF5)")
-    args = parser.parse_args()
-    source = [str(Path(args.labels).resolve())] if args.labels else [str(RECIPE.relative_to(ROOT)), "--n", str(N)]
+    source = ([str(Path(args.labels).resolve()), "--overwrite"] if args.labels
+              else [str(RECIPE.relative_to(ROOT)), "--n", str(N)])
     os.chdir(ROOT)  # engine specs and the report name paths relative to the repository
     return cli(["compare", *source, "--out", str(OUT.relative_to(ROOT)), "--reference", "fem:fine", "--engines",
                 *ENGINES])

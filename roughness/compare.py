@@ -3,9 +3,11 @@
 Inputs: a dataset file (its stored FEM labels serve as results of ``fem:<its fidelity>`` when its
 simulation parameters are the defaults), a folder of heightmaps, or a recipe JSON (its first
 ``n`` samples). Results go to ``results.jsonl`` in the output folder as they arrive, one line per
-(engine, texture); a rerun reads it and computes only what is missing, so an interrupted
-comparison resumes and FEM results are never recomputed. Textures run one at a time, every engine
-in turn, in one process: the times are single-core times.
+(engine, texture), keyed by the texture's content (its heights and pixel size) and the engine's
+identity (configuration, model file); a rerun reads it and computes only what is missing, so an
+interrupted comparison resumes, FEM results are never recomputed, and a replaced file or another
+``--pixel-mm`` is computed afresh. Inputs that cannot be read are never cached: they are reported.
+Textures run one at a time, every engine in turn, in one process: the times are single-core times.
 """
 from __future__ import annotations
 
@@ -15,28 +17,44 @@ import sys
 import time
 import weakref
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
-from roughness.core.errors import InputError
+import numpy as np
+
+from roughness.core.errors import InputError, OutputExists
+from roughness.core.files import atomic_write
+from roughness.core.hashing import array_digest
 from roughness.simulate.heightmap import Heightmap
 
 from .engines import FEM_FIDELITIES, Engine, fem_identity
 
 RESULTS_FILE = "results.jsonl"
+MANIFEST_FILE = "compare.json"  # what the report in a folder compares: input, reference, engines
 SETUP_KEY = "(set-up)"  # cache key of an engine's one-time preparation (FEM block, model loading)
+STORED = "dataset"  # ``source`` of results read from a dataset file (its build's times, not measured here)
+PLAIN_PROGRESS_SECONDS = 30.0  # interval of progress lines when stderr is not a terminal
 
 
 @dataclass(frozen=True)
 class Texture:
-    key: str  # stable identity: sample id, or file name
+    name: str  # shown in the report: sample id or file name
     family: str
     load: Callable[[], Heightmap]
 
 
+def content_key(heightmap: Heightmap) -> str:
+    """What a result depends on besides the engine: the heights (mm) and the pixel size (mm).
+
+    Heights count at float32 precision (1e-7 relative, far below any engine's resolution), the
+    precision datasets store them in: a dataset sample has the key of the texture it was made from.
+    """
+    return array_digest(np.asarray(heightmap.heights, dtype=np.float32), heightmap.pixel_mm)
+
+
 def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dict]]]:
-    """Samples of a dataset file, and its stored FEM results if they are reusable."""
+    """Samples of a dataset file, and its stored FEM results (by sample id) if they are reusable."""
     from roughness.dataset.store import open_dataset
     from roughness.simulate.config import SimConfig
 
@@ -51,7 +69,7 @@ def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dic
     stored: dict[str, dict[str, dict]] = {}
     if fidelity in FEM_FIDELITIES and fem_identity(simulation) == fem_identity(SimConfig(fidelity=fidelity).as_dict()):
         stored[f"fem:{fidelity}"] = {str(table["id"][i]): {"value": float(table["V"][i]),
-                                                          "seconds": float(table["seconds"][i]), "source": "dataset"}
+                                                          "seconds": float(table["seconds"][i]), "source": STORED}
                                      for i in ok}
     return textures, stored
 
@@ -84,36 +102,59 @@ def recipe_textures(path: Path, n: int | None) -> list[Texture]:
     from roughness.dataset.store import sample_id
 
     if n is None:
-        raise InputError("a recipe input needs --n, the number of its samples to compare on")
+        raise InputError("a recipe input needs --n, the number of its samples to compare on", parameter="n")
     return [Texture(sample_id(r), r["family"], lambda r=r: realise(r)) for r in expand(load_recipe(path), n)]
 
 
 def textures_of(source: str, n: int | None = None, pixel_mm: float | None = None,
                 height_mm: float | None = None) -> tuple[list[Texture], dict[str, dict[str, dict]]]:
-    """The textures an INPUT names, and any stored results that come with it."""
+    """The textures an INPUT names, and any stored results that come with it (by texture name)."""
     path = Path(source)
     if path.is_dir():
         return folder_textures(path, pixel_mm, height_mm), {}
     if not path.is_file():
-        raise InputError(f"compare input not found: {source}")
+        raise InputError(f"compare input not found: {source}", parameter="input")
     if path.suffix.lower() == ".json":
         return recipe_textures(path, n), {}
     if path.suffix.lower() in (".h5", ".hdf5"):
         textures, stored = dataset_textures(path)
         return textures[:n] if n else textures, stored
-    raise InputError(f"{source}: compare takes a dataset (.h5), a folder of heightmaps or a recipe (.json)")
+    raise InputError(f"{source}: compare takes a dataset (.h5), a folder of heightmaps or a recipe (.json)",
+                     parameter="input")
+
+
+def check_report_folder(folder: Path, manifest: dict, overwrite: bool = False) -> None:
+    """Refuse (OutputExists) a folder holding anything but a report of the same comparison, unless ``overwrite``.
+
+    The same comparison (input, number of textures, reference and engines) resumes there.
+    """
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"{folder} is a file, not a folder", parameter="out")
+    if overwrite or not folder.is_dir() or not any(folder.iterdir()):
+        return
+    try:
+        same = json.loads((folder / MANIFEST_FILE).read_text()) == manifest
+    except (OSError, json.JSONDecodeError):
+        same = False
+    if not same:
+        raise OutputExists(folder, "out")
+
+
+def write_manifest(folder: Path, manifest: dict) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    atomic_write(folder / MANIFEST_FILE, lambda tmp: Path(tmp).write_text(json.dumps(manifest, indent=1) + "\n"))
 
 
 class ResultCache:
-    """The output folder's results.jsonl: {engine, identity, key, value, seconds, error, source} per line.
+    """The output folder's results.jsonl: {engine, identity, key, texture, value, seconds, error, source} per line.
 
-    ``identities`` maps each engine spec to what its results depend on (configuration digest, model
-    file digest); entries made under another identity (a retrained model, say) are ignored.
+    ``key`` is the texture's ``content_key``; ``identities`` maps each engine spec to what its results
+    depend on (configuration digest, model file digest): entries made under another identity (a
+    retrained model, say) are ignored. The file is created with the first result.
     """
 
     def __init__(self, folder: Path, identities: dict[str, str]) -> None:
         self.identities = identities
-        folder.mkdir(parents=True, exist_ok=True)
         self.path = folder / RESULTS_FILE
         self.entries: dict[tuple[str, str], dict] = {}
         if self.path.exists():
@@ -127,7 +168,7 @@ class ResultCache:
                     entry = json.loads(line)
                 except json.JSONDecodeError:
                     raise InputError(f"{self.path} line {number} is not JSON: remove that line to recompute it") from None
-                if entry.get("identity") == identities.get(entry["engine"]):
+                if entry.get("identity") == identities.get(entry.get("engine")):
                     self.entries[(entry["engine"], entry["key"])] = entry
 
     def get(self, engine: str, key: str) -> dict | None:
@@ -136,48 +177,117 @@ class ResultCache:
     def put(self, engine: str, key: str, **fields) -> None:
         entry = {"engine": engine, "identity": self.identities[engine], "key": key, **fields}
         self.entries[(engine, key)] = entry
+        self.path.parent.mkdir(parents=True, exist_ok=True)
         with open(self.path, "a") as f:
             f.write(json.dumps(entry) + "\n")
             f.flush()
             os.fsync(f.fileno())
 
 
+@dataclass
+class Outcome:
+    """What ``run`` found: the content key of every readable texture and the inputs that could not be used."""
+
+    keys: dict[str, str] = field(default_factory=dict)  # texture name -> content key
+    input_errors: list[tuple[str, str]] = field(default_factory=list)  # (texture name, message)
+    computed: int = 0
+    cached: int = 0
+
+
+class Progress:
+    """Progress on stderr: one updated line on a terminal, plain lines every PLAIN_PROGRESS_SECONDS otherwise.
+
+    The ETA is the remaining results of each engine times that engine's mean time so far (set-up excluded).
+    """
+
+    def __init__(self, remaining: dict[str, int], quiet: bool) -> None:
+        self.remaining, self.quiet = dict(remaining), quiet
+        self.total, self.done = sum(remaining.values()), 0
+        self.spent: dict[str, list[float]] = {e: [0.0, 0] for e in remaining}
+        self.terminal = sys.stderr.isatty()
+        self.last = time.monotonic()
+
+    def eta_minutes(self) -> float | None:
+        if any(n and not self.spent[e][1] for e, n in self.remaining.items()):
+            return None  # an engine with work left has not finished a texture yet
+        return sum(n * self.spent[e][0] / self.spent[e][1] for e, n in self.remaining.items() if n) / 60
+
+    def step(self, engine: str, seconds: float, texture: str) -> None:
+        self.done += 1
+        self.remaining[engine] -= 1
+        self.spent[engine][0] += seconds
+        self.spent[engine][1] += 1
+        if self.quiet:
+            return
+        eta = self.eta_minutes()
+        text = f"  {self.done}/{self.total} results, {texture} {engine:<20s} ETA " + (
+            f"{eta:5.1f} min" if eta is not None else "  ? min")
+        if self.terminal:
+            print("\r" + text, end="", file=sys.stderr, flush=True)
+        elif self.done == self.total or time.monotonic() - self.last >= PLAIN_PROGRESS_SECONDS:
+            print(text.strip(), file=sys.stderr, flush=True)
+            self.last = time.monotonic()
+
+    def close(self) -> None:
+        if self.terminal and self.done and not self.quiet:
+            print(file=sys.stderr)
+
+
+def _input_error(outcome: Outcome, name: str, err: InputError) -> None:
+    message = str(err) if name in str(err) else f"{name}: {err}"
+    outcome.input_errors.append((name, message))
+    print(f"roughness: error: {message}", file=sys.stderr, flush=True)
+
+
 def run(textures: list[Texture], engines: list[Engine], cache: ResultCache,
-        stored: dict[str, dict[str, dict]], quiet: bool = False) -> None:
-    """Fill the cache for every (engine, texture), and each engine's one-time set-up seconds (SETUP_KEY)."""
-    for spec, results in stored.items():
-        if spec not in cache.identities:
-            continue
-        for key, entry in results.items():
-            if cache.get(spec, key) is None:
-                cache.put(spec, key, **entry)
-    todo = [(t, e) for t in textures for e in engines if cache.get(e.spec, t.key) is None]
-    start, done = time.monotonic(), 0
-    if not quiet:
-        print(f"compare: {len(textures)} textures x {len(engines)} engines; {len(todo)} results to compute, "
-              f"{len(textures) * len(engines) - len(todo)} cached", file=sys.stderr, flush=True)
+        stored: dict[str, dict[str, dict]], quiet: bool = False) -> Outcome:
+    """Fill the cache for every (engine, readable texture), and each engine's set-up seconds (SETUP_KEY).
+
+    A first pass reads every texture for its content key (and takes over stored results); a
+    second computes what is missing. Input errors are printed and returned, never cached.
+    """
+    outcome = Outcome()
     for texture in textures:
-        pending = [e for e in engines if cache.get(e.spec, texture.key) is None]
-        if not pending:
-            continue
         try:
-            heightmap = texture.load()
+            key = content_key(texture.load())
         except InputError as err:
-            for engine in pending:
-                cache.put(engine.spec, texture.key, value=None, seconds=None, error=f"input: {err}")
+            _input_error(outcome, texture.name, err)
             continue
-        for engine in pending:
-            try:
-                value, seconds = engine.measure(heightmap)
-                cache.put(engine.spec, texture.key, value=value, seconds=seconds, error=None, source="computed")
-                if engine.setup_seconds and cache.get(engine.spec, SETUP_KEY) is None:
-                    cache.put(engine.spec, SETUP_KEY, seconds=engine.setup_seconds)
-            except Exception as err:  # a failure is a result of the comparison, recorded with its reason
-                cache.put(engine.spec, texture.key, value=None, seconds=None, error=f"{type(err).__name__}: {err}")
-            done += 1
-            if not quiet:
-                rate = done / max(time.monotonic() - start, 1e-9)
-                print(f"\r  {done}/{len(todo)} results, {texture.key} {engine.spec:<20s} ETA "
-                      f"{(len(todo) - done) / rate / 60:5.1f} min", end="", file=sys.stderr, flush=True)
-    if not quiet and todo:
-        print(file=sys.stderr)
+        outcome.keys[texture.name] = key
+        for spec, results in stored.items():
+            if spec in cache.identities and texture.name in results and cache.get(spec, key) is None:
+                cache.put(spec, key, texture=texture.name, **results[texture.name])
+    pending = {t.name: [e for e in engines if cache.get(e.spec, outcome.keys[t.name]) is None]
+               for t in textures if t.name in outcome.keys}
+    todo = sum(map(len, pending.values()))
+    outcome.cached = len(outcome.keys) * len(engines) - todo
+    if not quiet:
+        print(f"compare: {len(textures)} textures x {len(engines)} engines; {todo} results to compute, "
+              f"{outcome.cached} cached", file=sys.stderr, flush=True)
+    progress = Progress({e.spec: sum(e in p for p in pending.values()) for e in engines}, quiet)
+    try:
+        for texture in textures:
+            if not pending.get(texture.name):
+                continue
+            heightmap, key = texture.load(), outcome.keys[texture.name]
+            for engine in pending[texture.name]:
+                setup, start = engine.setup_seconds, time.perf_counter()
+                try:
+                    value, seconds = engine.measure(heightmap)
+                except InputError as err:  # the texture does not suit the engine (e.g. smaller than the footprint)
+                    _input_error(outcome, texture.name, err)
+                    del outcome.keys[texture.name]  # not compared: listed with its reason instead
+                    break
+                except Exception as err:  # a failure is a result of the comparison, recorded with its reason
+                    cache.put(engine.spec, key, texture=texture.name, value=None, seconds=None,
+                              error=f"{type(err).__name__}: {err}")
+                else:
+                    cache.put(engine.spec, key, texture=texture.name, value=value, seconds=seconds, error=None,
+                              source="computed")
+                    if engine.setup_seconds and cache.get(engine.spec, SETUP_KEY) is None:
+                        cache.put(engine.spec, SETUP_KEY, seconds=engine.setup_seconds)
+                outcome.computed += 1
+                progress.step(engine.spec, time.perf_counter() - start - (engine.setup_seconds - setup), texture.name)
+    finally:
+        progress.close()
+    return outcome

@@ -1,26 +1,38 @@
-"""Roughness engines that `roughness compare` times and scores: FEM fidelities, the surrogate, classical measures.
+"""The engine layer: FEM, the surrogate, classical measures, and prediction with automatic dispatch.
 
-Spec strings: ``fem:coarse``, ``fem:default``, ``fem:fine``, ``surrogate`` (or ``surrogate:PATH.onnx``),
-and the classical measures ``ra``, ``p90``, ``glcm_sum_of_squares``, ``glcm_sum_variance``.
-Each engine returns a value and the seconds it took for one texture: FEM reports the solve with
-its block prepared (mesh, assembly and base field are paid once per process and reported as
-``setup_seconds``); the surrogate and the measures are timed end to end from the heightmap.
+Used by ``roughness predict``, ``roughness compare`` and the Python API (``roughness.predict``).
+
+Spec strings (compare): ``fem:coarse``, ``fem:default``, ``fem:fine``, ``surrogate`` (or
+``surrogate:PATH.onnx``), and the classical measures ``ra``, ``p90``, ``glcm_sum_of_squares``,
+``glcm_sum_variance``. Each engine returns a value and the seconds it took for one texture: FEM
+reports the solve with its block prepared (mesh, assembly and base field are paid once per process
+and reported as ``setup_seconds``); the surrogate and the measures are timed end to end from the
+heightmap.
+
+``predict`` engines: ``surrogate`` (milliseconds), ``fem`` (the reference; seconds) and ``auto``
+(the surrogate, falling back to FEM for inputs outside the model's domain). The FEM runs with the
+model's simulation parameters at the fidelity of its training labels unless told otherwise, so the
+engines share one scale; equivalent wavelengths are read off the standard scale of that fidelity.
 """
 from __future__ import annotations
 
-import hashlib
-import json
+import itertools
 import time
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Protocol
 
+import numpy as np
+
 from roughness.core.errors import InputError
+from roughness.core.hashing import digest, file_sha256
 from roughness.simulate.heightmap import Heightmap
 
 from .classical import MEASURES, footprint
 
 FEM_FIDELITIES = ("coarse", "default", "fine")
+PREDICT_ENGINES = ("surrogate", "fem", "auto")
 
 
 class Engine(Protocol):
@@ -33,66 +45,86 @@ class Engine(Protocol):
         """(value, seconds) for one texture."""
 
 
+def fem_identity(simulation: dict) -> str:
+    """Identity of FEM results: a digest of the full simulation configuration."""
+    return "fem-" + digest(simulation)
+
+
 @dataclass
 class FemEngine:
+    """The FEM with a configuration (``roughness.simulate.config.SimConfig``), prepared on first use."""
+
     spec: str
-    fidelity: str
+    config: object  # SimConfig
+    centre_mm: tuple[float, float] | None = None
+    tile: bool = False
     kind: str = "fem"
     setup_seconds: float = 0.0
     _simulator: object = field(default=None, repr=False)
 
-    @property
-    def identity(self) -> str:
+    @classmethod
+    def of(cls, fidelity: str, simulation: dict | None = None, centre_mm: tuple[float, float] | None = None,
+           tile: bool = False) -> FemEngine:
+        """FEM at ``fidelity`` with the other parameters of ``simulation`` (default: the defaults)."""
         from roughness.simulate.config import SimConfig
 
-        return fem_identity(SimConfig(fidelity=self.fidelity).as_dict())
+        return cls(f"fem:{fidelity}", SimConfig(**{**(simulation or {}), "fidelity": fidelity}), centre_mm, tile)
+
+    @property
+    def fidelity(self) -> str:
+        return self.config.fidelity
+
+    @property
+    def identity(self) -> str:
+        return fem_identity(self.config.as_dict())
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
         if self._simulator is None:
-            from roughness.simulate.config import SimConfig
             from roughness.simulate.model import Simulator
 
             start = time.perf_counter()
-            config = SimConfig(fidelity=self.fidelity)
-            self._simulator = Simulator(config)
-            self._simulator.block(config.resolved()).base(config.force_n, config.contact)
+            self._simulator = Simulator(self.config)
+            self._simulator.block(self.config.resolved()).base(self.config.force_n, self.config.contact)
             self.setup_seconds = time.perf_counter() - start
-        result = self._simulator.run(heightmap)
+        result = self._simulator.run(heightmap, self.centre_mm, self.tile)
         return result.roughness, result.seconds
 
 
 @dataclass
 class SurrogateEngine:
+    """The ONNX surrogate (default: the shipped model), loaded on first use."""
+
     spec: str
     model_path: str | None = None
+    threads: int = 1
     kind: str = "surrogate"
     setup_seconds: float = 0.0
     _model: object = field(default=None, repr=False)
 
     @property
-    def identity(self) -> str:
-        from roughness.dataset.digest import file_sha256
+    def path(self) -> Path:
         from roughness.surrogate.predictor import DEFAULT_MODEL
 
-        path = Path(self.model_path or DEFAULT_MODEL)
-        if not path.is_file():
-            raise InputError(f"surrogate model not found: {path}")
-        return "model-" + file_sha256(path)[:16]
+        return Path(self.model_path or DEFAULT_MODEL)
+
+    @property
+    def identity(self) -> str:
+        if not self.path.is_file():
+            raise InputError(f"surrogate model not found: {self.path}", parameter="model")
+        return "model-" + file_sha256(self.path)[:16]
 
     @property
     def model(self):
-        """The loaded model (one onnxruntime thread), loaded on first use."""
-        from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
+        """The loaded ``SurrogateModel``."""
+        from roughness.surrogate.predictor import SurrogateModel
 
         if self._model is None:
             start = time.perf_counter()
-            self._model = SurrogateModel(self.model_path or DEFAULT_MODEL, threads=1)
+            self._model = SurrogateModel(self.path, threads=self.threads)
             self.setup_seconds = time.perf_counter() - start
         return self._model
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
-        from roughness.surrogate.predictor import predict
-
         model = self.model
         start = time.perf_counter()
         [p] = predict(heightmap, engine="surrogate", model=model)
@@ -112,18 +144,82 @@ class ClassicalEngine:
         return value, time.perf_counter() - start
 
 
-def fem_identity(simulation: dict) -> str:
-    """Identity of FEM results: a digest of the full simulation configuration."""
-    return "fem-" + hashlib.sha1(json.dumps(simulation, sort_keys=True).encode()).hexdigest()[:16]
-
-
 def make_engine(spec: str) -> Engine:
     """Engine for a spec string; InputError lists the valid ones."""
     if spec.startswith("fem:") and spec[4:] in FEM_FIDELITIES:
-        return FemEngine(spec, spec[4:])
+        return FemEngine.of(spec[4:])
     if spec == "surrogate" or spec.startswith("surrogate:"):
         return SurrogateEngine(spec, spec.partition(":")[2] or None)
     if spec in MEASURES:
         return ClassicalEngine(spec)
     valid = [f"fem:{f}" for f in FEM_FIDELITIES] + ["surrogate", "surrogate:MODEL.onnx", *MEASURES]
-    raise InputError(f"unknown engine {spec!r}; valid: {', '.join(valid)}")
+    raise InputError(f"unknown engine {spec!r}; valid: {', '.join(valid)}", parameter="engines")
+
+
+@dataclass
+class Prediction:
+    """Roughness V (dimensionless strain variation) of one input and how it was obtained."""
+
+    source: str
+    roughness: float
+    engine: str  # "surrogate" or "fem"
+    fidelity: str  # FEM fidelity of the engine's scale (for the surrogate: of its training labels)
+    in_domain: bool
+    seconds: float  # wall time spent on this input (batched surrogate time is shared out)
+    placement: object  # roughness.surrogate.calibration.Placement on the standard scale
+    domain_notes: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        return {"input": self.source, "roughness": self.roughness, "engine": self.engine, "fidelity": self.fidelity,
+                "in_domain": self.in_domain, "seconds": self.seconds, **self.placement.as_dict(),
+                "domain_notes": self.domain_notes}
+
+
+def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
+            model: object | str | Path | None = None, centre_mm: tuple[float, float] | None = None,
+            tile: bool = False, fidelity: str | None = None, batch_size: int = 256,
+            sources: Iterable[str] | None = None,
+            on_result: Callable[[Prediction], None] | None = None) -> list[Prediction]:
+    """Predict V for each heightmap (mm) with ``engine`` (see the module docstring).
+
+    ``model`` is a ``SurrogateModel`` or the path of an ONNX model (default: the shipped one);
+    ``fidelity`` is the FEM's (default: the model's training labels'). ``sources`` names the
+    inputs in the results; ``on_result`` is called as each result is ready.
+    """
+    from roughness.surrogate.calibration import load_scale
+    from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
+
+    if engine not in PREDICT_ENGINES:
+        raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(PREDICT_ENGINES)}", parameter="engine")
+    if isinstance(batch_size, bool) or not isinstance(batch_size, int) or batch_size < 1:
+        raise InputError(f"batch size must be an integer >= 1, got {batch_size!r}", parameter="batch_size")
+    model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
+    fem = FemEngine.of(fidelity or model.fidelity, model.meta.simulation, centre_mm, tile)
+    surrogate_scale, fem_scale = load_scale(model.fidelity), load_scale(fem.fidelity)
+    names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
+    results: list[Prediction] = []
+    batch: list[tuple[str, Heightmap]] = []
+
+    def flush() -> None:
+        start = time.perf_counter()
+        values, reasons = model.run(np.stack([model.patch(hm, centre_mm, tile) for _, hm in batch]))
+        share = (time.perf_counter() - start) / len(batch)
+        for (source, hm), v, why in zip(batch, values, reasons):
+            if engine == "fem" or (engine == "auto" and why):
+                v_fem, seconds = fem.measure(hm)
+                result = Prediction(source, v_fem, "fem", fem.fidelity, not why, seconds, fem_scale.place(v_fem), why)
+            else:
+                result = Prediction(source, float(v), "surrogate", model.fidelity, not why, share,
+                                    surrogate_scale.place(float(v)), why)
+            results.append(result)
+            if on_result:
+                on_result(result)
+        batch.clear()
+
+    for hm in [heightmaps] if isinstance(heightmaps, Heightmap) else heightmaps:
+        batch.append((next(names), hm))
+        if len(batch) >= batch_size:
+            flush()
+    if batch:
+        flush()
+    return results

@@ -14,12 +14,14 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
+from roughness.core.files import atomic_write
 from roughness.surrogate.metrics import scores
 
-from .compare import SETUP_KEY, ResultCache, Texture
+from .compare import SETUP_KEY, STORED, Outcome, ResultCache, Texture
 
 COLUMNS = ("engine", "kind", "n", "failures", "median_s", "p95_s", "median_rel_err", "p95_rel_err", "spearman",
            "r2_log")
+STORED_MARK = "†"  # on times read from a dataset file: its build's times, not measured by the comparison
 
 
 @dataclass
@@ -32,10 +34,11 @@ class EngineScore:
     raw: np.ndarray
     seconds: np.ndarray
     failures: int
+    stored_times: bool  # some times come from a dataset's build (possibly a contended machine), not this comparison
 
     def row(self) -> dict:
         row = {"engine": self.engine, "kind": self.kind, "n": len(self.keys), "failures": self.failures,
-               "median_s": _q(self.seconds, 50), "p95_s": _q(self.seconds, 95)}
+               "median_s": _q(self.seconds, 50), "p95_s": _q(self.seconds, 95), "stored_times": self.stored_times}
         errors = scores(self.reference, self.estimate)  # reference V > 0 here, so nothing is left out
         if "spearman" not in errors:  # fewer than 3 textures
             return row | {k: math.nan for k in ("median_rel_err", "p95_rel_err", "spearman", "r2_log")}
@@ -47,13 +50,16 @@ def _q(values: np.ndarray, q: float) -> float:
     return float(np.percentile(values, q)) if len(values) else math.nan
 
 
-def score(textures: list[Texture], kinds: dict[str, str], reference: str, cache: ResultCache) -> list[EngineScore]:
-    """Scores of every engine (the reference first) on the textures."""
-    ref = {t.key: cache.get(reference, t.key) for t in textures}
+def score(content: dict[str, str], kinds: dict[str, str], reference: str, cache: ResultCache) -> list[EngineScore]:
+    """Scores of every engine (the reference first) on the textures ``content`` names (name -> content key).
+
+    The scored ``keys`` of each EngineScore are texture names.
+    """
+    ref = {name: cache.get(reference, key) for name, key in content.items()}
     ref_ok = {k: e["value"] for k, e in ref.items() if e and e.get("error") is None and e["value"] > 0}
     scores = []
     for engine, kind in kinds.items():
-        entries = {t.key: cache.get(engine, t.key) for t in textures}
+        entries = {name: cache.get(engine, key) for name, key in content.items()}
         done = {k: e for k, e in entries.items() if e and e.get("error") is None}
         keys = [k for k in done if k in ref_ok and (kind != "classical" or done[k]["value"] > 0)]
         reference_v = np.array([ref_ok[k] for k in keys])
@@ -61,7 +67,8 @@ def score(textures: list[Texture], kinds: dict[str, str], reference: str, cache:
         estimate = _power_law(raw, reference_v) if kind == "classical" else raw
         seconds = np.array([e["seconds"] for e in done.values() if e.get("seconds") is not None], dtype=float)
         failures = sum(1 for e in entries.values() if e and e.get("error") is not None)
-        scores.append(EngineScore(engine, kind, keys, reference_v, estimate, raw, seconds, failures))
+        stored = any(e.get("source") == STORED for e in done.values())
+        scores.append(EngineScore(engine, kind, keys, reference_v, estimate, raw, seconds, failures, stored))
     return scores
 
 
@@ -73,19 +80,27 @@ def _power_law(measure: np.ndarray, reference: np.ndarray) -> np.ndarray:
 
 
 def write_tables(rows: list[dict], folder: Path) -> str:
-    """table.csv and table.md; returns the Markdown."""
-    with open(folder / "table.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, COLUMNS)
-        writer.writeheader()
-        writer.writerows({k: row[k] for k in COLUMNS} for row in rows)
+    """table.csv and table.md; returns the Markdown (times read from a dataset marked with STORED_MARK)."""
+    def write_csv(tmp: str) -> None:
+        with open(tmp, "w", newline="") as f:
+            writer = csv.DictWriter(f, COLUMNS)
+            writer.writeheader()
+            writer.writerows({k: row[k] for k in COLUMNS} for row in rows)
+
+    atomic_write(folder / "table.csv", write_csv)
     head = ("| engine | kind | n | failures | median s | p95 s | median rel. error | p95 rel. error | Spearman | "
             "R² (log V) |\n|---|---|---|---|---|---|---|---|---|---|\n")
+    mark = lambda r: STORED_MARK if r["stored_times"] else ""  # noqa: E731
     lines = "".join(
-        f"| {r['engine']} | {r['kind']} | {r['n']} | {r['failures']} | {_sec(r['median_s'])} | {_sec(r['p95_s'])} | "
-        f"{_pct(r['median_rel_err'])} | {_pct(r['p95_rel_err'])} | {r['spearman']:.3f} | {r['r2_log']:.3f} |\n"
-        for r in rows)
-    (folder / "table.md").write_text(head + lines)
+        f"| {r['engine']} | {r['kind']} | {r['n']} | {r['failures']} | {_sec(r['median_s'])}{mark(r)} | "
+        f"{_sec(r['p95_s'])}{mark(r)} | {_pct(r['median_rel_err'])} | {_pct(r['p95_rel_err'])} | {r['spearman']:.3f} | "
+        f"{r['r2_log']:.3f} |\n" for r in rows)
+    write_text(folder / "table.md", head + lines)
     return head + lines
+
+
+def write_text(path: Path, text: str) -> None:
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
 
 
 def _sec(s: float) -> str:
@@ -107,24 +122,60 @@ def pareto_front(points: list[tuple[float, float]]) -> list[int]:
     return front
 
 
+MARKERS = {"fem": ("s", "FEM"), "surrogate": ("o", "surrogate (CNN)"),
+           "classical": ("^", "classical measure (power-law fit)")}
+LABEL_OFFSETS = [(7, 7), (7, -13), (-7, 7), (-7, -13), (7, 19), (7, -25), (-7, 19), (-7, -25), (7, 31), (7, -37)]
+
+
 def plot_pareto(rows: list[dict], reference: str, out: Path) -> None:
+    """Median time against median error per engine: marker by kind (legend), labels placed not to overlap."""
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7, 4.8))
+    fig, ax = plt.subplots(figsize=(7.5, 5))
     rows = [r for r in rows if not math.isnan(r["median_s"]) and not math.isnan(r["median_rel_err"])]
     points = [(r["median_s"], 100 * r["median_rel_err"]) for r in rows]
-    marker = {"fem": "s", "surrogate": "o", "classical": "^"}
-    for i, (r, (x, y)) in enumerate(zip(rows, points)):
-        ax.scatter(x, y, marker=marker.get(r["kind"], "o"), s=60, zorder=3)
-        ax.annotate(label(r["engine"]), (x, y), textcoords="offset points", xytext=(7, 9 if i % 2 else -12), fontsize=8)
+    for kind, (marker, name) in MARKERS.items():
+        mine = [p for r, p in zip(rows, points) if r["kind"] == kind]
+        if mine:
+            ax.scatter(*zip(*mine), marker=marker, s=60, zorder=3, label=name)
     front = pareto_front(points)
     ax.plot([points[i][0] for i in front], [points[i][1] for i in front], "k--", lw=1, label="Pareto front")
-    ax.set(xscale="log", xlabel="median seconds per texture (one core)", ylabel=f"median relative error vs {reference} (%)",
-           title="Speed / accuracy trade")
-    ax.legend(fontsize=8)
+    stored = " († stored build times)" if any(r.get("stored_times") for r in rows) else ""
+    ax.set(xscale="log", xlabel=f"median seconds per texture (one core){stored}",
+           ylabel=f"median relative error vs {reference} (%)", title="Speed / accuracy trade")
+    ax.margins(x=0.15, y=0.12)
+    ax.legend(fontsize=8, loc="upper right")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    _place_labels(fig, ax, [label(r["engine"]) + (STORED_MARK if r.get("stored_times") else "") for r in rows], points)
+    _save(fig, out, 110)
+
+
+def _place_labels(fig, ax, texts: list[str], points: list[tuple[float, float]]) -> None:
+    """Annotate each point with the first offset whose text overlaps no earlier label, marker or the legend."""
+    renderer = fig.canvas.get_renderer()
+    taken = [ax.get_legend().get_window_extent(renderer)]
+    for x, y in points:
+        px, py = ax.transData.transform((x, y))
+        taken.append(_box(px - 6, py - 6, px + 6, py + 6))
+    for text, point in zip(texts, points):
+        for dx, dy in LABEL_OFFSETS:
+            note = ax.annotate(text, point, textcoords="offset points", xytext=(dx, dy), fontsize=8,
+                               ha="left" if dx > 0 else "right")
+            box = note.get_window_extent(renderer)
+            if not any(box.overlaps(other) for other in taken):
+                break
+            note.remove()
+        else:  # every place is taken: the first one, with a leader line
+            note = ax.annotate(text, point, textcoords="offset points", xytext=LABEL_OFFSETS[0], fontsize=8,
+                               arrowprops={"arrowstyle": "-", "lw": 0.5})
+            box = note.get_window_extent(renderer)
+        taken.append(box)
+
+
+def _box(x0: float, y0: float, x1: float, y1: float):
+    from matplotlib.transforms import Bbox
+
+    return Bbox([[x0, y0], [x1, y1]])
 
 
 def label(engine: str) -> str:
@@ -150,8 +201,7 @@ def plot_scatter(scores: list[EngineScore], reference: str, out: Path) -> None:
     for ax in axes.ravel()[len(shown):]:
         ax.axis("off")
     fig.tight_layout()
-    fig.savefig(out, dpi=100)
-    plt.close(fig)
+    _save(fig, out, 100)
 
 
 def family_errors(scores: list[EngineScore], families: dict[str, str], reference: str) -> dict[str, dict[str, float]]:
@@ -178,8 +228,7 @@ def plot_family_errors(errors: dict[str, dict[str, float]], out: Path) -> None:
     ax.set(yscale="log", ylabel="median relative error (%)", title="Error by texture family")
     ax.legend(fontsize=7, bbox_to_anchor=(1.01, 1), loc="upper left")
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    _save(fig, out, 110)
 
 
 def disagreements(s: EngineScore, families: dict[str, str], count: int = 8) -> list[dict]:
@@ -207,6 +256,13 @@ def break_even(rows: list[dict], cost_core_seconds: dict | None) -> list[dict]:
     return out
 
 
+def _save(fig, path: Path, dpi: int) -> None:
+    import matplotlib.pyplot as plt
+
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=dpi))
+    plt.close(fig)
+
+
 def _pyplot():
     import matplotlib
 
@@ -216,13 +272,14 @@ def _pyplot():
     return plt
 
 
-def write_report(textures: list[Texture], kinds: dict[str, str], reference: str, cache: ResultCache, out: Path,
-                 cost_core_seconds: dict | None, source: str) -> str:
+def write_report(textures: list[Texture], outcome: Outcome, kinds: dict[str, str], reference: str,
+                 cache: ResultCache, out: Path, cost_core_seconds: dict | None, source: str) -> str:
     """Tables, plots and report.md in ``out``; returns the Markdown table."""
     setup_seconds = {e: entry["seconds"] for e in kinds if (entry := cache.get(e, SETUP_KEY))}
-    families = {t.key: t.family for t in textures}
-    scores = score(textures, kinds, reference, cache)
+    families = {t.name: t.family for t in textures}
+    scores = score(outcome.keys, kinds, reference, cache)
     rows = [s.row() for s in scores]
+    out.mkdir(parents=True, exist_ok=True)
     table = write_tables(rows, out)
     plot_pareto(rows, reference, out / "pareto.png")
     plot_scatter(scores, reference, out / "predicted_vs_reference.png")
@@ -238,9 +295,16 @@ def write_report(textures: list[Texture], kinds: dict[str, str], reference: str,
             + "); the surrogate end to end "
             "(patch, domain check, network) at batch 1. Classical measures are not in units of V: their errors "
             "are those of a power law fitted to the reference on these same textures (flattering them); "
-            "Spearman needs no fit. Relative errors and R² leave out textures whose reference V is 0.\n",
+            "Spearman needs no fit. Relative errors and R² leave out textures whose reference V is 0."
+            + (f" {STORED_MARK} Times read from the dataset file: measured while it was built (several workers, "
+               "possibly a contended machine), not by this comparison; do not compare them with the other times."
+               if any(r["stored_times"] for r in rows) else "") + "\n",
             "![Pareto](pareto.png)\n", "![predicted vs reference](predicted_vs_reference.png)\n",
-            "![error by family](error_by_family.png)\n", "## Textures that disagree most\n"]
+            "![error by family](error_by_family.png)\n"]
+    if outcome.input_errors:
+        text += [f"## Inputs not compared ({len(outcome.input_errors)})\n",
+                 *(f"- `{name}`: {message}" for name, message in outcome.input_errors), ""]
+    text.append("## Textures that disagree most\n")
     for s in scores:
         if s.kind in ("fem", "surrogate") and s.engine != reference and len(s.keys):
             text.append(f"`{s.engine}`:\n\n| texture | family | {reference} V | estimate | ratio |\n|---|---|---|---|---|")
@@ -255,7 +319,9 @@ def write_report(textures: list[Texture], kinds: dict[str, str], reference: str,
                  f"({', '.join(f'{k} {v / 3600:.2f} h' for k, v in cost_core_seconds.items())}). Each prediction "
                  "by the surrogate instead of FEM saves the difference in median time per texture:\n",
                  "| instead of | saving per prediction | predictions to break even |\n|---|---|---|"]
-        text += [f"| {e['engine']} | {e['saving_s_per_prediction']:.2f} s | {e['predictions']:,} |" for e in even]
+        stored = {r["engine"] for r in rows if r["stored_times"]}
+        text += [f"| {e['engine']} | {e['saving_s_per_prediction']:.2f} s{STORED_MARK if e['engine'] in stored else ''} | "
+                 f"{e['predictions']:,}{STORED_MARK if e['engine'] in stored else ''} |" for e in even]
         text.append("")
-    (out / "report.md").write_text("\n".join(text))
+    write_text(out / "report.md", "\n".join(text))
     return table

@@ -1,11 +1,10 @@
-"""CNN surrogate of the FEM roughness: training (torch), ONNX export, prediction (numpy + onnxruntime).
+"""CNN surrogate of the FEM roughness: training (torch), ONNX export, the model (numpy + onnxruntime).
 
-``surrogate.predict(heightmaps, engine="auto")`` needs no torch; names load on first use.
+Prediction with engine choice is ``roughness.predict`` (roughness.engines); names load on first use.
 """
 from importlib import import_module
 
-_HOMES = {"predict": "predictor", "Prediction": "predictor", "SurrogateModel": "predictor",
-          "DEFAULT_MODEL": "predictor", "StandardScale": "calibration", "load_scale": "calibration"}
+_HOMES = {"SurrogateModel": "predictor", "DEFAULT_MODEL": "predictor", "ModelMetadata": "metadata", "StandardScale": "calibration", "load_scale": "calibration"}
 
 __all__ = sorted(_HOMES)
 

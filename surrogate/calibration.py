@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from roughness.core.errors import InputError
+from roughness.core.files import atomic_write
 from roughness.models import MODELS_DIR
 
 WEBER_FRACTION = 0.19
@@ -101,7 +102,8 @@ def main(argv: list[str] | None = None) -> None:
         print(fidelity, tables[fidelity]["V_mean"], flush=True)
     note = ("Mean FEM V of the 13 standard cap-topped bump textures (paper parameters, 10 N, stick) over "
             "the seeds listed; regenerate with: python -m roughness.surrogate.calibration")
-    out.write_text(json.dumps({"note": note, "weber_fraction": WEBER_FRACTION, "tables": tables}, indent=1))
+    text = json.dumps({"note": note, "weber_fraction": WEBER_FRACTION, "tables": tables}, indent=1)
+    atomic_write(out, lambda tmp: Path(tmp).write_text(text))
 
 
 if __name__ == "__main__":

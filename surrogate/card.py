@@ -1,24 +1,33 @@
 """Model card and accuracy plots of an exported surrogate, from its training run.
 
-    python -m roughness.surrogate.card RUN_DIR MODEL.onnx --card models/MODEL_CARD.md
+    python -m roughness.surrogate.card RUN_DIR MODEL.onnx --card CARD.md --plots FOLDER [--latency LATENCY.json]
 
-Reads the model's metadata, the run's ``predictions.csv`` and ``history.csv`` and the latency
-benchmark (benchmarks/results/surrogate_latency.json, if present); writes the card and
-``surrogate_accuracy.png`` / ``surrogate_training.png`` next to the latency results.
+Reads the model's metadata, the run's ``predictions.csv`` and ``history.csv`` and, if given, the
+latency benchmark's JSON (used only if it timed this model); writes the card and
+``surrogate_accuracy.png`` / ``surrogate_training.png`` into the plots folder. The shipped card:
+``... runs/cnn models/roughness-cnn.onnx --card models/MODEL_CARD.md --plots benchmarks/results
+--latency benchmarks/results/surrogate_latency.json``.
 """
 from __future__ import annotations
 
 import argparse
 import csv
 import json
+import os
+from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from .patch import DESCRIPTOR_NAMES, FOOTPRINT_MM
-from .predictor import SurrogateModel
+from roughness.core.errors import InputError
+from roughness.core.files import atomic_write
+from roughness.core.hashing import file_sha256
 
-RESULTS = Path(__file__).resolve().parent.parent / "benchmarks" / "results"
+from .metadata import ModelMetadata, onnx_metadata
+from .patch import DESCRIPTOR_NAMES, FOOTPRINT_MM
+from .predictor import DEFAULT_MODEL
+
 SPLIT_NAMES = {"train": "training", "val": "validation", "test": "held-out (unseen base textures)",
                "ood": "out-of-family"}
 
@@ -28,7 +37,7 @@ def read_csv(path: Path) -> list[dict]:
         return list(csv.DictReader(f))
 
 
-def plot_accuracy(rows: list[dict], holdout: str | None, out: Path) -> None:
+def plot_accuracy(rows: list[dict], holdout: str | None, fidelity: str, out: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -45,12 +54,15 @@ def plot_accuracy(rows: list[dict], holdout: str | None, out: Path) -> None:
                 x, y = np.array(pts).T
                 ax.scatter(x, y, s=10, color=colours[family], label=family, alpha=0.8)
         ax.plot([1e-3, 0.4], [1e-3, 0.4], "k--", lw=0.8)
-        ax.set(xscale="log", yscale="log", xlabel="FEM V", title=f"{SPLIT_NAMES[split]} (n = {len(part)})")
+        ax.set(xscale="log", yscale="log", xlabel=f"FEM V ({fidelity} fidelity)",
+               title=f"{SPLIT_NAMES[split]} (n = {len(part)})")
     axes[0].set_ylabel("surrogate V")
-    axes[0].legend(fontsize=7, loc="upper left")
+    for ax in axes:
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7, loc="upper left")
     fig.suptitle(f"Surrogate vs FEM (held-out family: {holdout})")
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    atomic_write(out, lambda tmp: fig.savefig(tmp, dpi=110))
     plt.close(fig)
 
 
@@ -67,11 +79,15 @@ def plot_history(rows: list[dict], out: Path) -> None:
     ax.set(xlabel="epoch", ylabel="MSE of log(V + 0.001)", title="Training history")
     ax.legend()
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    atomic_write(out, lambda tmp: fig.savefig(tmp, dpi=110))
     plt.close(fig)
 
 
 def metric_table(metrics: dict, names: dict) -> str:
+    """Markdown table of scores; a sentence instead if no row has enough samples (3) for scores."""
+    if not any("spearman" in (metrics.get(key) or {}) for key in names):
+        counts = ", ".join(f"{label} {metrics[key]['n']}" for key, label in names.items() if key in metrics)
+        return f"Too few samples for scores (at least 3 with V > 0 are needed; n: {counts or 'none'})."
     lines = ["| split | n | Spearman | R² (log V) | median rel. error | p95 rel. error | flagged out of domain |",
              "|---|---|---|---|---|---|---|"]
     for key, label in names.items():
@@ -83,11 +99,15 @@ def metric_table(metrics: dict, names: dict) -> str:
     return "\n".join(lines)
 
 
-def int8_section(model_path: Path, latency: dict | None) -> str:
+def int8_section(model_path: Path, meta: ModelMetadata, latency: dict | None) -> str:
+    """The int8 sibling ``<stem>-int8.onnx``, if it exists and was quantised from this model."""
     path = model_path.with_name(model_path.stem + "-int8.onnx")
     if not path.exists():
         return ""
-    report = SurrogateModel(path).meta["int8"]
+    int8 = onnx_metadata(path)
+    if int8.int8 is None or replace(int8, int8=None) != meta:
+        return ""
+    report = int8.int8
     speed = (f" Graph latency {latency['int8']['batch1_1thread_ms_median']:.2f} ms at batch 1 on one thread, "
              f"{latency['int8']['batched_2threads_per_s']:,.0f} patches/s batched on 2 threads."
              if latency and latency.get("int8") else "")
@@ -100,23 +120,35 @@ activations calibrated on {report['calibration_inputs']} recipe textures (`rough
 """
 
 
-def write_card(run: Path, model_path: Path, card: Path) -> None:
-    model = SurrogateModel(model_path)
-    meta = model.meta
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    plot_accuracy(read_csv(run / "predictions.csv"), meta["holdout_family"], RESULTS / "surrogate_accuracy.png")
-    plot_history(read_csv(run / "history.csv"), RESULTS / "surrogate_training.png")
-    latency_path = RESULTS / "surrogate_latency.json"
-    latency = json.loads(latency_path.read_text()) if latency_path.exists() else None
-    test, ood = meta["metrics"]["test"], meta["metrics"].get("ood", {})
-    sim = meta["simulation"]
-    domain = meta["domain"]
-    rel = Path("../benchmarks/results")
+def read_latency(path: Path | None, model_path: Path) -> dict | None:
+    """The latency benchmark's results if they timed this model (by file name), else None."""
+    if path is None or not path.exists():
+        return None
+    latency = json.loads(path.read_text())
+    return latency if latency.get("model") == model_path.name else None
+
+
+def write_card(run: Path, model_path: Path, card: Path, plots: Path, latency_path: Path | None = None) -> None:
+    """Write the card of ``model_path`` to ``card`` and its two plots into the folder ``plots``."""
+    meta = onnx_metadata(model_path)
+    if not plots.is_dir():
+        raise InputError(f"plots folder {plots} does not exist", parameter="plots")
+    predictions = read_csv(run / "predictions.csv")
+    plot_accuracy(predictions, meta.holdout_family, meta.label_fidelity, plots / "surrogate_accuracy.png")
+    plot_history(read_csv(run / "history.csv"), plots / "surrogate_training.png")
+    latency = read_latency(latency_path, model_path)
+    test, ood = meta.metrics.get("test", {}), meta.metrics.get("ood", {})
+    sim, domain, config = meta.simulation, meta.domain, meta.train_config
+    rel = Path(os.path.relpath(plots.resolve(), card.resolve().parent))
+    families = Counter(r["family"] for r in predictions)
+    shipped = model_path.resolve() == DEFAULT_MODEL.resolve() or (
+        DEFAULT_MODEL.exists() and file_sha256(model_path) == file_sha256(DEFAULT_MODEL))
+    number = lambda m, k, pct=False: (f"{100 * m[k]:.1f}%" if pct else f"{m[k]:.3f}") if k in m else "-"  # noqa: E731
     target_rows = [
-        ("held-out Spearman", ">= 0.97", f"{test['spearman']:.3f}"),
-        ("held-out R² on log V", ">= 0.95", f"{test['r2_log']:.3f}"),
-        ("held-out median relative error", "<= 7%", f"{100 * test['median_rel_err']:.1f}%"),
-        ("out-of-family Spearman", ">= 0.85", f"{ood.get('spearman', float('nan')):.3f}"),
+        ("held-out Spearman", ">= 0.97", number(test, "spearman")),
+        ("held-out R² on log V", ">= 0.95", number(test, "r2_log")),
+        ("held-out median relative error", "<= 7%", number(test, "median_rel_err", True)),
+        ("out-of-family Spearman", ">= 0.85", number(ood, "spearman")),
     ]
     if latency:
         target_rows += [
@@ -124,6 +156,11 @@ def write_card(run: Path, model_path: Path, card: Path) -> None:
                                                         f"{latency['end_to_end_1thread_ms_median']:.2f} ms (end to end)"),
             ("batched throughput, 2 threads", ">= 2,000 patches/s", f"{latency['batched_patches_per_s']['2']:,.0f}"),
         ]
+    pixels = round(FOOTPRINT_MM / meta.patch_pixel_mm)
+    given = lambda key, unit="": f"{sim[key]}{unit}" if key in sim else "(not recorded)"  # noqa: E731
+    coarse_note = (" The coarse labels sit a few %\n  below `default` FEM (benchmarks/results/mesh_convergence.md); the "
+                   "standard scale used for the\n  equivalent wavelength is computed at the same fidelity, so "
+                   "equivalent wavelengths and JNDs carry over." if meta.label_fidelity == "coarse" else "")
     text = f"""# Model card: {model_path.name}
 
 A small CNN that predicts the FEM roughness V (strain variation at the Merkel receptor depth,
@@ -131,44 +168,41 @@ Tymms et al. 2018) of a texture from its heightmap, in about a millisecond inste
 
 ## What it computes
 - **Input**: the heights under the {FOOTPRINT_MM:g} mm x {FOOTPRINT_MM:g} mm skin footprint, box-averaged to
-  {meta['patch_pixel_mm']} mm pixels ({round(FOOTPRINT_MM / meta['patch_pixel_mm'])} x {round(FOOTPRINT_MM / meta['patch_pixel_mm'])}), in mm relative to the highest point.
-- **Output**: log(V + {meta['log_offset']}), hence V; and a {len(domain['mean'])}-number embedding for the domain score.
-- **Network**: {meta['parameters']:,} parameters; strided 3x3 convolutions with batch norm down to a 7 x 7 grid
-  (widths {meta['widths']}), global mean, two dense layers. ONNX, one self-contained file of
+  {meta.patch_pixel_mm} mm pixels ({pixels} x {pixels}), in mm relative to the highest point.
+- **Output**: log(V + {meta.log_offset}), hence V; and a {len(domain['mean'])}-number embedding for the domain score.
+- **Network**: {meta.parameters:,} parameters; strided 3x3 convolutions with batch norm
+  (widths {list(meta.widths)}), global mean, two dense layers. ONNX, one self-contained file of
   {model_path.stat().st_size / 1e6:.2f} MB, dynamic batch axis; metadata key `roughness` holds everything below.
-- **Labels it imitates**: FEM at `{meta['label_fidelity']}` fidelity with force {sim.get('force_n')} N, E = {sim.get('young_mpa')} MPa,
-  nu = {sim.get('poisson')}, {sim.get('contact')} contact, {sim.get('element', 'p1').upper()} elements. Other forces, materials or contact
-  models are outside what it was trained on: use `--engine fem` for them. The coarse labels sit a few %
-  below `default` FEM (benchmarks/results/mesh_convergence.md); the standard scale used for the
-  equivalent wavelength is computed at the same fidelity, so equivalent wavelengths and JNDs carry over.
+- **Labels it imitates**: FEM at `{meta.label_fidelity}` fidelity with force {given('force_n', ' N')}, E = {given('young_mpa', ' MPa')},
+  nu = {given('poisson')}, {given('contact')} contact, {given('element').upper()} elements. Other forces, materials or contact
+  models are outside what it was trained on: use `--engine fem` for them.{coarse_note}
 
 ## Training data
-- Recipe `datasets/training.json` (`{meta['data'].get('recipe')}`): bump textures (weight 4) and seven natural
-  families (weight 1 each), 70% perturbed; {sum(m['n'] + m['n_zero'] for m in meta['metrics'].values())} FEM samples.
-- Data checksum (inputs_sha256, see `datasets/training-v1.sha256.json`): `{meta['data']['inputs_sha256']}`
-- Regenerate (about 35 min on 2 cores, resumable):
-  `roughness dataset build --recipe datasets/training.json --n 3000 --fidelity coarse --workers 2 --out training-v1.h5`
+- Dataset `{meta.data.get('file')}` (recipe `{meta.data.get('recipe')}`): {len(predictions)} FEM samples; by family:
+  {', '.join(f'{f} {n}' for f, n in sorted(families.items()))}.
+- Data checksum (inputs_sha256): `{meta.data.get('inputs_sha256')}`
 - Splits by base texture (family, parameters, seed; perturbations ignored), so no perturbed sibling of a
-  test texture is trained on: test {100 * meta['test_fraction']:.0f}%, validation {100 * meta['train_config']['val_fraction']:.0f}%, the rest training.
-  Family `{meta['holdout_family']}` is held out entirely (out-of-family score).
+  test texture is trained on: test {100 * meta.test_fraction:.0f}%, validation {100 * config['val_fraction']:.0f}%, the rest training.
+  """ + (f"Family `{meta.holdout_family}` is held out entirely (out-of-family score)." if meta.holdout_family
+         else "No family is held out.") + f"""
 
 ## Training
-`roughness train training-v1.h5 --out runs/cnn`, then
-`roughness export runs/cnn/checkpoint.pt --out models/{model_path.name} --int8 models/{model_path.stem}-int8.onnx`:
-seed {meta['train_config']['seed']}, AdamW (learning rate {meta['train_config']['learning_rate']:g}, cosine schedule over
-{meta['train_config']['max_epochs']} epochs), batch {meta['train_config']['batch_size']}, a random 90-degree rotation and mirror per batch,
-best validation epoch {meta['best_epoch']} of {meta['epochs']}, {meta['minutes']:.1f} min on 2 CPU cores.
-Against FEM `fine` on the 160-texture validation set, with the other engines: benchmarks/results/trade/report.md.
-
+`roughness train {meta.data.get('file')} --out RUN`, then
+`roughness export RUN/checkpoint.pt --out {model_path.name}`:
+seed {config['seed']}, AdamW (learning rate {config['learning_rate']:g}, cosine schedule over
+{config['max_epochs']} epochs), batch {config['batch_size']}, a random 90-degree rotation and mirror per batch,
+best validation epoch {meta.best_epoch} of {meta.epochs}, {meta.minutes:.1f} min on {config['threads']} CPU threads.
+""" + ("Against FEM `fine` on the 160-texture validation set, with the other engines: "
+       "benchmarks/results/trade/report.md.\n" if shipped else "") + f"""
 ![training history]({rel / 'surrogate_training.png'})
 
-## Accuracy against FEM ({meta['label_fidelity']} labels)
+## Accuracy against FEM ({meta.label_fidelity} labels)
 
-{metric_table(meta['metrics'], SPLIT_NAMES)}
+{metric_table(meta.metrics, SPLIT_NAMES)}
 
 Held-out textures by family:
 
-{metric_table(meta['test_by_family'], {f: f for f in sorted(meta['test_by_family'])}).replace('| split |', '| family |')}
+{metric_table(meta.test_by_family, {f: f for f in sorted(meta.test_by_family)}).replace('| split |', '| family |')}
 
 Relative errors and R² leave out samples with V = 0 (exactly flat footprints), which have no
 relative error; they are counted in the metadata (`n_zero`).
@@ -181,13 +215,14 @@ relative error; they are counted in the metadata (`n_zero`).
 |---|---|---|
 """ + "".join(f"| {a} | {b} | {c} |\n" for a, b, c in target_rows) + """
 ## Speed
-""" + (f"""From `python benchmarks/surrogate_latency.py` ({latency['machine']}; full table in
-benchmarks/results/surrogate_latency.md): {latency['batch1_1thread_ms_median']:.2f} ms per patch at batch 1 on one thread
+""" + (f"""From `python benchmarks/surrogate_latency.py --model {model_path.name}` ({latency['machine']}): \
+{latency['batch1_1thread_ms_median']:.2f} ms per patch at batch 1 on one thread
 (graph only), {latency['end_to_end_1thread_ms_median']:.2f} ms end to end (patch, descriptors, domain check);
 {latency['batched_patches_per_s']['2']:,.0f} patches/s batched on 2 threads. FEM `default` takes
 {latency['fem_warm_seconds']['default']:.2f} s per texture with a warm block in the same run: a speed-up of
 {latency['speedup_vs_fem_default_end_to_end']:,.0f}x.
-""" if latency else "Run `python benchmarks/surrogate_latency.py`.\n") + int8_section(model_path, latency) + f"""
+""" if latency else f"Not measured for this model: `python benchmarks/surrogate_latency.py --model {model_path}`.\n") \
+        + int8_section(model_path, meta, latency) + f"""
 ## Input domain
 An input is flagged `in_domain: false` (and `--engine auto` runs the FEM for it) when a descriptor of
 its footprint patch leaves the training range (0.5th to 99.5th percentile, widened by 5% of the span)
@@ -203,20 +238,23 @@ dimensionless (dh/dx).
 ## Limitations
 - It imitates FEM, which is itself a model of perception (R = 0.91 with perceived roughness in the paper).
 - One skin footprint: the 10 mm square at the centre of the map (or at `--centre`); larger objects
-  need several calls.
-- Trained on synthetic textures (bumps and seven natural families). Held-out numbers describe textures
+  need several calls (or `roughness predict --map`).
+- Trained on the synthetic texture families listed above. Held-out numbers describe textures
   like these; the out-of-family numbers are a better guide for anything else.
 """
-    card.write_text(text)
+    atomic_write(card, lambda tmp: Path(tmp).write_text(text))
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("run", type=Path, help="training output folder (predictions.csv, history.csv)")
     parser.add_argument("model", type=Path, help="exported ONNX model")
-    parser.add_argument("--card", type=Path, default=Path("models/MODEL_CARD.md"))
+    parser.add_argument("--card", type=Path, required=True, help="Markdown file to write")
+    parser.add_argument("--plots", type=Path, required=True, help="existing folder for the two PNG plots")
+    parser.add_argument("--latency", type=Path, help="surrogate_latency.json of benchmarks/surrogate_latency.py "
+                                                     "(default: none; used only if it timed this model)")
     args = parser.parse_args(argv)
-    write_card(args.run, args.model, args.card)
+    write_card(args.run, args.model, args.card, args.plots, args.latency)
 
 
 if __name__ == "__main__":

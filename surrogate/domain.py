@@ -23,7 +23,7 @@ class Domain:
 
     @classmethod
     def fit(cls, descriptors: np.ndarray, embeddings: np.ndarray, quantile: float = 0.995,
-            margin: float = 0.05) -> "Domain":
+            margin: float = 0.05) -> Domain:
         """Domain of training inputs: descriptor quantiles widened by ``margin`` of their span (not below 0)."""
         from sklearn.covariance import LedoitWolf
 
@@ -55,7 +55,7 @@ class Domain:
                 "mean": self.mean.tolist(), "precision": self.precision.tolist(), "threshold": self.threshold}
 
     @classmethod
-    def from_dict(cls, data: dict) -> "Domain":
+    def from_dict(cls, data: dict) -> Domain:
         if tuple(data["descriptors"]) != DESCRIPTOR_NAMES:
             raise ValueError(f"model domain has descriptors {data['descriptors']}, this code {DESCRIPTOR_NAMES}")
         return cls(*(np.asarray(data[k], float) for k in ("low", "high", "mean", "precision")),

@@ -1,6 +1,6 @@
 """Export a training checkpoint to one self-contained ONNX file and check it against PyTorch.
 
-    roughness export runs/cnn/checkpoint.pt --out models/roughness-cnn.onnx
+    roughness export runs/cnn/checkpoint.pt --out runs/cnn/model.onnx
 
 The graph takes ``heights`` (batch, 1, P, P) float32 with a dynamic batch axis and returns
 ``log_roughness`` (batch,) and ``embedding`` (batch, E). Everything prediction needs besides the
@@ -11,9 +11,6 @@ agrees with PyTorch on real textures (relative difference of V below ``RTOL``) f
 """
 from __future__ import annotations
 
-import json
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -21,9 +18,14 @@ import onnx
 import onnxruntime as ort
 import torch
 
+from roughness.core.errors import InputError
+from roughness.core.files import atomic_write, check_output
+
+from .metadata import METADATA_KEY, ModelMetadata, read_metadata
 from .network import RoughnessNet
 from .patch import footprint_patch
-from .predictor import INPUT, METADATA_KEY
+from .predictor import INPUT
+from .target import roughness_from_log
 
 RTOL = 1e-4
 OUTPUTS = ("log_roughness", "embedding")
@@ -33,19 +35,20 @@ class ExportError(RuntimeError):
     """The exported graph disagrees with PyTorch or lacks a dynamic batch axis."""
 
 
-def load_checkpoint(path: str | Path) -> tuple[RoughnessNet, dict]:
-    """The network (eval mode) and the checkpoint's metadata."""
+def load_checkpoint(path: str | Path) -> tuple[RoughnessNet, ModelMetadata]:
+    """The network (eval mode) and the checkpoint's metadata; InputError if it is not a training checkpoint."""
     try:
         checkpoint = torch.load(path, map_location="cpu", weights_only=False)
     except FileNotFoundError:
-        raise ValueError(f"checkpoint not found: {path}") from None
+        raise InputError(f"checkpoint not found: {path}", parameter="checkpoint") from None
     except Exception as err:
-        raise ValueError(f"{path} is not a roughness training checkpoint: {err}") from None
+        raise InputError(f"{path} is not a roughness training checkpoint: {err}", parameter="checkpoint") from None
     if not isinstance(checkpoint, dict) or "state_dict" not in checkpoint:
-        raise ValueError(f"{path} is not a roughness training checkpoint (no state_dict)")
-    model = RoughnessNet(tuple(checkpoint["widths"]), checkpoint["hidden"])
+        raise InputError(f"{path} is not a roughness training checkpoint (no state_dict)", parameter="checkpoint")
+    meta = ModelMetadata.from_dict({k: v for k, v in checkpoint.items() if k != "state_dict"}, str(path))
+    model = RoughnessNet(meta.widths, meta.hidden)
     model.load_state_dict(checkpoint["state_dict"])
-    return model.eval(), {k: v for k, v in checkpoint.items() if k != "state_dict"}
+    return model.eval(), meta
 
 
 def check_patches(n: int = 16) -> np.ndarray:
@@ -57,26 +60,27 @@ def check_patches(n: int = 16) -> np.ndarray:
     return np.stack([footprint_patch(realise(sample_record(recipe, i))) for i in range(n)])[:, None]
 
 
-def export(checkpoint_path: str | Path, out: str | Path, patches: np.ndarray | None = None) -> dict:
-    """Write the ONNX model to ``out`` after checking it; returns the check's numbers."""
+def export(checkpoint_path: str | Path, out: str | Path, patches: np.ndarray | None = None,
+           overwrite: bool = False) -> dict:
+    """Write the ONNX model to ``out`` after checking it; returns the check's numbers.
+
+    ``out`` must not exist unless ``overwrite``; it is written whole or not at all.
+    """
+    out = check_output(out, overwrite, "out")
     model, meta = load_checkpoint(checkpoint_path)
     patches = check_patches() if patches is None else patches.astype(np.float32)
-    out = Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=".onnx", dir=out.parent)
-    os.close(fd)
-    try:
+    report: dict = {}
+
+    def write(tmp: str) -> None:
         batch = torch.export.Dim("batch", min=1)
         torch.onnx.export(model, (torch.from_numpy(patches[:2]),), tmp, input_names=[INPUT], output_names=list(OUTPUTS),
                           dynamic_shapes=({0: batch},), external_data=False, dynamo=True)
         graph = onnx.load(tmp)
-        graph.metadata_props.add(key=METADATA_KEY, value=json.dumps(meta, default=_plain))
+        graph.metadata_props.add(key=METADATA_KEY, value=meta.to_json())
         onnx.save(graph, tmp)
-        report = verify(model, tmp, patches)
-        os.chmod(tmp, 0o644)  # mkstemp makes it private
-        os.replace(tmp, out)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
+        report.update(verify(model, tmp, patches))
+
+    atomic_write(out, write)
     return report | {"path": str(out), "bytes": out.stat().st_size}
 
 
@@ -89,24 +93,17 @@ def verify(model: RoughnessNet, onnx_path: str, patches: np.ndarray) -> dict:
     options = ort.SessionOptions()
     options.intra_op_num_threads = 1
     session = ort.InferenceSession(onnx_path, options, providers=["CPUExecutionProvider"])
-    offset = json.loads(next(p.value for p in graph.metadata_props if p.key == METADATA_KEY))["log_offset"]
+    offset = read_metadata({p.key: p.value for p in graph.metadata_props}, onnx_path).log_offset
     with torch.no_grad():
         ref_log, ref_emb = (t.numpy() for t in model(torch.from_numpy(patches)))
     got_log = np.concatenate([session.run(list(OUTPUTS), {INPUT: patches[i:i + 1]})[0] for i in range(len(patches))])
     batch_log, batch_emb = session.run(list(OUTPUTS), {INPUT: patches})
-    ref_v = np.exp(ref_log) - offset
-    worst = max(float(np.max(np.abs(np.exp(got) - offset - ref_v) / np.abs(ref_v))) for got in (got_log, batch_log))
+    ref_v = roughness_from_log(ref_log, offset)
+    worst = max(float(np.max(np.abs(roughness_from_log(got, offset) - ref_v) / np.maximum(ref_v, 1e-6)))
+                for got in (got_log, batch_log))
     emb_diff = float(np.max(np.abs(batch_emb - ref_emb)) / max(np.max(np.abs(ref_emb)), 1e-12))
     if not worst < RTOL or not emb_diff < RTOL:
         raise ExportError(f"onnxruntime differs from PyTorch: relative difference {worst:.2e} in V and "
                           f"{emb_diff:.2e} in the embedding (limit {RTOL:.0e})")
     return {"max_rel_diff_V": worst, "max_rel_diff_embedding": emb_diff, "checked_inputs": len(patches),
             "batch_axis": dim.dim_param}
-
-
-def _plain(value: object) -> object:
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    raise TypeError(f"cannot store {type(value).__name__} in model metadata")

@@ -8,17 +8,20 @@ the fp32 V is measured on other textures and stored under ``int8`` in the metada
 """
 from __future__ import annotations
 
-import json
-import os
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import onnx
 import onnxruntime as ort
 
+from roughness.core.files import atomic_write, check_output
+
 from .export import OUTPUTS, check_patches
-from .predictor import INPUT, METADATA_KEY
+from .metadata import METADATA_KEY, onnx_metadata
+from .predictor import INPUT
+from .target import roughness_from_log
 
 MAX_REL_DIFF = 0.1  # int8 V may differ from fp32 V by at most 10% on the check textures
 
@@ -27,8 +30,12 @@ class QuantizationError(RuntimeError):
     """The int8 graph strays too far from the fp32 one."""
 
 
-def quantize(fp32_path: str | Path, out: str | Path, calibration: int = 64, check: int = 32) -> dict:
-    """Write the int8 model next to the checks' numbers; nothing is written if the check fails."""
+def quantize(fp32_path: str | Path, out: str | Path, calibration: int = 64, check: int = 32,
+             overwrite: bool = False) -> dict:
+    """Write the int8 model and return the checks' numbers; nothing is written if the check fails.
+
+    ``out`` must not exist unless ``overwrite``.
+    """
     from onnxruntime.quantization import (
         CalibrationDataReader,
         QuantFormat,
@@ -37,6 +44,8 @@ def quantize(fp32_path: str | Path, out: str | Path, calibration: int = 64, chec
     )
     from onnxruntime.quantization.shape_inference import quant_pre_process
 
+    out = check_output(out, overwrite, "int8")
+    fp32_meta = onnx_metadata(fp32_path)
     patches = check_patches(calibration + check)
     calib, held = patches[:calibration], patches[calibration:]
 
@@ -47,16 +56,13 @@ def quantize(fp32_path: str | Path, out: str | Path, calibration: int = 64, chec
         def get_next(self) -> dict | None:
             return next(self.batches, None)
 
-    out = Path(out)
-    with tempfile.TemporaryDirectory(dir=out.parent) as tmp:
+    with tempfile.TemporaryDirectory() as tmp:
         pre, q = Path(tmp) / "pre.onnx", Path(tmp) / "int8.onnx"
         quant_pre_process(str(fp32_path), str(pre))
         quantize_static(str(pre), str(q), Reader(), quant_format=QuantFormat.QDQ, per_channel=True,
                         activation_type=QuantType.QUInt8, weight_type=QuantType.QInt8)
-        fp32_meta = json.loads(next(p.value for p in onnx.load(str(fp32_path)).metadata_props if p.key == METADATA_KEY))
-        offset = fp32_meta["log_offset"]
-        v32 = np.exp(_run(fp32_path, held)) - offset
-        v8 = np.exp(_run(q, held)) - offset
+        v32 = roughness_from_log(_run(fp32_path, held), fp32_meta.log_offset)
+        v8 = roughness_from_log(_run(q, held), fp32_meta.log_offset)
         rel = np.abs(v8 - v32) / np.maximum(v32, 1e-6)
         report = {"median_rel_diff_vs_fp32": float(np.median(rel)), "max_rel_diff_vs_fp32": float(rel.max()),
                   "checked_inputs": len(held), "calibration_inputs": len(calib)}
@@ -67,10 +73,8 @@ def quantize(fp32_path: str | Path, out: str | Path, calibration: int = 64, chec
         if any(node.op_type in ("ConvInteger", "MatMulInteger") for node in graph.graph.node):
             raise QuantizationError("the int8 graph has ConvInteger/MatMulInteger nodes (dynamic quantisation)")
         del graph.metadata_props[:]
-        graph.metadata_props.add(key=METADATA_KEY, value=json.dumps(fp32_meta | {"int8": report}))
-        onnx.save(graph, str(q))
-        os.chmod(q, 0o644)
-        os.replace(q, out)
+        graph.metadata_props.add(key=METADATA_KEY, value=replace(fp32_meta, int8=report).to_json())
+        atomic_write(out, lambda path: onnx.save(graph, path))
     return report | {"path": str(out), "bytes": out.stat().st_size}
 
 

@@ -6,16 +6,20 @@ footprint inside the other (the whole map, wrapping, if ``tile``).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
+from roughness.core.files import atomic_write, check_output
 from roughness.simulate.heightmap import Heightmap
 
-from .predictor import SurrogateModel
+if TYPE_CHECKING:
+    from .predictor import SurrogateModel
 
 
 @dataclass
@@ -39,22 +43,35 @@ def centres(size_mm: float, footprint_mm: float, step_mm: float, tile: bool) -> 
     return footprint_mm / 2 + np.arange(0.0, span + 1e-9, step_mm) + (span % step_mm) / 2
 
 
+MAP_SUFFIXES = (".npy", ".png")
+
+
+def check_map_path(path: str | Path, overwrite: bool = False) -> Path:
+    """``path`` if a map may be written there (.npy or .png, folder writable, not existing unless ``overwrite``)."""
+    path = check_output(path, overwrite, "map")
+    if path.suffix.lower() not in MAP_SUFFIXES:
+        raise InputError(f"cannot write {path}: a roughness map is saved as .npy or .png", parameter="map")
+    return path
+
+
 def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False,
-                  batch_size: int = 256) -> RoughnessMap:
-    """V at footprint centres ``step_mm`` apart over the whole map."""
-    step_mm = positive("--step-mm", step_mm)
+                  batch_size: int = 256, progress: Callable[[int, int], None] | None = None) -> RoughnessMap:
+    """V at footprint centres ``step_mm`` apart over the whole map; ``progress(done, total)`` after each batch."""
+    step_mm = positive("step_mm", step_mm)
     heightmap.require_footprint(model.footprint_mm, None, tile)
     width, height = heightmap.size_mm
     xs, ys = centres(width, model.footprint_mm, step_mm, tile), centres(height, model.footprint_mm, step_mm, tile)
     grid = [(x, y) for y in ys for x in xs]
     if len(grid) > 1_000_000:
-        raise InputError(f"{len(grid):,} footprint positions: choose a larger --step-mm")
+        raise InputError(f"{len(grid):,} footprint positions: choose a larger step", parameter="step_mm")
     values, flags = [], []
     for i in range(0, len(grid), batch_size):
         patches = np.stack([model.patch(heightmap, c, tile) for c in grid[i:i + batch_size]])
         v, reasons = model.run(patches)
         values.append(v)
         flags += [not r for r in reasons]
+        if progress:
+            progress(len(flags), len(grid))
     shape = (len(ys), len(xs))
     return RoughnessMap(xs, ys, np.concatenate(values).reshape(shape), np.array(flags).reshape(shape))
 
@@ -62,13 +79,11 @@ def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 
 def save_map(result: RoughnessMap, path: str | Path) -> None:
     """.npy: the V array (rows = y); .png: a figure with axes in mm, out-of-domain positions hatched."""
     path = Path(path)
-    if not path.parent.is_dir():
-        raise InputError(f"cannot write {path}: its folder does not exist")
+    if path.suffix.lower() not in MAP_SUFFIXES:
+        raise InputError(f"cannot write {path}: a roughness map is saved as .npy or .png", parameter="map")
     if path.suffix.lower() == ".npy":
-        np.save(path, result.roughness)
+        atomic_write(path, lambda tmp: np.save(tmp, result.roughness))
         return
-    if path.suffix.lower() != ".png":
-        raise InputError(f"cannot write {path}: a roughness map is saved as .npy or .png")
     import matplotlib
 
     matplotlib.use("Agg")
@@ -84,5 +99,5 @@ def save_map(result: RoughnessMap, path: str | Path) -> None:
     ax.set(xlabel="x (mm)", ylabel="y (mm)", title="V per footprint centre (hatched: out of domain)")
     fig.colorbar(image, ax=ax, label="V")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110))
     plt.close(fig)

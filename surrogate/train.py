@@ -15,41 +15,26 @@ import json
 import math
 import sys
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
 import torch
 import torch.nn.functional as F
 
-from roughness.core.errors import InputError
+from roughness.core.errors import InputError, OutputExists
+from roughness.core.files import atomic_write
 from roughness.dataset.digest import inputs_sha256
 from roughness.dataset.store import open_dataset
 
-from .data import LOG_OFFSET, load_samples, target
+from .config import TrainConfig
+from .data import load_samples
 from .domain import Domain
+from .metadata import ModelMetadata
 from .metrics import scores
 from .network import RoughnessNet, parameter_count
 from .patch import FOOTPRINT_MM, PATCH_PIXEL_MM
-
-
-@dataclass
-class TrainConfig:
-    data: str
-    out: str
-    seed: int = 0
-    holdout_family: str | None = None  # None: the dataset recipe's; "none": no family held out
-    test_fraction: float | None = None  # None: the dataset recipe's
-    val_fraction: float = 0.1
-    widths: tuple[int, ...] = (16, 32, 64, 96)
-    hidden: int = 64
-    batch_size: int = 32
-    learning_rate: float = 3e-3
-    weight_decay: float = 1e-4
-    max_epochs: int = 200
-    patience: int = 60  # epochs without a better validation loss before stopping (the cosine schedule runs to 0)
-    max_minutes: float = 25.0  # wall-clock budget; the best checkpoint so far is kept
-    threads: int = 2
+from .target import LOG_OFFSET, roughness_from_log, target
 
 
 def augment(x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
@@ -68,14 +53,45 @@ def infer(model: RoughnessNet, patches: np.ndarray, batch: int = 256) -> tuple[n
         log_v, emb = model(torch.from_numpy(patches[i:i + batch, None]))
         logs.append(log_v.numpy())
         embeddings.append(emb.numpy())
-    return np.maximum(np.exp(np.concatenate(logs)) - LOG_OFFSET, 0.0), np.concatenate(embeddings)
+    return roughness_from_log(np.concatenate(logs)), np.concatenate(embeddings)
 
 
-def train(cfg: TrainConfig) -> Path:
+def check_out_folder(out: str | Path, overwrite: bool = False) -> Path:
+    """The training output folder: a new or empty folder, or an existing one only if ``overwrite``."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out} is a file, not a folder", parameter="out")
+    if out.is_dir() and any(out.iterdir()) and not overwrite:
+        raise OutputExists(out, "out")
+    return out
+
+
+def format_scores(values: dict) -> str:
+    """A split's scores with units: counts, Spearman and R² as numbers, errors and shares in percent."""
+    percent = ("median_rel_err", "p95_rel_err", "out_of_domain")
+    return "  ".join(f"{k} {100 * v:.1f}%" if k in percent else f"{k} {v}" if isinstance(v, int) else f"{k} {v:.3f}"
+                     for k, v in values.items())
+
+
+def train(cfg: TrainConfig, overwrite: bool = False) -> Path:
+    """Train, evaluate and write the run folder ``cfg.out``; returns the checkpoint's path.
+
+    On any error or interruption the intermediate best.pt is removed, and a folder this call
+    created is removed again if nothing else was written into it.
+    """
+    out = check_out_folder(cfg.out, overwrite)
+    created = not out.exists()
+    try:
+        return _train(cfg, out)
+    finally:
+        (out / "best.pt").unlink(missing_ok=True)
+        if created and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
+
+
+def _train(cfg: TrainConfig, out: Path) -> Path:
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(cfg.threads)
-    out = Path(cfg.out)
-    out.mkdir(parents=True, exist_ok=True)
     start = time.monotonic()
 
     # data: patches in mm (max 0) and log-V targets, split by base texture
@@ -88,7 +104,11 @@ def train(cfg: TrainConfig) -> Path:
         samples = load_samples(data, test_fraction, cfg.val_fraction, holdout)
     tr, va = samples.subset("train"), samples.subset("val")
     if len(tr) < cfg.batch_size or len(va) == 0:
-        raise InputError(f"{cfg.data}: {len(tr)} training and {len(va)} validation samples are too few to train on")
+        raise InputError(f"{cfg.data}: {len(tr)} training and {len(va)} validation samples are too few to train on: "
+                         f"training needs at least {cfg.batch_size} training samples (the batch size) and one "
+                         f"validation sample, about {cfg.minimum_samples(test_fraction)} ok samples in the dataset",
+                         parameter="data")
+    out.mkdir(parents=True, exist_ok=True)
     x_train, y_train = torch.from_numpy(tr.patches[:, None]), torch.from_numpy(target(tr.roughness))
     x_val, y_val = torch.from_numpy(va.patches[:, None]), torch.from_numpy(target(va.roughness))
     log(f"samples: {', '.join(f'{s} {int((samples.split == s).sum())}' for s in ('train', 'val', 'test', 'ood'))}")
@@ -145,31 +165,33 @@ def train(cfg: TrainConfig) -> Path:
         part = samples.split == split
         if part.any():
             metrics[split] = scores(samples.roughness[part], predicted[part]) | {"out_of_domain": float(flagged[part].mean())}
-            log(f"{split:5s} " + "  ".join(f"{k} {v:.4g}" for k, v in metrics[split].items()))
+            log(f"{split:5s} {format_scores(metrics[split])}")
     test = samples.split == "test"
     by_family = {f: scores(samples.roughness[test & (samples.family == f)], predicted[test & (samples.family == f)])
                  for f in np.unique(samples.family[test])}
-    (out / "predictions.csv").write_text("id,family,split,V_fem,V_predicted,out_of_domain\n" + "".join(
+    meta = ModelMetadata(
+        widths=tuple(cfg.widths), hidden=cfg.hidden, patch_pixel_mm=PATCH_PIXEL_MM, footprint_mm=FOOTPRINT_MM,
+        log_offset=LOG_OFFSET, label_fidelity=simulation.get("fidelity", "default"), simulation=simulation,
+        domain=domain.to_dict(), metrics=metrics, test_by_family=by_family, holdout_family=holdout,
+        test_fraction=test_fraction,
+        data={"file": Path(cfg.data).name, "recipe": recipe.get("name"), "inputs_sha256": inputs_sha256(cfg.data)},
+        train_config=asdict(cfg) | {"widths": list(cfg.widths)}, best_epoch=best_epoch, epochs=len(history),
+        minutes=(time.monotonic() - start) / 60, parameters=parameter_count(model),
+        cost_core_seconds={"data_fem": data_fem_seconds, "training": (time.monotonic() - start) * cfg.threads})
+    atomic_write(out / "checkpoint.pt", lambda path: torch.save({"state_dict": model.state_dict(), **meta.to_dict()},
+                                                               path))
+    write_text(out / "metrics.json", json.dumps({k: v for k, v in meta.to_dict().items() if k != "domain"}, indent=1))
+    write_text(out / "history.csv", "epoch,train_loss,val_loss,lr,minutes\n" + "".join(
+        ",".join(f"{v:.6g}" for v in row) + "\n" for row in history))
+    write_text(out / "predictions.csv", "id,family,split,V_fem,V_predicted,out_of_domain\n" + "".join(
         f"{i},{f},{s},{v:.6g},{p:.6g},{int(o)}\n" for i, f, s, v, p, o in zip(
             samples.ids, samples.family, samples.split, samples.roughness, predicted, flagged)))
-    checkpoint = {
-        "state_dict": model.state_dict(), "widths": list(cfg.widths), "hidden": cfg.hidden,
-        "patch_pixel_mm": PATCH_PIXEL_MM, "footprint_mm": FOOTPRINT_MM, "log_offset": LOG_OFFSET,
-        "label_fidelity": simulation.get("fidelity", "default"), "simulation": simulation, "domain": domain.to_dict(),
-        "metrics": metrics, "test_by_family": by_family, "holdout_family": holdout, "test_fraction": test_fraction,
-        "data": {"file": Path(cfg.data).name, "recipe": recipe.get("name"), "inputs_sha256": inputs_sha256(cfg.data)},
-        "train_config": asdict(cfg), "best_epoch": best_epoch, "epochs": len(history),
-        "minutes": (time.monotonic() - start) / 60, "parameters": parameter_count(model),
-        "cost_core_seconds": {"data_fem": data_fem_seconds, "training": (time.monotonic() - start) * cfg.threads},
-    }
-    torch.save(checkpoint, out / "checkpoint.pt")
-    (out / "metrics.json").write_text(json.dumps({k: v for k, v in checkpoint.items() if k not in (
-        "state_dict", "domain")}, indent=1))
-    (out / "history.csv").write_text("epoch,train_loss,val_loss,lr,minutes\n" + "".join(
-        ",".join(f"{v:.6g}" for v in row) + "\n" for row in history))
-    (out / "best.pt").unlink()
-    log(f"wrote {out / 'checkpoint.pt'} (best epoch {best_epoch}, {checkpoint['minutes']:.1f} min)")
+    log(f"wrote {out / 'checkpoint.pt'} (best epoch {best_epoch}, {meta.minutes:.1f} min)")
     return out / "checkpoint.pt"
+
+
+def write_text(path: Path, text: str) -> None:
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
 
 
 def log(message: str) -> None:

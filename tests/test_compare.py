@@ -62,6 +62,9 @@ def test_report_tables_plots_and_numbers(tiny_set, tmp_path, capsys):
     results = [r for r in map(json.loads, (out / "results.jsonl").read_text().splitlines()) if r["key"] != SETUP_KEY]
     stored = {r["key"]: r for r in results if r["engine"] == "fem:coarse"}
     assert float(ref["median_s"]) == pytest.approx(np.median([r["seconds"] for r in stored.values()]))
+    assert "| fem:coarse | fem | 12 | 0 |" in (out / "table.md").read_text().replace("†", "")
+    assert [line for line in (out / "table.md").read_text().splitlines() if "†" in line] == [
+        line for line in (out / "table.md").read_text().splitlines() if line.startswith("| fem:coarse")]
     # the surrogate's numbers follow from the cached results
     mine = {r["key"]: r["value"] for r in results if r["engine"] == "surrogate"}
     rel = [abs(mine[k] - stored[k]["value"]) / stored[k]["value"] for k in mine]
@@ -105,20 +108,91 @@ def test_fem_results_are_computed_once(tmp_path, capsys, monkeypatch):
     assert int(table["fem:coarse"]["n"]) == 2 and float(table["fem:coarse"]["median_s"]) > 0
 
 
-def test_failures_are_counted_not_fatal(tmp_path, capsys):
+def maps_folder(tmp_path: Path, n: int = 4) -> Path:
     folder = tmp_path / "maps"
     folder.mkdir()
     rng = np.random.default_rng(0)
-    for i in range(4):
+    for i in range(n):
         np.save(folder / f"ok{i}.npy", 0.3 * rng.random((240, 240)))
+    return folder
+
+
+def test_input_errors_are_reported_never_cached(tmp_path, capsys):
+    folder = maps_folder(tmp_path)
     np.save(folder / "small.npy", np.zeros((20, 20)))
+    (folder / "broken.npy").write_bytes(b"not numpy")
     out = tmp_path / "o"
-    assert main(["compare", str(folder), "--pixel-mm", "0.05", "--out", str(out), "--reference", "ra",
-                 "--engines", "p90", "--quiet"]) == 0
+    args = ["compare", str(folder), "--pixel-mm", "0.05", "--out", str(out), "--reference", "ra", "--engines", "p90"]
+    assert main(args) == 2  # the report of the readable ones is written, the others are listed
+    err = capsys.readouterr().err
+    assert "small.npy" in err and "broken.npy" in err and "Traceback" not in err
     table = read_table(out)
-    assert table["p90"]["failures"] == "1" and table["p90"]["n"] == "4"
-    errors = [json.loads(x) for x in (out / "results.jsonl").read_text().splitlines()]
-    assert any("small.npy" in e["key"] and "footprint" in (e["error"] or "") for e in errors)
+    assert table["p90"]["failures"] == "0" and table["p90"]["n"] == "4"
+    entries = [json.loads(x) for x in (out / "results.jsonl").read_text().splitlines()]
+    assert {e.get("texture") for e in entries} == {f"ok{i}.npy" for i in range(4)}
+    report = (out / "report.md").read_text()
+    assert "Inputs not compared (2)" in report and "`small.npy`" in report and "`broken.npy`" in report
+
+
+def test_folder_without_pixel_size_is_an_input_error(tmp_path, capsys):
+    folder = maps_folder(tmp_path)
+    out = tmp_path / "o"
+    assert main(["compare", str(folder), "--out", str(out), "--reference", "ra", "--engines", "p90"]) == 2
+    err = capsys.readouterr().err
+    assert "pixel" in err and "none of the 4 textures" in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_results_follow_the_content_not_the_file_name(tmp_path, capsys):
+    folder = maps_folder(tmp_path, 3)
+    out = tmp_path / "o"
+    args = ["compare", str(folder), "--pixel-mm", "0.05", "--out", str(out), "--reference", "ra", "--engines", "p90"]
+    assert main(args) == 0
+    np.save(folder / "ok1.npy", 0.6 * np.random.default_rng(5).random((240, 240)))  # same name, new heights
+    capsys.readouterr()
+    assert main(args) == 0
+    assert "2 results to compute, 4 cached" in capsys.readouterr().err
+    values = {(e["engine"], e["texture"]): e["value"] for e in map(json.loads, (out / "results.jsonl").open())
+              if e["key"] != SETUP_KEY}
+    assert values[("ra", "ok1.npy")] == pytest.approx(classical.ra(classical.footprint(
+        Heightmap(np.load(folder / "ok1.npy"), 0.05))))
+    assert main([*args[:2], "--pixel-mm", "0.06", *args[4:]]) == 0  # another pixel size: other textures
+    assert "6 results to compute, 0 cached" in capsys.readouterr().err
+
+
+def test_another_comparison_in_the_same_folder_is_refused(tmp_path, capsys):
+    folder = maps_folder(tmp_path, 3)
+    out = tmp_path / "o"
+    args = ["compare", str(folder), "--pixel-mm", "0.05", "--out", str(out), "--reference", "ra", "--engines"]
+    assert main([*args, "p90", "--quiet"]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert main([*args, "glcm_sum_variance", "--quiet"]) == 2
+    assert "already exists; pass --overwrite" in capsys.readouterr().err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "notes.txt").write_text("mine")
+    assert main([*args[:5], str(tmp_path / "other"), *args[6:], "p90", "--quiet"]) == 2
+    assert main([*args, "glcm_sum_variance", "--quiet", "--overwrite"]) == 0
+    assert "glcm_sum_variance" in read_table(out)
+
+
+def test_progress_is_plain_lines_without_a_terminal(tmp_path, capsys):
+    folder = maps_folder(tmp_path, 3)
+    assert main(["compare", str(folder), "--pixel-mm", "0.05", "--out", str(tmp_path / "o"), "--reference", "ra",
+                 "--engines", "p90"]) == 0
+    err = capsys.readouterr().err
+    assert "\r" not in err and "6/6 results" in err
+
+
+def test_eta_comes_from_each_engines_time_per_texture():
+    from roughness.compare import Progress
+
+    progress = Progress({"fem:coarse": 3, "ra": 3}, quiet=True)
+    assert progress.eta_minutes() is None  # nothing timed yet
+    progress.step("fem:coarse", 60.0, "a")
+    assert progress.eta_minutes() is None  # ra untimed
+    progress.step("ra", 0.5, "a")
+    assert progress.eta_minutes() == pytest.approx((2 * 60.0 + 2 * 0.5) / 60)
 
 
 def test_bad_compare_arguments_exit_2(tmp_path, capsys):
@@ -178,3 +252,17 @@ def test_cached_results_follow_the_engine_identity(tiny_set, tmp_path, capsys):
     onnx.save(graph, model)
     assert main(args) == 0
     assert "12 results to compute" in capsys.readouterr().err
+
+
+def test_a_dataset_sample_has_the_content_key_of_its_texture(tiny_set):
+    from roughness.compare import content_key
+    from roughness.dataset.store import open_dataset, sample_id
+
+    recipe = Recipe(name="tiny", seed=8, families={"bumps": 1, "fbm": 1, "woven": 1, "grating": 1})
+    with open_dataset(tiny_set) as data:
+        for i in range(3):
+            record = sample_record(recipe, i)
+            hm = realise(record)
+            assert content_key(data.heightmap(sample_id(record))) == content_key(hm)
+            assert content_key(Heightmap(hm.heights, hm.pixel_mm * 1.01)) != content_key(hm)
+            assert content_key(Heightmap(hm.heights * 1.001, hm.pixel_mm)) != content_key(hm)

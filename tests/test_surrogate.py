@@ -18,6 +18,7 @@ from roughness.dataset.digest import inputs_sha256
 from roughness.dataset.recipe import Recipe, realise, sample_record
 from roughness.dataset.store import DatasetWriter
 from roughness.dataset.textures import standard_texture
+from roughness.engines import predict
 from roughness.simulate.heightmap import Heightmap
 from roughness.simulate.io import save_heightmap
 from roughness.surrogate.calibration import StandardScale, load_scale
@@ -30,7 +31,7 @@ from roughness.surrogate.export import (
     verify,
 )
 from roughness.surrogate.patch import descriptors, footprint_patch
-from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel, predict
+from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 from roughness.surrogate.train import TrainConfig, train
 
 ROOT = Path(__file__).parents[1]
@@ -124,7 +125,7 @@ def test_export_round_trip(tiny):
     model, meta = load_checkpoint(tiny.checkpoint)
     patches = check_patches(5)
     with torch.no_grad():
-        expected = np.exp(model(torch.from_numpy(patches))[0].numpy()) - meta["log_offset"]
+        expected = np.exp(model(torch.from_numpy(patches))[0].numpy()) - meta.log_offset
     surrogate = SurrogateModel(tiny.model)
     for batch in (patches[:1], patches):
         got, _ = surrogate.run(batch[:, 0])
@@ -160,7 +161,7 @@ class Block(importlib.abc.MetaPathFinder):
             raise ImportError('blocked: ' + name)
 sys.meta_path.insert(0, Block())
 from roughness.dataset.textures import standard_texture
-from roughness.surrogate import predict
+from roughness import predict
 [p] = predict(standard_texture(1.0, seed=1), engine='surrogate', model={str(tiny.model)!r})
 assert p.roughness > 0 and p.engine == 'surrogate'
 print('ok', sorted(m for m in sys.modules if m.split('.')[0] in ('torch', 'onnx', 'sklearn')))
@@ -281,9 +282,9 @@ def test_shipped_model_matches_its_card_and_data():
     assert DEFAULT_MODEL.stat().st_size < 5e6
     meta = SurrogateModel().meta
     shipped = json.loads((ROOT / "datasets" / "training-v1.sha256.json").read_text())
-    assert meta["data"]["inputs_sha256"] == shipped["inputs_sha256"]
+    assert meta.data["inputs_sha256"] == shipped["inputs_sha256"]
     assert shipped["inputs_sha256"] in (ROOT / "models" / "MODEL_CARD.md").read_text()
-    assert meta["parameters"] < 1_000_000 and meta["label_fidelity"] == "coarse"
+    assert meta.parameters < 1_000_000 and meta.label_fidelity == "coarse"
 
 
 def test_extreme_inputs_give_finite_answers_or_are_flagged():
@@ -327,8 +328,14 @@ def test_roughness_map_matches_single_predictions(tmp_path, capsys):
     save_heightmap(hm, path)
     assert main(["predict", str(path), "--pixel-mm", "0.05", "--map", str(tmp_path / "m.png"), "--step-mm", "2",
                  "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["positions"] == 9
-    assert (tmp_path / "m.png").read_bytes()[:4] == b"\x89PNG"
+    captured = capsys.readouterr()
+    assert json.loads(captured.out)["positions"] == 9 and "map: 9/9 footprint positions" in captured.err
+    figure = (tmp_path / "m.png").read_bytes()
+    assert figure[:4] == b"\x89PNG"
+    again = ["predict", str(path), "--pixel-mm", "0.05", "--map", str(tmp_path / "m.png"), "--step-mm", "3"]
+    assert main(again) == 2  # an existing map is kept, refused before any computation
+    assert "already exists; pass --overwrite" in capsys.readouterr().err and (tmp_path / "m.png").read_bytes() == figure
+    assert main([*again, "--overwrite"]) == 0 and (tmp_path / "m.png").read_bytes() != figure
     for inputs, argv, message in (([path], ["--step-mm", "0"], "--step-mm"),
                                   ([path], ["--map", str(tmp_path / "no" / "m.png")], "folder"),
                                   ([path, path], [], "exactly one")):
@@ -346,6 +353,108 @@ def test_int8_export_is_static_qdq_and_close_to_fp32(tiny, tmp_path):
     assert {"QuantizeLinear", "DequantizeLinear", "Conv"} <= ops and "ConvInteger" not in ops
     assert report["max_rel_diff_vs_fp32"] < 0.1
     q = SurrogateModel(tmp_path / "int8.onnx")
-    assert q.meta["int8"]["checked_inputs"] == 8
+    assert q.meta.int8["checked_inputs"] == 8
     patches = check_patches(4)[:, 0]
     np.testing.assert_allclose(q.run(patches)[0], SurrogateModel(tiny.model).run(patches)[0], rtol=0.1)
+
+
+def test_model_metadata_is_one_typed_record(tiny, tmp_path):
+    from dataclasses import replace
+
+    from roughness.surrogate.metadata import METADATA_KEY, ModelMetadata, onnx_metadata
+
+    for path in (DEFAULT_MODEL, DEFAULT_MODEL.with_name("roughness-cnn-int8.onnx")):  # shipped, never re-exported
+        meta = onnx_metadata(path)
+        assert ModelMetadata.from_json(meta.to_json()) == meta and meta.label_fidelity == "coarse"
+    assert onnx_metadata(DEFAULT_MODEL.with_name("roughness-cnn-int8.onnx")).int8["checked_inputs"] == 32
+    meta = onnx_metadata(tiny.model)
+    assert meta == load_checkpoint(tiny.checkpoint)[1] and meta.data["recipe"] == "tiny"
+    assert replace(meta, int8={"x": 1}).to_dict()["int8"] == {"x": 1} and "int8" not in meta.to_dict()
+    data = json.loads(meta.to_json())
+    with pytest.raises(InputError, match="missing keys: domain, log_offset"):
+        ModelMetadata.from_dict({k: v for k, v in data.items() if k not in ("domain", "log_offset")})
+    with pytest.raises(InputError, match="unknown keys: colour"):
+        ModelMetadata.from_dict(data | {"colour": "red"})
+    with pytest.raises(InputError, match="not JSON"):
+        ModelMetadata.from_json("{")
+    graph = onnx.load(tiny.model)
+    graph.metadata_props[0].value = json.dumps({k: v for k, v in data.items() if k != "footprint_mm"})
+    assert graph.metadata_props[0].key == METADATA_KEY
+    onnx.save(graph, tmp_path / "old.onnx")
+    with pytest.raises(InputError, match="missing keys: footprint_mm"):
+        SurrogateModel(tmp_path / "old.onnx")
+
+
+def test_outputs_are_refused_unless_overwrite(tiny, tmp_path, capsys):
+    from roughness.cli import main
+
+    run = tiny.root / "run"
+    before = {p.name: p.read_bytes() for p in run.iterdir()}
+    model = tiny.model.read_bytes()
+    cases = [
+        (["train", str(tiny.data), "--out", str(run)], str(run)),
+        (["export", str(tiny.checkpoint), "--out", str(tiny.model)], str(tiny.model)),
+        (["export", str(tiny.checkpoint), "--out", str(tmp_path / "new.onnx"), "--int8", str(tmp_path / "no" / "q.onnx")],
+         "does not exist"),
+        (["export", str(tiny.checkpoint), "--out", str(tmp_path / "new.onnx"), "--int8", str(tiny.model)],
+         str(tiny.model)),
+    ]
+    for argv, message in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert message in err and "Traceback" not in err, err
+    assert {p.name: p.read_bytes() for p in run.iterdir()} == before and tiny.model.read_bytes() == model
+    assert not (tmp_path / "new.onnx").exists()  # --int8 was checked before the fp32 model was written
+
+
+def test_too_small_a_dataset_states_the_minimum(tiny, tmp_path, capsys):
+    from roughness.cli import main
+
+    out = tmp_path / "run"
+    assert main(["train", str(tiny.data), "--out", str(out), "--batch-size", "64", "--max-epochs", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "at least 64 training samples" in err and "ok samples in the dataset" in err and "Traceback" not in err
+    assert not out.exists()  # nothing left behind
+
+
+def test_training_metrics_are_printed_with_units():
+    from roughness.surrogate.train import format_scores
+
+    line = format_scores({"n": 12, "n_zero": 0, "spearman": 0.98765, "r2_log": 0.9, "median_rel_err": 12.74,
+                          "p95_rel_err": 0.127, "out_of_domain": 0.05})
+    assert line == ("n 12  n_zero 0  spearman 0.988  r2_log 0.900  median_rel_err 1274.0%  p95_rel_err 12.7%  "
+                    "out_of_domain 5.0%")
+
+
+def test_card_of_a_custom_model_describes_that_model(tiny, tmp_path):
+    from roughness.surrogate.card import write_card
+
+    plots, card = tmp_path / "plots", tmp_path / "cards" / "CARD.md"
+    plots.mkdir()
+    card.parent.mkdir()
+    latency = tmp_path / "latency.json"
+    latency.write_text(json.dumps({"model": "roughness-cnn.onnx", "batch1_1thread_ms_median": 0.45}))
+    write_card(tiny.root / "run", tiny.model, card, plots, latency)
+    text = card.read_text()
+    assert "# Model card: model.onnx" in text and "recipe `tiny`" in text and "training-v1" not in text
+    assert "trade/report.md" not in text and "Not measured for this model" in text  # another model's latency
+    assert "(../plots/surrogate_accuracy.png)" in text and "(../plots/surrogate_training.png)" in text
+    for name in ("surrogate_accuracy.png", "surrogate_training.png"):
+        assert (plots / name).read_bytes()[:4] == b"\x89PNG"
+    families = json.loads((tiny.root / "run" / "metrics.json").read_text())["test_by_family"]
+    if not any("spearman" in m for m in families.values()):
+        assert "Too few samples for scores" in text.split("Held-out textures by family:")[1].split("Relative")[0]
+    assert "| family |" not in text or any("spearman" in m for m in families.values())
+
+
+def test_splits_are_those_the_shipped_model_was_trained_with():
+    from collections import Counter
+
+    from roughness.dataset.recipe import expand, load_recipe
+    from roughness.surrogate.metadata import onnx_metadata
+
+    meta = onnx_metadata(DEFAULT_MODEL)
+    records = expand(load_recipe(ROOT / "datasets" / "training.json"), 3000)
+    counts = Counter(split_of(r, meta.test_fraction, meta.train_config["val_fraction"], meta.holdout_family)
+                     for r in records)
+    assert counts == {split: m["n"] + m["n_zero"] for split, m in meta.metrics.items()}

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import inspect
 import math
 import re
 import sys
@@ -94,6 +95,12 @@ def log(args: argparse.Namespace, message: str) -> None:
         print(message, file=sys.stderr, flush=True)
 
 
+
+
+def defaults(function) -> dict:
+    """The keyword defaults of a library function or dataclass: the CLI's one source of them."""
+    return {name: p.default for name, p in inspect.signature(function).parameters.items()
+            if p.default is not inspect.Parameter.empty}
 
 
 def add_overwrite(p: argparse.ArgumentParser) -> None:

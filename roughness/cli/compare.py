@@ -4,30 +4,39 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import at_least_one, log
+from .common import add_overwrite, add_quiet, at_least_one, finish, log
 
 COMPARE_ENGINES = ("fem:coarse", "fem:default", "surrogate", "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance")
+REFERENCE = "fem:fine"
 
 
 def add_parser(sub) -> None:
     cmp = sub.add_parser("compare", help="time and score engines against a reference engine (resumable)")
-    cmp.add_argument("input", help="dataset file (.h5), folder of heightmaps, or recipe (.json, with --n)")
-    cmp.add_argument("--out", required=True, help="folder for results.jsonl (the cache), tables, plots, report.md")
+    cmp.add_argument("input", metavar="INPUT",
+                     help="dataset file (.h5), folder of heightmaps, or recipe (.json, with --n)")
+    cmp.add_argument("--out", required=True,
+                     help="folder for results.jsonl (the cache), tables, plots, report.md; rerunning the same "
+                          "comparison there resumes it, another comparison is refused unless --overwrite")
     cmp.add_argument("--engines", nargs="+", default=list(COMPARE_ENGINES), metavar="ENGINE",
                      help="fem:coarse fem:default fem:fine surrogate[:MODEL.onnx] ra p90 glcm_sum_of_squares "
-                          "glcm_sum_variance (default: all but fem:fine)")
-    cmp.add_argument("--reference", default="fem:fine", help="engine the others are scored against")
-    cmp.add_argument("--n", type=int, help="number of textures (the first n; required for a recipe)")
-    cmp.add_argument("--pixel-mm", type=float, help="pixel size of a folder's heightmaps (mm)")
-    cmp.add_argument("--height-mm", type=float, help="full-scale height of a folder's PNG/TIFF heightmaps (mm)")
-    cmp.add_argument("--quiet", action="store_true")
-    cmp.set_defaults(run=run)
+                          f"glcm_sum_variance (default: {' '.join(COMPARE_ENGINES)})")
+    cmp.add_argument("--reference", default=REFERENCE,
+                     help=f"engine the others are scored against (default: {REFERENCE})")
+    cmp.add_argument("--n", type=int, help="number of textures, the first n (default: all; required for a recipe)")
+    cmp.add_argument("--pixel-mm", type=float,
+                     help="pixel size of a folder's heightmaps in mm (default: none; required unless the files state it)")
+    cmp.add_argument("--height-mm", type=float,
+                     help="full-scale height of a folder's PNG/TIFF heightmaps in mm (default: the file's own)")
+    add_quiet(cmp)
+    add_overwrite(cmp)
+    finish(cmp, run)
 
 
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from roughness.compare import ResultCache, run, textures_of
+    from roughness.compare import ResultCache, check_report_folder, run, textures_of, write_manifest
+    from roughness.core.errors import InputError
     from roughness.engines import make_engine
     from roughness.report import write_report
 
@@ -35,17 +44,27 @@ def run(args: argparse.Namespace) -> int:
         at_least_one("--n", args.n)
     specs = list(dict.fromkeys([args.reference, *args.engines]))
     engines = [make_engine(spec) for spec in specs]
-    textures, stored = textures_of(args.input, args.n, args.pixel_mm, args.height_mm)
     out = Path(args.out)
+    manifest = {"input": args.input, "n": args.n, "reference": args.reference, "engines": sorted(specs)}
+    check_report_folder(out, manifest, args.overwrite)
+    textures, stored = textures_of(args.input, args.n, args.pixel_mm, args.height_mm)
     cache = ResultCache(out, {e.spec: e.identity for e in engines})
     try:
-        run(textures, engines, cache, stored, quiet=args.quiet)
+        outcome = run(textures, engines, cache, stored, quiet=args.quiet)
     except KeyboardInterrupt:
         print(f"roughness: interrupted; results so far are kept in {cache.path}; run the same command again to "
               "resume", file=sys.stderr)
         return 130
-    cost = next((e.model.meta.get("cost_core_seconds") for e in engines if e.kind == "surrogate"), None)
-    table = write_report(textures, {e.spec: e.kind for e in engines}, args.reference, cache, out, cost, args.input)
+    if not outcome.keys:
+        raise InputError(f"none of the {len(textures)} textures of {args.input} could be compared (reasons above)",
+                         parameter="input")
+    write_manifest(out, manifest)
+    cost = next((e.model.meta.cost_core_seconds for e in engines if e.kind == "surrogate"), None)
+    table = write_report(textures, outcome, {e.spec: e.kind for e in engines}, args.reference, cache, out, cost,
+                         args.input)
     print(table)
     log(args, f"report written to {out / 'report.md'}")
+    if outcome.input_errors:
+        log(args, f"{len(outcome.input_errors)} of {len(textures)} inputs could not be compared (listed in the report)")
+        return 2
     return 0

@@ -7,38 +7,56 @@ import os
 import sys
 import time
 
-from .common import at_least_one, float_pair, log
+from .common import add_overwrite, add_quiet, at_least_one, defaults, finish, float_pair, log
+
+MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
 
 
 def add_parser(sub) -> None:
+    from roughness.engines import PREDICT_ENGINES, SurrogateEngine, predict
+    from roughness.surrogate.roughness_map import roughness_map
+
+    given, mapping, threads = defaults(predict), defaults(roughness_map), defaults(SurrogateEngine)["threads"]
     pr = sub.add_parser("predict", help="roughness in milliseconds (surrogate), FEM where out of domain")
     pr.add_argument("inputs", nargs="+", metavar="HEIGHTMAP",
                     help="heightmap files, folders of them, or roughness dataset files (.h5)")
-    pr.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
-    pr.add_argument("--engine", choices=("surrogate", "fem", "auto"), default="auto",
-                    help="auto (default): surrogate, FEM for inputs outside its domain")
+    pr.add_argument("--model", help="ONNX surrogate (default: the shipped models/roughness-cnn.onnx)")
+    pr.add_argument("--engine", choices=PREDICT_ENGINES, default=given["engine"],
+                    help=f"surrogate, fem, or auto: the surrogate, FEM for inputs outside its domain "
+                         f"(default: {given['engine']})")
     pr.add_argument("--fidelity", choices=("coarse", "default"),
                     help="FEM fidelity (default: that of the model's training labels; the standard scale "
                          "is tabulated for these two)")
-    pr.add_argument("--pixel-mm", type=float, help="pixel size in mm (required unless the file states it)")
-    pr.add_argument("--height-mm", type=float, help="height of full-scale white in mm (PNG/TIFF)")
-    pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures")
+    pr.add_argument("--pixel-mm", type=float, help="pixel size in mm (default: none; required unless the file "
+                                                   "states it)")
+    pr.add_argument("--height-mm", type=float, help="height of full-scale white in mm for PNG/TIFF (default: the "
+                                                    "file's own)")
+    pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures (default: off)")
     pr.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
-    pr.add_argument("--batch-size", type=int, default=256)
-    pr.add_argument("--threads", type=int, default=1, help="onnxruntime threads (default 1)")
-    pr.add_argument("--json", action="store_true", help="one JSON object per input and line")
+    pr.add_argument("--batch-size", type=int, default=given["batch_size"],
+                    help=f"heightmaps per surrogate batch (default: {given['batch_size']})")
+    pr.add_argument("--threads", type=int, default=threads, help=f"onnxruntime threads (default: {threads})")
+    pr.add_argument("--json", action="store_true", help="one JSON object per input and line (default: text)")
     pr.add_argument("--map", metavar="FILE", help="roughness map of a whole object (one input): the footprint slid "
-                    "over the map, saved as .png (figure) or .npy (V per position)")
-    pr.add_argument("--step-mm", type=float, default=1.0, help="--map: distance between footprint positions (mm)")
-    pr.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
-    pr.set_defaults(run=run)
+                    "over the map, saved as .png (figure) or .npy (V per position); refused if FILE exists "
+                    "unless --overwrite")
+    pr.add_argument("--step-mm", type=float, default=mapping["step_mm"],
+                    help=f"--map: distance between footprint positions in mm (default: {mapping['step_mm']:g})")
+    add_quiet(pr)
+    add_overwrite(pr)
+    finish(pr, run, centre_mm="--centre")
 
 
 def run(args: argparse.Namespace) -> int:
+    from roughness.engines import predict
     from roughness.surrogate.inputs import InputReader
-    from roughness.surrogate.predictor import SurrogateModel, predict
+    from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
-    model = SurrogateModel(args.model or _default_model(), threads=at_least_one("--threads", args.threads))
+    if args.map:
+        from roughness.surrogate.roughness_map import check_map_path
+
+        check_map_path(args.map, args.overwrite)
+    model = SurrogateModel(args.model or DEFAULT_MODEL, threads=at_least_one("--threads", args.threads))
     if args.map:
         return _predict_map(args, model)
     reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, model.footprint_mm, args.centre, args.tile)
@@ -71,8 +89,18 @@ def _predict_map(args: argparse.Namespace, model) -> int:
     if args.engine == "fem":
         raise InputError("--map runs the surrogate (thousands of footprints); use --engine surrogate or auto")
     hm = load_heightmap(args.inputs[0], args.pixel_mm, args.height_mm)
-    start = time.perf_counter()
-    result = roughness_map(model, hm, args.step_mm, args.tile, at_least_one("--batch-size", args.batch_size))
+    start = last = time.perf_counter()
+
+    def progress(done: int, total: int) -> None:
+        nonlocal last
+        now = time.perf_counter()
+        if done == total or now - last >= MAP_PROGRESS_SECONDS:
+            last = now
+            eta = (now - start) / done * (total - done)
+            log(args, f"map: {done:,}/{total:,} footprint positions, {now - start:.0f} s, ETA {eta:.0f} s")
+
+    result = roughness_map(model, hm, args.step_mm, args.tile, at_least_one("--batch-size", args.batch_size),
+                           progress=progress)
     save_map(result, args.map)
     summary = {"input": args.inputs[0], "map": args.map, **result.summary(), "seconds": time.perf_counter() - start}
     print(json.dumps(summary) if args.json else
@@ -80,12 +108,6 @@ def _predict_map(args: argparse.Namespace, model) -> int:
           f"{summary['roughness_max']:.4f} (median {summary['roughness_median']:.4f}), "
           f"{100 * summary['in_domain_fraction']:.0f}% in domain, {summary['seconds']:.2f} s; map written to {args.map}")
     return 0
-
-
-def _default_model() -> str:
-    from roughness.surrogate.predictor import DEFAULT_MODEL
-
-    return str(DEFAULT_MODEL)
 
 
 def _prediction_line(p) -> str:

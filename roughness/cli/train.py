@@ -3,55 +3,80 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 
-from .common import at_least_one
+from .common import add_overwrite, at_least_one, defaults, finish
 
 
 def add_parser(sub) -> None:
+    from roughness.surrogate.config import TrainConfig
+
+    d = defaults(TrainConfig)
     tr = sub.add_parser("train", help="train the CNN surrogate on a dataset file (CPU, needs torch)")
-    tr.add_argument("data", help="HDF5 dataset from `roughness dataset build`")
-    tr.add_argument("--out", required=True, help="folder for checkpoint.pt, metrics.json, history.csv")
-    tr.add_argument("--seed", type=int, default=0)
-    tr.add_argument("--holdout-family", help="family never trained on, scored as out-of-family (default: the "
-                    "dataset recipe's; 'none' to train on all)")
-    tr.add_argument("--max-epochs", type=int, default=200)
-    tr.add_argument("--max-minutes", type=float, default=25.0, help="wall-clock budget for the epochs")
-    tr.add_argument("--threads", type=int, default=2, help="torch threads")
-    tr.set_defaults(run=train)
+    tr.add_argument("data", metavar="DATASET",
+                    help=f"HDF5 dataset from `roughness dataset build`: at least {d['batch_size']} training samples "
+                         f"(the batch size) after the splits, about {TrainConfig('', '').minimum_samples()} ok "
+                         "samples with the default fractions; thousands for a useful model")
+    tr.add_argument("--out", required=True, help="folder for checkpoint.pt, metrics.json, history.csv, "
+                                                 "predictions.csv; refused if it holds files unless --overwrite")
+    tr.add_argument("--seed", type=int, default=d["seed"], help=f"seed of weights and batches (default: {d['seed']})")
+    tr.add_argument("--holdout-family", default=d["holdout_family"],
+                    help="family never trained on, scored as out-of-family (default: the dataset recipe's; "
+                         "'none' to train on all)")
+    tr.add_argument("--batch-size", type=int, default=d["batch_size"],
+                    help=f"training batch size (default: {d['batch_size']})")
+    tr.add_argument("--max-epochs", type=int, default=d["max_epochs"],
+                    help=f"epochs of the cosine schedule (default: {d['max_epochs']})")
+    tr.add_argument("--max-minutes", type=float, default=d["max_minutes"],
+                    help=f"wall-clock budget for the epochs in minutes (default: {d['max_minutes']:g})")
+    tr.add_argument("--threads", type=int, default=d["threads"], help=f"torch threads (default: {d['threads']})")
+    add_overwrite(tr)
+    finish(tr, train, data="DATASET")
     ex = sub.add_parser("export", help="export a training checkpoint to ONNX, checked against PyTorch")
-    ex.add_argument("checkpoint")
-    ex.add_argument("--out", required=True, help="ONNX file to write")
-    ex.add_argument("--int8", metavar="FILE", help="also write an int8 model (static QDQ, per-channel weights)")
-    ex.set_defaults(run=export)
+    ex.add_argument("checkpoint", metavar="CHECKPOINT", help="checkpoint.pt of a `roughness train` run")
+    ex.add_argument("--out", required=True, help="ONNX file to write; refused if it exists unless --overwrite")
+    ex.add_argument("--int8", metavar="FILE", help="also write an int8 model (static QDQ, per-channel weights) "
+                                                   "(default: none); refused if it exists unless --overwrite")
+    add_overwrite(ex)
+    finish(ex, export, checkpoint="CHECKPOINT")
 
 
 def train(args: argparse.Namespace) -> int:
+    import os
+
     from roughness.core.errors import InputError
 
     _require_torch("train")
-    from roughness.surrogate.train import TrainConfig, train
+    from roughness.surrogate.train import TrainConfig, check_out_folder, train
 
     if not os.path.isfile(args.data):
         raise InputError(f"dataset file not found: {args.data}")
-    at_least_one("--max-epochs", args.max_epochs)
-    at_least_one("--threads", args.threads)
+    for flag, value in (("--max-epochs", args.max_epochs), ("--threads", args.threads),
+                        ("--batch-size", args.batch_size)):
+        at_least_one(flag, value)
+    check_out_folder(args.out, args.overwrite)
     train(TrainConfig(data=args.data, out=args.out, seed=args.seed, holdout_family=args.holdout_family,
-                      max_epochs=args.max_epochs, max_minutes=args.max_minutes, threads=args.threads))
+                      batch_size=args.batch_size, max_epochs=args.max_epochs, max_minutes=args.max_minutes,
+                      threads=args.threads), overwrite=args.overwrite)
     return 0
 
 
 def export(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
     from roughness.core.errors import InputError
+    from roughness.core.files import check_output
 
     _require_torch("export")
     from roughness.surrogate.export import ExportError, export
 
+    check_output(args.out, args.overwrite, "out")  # both outputs checked before anything is computed or written
+    if args.int8:
+        check_output(args.int8, args.overwrite, "int8")
+        if Path(args.int8).resolve() == Path(args.out).resolve():
+            raise InputError("--int8 must name another file than --out", parameter="int8")
     try:
-        report = export(args.checkpoint, args.out)
-    except ValueError as err:
-        raise InputError(str(err)) from None
+        report = export(args.checkpoint, args.out, overwrite=args.overwrite)
     except ExportError as err:
         print(f"roughness: export check failed, nothing written: {err}", file=sys.stderr)
         return 1
@@ -60,7 +85,7 @@ def export(args: argparse.Namespace) -> int:
         from roughness.surrogate.quantize import QuantizationError, quantize
 
         try:
-            print(json.dumps(quantize(args.out, args.int8)))
+            print(json.dumps(quantize(args.out, args.int8, overwrite=args.overwrite)))
         except QuantizationError as err:
             print(f"roughness: int8 check failed, {args.int8} not written: {err}", file=sys.stderr)
             return 1

@@ -1,0 +1,85 @@
+"""The model metadata: what `train` writes into the checkpoint, `export` embeds in the ONNX file
+(JSON under the metadata key ``roughness``) and the predictor, quantiser, card and CLI read.
+
+One frozen dataclass and one reader; a missing or unknown key is an InputError that names it.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+
+from roughness.core.errors import InputError
+
+METADATA_KEY = "roughness"  # ONNX metadata_props key of the model's JSON metadata
+
+
+@dataclass(frozen=True)
+class ModelMetadata:
+    """Everything prediction needs besides the weights, and how the model was made."""
+
+    widths: tuple[int, ...]  # channels per convolution stage
+    hidden: int  # units of the hidden dense layer
+    patch_pixel_mm: float  # pixel size of the input patch (mm)
+    footprint_mm: float  # side of the square skin footprint (mm)
+    log_offset: float  # the network predicts log(V + log_offset)
+    label_fidelity: str  # FEM fidelity of the training labels
+    simulation: dict  # SimConfig of the training labels (as_dict)
+    domain: dict  # Domain.to_dict() of the training inputs
+    metrics: dict  # scores per split: train, val, test, ood
+    test_by_family: dict  # scores of the test split per family
+    holdout_family: str | None  # family never trained on (None: none held out)
+    test_fraction: float  # share of base textures in the test split
+    data: dict  # training data: file, recipe, inputs_sha256
+    train_config: dict  # TrainConfig as a dict
+    best_epoch: int
+    epochs: int
+    minutes: float  # wall-clock training time
+    parameters: int  # trainable parameters
+    cost_core_seconds: dict  # {"data_fem": s, "training": s}: core-seconds spent making the model
+    int8: dict | None = None  # quantisation check of an int8 model (quantize.py); None for fp32
+
+    def to_dict(self) -> dict:
+        """Plain JSON-able dict; ``int8`` only when present."""
+        out = asdict(self) | {"widths": list(self.widths)}
+        return out if self.int8 is not None else {k: v for k, v in out.items() if k != "int8"}
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict())
+
+    @classmethod
+    def from_dict(cls, data: dict, source: str = "model metadata") -> ModelMetadata:
+        """Metadata from a dict; InputError names missing and unknown keys."""
+        if not isinstance(data, dict):
+            raise InputError(f"{source}: metadata must be a JSON object, got {type(data).__name__}")
+        names = {f.name for f in fields(cls)}
+        required = {f.name for f in fields(cls) if f.name != "int8"}
+        missing, unknown = sorted(required - set(data)), sorted(set(data) - names)
+        if missing or unknown:
+            raise InputError(f"{source}: not roughness model metadata of this version"
+                             + (f"; missing keys: {', '.join(missing)}" if missing else "")
+                             + (f"; unknown keys: {', '.join(unknown)}" if unknown else ""))
+        return cls(**(data | {"widths": tuple(int(w) for w in data["widths"])}))
+
+    @classmethod
+    def from_json(cls, text: str, source: str = "model metadata") -> ModelMetadata:
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as err:
+            raise InputError(f"{source}: metadata is not JSON: {err}") from None
+        return cls.from_dict(data, source)
+
+
+def read_metadata(props: dict[str, str], source: str | Path) -> ModelMetadata:
+    """The metadata of an ONNX model from its metadata properties (``key -> value``)."""
+    if METADATA_KEY not in props:
+        raise InputError(f"{source} is an ONNX model without roughness metadata (export it with `roughness export`)")
+    return ModelMetadata.from_json(props[METADATA_KEY], str(source))
+
+
+def onnx_metadata(path: str | Path) -> ModelMetadata:
+    """The metadata of an ONNX file, read with onnx (no session)."""
+    import onnx
+
+    graph = onnx.load(str(path), load_external_data=False)
+    return read_metadata({p.key: p.value for p in graph.metadata_props}, path)
