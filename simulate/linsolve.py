@@ -42,12 +42,11 @@ class AMGCache:
     fresh_iterations: int = 0
     setups: int = 0
 
-    def drift(self, fixed: np.ndarray) -> int:
-        """Number of DOFs whose prescribed state differs from the hierarchy's."""
-        return len(fixed) if self.built_for is None else int(np.count_nonzero(fixed != self.built_for))
-
     def fits(self, fixed: np.ndarray) -> bool:
-        return self.hierarchy is not None and self.drift(fixed) <= self.rebuild_drift * len(fixed)
+        """True if the hierarchy exists and was built for a prescribed set close to ``fixed``."""
+        if self.hierarchy is None:
+            return False
+        return np.count_nonzero(fixed != self.built_for) <= self.rebuild_drift * len(fixed)
 
     def build(self, matrix: sp.csr_matrix, fixed: np.ndarray) -> None:
         self.hierarchy = pyamg.smoothed_aggregation_solver(matrix, B=self.near_null, symmetry="symmetric")

@@ -53,7 +53,9 @@ def test_near_flat_texture_is_nearly_smooth(sim, bumps):
 
 def test_same_input_same_answer_and_seed_changes_sampling(sim, bumps):
     again = sim.run(standard_texture(1.0, seed=0))
-    assert again.roughness == bumps.roughness
+    # The block's AMG hierarchy may differ between the runs, so CG (relative residual 1e-6) may
+    # stop elsewhere: the answer agrees far inside V's own sampling error, not bit for bit.
+    assert abs(again.roughness - bumps.roughness) <= 1e-3 * bumps.roughness_stderr
     other = sim.run(standard_texture(1.0, seed=0), seed=1)
     assert other.roughness != bumps.roughness
     assert abs(other.roughness / bumps.roughness - 1) < 5 * bumps.roughness_stderr / bumps.roughness
