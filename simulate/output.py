@@ -24,7 +24,7 @@ def save_strain_png(result: Result, path: str | Path) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.6), constrained_layout=True)
     panels = ((result.lambda3, f"$\\lambda_3$ at {c.depth_mm} mm depth",
                "max. compressive principal strain $\\lambda_3$ (dimensionless)"),
-              (result.fluctuation, "fluctuation: $\\lambda_3$ minus the untextured block's",
+              (result.fluctuation, "fluctuation: $\\lambda_3$ minus that of the flat texture",
                "strain fluctuation $\\Delta\\lambda_3$ (dimensionless)"))
     for ax, (field, title, label) in zip(axes, panels):
         im = ax.imshow(field, origin="lower", extent=extent, cmap="viridis")
