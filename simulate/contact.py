@@ -80,7 +80,9 @@ class ContactRound:
 
 @dataclass
 class ContactProblem:
-    """Texture-independent description of the contact face and the bone face."""
+    """Texture-independent parts of the contact problem: the block's stiffness (N/mm), the AMG
+    hierarchy its constrained systems share, the contact face (bottom) and the bone face (top),
+    and the CG tolerance (relative residual) of every linear solve."""
 
     stiffness: sp.csr_matrix
     amg: AMGCache
