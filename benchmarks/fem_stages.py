@@ -8,6 +8,7 @@ warm. A second table times one constrained solve of the default block with each 
 """
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import resource
@@ -33,8 +34,10 @@ def one_fidelity(fidelity: str) -> dict:
     cold = time.perf_counter() - t
     warm = []
     for lam, seed in WARM_TEXTURES:
-        r = sim.run(standard_texture(lam, seed=seed))
-        warm.append({"seconds": r.seconds, **{k: v for k, v in r.stage_seconds.items()}, "rounds": r.iterations})
+        rounds = []
+        r = sim.run(standard_texture(lam, seed=seed), callback=rounds.append)
+        warm.append({"seconds": r.seconds, **r.stage_seconds, "rounds": r.iterations,
+                     "cg_iterations": [x.cg_iterations for x in rounds], "amg_setups": r.amg_setups})
     stages = {k: float(sum(w[k] for w in warm) / len(warm)) for k in ("contact", "strain", "variation")}
     return {
         "fidelity": fidelity, "nodes": first.nodes, "dofs": first.dofs, "h_contact_mm": first.config.h_contact_mm,
@@ -42,6 +45,7 @@ def one_fidelity(fidelity: str) -> dict:
         "warm_seconds_mean": sum(w["seconds"] for w in warm) / len(warm),
         "warm_seconds_max": max(w["seconds"] for w in warm),
         "warm_stages": stages, "warm_rounds": [w["rounds"] for w in warm],
+        "warm_cg_iterations": [w["cg_iterations"] for w in warm], "warm_amg_setups": [w["amg_setups"] for w in warm],
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
 
@@ -53,27 +57,27 @@ def solver_comparison() -> list[dict]:
     import scipy.sparse.linalg as sla
 
     from roughness.simulate.config import SimConfig
+    from roughness.simulate.linsolve import AMGCache, constrain
     from roughness.simulate.model import Block
 
-    block = Block(SimConfig().resolved())
+    block = Block(SimConfig().resolved().block_spec())
     p = block.problem
     fixed = p.constraints(np.ones(len(p.bottom), dtype=bool), frictionless=False)
     values = np.zeros(p.n_dofs)
     values[3 * p.top + 2] = -1.0
-    k = p.system.k
+    k = p.stiffness
     free = ~fixed
     a = k[free][:, free].tocsc()
     b = -(k[free][:, fixed] @ values[fixed])
     rows = []
     t = time.perf_counter()
-    p.system.set_constraints(fixed)
-    p.system._build()
+    system = constrain(k, fixed, AMGCache(p.amg.near_null))  # a fresh hierarchy is built here
     setup = time.perf_counter() - t
     t = time.perf_counter()
-    u, _ = p.system.solve(values)
+    u = system.solve(values).u
     rows.append({"solver": "pyamg SA + CG (fresh hierarchy)", "setup_s": setup, "solve_s": time.perf_counter() - t})
     t = time.perf_counter()
-    p.system.solve(values, x0=u + 1e-3 * np.random.default_rng(0).standard_normal(len(u)))
+    system.solve(values, x0=u + 1e-3 * np.random.default_rng(0).standard_normal(len(u)))
     rows.append({"solver": "pyamg SA + CG (reused hierarchy, warm start)", "setup_s": 0.0,
                  "solve_s": time.perf_counter() - t})
     t = time.perf_counter()
@@ -132,10 +136,14 @@ def plot(rows: list[dict]) -> None:
 
 
 def main() -> None:
-    if len(sys.argv) == 3 and sys.argv[1] == "--one":
-        print(json.dumps(one_fidelity(sys.argv[2])))
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--one", choices=FIDELITIES, help="internal: measure one fidelity in this process, print JSON")
+    parser.add_argument("--solvers", action="store_true", help="internal: only the solver comparison, print JSON")
+    args = parser.parse_args()
+    if args.one:
+        print(json.dumps(one_fidelity(args.one)))
         return
-    if len(sys.argv) == 2 and sys.argv[1] == "--solvers":
+    if args.solvers:
         print(json.dumps(solver_comparison()))
         return
     OUT.mkdir(exist_ok=True)

@@ -5,28 +5,29 @@
 """
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import time
 from pathlib import Path
 
-os.environ.setdefault("OMP_NUM_THREADS", "2")
-
-from roughness.dataset.fractal import fbm_surface  # noqa: E402
-from roughness.dataset.textures import standard_texture  # noqa: E402
-from roughness.simulate.config import SimConfig  # noqa: E402
-from roughness.simulate.model import Simulator  # noqa: E402
-
 OUT = Path(__file__).parent / "results"
-TEXTURES = {
-    "standard lambda=1.0 mm (seed 0)": lambda: standard_texture(1.0, seed=0),
-    "fBm H=0.8, rms 0.15 mm (seed 0)": lambda: fbm_surface(seed=0),
-}
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()
+    os.environ.setdefault("OMP_NUM_THREADS", "2")
+    from roughness.dataset.fractal import fbm_surface
+    from roughness.dataset.textures import standard_texture
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.model import Simulator
+
+    textures = {
+        "standard lambda=1.0 mm (seed 0)": lambda: standard_texture(1.0, seed=0),
+        "fBm H=0.8, rms 0.15 mm (seed 0)": lambda: fbm_surface(seed=0),
+    }
     rows = []
-    for name, make in TEXTURES.items():
+    for name, make in textures.items():
         hm = make()
         for fidelity in ("coarse", "default", "fine"):
             sim = Simulator(SimConfig(fidelity=fidelity))

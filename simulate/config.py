@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-from roughness.core.checks import positive
+from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
 
 from .heightmap import Heightmap
@@ -16,6 +16,27 @@ FIDELITIES = ("coarse", "default", "fine", "auto")
 CONTACT_MODES = ("stick", "frictionless")
 BONE_MODELS = ("rigid", "elastic")
 ELEMENTS = ("p1", "p2")
+CHOICES = {"fidelity": FIDELITIES, "contact": CONTACT_MODES, "bone": BONE_MODELS, "element": ELEMENTS}
+
+# SimConfig fields that do not shape the prepared skin block, so a Simulator reuses one block
+# for all of them: the load and contact law (force_n, contact, max_rounds: the contact solve per
+# texture) and the disk-pair sampling of V (pairs, pair_distance_mm, disk_radius_mm, seed).
+# Every other field enters BlockSpec (fidelity through the h_contact_mm it resolves to).
+RUN_FIELDS = frozenset({"force_n", "contact", "max_rounds", "pairs", "pair_distance_mm", "disk_radius_mm", "seed"})
+
+
+@dataclass(frozen=True)
+class BlockSpec:
+    """Exactly what the prepared skin block (mesh, stiffness, strain sampler) depends on; its cache key."""
+
+    mesh: MeshSpec
+    young_mpa: float
+    poisson: float
+    bone_young_mpa: float
+    bone_poisson: float
+    depth_mm: float
+    window_mm: float
+    grid_mm: float
 
 
 @dataclass(frozen=True)
@@ -45,27 +66,30 @@ class SimConfig:
     max_rounds: int = 30
 
     def __post_init__(self) -> None:
-        _choice("fidelity", self.fidelity, FIDELITIES)
-        _choice("contact", self.contact, CONTACT_MODES)
-        _choice("bone", self.bone, BONE_MODELS)
-        _choice("element", self.element, ELEMENTS)
+        for name, options in CHOICES.items():
+            if getattr(self, name) not in options:
+                raise InputError(f"{name} must be one of {', '.join(options)}; got {getattr(self, name)!r}",
+                                 parameter=name)
         for name in ("young_mpa", "tissue_mm", "width_mm", "bone_young_mpa", "bone_mm", "force_n",
                      "depth_mm", "window_mm", "grid_mm", "pair_distance_mm", "disk_radius_mm"):
             positive(name, getattr(self, name))
         for name in ("poisson", "bone_poisson"):
             value = getattr(self, name)
             if not (math.isfinite(value) and -1.0 < value < 0.5):
-                raise InputError(f"{name} must lie in (-1, 0.5), got {value}")
+                raise InputError(f"{name} must lie in (-1, 0.5), got {value}", parameter=name)
         if self.h_contact_mm is not None:
             positive("h_contact_mm", self.h_contact_mm)
         if self.depth_mm >= self.tissue_mm:
-            raise InputError(f"receptor depth {self.depth_mm} mm must be inside the {self.tissue_mm} mm tissue")
+            raise InputError(f"receptor depth {self.depth_mm} mm must be inside the {self.tissue_mm} mm tissue",
+                             parameter="depth_mm")
         if self.window_mm > self.width_mm:
-            raise InputError(f"sampling window {self.window_mm} mm exceeds the {self.width_mm} mm footprint")
+            raise InputError(f"sampling window {self.window_mm} mm exceeds the {self.width_mm} mm footprint",
+                             parameter="window_mm")
         if self.window_mm / 2 <= self.pair_distance_mm / 2 + self.disk_radius_mm:
-            raise InputError("disk pairs (d/2 + r) do not fit in the sampling window")
-        if self.pairs < 2 or self.max_rounds < 1:
-            raise InputError("pairs must be >= 2 and max_rounds >= 1")
+            raise InputError("disk pairs (d/2 + r) do not fit in the sampling window", parameter="pair_distance_mm")
+        integer("pairs", self.pairs, minimum=2)
+        integer("max_rounds", self.max_rounds, minimum=1)
+        integer("seed", self.seed, minimum=0)
 
     def spacing_mm(self, heightmap: Heightmap | None = None) -> float:
         """Contact-face spacing for this fidelity (``auto`` needs the heightmap)."""
@@ -95,11 +119,12 @@ class SimConfig:
             order=2 if self.element == "p2" else 1,
         )
 
+    def block_spec(self) -> BlockSpec:
+        """The fields of this (resolved) configuration the prepared block depends on."""
+        return BlockSpec(mesh=self.mesh_spec(), young_mpa=self.young_mpa, poisson=self.poisson,
+                         bone_young_mpa=self.bone_young_mpa, bone_poisson=self.bone_poisson,
+                         depth_mm=self.depth_mm, window_mm=self.window_mm, grid_mm=self.grid_mm)
+
     def as_dict(self) -> dict:
         return asdict(self)
-
-
-def _choice(name: str, value: str, options: tuple[str, ...]) -> None:
-    if value not in options:
-        raise InputError(f"{name} must be one of {', '.join(options)}; got {value!r}")
 

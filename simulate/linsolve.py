@@ -1,9 +1,11 @@
 """Constrained linear elasticity solves: AMG-preconditioned CG with a reusable hierarchy.
 
-A solve prescribes some degrees of freedom. The system keeps its
-smoothed-aggregation hierarchy (pyamg) across solves and rebuilds it only when the set
-of prescribed DOFs has drifted or CG needed clearly more iterations than on a fresh
-hierarchy, so that a contact loop pays the set-up cost about once per texture.
+``constrain(stiffness, fixed, amg)`` returns a new ``ConstrainedSystem`` for one set of
+prescribed degrees of freedom (like scikit-fem's ``condense``, but keeping the full size so
+reactions come for free). The smoothed-aggregation hierarchy (pyamg) lives in an explicit
+``AMGCache`` passed to every system of the same stiffness matrix: it is rebuilt only when the
+prescribed set has drifted or CG needed clearly more iterations than on a fresh hierarchy, so
+that a contact loop pays the set-up cost about once per texture.
 """
 from __future__ import annotations
 
@@ -14,96 +16,113 @@ import pyamg
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
+CG_RTOL = 1e-6  # relative residual |b - A u| / |b| at which CG stops
+CG_MAXITER = 2000
+
 
 class SolverError(RuntimeError):
     """The linear solver did not reach its tolerance."""
 
 
 @dataclass
-class SolveStats:
-    """Counters for the benchmark: seconds are filled in by the caller."""
+class AMGCache:
+    """The smoothed-aggregation hierarchy shared by the constrained systems of one stiffness matrix.
 
+    Reuse policy: a new system rebuilds it when its prescribed set differs from the one the
+    hierarchy was built for in more than ``rebuild_drift`` of the DOFs; a solve rebuilds it when
+    CG took more than ``slow_factor`` x (iterations on the fresh hierarchy) + ``slow_margin``.
+    """
+
+    near_null: np.ndarray
+    rebuild_drift: float = 0.01
+    slow_factor: float = 2.0
+    slow_margin: int = 5
+    hierarchy: pyamg.multilevel.MultilevelSolver | None = field(default=None, repr=False)
+    built_for: np.ndarray | None = field(default=None, repr=False)
+    fresh_iterations: int = 0
     setups: int = 0
-    solves: int = 0
-    cg_iterations: int = 0
-    history: list[int] = field(default_factory=list)
+
+    def fits(self, fixed: np.ndarray) -> bool:
+        """True if the hierarchy exists and was built for a prescribed set close to ``fixed``."""
+        if self.hierarchy is None:
+            return False
+        return np.count_nonzero(fixed != self.built_for) <= self.rebuild_drift * len(fixed)
+
+    def build(self, matrix: sp.csr_matrix, fixed: np.ndarray) -> None:
+        self.hierarchy = pyamg.smoothed_aggregation_solver(matrix, B=self.near_null, symmetry="symmetric")
+        self.built_for = fixed.copy()
+        self.fresh_iterations = 0
+        self.setups += 1
+
+    def too_slow(self, iterations: int) -> bool:
+        """Record a solve's CG iterations; True if the hierarchy has gone stale."""
+        if not self.fresh_iterations:
+            self.fresh_iterations = iterations
+            return False
+        return iterations > self.slow_factor * self.fresh_iterations + self.slow_margin
+
+
+@dataclass(frozen=True)
+class LinearSolution:
+    """Displacements u (mm), reactions K u - f (N), CG iterations and the achieved relative residual."""
+
+    u: np.ndarray
+    reaction: np.ndarray
+    iterations: int
+    residual: float
 
 
 class ConstrainedSystem:
-    """K u = f with u prescribed on a subset of DOFs."""
+    """K u = f with u prescribed on the DOFs of the boolean mask ``fixed``; build with ``constrain``."""
 
-    def __init__(
-        self,
-        stiffness: sp.csr_matrix,
-        near_null: np.ndarray,
-        rtol: float = 1e-6,
-        maxiter: int = 2000,
-        rebuild_drift: float = 0.01,
-    ) -> None:
-        self.k = stiffness.tocsr()
-        self.near_null = near_null
+    def __init__(self, stiffness: sp.csr_matrix, fixed: np.ndarray, amg: AMGCache,
+                 rtol: float = CG_RTOL, maxiter: int = CG_MAXITER) -> None:
+        self.k = stiffness
+        self.fixed = fixed
+        self.amg = amg
         self.rtol = rtol
         self.maxiter = maxiter
-        self.rebuild_drift = rebuild_drift
-        self.stats = SolveStats()
-        self._amg = None
-        self._amg_fixed: np.ndarray | None = None
-        self._fresh_iterations = 0
-        self._matrix: sp.csr_matrix | None = None
-
-    def set_constraints(self, fixed: np.ndarray) -> None:
-        """Prescribe the DOFs in the boolean mask ``fixed``."""
-        self.fixed = fixed
         keep = sp.diags((~fixed).astype(float))
         # Prescribed rows keep their stiffness diagonal (not 1): a hierarchy built for a
         # slightly different set then stays well scaled on the DOFs that changed.
-        self._diag = np.where(fixed, self.k.diagonal(), 0.0)
-        self._matrix = (keep @ self.k @ keep + sp.diags(self._diag)).tocsr()
-        drift = 0 if self._amg_fixed is None else int(np.count_nonzero(fixed != self._amg_fixed))
-        if self._amg is None or drift > self.rebuild_drift * len(fixed):
-            self._build()
+        self.diag = np.where(fixed, stiffness.diagonal(), 0.0)
+        self.matrix = (keep @ stiffness @ keep + sp.diags(self.diag)).tocsr()
+        if not amg.fits(fixed):
+            amg.build(self.matrix, fixed)
 
-    def _build(self) -> None:
-        self._amg = pyamg.smoothed_aggregation_solver(self._matrix, B=self.near_null, symmetry="symmetric")
-        self._amg_fixed = self.fixed.copy()
-        self._fresh_iterations = 0
-        self.stats.setups += 1
-
-    def solve(
-        self, values: np.ndarray, load: np.ndarray | None = None, x0: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Displacements u (mm) and reactions K u - f (N) for prescribed ``values`` (mm).
-
-        ``values`` is read where fixed; ``load`` holds external nodal forces f (N);
-        ``x0`` is a warm start.
-        """
+    def solve(self, values: np.ndarray, load: np.ndarray | None = None,
+              x0: np.ndarray | None = None) -> LinearSolution:
+        """Solution for prescribed ``values`` (mm, read where fixed), nodal forces ``load`` (N), warm start ``x0``."""
         fixed = self.fixed
         vp = np.where(fixed, values, 0.0)
         f = np.zeros_like(vp) if load is None else load
-        b = np.where(fixed, self._diag * vp, f - self.k @ vp)
-        u = self._cg(b, None if x0 is None else np.where(fixed, vp, x0))
-        if self._fresh_iterations and self.stats.history[-1] > 2 * self._fresh_iterations + 5:
-            self._build()
-        return u, self.k @ u - f
+        b = np.where(fixed, self.diag * vp, f - self.k @ vp)
+        u, iterations, residual = self._cg(b, None if x0 is None else np.where(fixed, vp, x0))
+        if self.amg.too_slow(iterations):
+            self.amg.build(self.matrix, fixed)
+        return LinearSolution(u, self.k @ u - f, iterations, residual)
 
-    def _cg(self, b: np.ndarray, x0: np.ndarray | None) -> np.ndarray:
-        count = [0]
+    def _cg(self, b: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, float]:
+        count = 0
 
         def tick(_: np.ndarray) -> None:
-            count[0] += 1
+            nonlocal count
+            count += 1
 
-        m = self._amg.aspreconditioner(cycle="V")
-        atol = self.rtol * float(np.linalg.norm(b))
-        x, info = sla.cg(self._matrix, b, x0=x0, M=m, rtol=0.0, atol=atol, maxiter=self.maxiter, callback=tick)
-        self.stats.solves += 1
-        self.stats.cg_iterations += count[0]
-        self.stats.history.append(count[0])
-        if not self._fresh_iterations:
-            self._fresh_iterations = count[0]
+        norm_b = max(float(np.linalg.norm(b)), 1e-300)
+        m = self.amg.hierarchy.aspreconditioner(cycle="V")
+        x, info = sla.cg(self.matrix, b, x0=x0, M=m, rtol=0.0, atol=self.rtol * norm_b, maxiter=self.maxiter,
+                         callback=tick)
+        residual = float(np.linalg.norm(b - self.matrix @ x)) / norm_b
         if info != 0 or not np.all(np.isfinite(x)):
-            res = np.linalg.norm(b - self._matrix @ x) / max(np.linalg.norm(b), 1e-300)
             raise SolverError(
-                f"CG did not converge in {self.maxiter} iterations (relative residual {res:.2e}); "
+                f"CG did not converge in {self.maxiter} iterations (relative residual {residual:.2e}); "
                 "the system is ill-conditioned (Poisson ratio close to 0.5 with P1 elements? try --element p2)"
             )
-        return x
+        return x, count, residual
+
+
+def constrain(stiffness: sp.csr_matrix, fixed: np.ndarray, amg: AMGCache, rtol: float = CG_RTOL,
+              maxiter: int = CG_MAXITER) -> ConstrainedSystem:
+    """The system of ``stiffness`` with the DOFs in ``fixed`` prescribed, preconditioned from ``amg``."""
+    return ConstrainedSystem(stiffness.tocsr(), fixed, amg, rtol, maxiter)

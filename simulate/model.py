@@ -1,29 +1,60 @@
 """The FEM roughness model: a prepared skin block and the texture -> V pipeline."""
 from __future__ import annotations
 
+import json
 import math
 import time
 from collections import OrderedDict
-from dataclasses import dataclass, field, replace
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from roughness.core.errors import SimulationError
+from roughness.core.errors import InputError, SimulationError
+from roughness.core.hashing import canonical_json
 
 from . import mesh as meshing
-from .config import SimConfig
-from .contact import ContactError, ContactProblem, ContactState, solve_contact
+from .config import BlockSpec, SimConfig
+from .contact import MAX_FLIPS, ContactError, ContactProblem, ContactResult, ContactRound, solve_contact
 from .elasticity import rigid_body_modes, stiffness
 from .face import ContactFace
 from .heightmap import Heightmap
-from .linsolve import ConstrainedSystem, SolverError
+from .linsolve import AMGCache, SolverError
 from .strain import StrainSampler
 from .variation import PairSampling, variation
+
+# Where linear small-strain elasticity stops meaning anything: the skin is pushed further than
+# this many tissue thicknesses (the paper's own regime reaches about 2 at 10 N on 1 mm bumps).
+MAX_INDENTATION_TISSUES = 4.0
+DEEP_INDENTATION_TISSUES = 2.0  # beyond this an indentation is unusual (a note on stderr)
+MIN_FOOTPRINT_PIXELS = 10  # the skin footprint must span at least this many pixels across
+LOCKING_POISSON = 0.49  # P1 elements lock above this Poisson ratio
+HELD_TENSION_FRACTION = 0.01  # nodes held in contact pulling more than this share of the force are unusual
+
+
+@dataclass(frozen=True)
+class Note:
+    """A remark on how a result was obtained; ``unusual`` ones are worth a user's attention.
+
+    Codes: ``indentation`` (deeper than the tissue: outside small strain, as in the paper's
+    model; unusual beyond ``DEEP_INDENTATION_TISSUES``), ``not_converged``, ``cycled``,
+    ``unresolved`` (nodes held in contact under tension; unusual when they pull more than
+    ``HELD_TENSION_FRACTION`` of the force), ``locking`` (P1 near incompressibility),
+    ``unresolved_texture`` (features finer than the contact mesh).
+    """
+
+    code: str
+    message: str
+    unusual: bool
 
 
 @dataclass
 class Result:
-    """Roughness of one texture and how it was obtained (mm, N, s)."""
+    """Roughness of one texture and how it was obtained (mm, N, s).
+
+    ``iterations``: contact rounds; ``cg_iterations``, ``amg_setups``: linear-solver work of
+    this texture's contact solve; ``notes``: see ``Note``.
+    """
 
     roughness: float
     roughness_stderr: float
@@ -33,6 +64,8 @@ class Result:
     iterations: int
     unresolved_nodes: int
     cycled: bool
+    cg_iterations: int
+    amg_setups: int
     nodes: int
     dofs: int
     seconds: float
@@ -41,45 +74,51 @@ class Result:
     lambda3: np.ndarray
     grid_axis_mm: np.ndarray
     contact_history: list[int]
-    warnings: list[str]
+    notes: list[Note]
     config: SimConfig
-    state: ContactState | None = field(default=None, repr=False)
+    state: ContactResult | None = field(default=None, repr=False)
 
     def summary(self) -> dict:
-        """JSON-ready scalars."""
+        """The scalars, contact history, notes and main settings, as plain Python types (JSON-ready)."""
         keys = ("roughness", "roughness_stderr", "contact_fraction", "indentation_mm", "converged",
-                "iterations", "unresolved_nodes", "cycled", "nodes", "dofs", "seconds")
+                "iterations", "cg_iterations", "amg_setups", "unresolved_nodes", "cycled", "nodes", "dofs",
+                "seconds")
         out = {k: getattr(self, k) for k in keys}
         out.update(stage_seconds={k: round(v, 4) for k, v in self.stage_seconds.items()},
-                   contact_history=self.contact_history, warnings=self.warnings,
+                   contact_history=self.contact_history, notes=[asdict(n) for n in self.notes],
                    fidelity=self.config.fidelity, h_contact_mm=self.config.h_contact_mm,
                    force_n=self.config.force_n, poisson=self.config.poisson, contact=self.config.contact,
                    element=self.config.element, bone=self.config.bone)
-        return out
+        return json.loads(canonical_json(out))  # numpy scalars and arrays become Python numbers and lists
+
+    @property
+    def unusual_notes(self) -> list[Note]:
+        return [n for n in self.notes if n.unusual]
 
 
 class Block:
     """Texture-independent parts of one configuration, built once and reused.
 
-    Mesh (cached on disk), stiffness, AMG-preconditioned constrained system, strain
-    sampler, disk-pair sampling and the untextured (flat) base field per force.
+    Mesh (cached on disk), stiffness, the contact problem with its reusable AMG hierarchy,
+    strain sampler and the untextured (flat) base field per load.
     """
 
-    def __init__(self, config: SimConfig, cache: bool = True) -> None:
-        self.config = config
+    def __init__(self, spec: BlockSpec, cache: bool = True) -> None:
+        self.spec = spec
         self.seconds: dict[str, float] = {}
         t = time.perf_counter()
-        self.mesh = meshing.build(config.mesh_spec(), cache=cache)
+        self.mesh = meshing.build(spec.mesh, cache=cache)
         self.seconds["mesh"] = time.perf_counter() - t
         t = time.perf_counter()
         bone = self.mesh.region == meshing.BONE
-        young = np.where(bone, config.bone_young_mpa, config.young_mpa)
-        poisson = np.where(bone, config.bone_poisson, config.poisson)
-        k = stiffness(self.mesh, young, poisson)
+        young = np.where(bone, spec.bone_young_mpa, spec.young_mpa)
+        poisson = np.where(bone, spec.bone_poisson, spec.poisson)
+        k = stiffness(self.mesh, young, poisson).tocsr()
         self.seconds["assembly"] = time.perf_counter() - t
         bottom = self.mesh.bottom
         self.problem = ContactProblem(
-            system=ConstrainedSystem(k, rigid_body_modes(self.mesh.points)),
+            stiffness=k,
+            amg=AMGCache(rigid_body_modes(self.mesh.points)),
             bottom=bottom,
             bottom_xy=self.mesh.points[bottom, :2],
             top=self.mesh.top,
@@ -88,18 +127,18 @@ class Block:
         )
         self.area = self.problem.face.area
         t = time.perf_counter()
-        self.sampler = StrainSampler(self.mesh, config.depth_mm, config.window_mm, config.grid_mm)
+        self.sampler = StrainSampler(self.mesh, spec.depth_mm, spec.window_mm, spec.grid_mm)
         self.seconds["sampler"] = time.perf_counter() - t
-        self._base: dict[tuple[float, str], tuple[np.ndarray, float, tuple]] = {}
+        self._base: dict[tuple[float, str, int], tuple[np.ndarray, float, tuple]] = {}
         self.runs = 0
 
-    def base(self, force_n: float, contact: str) -> tuple[np.ndarray, float, tuple]:
-        """lambda3 of the untextured block, its indentation and warm-start solutions."""
-        key = (force_n, contact)
+    def base(self, force_n: float, contact: str, max_rounds: int = SimConfig.max_rounds
+             ) -> tuple[np.ndarray, float, tuple[np.ndarray, np.ndarray]]:
+        """lambda3 of the untextured block, its indentation (mm) and warm-start solutions."""
+        key = (force_n, contact, max_rounds)
         if key not in self._base:
-            state, warm = solve_contact(self.problem, _flat, force_n, contact == "frictionless",
-                                        max_rounds=self.config.max_rounds)
-            self._base[key] = (self.sampler.max_compression(state.u), state.indentation_mm, warm)
+            flat = solve_contact(self.problem, _flat, force_n, contact == "frictionless", max_rounds=max_rounds)
+            self._base[key] = (self.sampler.max_compression(flat.u), flat.indentation_mm, flat.warm)
         return self._base[key]
 
 
@@ -124,44 +163,47 @@ class Simulator:
         self.config = config or SimConfig()
         self.cache = cache
         self.max_blocks = max_blocks
-        self._blocks: OrderedDict[tuple, Block] = OrderedDict()
+        self._blocks: OrderedDict[BlockSpec, Block] = OrderedDict()
 
     def block(self, config: SimConfig) -> Block:
-        """The prepared block for a resolved configuration (what the mesh and matrices depend on)."""
-        key = (config.mesh_spec(), config.young_mpa, config.poisson, config.bone_young_mpa,
-               config.bone_poisson, config.depth_mm, config.window_mm, config.grid_mm)
+        """The prepared block for a resolved configuration, keyed by its ``block_spec()``."""
+        key = config.block_spec()
         if key not in self._blocks:
-            self._blocks[key] = Block(config, cache=self.cache)
+            self._blocks[key] = Block(key, cache=self.cache)
             while len(self._blocks) > self.max_blocks:
                 self._blocks.popitem(last=False)
         self._blocks.move_to_end(key)
         return self._blocks[key]
 
-    def run(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None,
-            tile: bool = False, **overrides) -> Result:
-        """Roughness V of ``heightmap`` under the skin footprint centred at ``centre_mm``."""
+    def run(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False,
+            callback: Callable[[ContactRound], None] | None = None, **overrides) -> Result:
+        """Roughness V of ``heightmap`` under the skin footprint centred at ``centre_mm``.
+
+        ``overrides`` replace ``SimConfig`` fields; ``callback`` receives each contact round's statistics.
+        """
         t_start = time.perf_counter()
         config = replace(self.config, **overrides).resolved(heightmap)
         centre = centre_mm or heightmap.centre_mm
         heightmap.require_footprint(config.width_mm, centre, tile)
+        _require_resolved_footprint(heightmap, config)
         block = self.block(config)
         stages = dict(block.seconds) if block.runs == 0 else {}
         block.runs += 1
         t = time.perf_counter()
-        base, flat_indentation, warm = block.base(config.force_n, config.contact)
+        base, flat_indentation, warm = block.base(config.force_n, config.contact, config.max_rounds)
         stages["base_field"] = time.perf_counter() - t
         z0 = heightmap.max_in_footprint(config.width_mm, centre, periodic=tile)
         surface = texture_surface(heightmap, centre, z0, tile)
         # Initial contact set: what the flat block's indentation at this force would touch.
         initial = surface(*block.problem.bottom_xy.T) >= -flat_indentation
         t = time.perf_counter()
-        setups = block.problem.system.stats.setups
         try:
-            state, _ = solve_contact(block.problem, surface, config.force_n, config.contact == "frictionless",
-                                     max_rounds=config.max_rounds, initial=initial, warm=warm)
+            state = solve_contact(block.problem, surface, config.force_n, config.contact == "frictionless",
+                                     max_rounds=config.max_rounds, initial=initial, warm=warm, callback=callback)
         except (ContactError, SolverError) as err:
             raise SimulationError(str(err)) from err
         stages["contact"] = time.perf_counter() - t
+        _require_small_strain_regime(config, state)
         t = time.perf_counter()
         lam3 = block.sampler.max_compression(state.u)
         stages["strain"] = time.perf_counter() - t
@@ -179,34 +221,73 @@ class Simulator:
             roughness_stderr=se,
             contact_fraction=contact_fraction,
             indentation_mm=state.indentation_mm,
-            converged=state.converged,
+            converged=state.success,
             iterations=state.rounds,
             unresolved_nodes=state.unresolved,
             cycled=state.cycled,
+            cg_iterations=state.cg_iterations,
+            amg_setups=state.amg_setups,
             nodes=len(block.mesh.points),
             dofs=3 * len(block.mesh.points),
             seconds=time.perf_counter() - t_start,
-            stage_seconds={**stages, "amg_setups": block.problem.system.stats.setups - setups},
+            stage_seconds=stages,
             fluctuation=fluct,
             lambda3=lam3,
             grid_axis_mm=block.sampler.axis,
             contact_history=state.contact_history,
-            warnings=_regime_warnings(config, state),
+            notes=_notes(config, state, heightmap),
             config=config,
             state=state,
         )
 
 
-def _regime_warnings(config: SimConfig, state: ContactState) -> list[str]:
+def _require_resolved_footprint(heightmap: Heightmap, config: SimConfig) -> None:
+    """InputError if the skin footprint spans fewer than MIN_FOOTPRINT_PIXELS pixels."""
+    across = config.width_mm / heightmap.pixel_mm
+    if across < MIN_FOOTPRINT_PIXELS:
+        raise InputError(f"the {config.width_mm:g} mm skin footprint spans only {across:.3g} pixels of "
+                         f"{heightmap.pixel_mm:g} mm (at least {MIN_FOOTPRINT_PIXELS} needed): the texture is not "
+                         "resolved at the fingertip's scale; is the pixel size in mm?", parameter="pixel_mm")
+
+
+def _require_small_strain_regime(config: SimConfig, state: ContactResult) -> None:
+    """InputError if the skin was pushed beyond MAX_INDENTATION_TISSUES tissue thicknesses."""
+    ratio = state.indentation_mm / config.tissue_mm
+    if ratio > MAX_INDENTATION_TISSUES:
+        below = config.force_n * MAX_INDENTATION_TISSUES / ratio
+        raise InputError(
+            f"the skin would be pushed {state.indentation_mm:.4g} mm into the texture, {ratio:.3g} times its "
+            f"{config.tissue_mm:g} mm thickness (limit {MAX_INDENTATION_TISSUES:g}): linear elasticity cannot "
+            f"answer this; a force of {config.force_n:g} N is far too large for this texture (stay below about "
+            f"{below:.2g} N), or its heights are not in mm", parameter="force_n")
+
+
+def _notes(config: SimConfig, state: ContactResult, heightmap: Heightmap) -> list[Note]:
     out = []
-    if state.indentation_mm > config.tissue_mm:
-        out.append(f"indentation {state.indentation_mm:.2f} mm exceeds the {config.tissue_mm} mm tissue: "
-                   "linear small-strain elasticity far past its range (as in the paper's model)")
-    if not state.converged:
-        out.append(f"contact did not settle in {state.rounds} rounds: {state.unresolved} nodes still violate "
-                   f"(max penetration {state.max_penetration_mm:.2e} mm, max tension {state.max_tension_mpa:.2e} MPa)")
+    ratio = state.indentation_mm / config.tissue_mm
+    if ratio > 1:
+        out.append(Note("indentation", f"indentation {state.indentation_mm:.2f} mm exceeds the {config.tissue_mm} mm "
+                        "tissue: linear small-strain elasticity past its range (as in the paper's model)",
+                        unusual=ratio > DEEP_INDENTATION_TISSUES))
+    if not state.success:
+        out.append(Note("not_converged", f"{state.message}; {state.unresolved} nodes still violate contact (max "
+                        f"penetration {state.max_penetration_mm:.2e} mm, max tension {state.max_tension_mpa:.2e} MPa)",
+                        unusual=True))
+    elif state.unresolved:
+        held = state.in_contact & (state.normal_reaction < 0)
+        tension_n = float(-state.normal_reaction[held].sum())
+        out.append(Note("unresolved", f"{state.unresolved} nodes held in contact under tension after changing state "
+                        f"{MAX_FLIPS} times (max {state.max_tension_mpa:.2e} MPa, {tension_n:.2g} N in all)",
+                        unusual=tension_n > HELD_TENSION_FRACTION * config.force_n))
     if state.cycled:
-        out.append("the contact set revisited an earlier state (cycling) before settling")
+        out.append(Note("cycled", "the contact set revisited an earlier state (cycling)", unusual=True))
+    if config.element == "p1" and config.poisson > LOCKING_POISSON:
+        out.append(Note("locking", f"P1 elements lock at Poisson ratio {config.poisson} > {LOCKING_POISSON}: strain "
+                        "is underestimated; use element p2", unusual=True))
+    feature = heightmap.feature_size_mm()
+    if feature < config.h_contact_mm:
+        out.append(Note("unresolved_texture", f"texture features (~{feature:.2g} mm) are finer than the contact mesh "
+                        f"({config.h_contact_mm} mm): they are under-resolved; use a finer fidelity", unusual=True))
     return out
 
 

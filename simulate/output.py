@@ -19,18 +19,23 @@ def save_strain_png(result: Result, path: str | Path) -> None:
     import matplotlib.pyplot as plt
 
     a = result.grid_axis_mm
+    c = result.config
     extent = (a[0], a[-1], a[0], a[-1])
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.4), constrained_layout=True)
-    for ax, field, title in ((axes[0], result.lambda3, "max. compressive strain $\\lambda_3$"),
-                             (axes[1], result.fluctuation, "fluctuation (minus untextured base)")):
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.6), constrained_layout=True)
+    panels = ((result.lambda3, f"$\\lambda_3$ at {c.depth_mm} mm depth",
+               "max. compressive principal strain $\\lambda_3$ (dimensionless)"),
+              (result.fluctuation, "fluctuation: $\\lambda_3$ minus that of the flat texture",
+               "strain fluctuation $\\Delta\\lambda_3$ (dimensionless)"))
+    for ax, (field, title, label) in zip(axes, panels):
         im = ax.imshow(field, origin="lower", extent=extent, cmap="viridis")
         ax.set(title=title, xlabel="x (mm)", ylabel="y (mm)")
-        fig.colorbar(im, ax=ax, shrink=0.85)
-    c = result.config
-    fig.suptitle(f"V = {result.roughness:.4g} ± {result.roughness_stderr:.2g}   "
-                 f"(depth {c.depth_mm} mm, F = {c.force_n} N, contact {100 * result.contact_fraction:.0f}%)")
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
-    plt.close(fig)
+        fig.colorbar(im, ax=ax, shrink=0.85, label=label)
+    fig.suptitle(f"FEM ({c.fidelity} fidelity, h = {c.h_contact_mm} mm): V = {result.roughness:.4g} ± "
+                 f"{result.roughness_stderr:.2g}   (F = {c.force_n} N, contact {100 * result.contact_fraction:.0f}%)")
+    try:
+        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
+    finally:
+        plt.close(fig)
 
 
 def save_vtu(result: Result, block: Block, path: str | Path) -> None:

@@ -3,47 +3,53 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 
+from . import common
 from .common import add_heightmap_args, log
 
 
 def add_parser(sub) -> None:
-    from roughness.simulate.config import BONE_MODELS, CONTACT_MODES, ELEMENTS, FIDELITIES
+    from roughness.simulate.config import CHOICES, FIDELITY_SPACING_MM, SimConfig
 
+    d = SimConfig()
+    spacing = ", ".join(f"{k} {v} mm" for k, v in FIDELITY_SPACING_MM.items())
     sim = sub.add_parser("simulate", help="FEM roughness of a heightmap (reference engine)")
     add_heightmap_args(sim)
-    sim.add_argument("--fidelity", choices=FIDELITIES, default="default",
-                     help="mesh resolution: coarse 0.3 mm, default 0.2 mm, fine 0.14 mm, auto from feature size")
-    sim.add_argument("--force", type=float, default=10.0, help="normal force in N (default 10)")
-    sim.add_argument("--poisson", type=float, default=0.45, help="tissue Poisson ratio (default 0.45)")
-    sim.add_argument("--contact", choices=CONTACT_MODES, default="stick")
-    sim.add_argument("--element", choices=ELEMENTS, default="p1", help="p2 for Poisson ratio close to 0.5")
-    sim.add_argument("--bone", choices=BONE_MODELS, default="rigid")
-    sim.add_argument("--seed", type=int, default=0, help="seed of the disk-pair sampling")
-    sim.add_argument("--json", action="store_true", help="print one JSON object")
-    sim.add_argument("--save-strain", metavar="PNG", help="image of the strain map at receptor depth")
-    sim.add_argument("--save-vtu", metavar="FILE", help="deformed mesh with strain for ParaView")
-    sim.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
-    sim.set_defaults(run=run)
+    sim.add_argument("--fidelity", choices=CHOICES["fidelity"], default=d.fidelity,
+                     help=f"contact-mesh spacing: {spacing}, auto from the feature size (default: %(default)s)")
+    sim.add_argument("--force", type=float, default=d.force_n, help="normal force in N (default: %(default)s)")
+    sim.add_argument("--poisson", type=float, default=d.poisson, help="tissue Poisson ratio (default: %(default)s)")
+    sim.add_argument("--contact", choices=CHOICES["contact"], default=d.contact,
+                     help="skin-texture contact: stick (no slip) or frictionless (default: %(default)s)")
+    sim.add_argument("--element", choices=CHOICES["element"], default=d.element,
+                     help="tetrahedra: p1 linear, p2 quadratic (for Poisson ratio close to 0.5) (default: %(default)s)")
+    sim.add_argument("--bone", choices=CHOICES["bone"], default=d.bone,
+                     help=f"bone under the tissue: rigid, or elastic {d.bone_mm} mm layer (default: %(default)s)")
+    sim.add_argument("--seed", type=int, default=d.seed, help="seed of the disk-pair sampling of V (default: %(default)s)")
+    sim.add_argument("--json", action="store_true",
+                     help="print one JSON object: V, contact, solver counts and `notes` (default: a table)")
+    sim.add_argument("--save-strain", metavar="PNG", help="image of the strain map at receptor depth (default: none)")
+    sim.add_argument("--save-vtu", metavar="FILE", help="deformed mesh with strain for ParaView (default: none)")
+    common.add_overwrite(sim)
+    common.add_quiet(sim)
+    common.finish(sim, run, force_n="--force")
 
 
 def run(args: argparse.Namespace) -> int:
+    from roughness.core.files import check_output
     from roughness.simulate.config import SimConfig
     from roughness.simulate.io import load_heightmap
     from roughness.simulate.model import Simulator
 
+    for name in ("save_strain", "save_vtu"):
+        if getattr(args, name):
+            check_output(getattr(args, name), args.overwrite, name)
     hm = load_heightmap(args.heightmap, pixel_mm=args.pixel_mm, height_mm=args.height_mm)
     config = SimConfig(fidelity=args.fidelity, force_n=args.force, poisson=args.poisson, contact=args.contact,
                        element=args.element, bone=args.bone, seed=args.seed)
-    for path in (args.save_strain, args.save_vtu):
-        if path and not os.path.isdir(os.path.dirname(os.path.abspath(path))):
-            from roughness.core.errors import InputError
-
-            raise InputError(f"cannot write {path}: its folder does not exist")
     log(args, f"{args.heightmap}: {hm.shape[1]} x {hm.shape[0]} px of {hm.pixel_mm} mm; "
-               f"{config.resolved(hm).fidelity} fidelity, contact spacing {config.spacing_mm(hm)} mm; "
-               "preparing the skin block (cached after the first run) ...")
+              f"{config.fidelity} fidelity, contact spacing {config.spacing_mm(hm)} mm; "
+              "preparing the skin block (cached after the first run) ...")
     sim = Simulator(config)
     result = sim.run(hm, centre_mm=args.centre, tile=args.tile)
     if args.save_strain:
@@ -60,8 +66,8 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps({"input": args.heightmap, **result.summary()}))
     else:
         _print_result(result)
-    for w in result.warnings:
-        log(args, f"note: {w}")
+    for note in result.unusual_notes:
+        log(args, f"note: {note.message}")
     return 0
 
 
