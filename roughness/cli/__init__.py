@@ -28,7 +28,10 @@ def _version() -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:  # --help, --version, or a usage error (argparse printed it): exit 2
+        return exit_.code if isinstance(exit_.code, int) else 2
     from roughness.core.errors import InputError, SimulationError
 
     try:
