@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from roughness.core.errors import InputError, OutputExists
-from roughness.core.files import atomic_write
+from roughness.core.errors import InputError
+from roughness.core.files import atomic_write, check_output_folder
 from roughness.core.hashing import array_digest
 from roughness.simulate.heightmap import Heightmap
 
@@ -128,16 +128,11 @@ def check_report_folder(folder: Path, manifest: dict, overwrite: bool = False) -
 
     The same comparison (input, number of textures, reference and engines) resumes there.
     """
-    if folder.exists() and not folder.is_dir():
-        raise InputError(f"{folder} is a file, not a folder", parameter="out")
-    if overwrite or not folder.is_dir() or not any(folder.iterdir()):
-        return
     try:
         same = json.loads((folder / MANIFEST_FILE).read_text()) == manifest
     except (OSError, json.JSONDecodeError):
         same = False
-    if not same:
-        raise OutputExists(folder, "out")
+    check_output_folder(folder, overwrite or same, "out")
 
 
 def write_manifest(folder: Path, manifest: dict) -> None:

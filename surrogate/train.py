@@ -22,8 +22,8 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from roughness.core.errors import InputError, OutputExists
-from roughness.core.files import atomic_write
+from roughness.core.errors import InputError
+from roughness.core.files import atomic_write, check_output_folder
 from roughness.dataset.digest import inputs_sha256
 from roughness.dataset.store import open_dataset
 
@@ -56,16 +56,6 @@ def infer(model: RoughnessNet, patches: np.ndarray, batch: int = 256) -> tuple[n
     return roughness_from_log(np.concatenate(logs)), np.concatenate(embeddings)
 
 
-def check_out_folder(out: str | Path, overwrite: bool = False) -> Path:
-    """The training output folder: a new or empty folder, or an existing one only if ``overwrite``."""
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"{out} is a file, not a folder", parameter="out")
-    if out.is_dir() and any(out.iterdir()) and not overwrite:
-        raise OutputExists(out, "out")
-    return out
-
-
 def format_scores(values: dict) -> str:
     """A split's scores with units: counts, Spearman and R² as numbers, errors and shares in percent."""
     percent = ("median_rel_err", "p95_rel_err", "out_of_domain")
@@ -79,7 +69,7 @@ def train(cfg: TrainConfig, overwrite: bool = False) -> Path:
     On any error or interruption the intermediate best.pt is removed, and a folder this call
     created is removed again if nothing else was written into it.
     """
-    out = check_out_folder(cfg.out, overwrite)
+    out = check_output_folder(cfg.out, overwrite)
     created = not out.exists()
     try:
         return _train(cfg, out)

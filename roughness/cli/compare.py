@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import add_overwrite, add_quiet, at_least_one, finish, log
+from .common import COUNT, POSITIVE, add_overwrite, add_quiet, finish, log
 
 COMPARE_ENGINES = ("fem:coarse", "fem:default", "surrogate", "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance")
 REFERENCE = "fem:fine"
@@ -22,10 +22,10 @@ def add_parser(sub) -> None:
                           f"glcm_sum_variance (default: {' '.join(COMPARE_ENGINES)})")
     cmp.add_argument("--reference", default=REFERENCE,
                      help=f"engine the others are scored against (default: {REFERENCE})")
-    cmp.add_argument("--n", type=int, help="number of textures, the first n (default: all; required for a recipe)")
-    cmp.add_argument("--pixel-mm", type=float,
+    cmp.add_argument("--n", type=COUNT, help="number of textures, the first n (default: all; required for a recipe)")
+    cmp.add_argument("--pixel-mm", type=POSITIVE,
                      help="pixel size of a folder's heightmaps in mm (default: none; required unless the files state it)")
-    cmp.add_argument("--height-mm", type=float,
+    cmp.add_argument("--height-mm", type=POSITIVE,
                      help="full-scale height of a folder's PNG/TIFF heightmaps in mm (default: the file's own)")
     add_quiet(cmp)
     add_overwrite(cmp)
@@ -40,8 +40,6 @@ def run(args: argparse.Namespace) -> int:
     from roughness.engines import make_engine
     from roughness.report import write_report
 
-    if args.n is not None:
-        at_least_one("--n", args.n)
     specs = list(dict.fromkeys([args.reference, *args.engines]))
     engines = [make_engine(spec) for spec in specs]
     out = Path(args.out)

@@ -7,7 +7,7 @@ import os
 import sys
 import time
 
-from .common import add_overwrite, add_quiet, at_least_one, defaults, finish, float_pair, log
+from .common import COUNT, POSITIVE, add_overwrite, add_quiet, defaults, finish, float_pair, log
 
 MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
 
@@ -27,20 +27,20 @@ def add_parser(sub) -> None:
     pr.add_argument("--fidelity", choices=("coarse", "default"),
                     help="FEM fidelity (default: that of the model's training labels; the standard scale "
                          "is tabulated for these two)")
-    pr.add_argument("--pixel-mm", type=float, help="pixel size in mm (default: none; required unless the file "
+    pr.add_argument("--pixel-mm", type=POSITIVE, help="pixel size in mm (default: none; required unless the file "
                                                    "states it)")
-    pr.add_argument("--height-mm", type=float, help="height of full-scale white in mm for PNG/TIFF (default: the "
+    pr.add_argument("--height-mm", type=POSITIVE, help="height of full-scale white in mm for PNG/TIFF (default: the "
                                                     "file's own)")
     pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures (default: off)")
     pr.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
-    pr.add_argument("--batch-size", type=int, default=given["batch_size"],
+    pr.add_argument("--batch-size", type=COUNT, default=given["batch_size"],
                     help=f"heightmaps per surrogate batch (default: {given['batch_size']})")
-    pr.add_argument("--threads", type=int, default=threads, help=f"onnxruntime threads (default: {threads})")
+    pr.add_argument("--threads", type=COUNT, default=threads, help=f"onnxruntime threads (default: {threads})")
     pr.add_argument("--json", action="store_true", help="one JSON object per input and line (default: text)")
     pr.add_argument("--map", metavar="FILE", help="roughness map of a whole object (one input): the footprint slid "
                     "over the map, saved as .png (figure) or .npy (V per position); refused if FILE exists "
                     "unless --overwrite")
-    pr.add_argument("--step-mm", type=float, default=mapping["step_mm"],
+    pr.add_argument("--step-mm", type=POSITIVE, default=mapping["step_mm"],
                     help=f"--map: distance between footprint positions in mm (default: {mapping['step_mm']:g})")
     add_quiet(pr)
     add_overwrite(pr)
@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
         from roughness.surrogate.roughness_map import check_map_path
 
         check_map_path(args.map, args.overwrite)
-    model = SurrogateModel(args.model or DEFAULT_MODEL, threads=at_least_one("--threads", args.threads))
+    model = SurrogateModel(args.model or DEFAULT_MODEL, threads=args.threads)
     if args.map:
         return _predict_map(args, model)
     reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, model.footprint_mm, args.centre, args.tile)
@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 
     predict(reader.heightmaps(), engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
-            fidelity=args.fidelity, batch_size=at_least_one("--batch-size", args.batch_size),
+            fidelity=args.fidelity, batch_size=args.batch_size,
             sources=reader.sources(), on_result=show)
     for source, error in reader.errors:
         print(f"roughness: error: {error}", file=sys.stderr)
@@ -99,7 +99,7 @@ def _predict_map(args: argparse.Namespace, model) -> int:
             eta = (now - start) / done * (total - done)
             log(args, f"map: {done:,}/{total:,} footprint positions, {now - start:.0f} s, ETA {eta:.0f} s")
 
-    result = roughness_map(model, hm, args.step_mm, args.tile, at_least_one("--batch-size", args.batch_size),
+    result = roughness_map(model, hm, args.step_mm, args.tile, args.batch_size,
                            progress=progress)
     save_map(result, args.map)
     summary = {"input": args.inputs[0], "map": args.map, **result.summary(), "seconds": time.perf_counter() - start}

@@ -5,7 +5,7 @@ import argparse
 import json
 
 from . import common
-from .common import add_heightmap_args, log
+from .common import POISSON, POSITIVE, SEED, add_heightmap_args, log
 
 
 def add_parser(sub) -> None:
@@ -17,15 +17,15 @@ def add_parser(sub) -> None:
     add_heightmap_args(sim)
     sim.add_argument("--fidelity", choices=CHOICES["fidelity"], default=d.fidelity,
                      help=f"contact-mesh spacing: {spacing}, auto from the feature size (default: %(default)s)")
-    sim.add_argument("--force", type=float, default=d.force_n, help="normal force in N (default: %(default)s)")
-    sim.add_argument("--poisson", type=float, default=d.poisson, help="tissue Poisson ratio (default: %(default)s)")
+    sim.add_argument("--force", type=POSITIVE, default=d.force_n, help="normal force in N (default: %(default)s)")
+    sim.add_argument("--poisson", type=POISSON, default=d.poisson, help="tissue Poisson ratio (default: %(default)s)")
     sim.add_argument("--contact", choices=CHOICES["contact"], default=d.contact,
                      help="skin-texture contact: stick (no slip) or frictionless (default: %(default)s)")
     sim.add_argument("--element", choices=CHOICES["element"], default=d.element,
                      help="tetrahedra: p1 linear, p2 quadratic (for Poisson ratio close to 0.5) (default: %(default)s)")
     sim.add_argument("--bone", choices=CHOICES["bone"], default=d.bone,
                      help=f"bone under the tissue: rigid, or elastic {d.bone_mm} mm layer (default: %(default)s)")
-    sim.add_argument("--seed", type=int, default=d.seed, help="seed of the disk-pair sampling of V (default: %(default)s)")
+    sim.add_argument("--seed", type=SEED, default=d.seed, help="seed of the disk-pair sampling of V (default: %(default)s)")
     sim.add_argument("--json", action="store_true",
                      help="print one JSON object: V, contact, solver counts and `notes` (default: a table)")
     sim.add_argument("--save-strain", metavar="PNG", help="image of the strain map at receptor depth (default: none)")

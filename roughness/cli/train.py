@@ -5,7 +5,7 @@ import argparse
 import json
 import sys
 
-from .common import add_overwrite, at_least_one, defaults, finish
+from .common import COUNT, POSITIVE, SEED, add_overwrite, defaults, finish
 
 
 def add_parser(sub) -> None:
@@ -19,17 +19,17 @@ def add_parser(sub) -> None:
                          "samples with the default fractions; thousands for a useful model")
     tr.add_argument("--out", required=True, help="folder for checkpoint.pt, metrics.json, history.csv, "
                                                  "predictions.csv; refused if it holds files unless --overwrite")
-    tr.add_argument("--seed", type=int, default=d["seed"], help=f"seed of weights and batches (default: {d['seed']})")
+    tr.add_argument("--seed", type=SEED, default=d["seed"], help=f"seed of weights and batches (default: {d['seed']})")
     tr.add_argument("--holdout-family", default=d["holdout_family"],
                     help="family never trained on, scored as out-of-family (default: the dataset recipe's; "
                          "'none' to train on all)")
-    tr.add_argument("--batch-size", type=int, default=d["batch_size"],
+    tr.add_argument("--batch-size", type=COUNT, default=d["batch_size"],
                     help=f"training batch size (default: {d['batch_size']})")
-    tr.add_argument("--max-epochs", type=int, default=d["max_epochs"],
+    tr.add_argument("--max-epochs", type=COUNT, default=d["max_epochs"],
                     help=f"epochs of the cosine schedule (default: {d['max_epochs']})")
-    tr.add_argument("--max-minutes", type=float, default=d["max_minutes"],
+    tr.add_argument("--max-minutes", type=POSITIVE, default=d["max_minutes"],
                     help=f"wall-clock budget for the epochs in minutes (default: {d['max_minutes']:g})")
-    tr.add_argument("--threads", type=int, default=d["threads"], help=f"torch threads (default: {d['threads']})")
+    tr.add_argument("--threads", type=COUNT, default=d["threads"], help=f"torch threads (default: {d['threads']})")
     add_overwrite(tr)
     finish(tr, train, data="DATASET")
     ex = sub.add_parser("export", help="export a training checkpoint to ONNX, checked against PyTorch")
@@ -47,14 +47,12 @@ def train(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
 
     _require_torch("train")
-    from roughness.surrogate.train import TrainConfig, check_out_folder, train
+    from roughness.core.files import check_output_folder
+    from roughness.surrogate.train import TrainConfig, train
 
+    check_output_folder(args.out, args.overwrite)
     if not os.path.isfile(args.data):
         raise InputError(f"dataset file not found: {args.data}")
-    for flag, value in (("--max-epochs", args.max_epochs), ("--threads", args.threads),
-                        ("--batch-size", args.batch_size)):
-        at_least_one(flag, value)
-    check_out_folder(args.out, args.overwrite)
     train(TrainConfig(data=args.data, out=args.out, seed=args.seed, holdout_family=args.holdout_family,
                       batch_size=args.batch_size, max_epochs=args.max_epochs, max_minutes=args.max_minutes,
                       threads=args.threads), overwrite=args.overwrite)

@@ -25,6 +25,22 @@ def check_output(path: str | Path, overwrite: bool = False, name: str = "out") -
     return path
 
 
+def check_output_folder(path: str | Path, overwrite: bool = False, name: str = "out") -> Path:
+    """``path`` if it may become an output folder: new, empty, or (with ``overwrite``) any folder,
+    inside a folder that exists and is writable. Call before any computation."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise InputError(f"{path} is a file, not a folder", parameter=name)
+    if path.is_dir() and any(path.iterdir()) and not overwrite:
+        raise OutputExists(path, name)
+    parent = path.resolve().parent
+    if not path.exists() and not parent.is_dir():
+        raise InputError(f"cannot create {path}: folder {parent} does not exist", parameter=name)
+    if not os.access(path if path.exists() else parent, os.W_OK | os.X_OK):
+        raise InputError(f"cannot write into {path if path.exists() else parent}: not writable", parameter=name)
+    return path
+
+
 def atomic_write(path: str | Path, write: Callable[[str], object]) -> Path:
     """Call ``write`` on a temporary file beside ``path`` (same suffix), then rename it over ``path``.
 
