@@ -33,16 +33,16 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("predict",): ["map.npy", "--pixel-mm", "0.05", "--engine", "surrogate"],
     ("compare",): ["maps", "--pixel-mm", "0.05", "--out", "report", "--engines", "ra", "--reference", "p90"],
 }
-# Input files per subcommand: (position in BASE or flag, suffix the broken file gets).
-FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str]]] = {
-    ("simulate",): [(0, ".npy")],
-    ("dataset", "build"): [("--recipe", ".json")],
-    ("dataset", "info"): [(0, ".h5")],
-    ("dataset", "verify"): [(0, ".h5")],
-    ("train",): [(0, ".h5")],
-    ("export",): [(0, ".pt")],
-    ("predict",): [(0, ".npy"), ("--model", ".onnx")],
-    ("compare",): [(0, ".json")],
+# Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
+FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
+    ("simulate",): [(0, ".npy", [])],
+    ("dataset", "build"): [("--recipe", ".json", [])],
+    ("dataset", "info"): [(0, ".h5", [])],
+    ("dataset", "verify"): [(0, ".h5", [])],
+    ("train",): [(0, ".h5", [])],
+    ("export",): [(0, ".pt", [])],
+    ("predict",): [(0, ".npy", []), ("--model", ".onnx", [])],
+    ("compare",): [(0, ".json", ["--n", "2"]), (0, ".h5", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
@@ -76,10 +76,10 @@ def _numeric_cases() -> list[tuple[tuple[str, ...], str, str]]:
     return cases
 
 
-def _file_cases() -> list[tuple[tuple[str, ...], int | str, str, str]]:
+def _file_cases() -> list[tuple[tuple[str, ...], int | str, str, list[str], str]]:
     kinds = ("missing", "empty", "truncated", "folder", "garbage")
-    return [(path, where, suffix, kind) for path, inputs in FILE_INPUTS.items() for where, suffix in inputs
-            for kind in kinds]
+    return [(path, where, suffix, extra, kind) for path, inputs in FILE_INPUTS.items()
+            for where, suffix, extra in inputs for kind in kinds]
 
 
 def _output_cases() -> list[tuple[tuple[str, ...], str, str]]:
@@ -163,8 +163,8 @@ def test_numeric_option_out_of_domain(path, flag, value, workdir, capsys):
     _expect_refusal([*path, *BASE[path], flag, value], workdir, capsys, (flag,))
 
 
-@pytest.mark.parametrize("path, where, suffix, kind", _file_cases(), ids=lambda v: str(v))
-def test_broken_input_file(path, where, suffix, kind, workdir, capsys):
+@pytest.mark.parametrize("path, where, suffix, extra, kind", _file_cases(), ids=lambda v: str(v))
+def test_broken_input_file(path, where, suffix, extra, kind, workdir, capsys):
     name = f"broken{suffix}"
     target = workdir / name
     if kind == "empty":
@@ -175,7 +175,7 @@ def test_broken_input_file(path, where, suffix, kind, workdir, capsys):
         target.mkdir()
     elif kind == "garbage":
         target.write_bytes(bytes(range(256)) * 4)
-    argv = list(BASE[path])
+    argv = [*BASE[path], *extra]
     if isinstance(where, int):
         argv[where] = name
     else:
