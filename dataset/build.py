@@ -19,7 +19,8 @@ from roughness.core.version import package_version
 from roughness.simulate.config import SimConfig
 
 from .recipe import Recipe, expand, realise
-from .store import DatasetWriter, result_fields, sample_id
+from .schema import DatasetConfig, result_fields, sample_id
+from .store import DatasetWriter
 
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration
@@ -77,8 +78,8 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig, workers: int = 2,
     ids = [sample_id(r) for r in records]
     if len(set(ids)) != len(ids):
         raise InputError("the recipe produced duplicate samples; change its seed or ranges")
-    file_config = {"simulation": config.as_dict(), "recipe": json.loads(recipe.to_json())}
-    with DatasetWriter(out, config=file_config, version=package_version()) as writer:
+    file_config = DatasetConfig(config.as_dict(), json.loads(recipe.to_json()))
+    with DatasetWriter(out, file_config, package_version()) as writer:
         pending = [r for r, i in zip(records, ids) if i not in writer.ids]
         counts = {"requested": n, "already_done": n - len(pending), "written": 0, "failed": 0}
         if not quiet:
