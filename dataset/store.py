@@ -73,7 +73,7 @@ def parts_folder(path: str | os.PathLike) -> Path:
 
 
 class DatasetWriter:
-    """Single writer of a dataset file (created if missing, else added to); a context manager.
+    """Single writer of a dataset file (created with its first sample, else added to); a context manager.
 
     ``config`` says how the samples are made (``DatasetConfig``, or its dict form); adding to a file
     requires the same configuration. ``version`` is the package version (stored).
@@ -87,13 +87,13 @@ class DatasetWriter:
         self._lock = _claim(self._parts, self.path)
         try:
             _remove_temporaries(self.path)
-            if not self.path.exists():
-                self._pack()  # an empty dataset: the file exists and reads from the start
-            with _open_h5(self.path) as h5:
-                header, entries = _read_index(h5, self.path, "exists and")
-            if header.config != self.config:
-                raise InputError(f"{self.path} was made with another configuration "
-                                 f"({header.config.differences(self.config)}); use a new file for this one")
+            entries = {}
+            if self.path.exists():
+                with _open_h5(self.path) as h5:
+                    header, entries = _read_index(h5, self.path, "exists and")
+                if header.config != self.config:
+                    raise InputError(f"{self.path} was made with another configuration "
+                                     f"({header.config.differences(self.config)}); use a new file for this one")
             self._ids = set(entries) | set(_part_ids(self._parts))
         except BaseException:
             self._release()
@@ -148,6 +148,8 @@ class DatasetWriter:
             raise ValueError(f"the writer of {self.path} is closed")
         if entry.id in self._ids:
             return False
+        if not self.path.exists():
+            self._pack()  # the file exists (an empty dataset) once the first sample is on its way
         arrays = {"entry": np.array(json.dumps(asdict(entry))), **maps}
         atomic_write(self._parts / f"{entry.id}.npz", lambda tmp: np.savez_compressed(tmp, **arrays))
         self._ids.add(entry.id)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from roughness.core.errors import InputError, OutputExists
@@ -66,3 +67,11 @@ def error_message(err: InputError, flags: dict[str, str]) -> str:
         return f"{err.path} already exists; pass --overwrite to replace it"
     flag = flags.get(err.parameter or "")
     return f"{flag}: {err}" if flag else str(err)
+
+
+def write_stdout(text: str) -> None:
+    """Print ``text``; if the reader has gone (``| head``), the rest of the output goes nowhere, quietly."""
+    try:
+        print(text, flush=True)
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # so the flush at exit cannot fail
