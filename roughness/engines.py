@@ -71,7 +71,7 @@ class SurrogateEngine:
 
     @property
     def identity(self) -> str:
-        from roughness.dataset.digest import file_sha256
+        from roughness.core.hashing import file_sha256
         from roughness.surrogate.predictor import DEFAULT_MODEL
 
         path = Path(self.model_path or DEFAULT_MODEL)
