@@ -16,7 +16,7 @@ def map_side(size_mm: object, pixel_mm: object) -> int:
     and making the map fits in this machine's memory."""
     n = round(positive("size_mm", size_mm) / positive("pixel_mm", pixel_mm))
     if n < 1:
-        raise InputError(f"size_mm={size_mm:g} is smaller than one pixel of {pixel_mm:g} mm", parameter="size_mm")
+        raise InputError(f"size_mm={size_mm:g} is smaller than one pixel (pixel_mm={pixel_mm:g})", parameter="size_mm")
     need, have = n * n * 8 * WORK_ARRAYS, _memory_bytes()
     if need > have:
         raise InputError(f"a {size_mm:g} mm map of {pixel_mm:g} mm pixels is {n} x {n} pixels: {_size(n * n * 8)} "

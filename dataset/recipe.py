@@ -60,13 +60,13 @@ class Recipe:
             raise InputError(f"families must be a non-empty object of family: weight, got {self.families!r}",
                              "families")
         for family, weight in self.families.items():
-            default_ranges(family)
+            _known("families", family)
             positive(f"families.{family}", weight)
         if not isinstance(self.ranges, dict):
             raise InputError(f"ranges must be an object of family: {{parameter: range}}, got {self.ranges!r}",
                              "ranges")
         for family, ranges in self.ranges.items():
-            allowed = default_ranges(family)
+            allowed = _known("ranges", family)
             if not isinstance(ranges, dict):
                 raise InputError(f"ranges.{family} must be an object of parameter: range, got {ranges!r}", "ranges")
             for key, spec in ranges.items():
@@ -74,7 +74,8 @@ class Recipe:
         in_range("perturb_probability", self.perturb_probability, 0.0, 1.0)
         integer("max_perturb_steps", self.max_perturb_steps, minimum=0)
         map_side(self.size_mm, self.pixel_mm)
-        if self.holdout_family is not None and self.holdout_family not in self.families:
+        if self.holdout_family is not None and (not isinstance(self.holdout_family, str)
+                                                or self.holdout_family not in self.families):
             raise InputError(f"holdout_family {self.holdout_family!r} is not among the recipe's families",
                              "holdout_family")
         if in_range("test_fraction", self.test_fraction, 0.0, 1.0) == 1.0:
@@ -82,6 +83,14 @@ class Recipe:
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), sort_keys=True)
+
+
+def _known(field_name: str, family: object) -> dict[str, tuple]:
+    """The default ranges of ``family``, or InputError naming the recipe field."""
+    try:
+        return default_ranges(family)
+    except InputError as err:
+        raise InputError(f"{field_name}: {err}", field_name) from None
 
 
 def _check_range(family: str, key: str, spec: object, allowed: dict[str, tuple]) -> None:
