@@ -16,6 +16,7 @@ import pytest
 
 from roughness.core.errors import InputError
 from roughness.dataset import store
+from roughness.dataset.digest import inputs_sha256
 from roughness.dataset.schema import DatasetConfig
 from roughness.dataset.store import (
     DatasetWriter,
@@ -282,10 +283,27 @@ def test_version_1_files_are_read_and_converted_by_the_next_writer(tmp_path):
         assert ds.header.schema_version == 1 and len(ds) == 3
         assert ds.table()["V"].tolist() == [values_of(sid) for sid in ds.ids]
     assert stored_indices(path, unfinished_ok=True) == [0, 1, 2]
+    checksum, old = inputs_sha256(path), path.read_bytes()
+    assert fill(path, range(3)) == [False] * 3
+    assert path.read_bytes() == old  # nothing to add: the file is left as it was
     assert fill(path, range(5)) == [False] * 3 + [True] * 2
     with open_dataset(path) as ds:
         assert ds.header.schema_version == 2 and ds.header.created == "2026-01-01T00:00:00+00:00"
     assert stored_indices(path) == [0, 1, 2, 3, 4]
+    new = tmp_path / "new.h5"
+    fill(new, range(3))
+    assert inputs_sha256(new) == checksum  # ids, recipes and heightmaps read alike from both layouts
+
+
+def test_the_dataset_layer_imports_no_upper_layer():
+    import ast
+
+    upper = ("roughness.cli", "roughness.surrogate", "roughness.compare", "roughness.engines", "roughness.report")
+    for source in (ROOT / "dataset").glob("*.py"):
+        for node in ast.walk(ast.parse(source.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            assert not [n for n in names if n.startswith(upper)], f"{source.name} imports {names}"
 
 
 def values_of(sid: str) -> float:
