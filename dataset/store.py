@@ -160,10 +160,11 @@ class DatasetWriter:
         ids = _part_ids(self._parts)
 
         def write(tmp: str) -> None:
-            if self.path.exists():
+            base = self.path.exists()
+            if base:
                 shutil.copyfile(self.path, tmp)
-            with h5py.File(tmp, "r+" if self.path.exists() else "w") as h5:
-                if self.path.exists():
+            with h5py.File(tmp, "r+" if base else "w") as h5:
+                if base:
                     header, entries = _read_index(h5, self.path, "exists and")
                 else:
                     header, entries = Header(self.config, self._version, _now()), {}
@@ -311,12 +312,13 @@ def _read_index(h5: h5py.File, path: Path, context: str = "is") -> tuple[Header,
                                  f"{journal.name}); finish it with that version")
             return header, {n: entry_from_attrs(n, g.attrs) for n, g in sorted(h5["samples"].items())
                             if not n.startswith(".tmp-")}
-        columns = [h5["index"][name] for name in ENTRY_FIELDS]
-        columns = [c.asstr()[()] if name in TEXT_FIELDS else c[()] for name, c in zip(ENTRY_FIELDS, columns)]
+        index = h5["index"]
+        columns = [index[n].asstr()[()] if n in TEXT_FIELDS else index[n][()] for n in ENTRY_FIELDS]
     except KeyError as err:
         raise InputError(f"{path} {context} is not a roughness dataset: {err}") from None
-    *head, history = [c.tolist() for c in columns[:-1]] + [columns[-1]]
-    return header, {row[0]: Entry(*row, tuple(h.tolist())) for *row, h in zip(*head, history)}
+    columns = [[tuple(h.tolist()) for h in c] if n == "contact_history" else c.tolist()
+               for n, c in zip(ENTRY_FIELDS, columns)]
+    return header, {row[0]: Entry(*row) for row in zip(*columns)}  # columns in Entry's field order
 
 
 def _read_part(file: Path) -> tuple[Entry, dict[str, np.ndarray]]:
