@@ -86,7 +86,6 @@ class DatasetWriter:
         self._parts = parts_folder(self.path)
         self._lock = _claim(self._parts, self.path)
         try:
-            _remove_temporaries(self.path)
             entries = {}
             if self.path.exists():
                 with _open_h5(self.path) as h5:
@@ -94,6 +93,7 @@ class DatasetWriter:
                 if header.config != self.config:
                     raise InputError(f"{self.path} was made with another configuration "
                                      f"({header.config.differences(self.config)}); use a new file for this one")
+            _remove_temporaries(self.path)  # of this dataset's writers: checked to be one above
             self._ids = set(entries) | set(_part_ids(self._parts))
         except BaseException:
             self._release()
