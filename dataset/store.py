@@ -44,6 +44,7 @@ from .schema import (
     RESULT_ARRAYS,
     RESULT_ATTRS,
     SCHEMA,
+    SCHEMA_VERSION,
     STATUSES,
     TEXT_FIELDS,
     DatasetConfig,
@@ -86,13 +87,14 @@ class DatasetWriter:
         self._parts = parts_folder(self.path)
         self._lock = _claim(self._parts, self.path)
         try:
-            entries = {}
+            entries, self._old_layout = {}, False
             if self.path.exists():
                 with _open_h5(self.path) as h5:
                     header, entries = _read_index(h5, self.path, "exists and")
                 if header.config != self.config:
                     raise InputError(f"{self.path} was made with another configuration "
                                      f"({header.config.differences(self.config)}); use a new file for this one")
+                self._old_layout = header.schema_version < SCHEMA_VERSION  # converted on close
             _remove_temporaries(self.path)  # of this dataset's writers: checked to be one above
             self._ids = set(entries) | set(_part_ids(self._parts))
         except BaseException:
@@ -123,11 +125,11 @@ class DatasetWriter:
         return self._write(recipe, pixel_mm, "failed", {"error": error}, maps)
 
     def close(self) -> None:
-        """Pack the finished samples into the file and release it (idempotent)."""
+        """Pack the finished samples into the file (and a version-1 file into version 2); release it (idempotent)."""
         if self._lock < 0:
             return
         try:
-            if _part_ids(self._parts):
+            if _part_ids(self._parts) or self._old_layout:
                 self._pack()
         finally:
             self._release()
