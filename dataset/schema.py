@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, fields
-from typing import Mapping
 
 import numpy as np
 
@@ -44,7 +44,6 @@ RESULT_ATTRS = {
     "seconds": ("seconds", float),
 }
 RESULT_ARRAYS = ("contact_history", "grid_axis_mm")
-MISSING = {float: math.nan, bool: False, int: -1}  # values of failed samples
 
 
 def sample_id(recipe: dict) -> str:

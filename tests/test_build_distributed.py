@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from roughness.core.errors import InputError
 from roughness.dataset.recipe import Recipe, expand
 from roughness.dataset.store import open_dataset, sample_id, verify
 
@@ -37,7 +38,7 @@ def stored(path: Path) -> list[str]:
     try:
         with open_dataset(path) as ds:
             return ds.ids
-    except Exception:  # not created yet
+    except InputError:  # not created yet
         return []
 
 
@@ -70,7 +71,7 @@ def test_build_survives_a_killed_worker(tmp_path):
         wait_for(lambda: len(stored(out)) >= 1 or build.poll() is not None, "the first sample", deadline)
         busy = {client.scheduler_info()["workers"][w]["name"] for w, tasks in client.processing().items() if tasks}
         assert build.poll() is None and busy, "the kill should land mid-build, on a worker with a task"
-        victim = sorted(busy)[0]
+        victim = min(busy)
         os.killpg(workers[victim].pid, signal.SIGKILL)
         assert workers[victim].wait(timeout=30) == -signal.SIGKILL
 

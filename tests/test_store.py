@@ -373,7 +373,7 @@ def stored_indices(path: Path, unfinished_ok: bool = False) -> list[int]:
         by_id = {sample_id(recipe(i)): i for i in range(N)}
         assert set(ds.ids) <= set(by_id) and len(set(ds.ids)) == len(ds)
         for s in ds.iter_samples(None):
-            rec, heights, pixel, values, strain = sample(by_id[s.id])
+            rec, heights, _, values, strain = sample(by_id[s.id])
             assert s.recipe == rec and s.values["V"] == values["roughness"]
             assert np.array_equal(s.heightmap.heights, heights.astype(np.float32))
             assert np.array_equal(s.fluctuation, strain.astype(np.float32))
