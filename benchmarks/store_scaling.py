@@ -9,6 +9,8 @@ are the --map/--strain sides in pixels. Times are wall-clock seconds on this mac
 - iterate: ``iter_samples()`` over every sample, maps included
 
     python benchmarks/store_scaling.py [--n 10000] [--label after]   # appends to benchmarks/results/store_scaling.md
+
+Run it from outside a source tree (or with PYTHONPATH naming the tree) to measure another checkout.
 """
 from __future__ import annotations
 
@@ -67,7 +69,8 @@ def main() -> None:
         path = Path(tmp) / "synthetic.h5"
         t_write = write(path, args.n, args.map, args.strain)
         size_mb = path.stat().st_size / 1e6
-        out = subprocess.run([sys.executable, "-c", READ, str(path)], capture_output=True, text=True, check=True)
+        out = subprocess.run([sys.executable, "-c", READ, str(path)], capture_output=True, text=True, check=True,
+                             cwd=tmp)  # not the current folder: the code read is the one PYTHONPATH names
         n, m, t_open, t_table, t_iter = out.stdout.split()
     assert int(n) == int(m) == args.n, (n, m)
     row = (f"| {args.label} | {args.n} | {args.map}/{args.strain} | {size_mb:.0f} | {t_write:.1f} | "
