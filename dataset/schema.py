@@ -156,8 +156,8 @@ class Entry:
 
     def values(self) -> dict:
         """Scalar values of the sample (Sample.values): results if ok, the error if failed."""
-        keep = ("pixel_mm", "written", "roughness_version")
-        keep += tuple(n for n, _ in RESULT_ATTRS.values()) + ("contact_history",) if self.status == "ok" else ("error",)
+        results = (*(name for name, _ in RESULT_ATTRS.values()), "contact_history")
+        keep = ("pixel_mm", "written", "roughness_version", *(results if self.status == "ok" else ("error",)))
         return {k: list(self.contact_history) if k == "contact_history" else getattr(self, k) for k in keep}
 
 
