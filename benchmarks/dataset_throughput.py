@@ -12,26 +12,28 @@ import argparse
 import json
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
-from roughness.dataset.build import build
+from roughness.dataset.build import BUILD_CONFIG, build
 from roughness.dataset.recipe import load_recipe
-from roughness.simulate.config import SimConfig
+from roughness.simulate.config import FIDELITIES
 
 ROOT = Path(__file__).parents[1]
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--n", type=int, default=30)
-    ap.add_argument("--fidelity", default="coarse")
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--n", type=int, default=30, help="samples per run (default 30)")
+    ap.add_argument("--fidelity", choices=FIDELITIES, default=BUILD_CONFIG.fidelity,
+                    help=f"FEM fidelity (default {BUILD_CONFIG.fidelity}, as training sets are built)")
     args = ap.parse_args()
     recipe = load_recipe(ROOT / "datasets" / "training.json")
     rows = []
     for workers in (1, 2):
         with tempfile.TemporaryDirectory() as tmp:
             t = time.perf_counter()
-            counts = build(str(Path(tmp) / "t.h5"), args.n, recipe, SimConfig(fidelity=args.fidelity),
+            counts = build(str(Path(tmp) / "t.h5"), args.n, recipe, replace(BUILD_CONFIG, fidelity=args.fidelity),
                            workers=workers, quiet=True)
             wall = time.perf_counter() - t
         rows.append({"workers": workers, "samples": args.n, "failed": counts["failed"], "wall_s": wall,

@@ -11,16 +11,23 @@ import os
 import sys
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from roughness.core.checks import integer
 from roughness.core.errors import InputError
 from roughness.core.version import package_version
 from roughness.simulate.config import SimConfig
 
-from .recipe import Recipe, expand, realise
-from .store import DatasetWriter, result_fields, sample_id
+from .schema import DatasetConfig, result_fields, sample_id
 
+if TYPE_CHECKING:  # the texture generators load on first use (the CLI reads this module's defaults)
+    from .recipe import Recipe
+    from .store import DatasetWriter
+
+BUILD_CONFIG = SimConfig(fidelity="coarse")  # how the project's training sets are simulated
+WORKERS = 2  # local Dask worker processes
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration
 
@@ -28,6 +35,8 @@ _SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configu
 def simulate_record(record: dict, config: dict) -> dict:
     """Run the FEM for one sample record (on a worker); failures come back as data."""
     from roughness.simulate.model import Simulator
+
+    from .recipe import realise
 
     key = json.dumps(config, sort_keys=True)
     if key not in _SIMULATORS:
@@ -70,15 +79,22 @@ def _duration(seconds: float) -> str:
     return f"{h}h{m:02d}m" if h else f"{m}m{s:02d}s"
 
 
-def build(out: str, n: int, recipe: Recipe, config: SimConfig, workers: int = 2,
+def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, workers: int = WORKERS,
           scheduler: str | None = None, quiet: bool = False) -> dict:
-    """Simulate the first ``n`` samples of ``recipe`` into ``out``; returns counts."""
+    """Simulate the first ``n`` samples of ``recipe`` into ``out``; returns counts.
+
+    ``out`` is created, or added to if it is a dataset of the same configuration (resume).
+    """
+    from .recipe import expand
+    from .store import DatasetWriter
+
+    integer("workers", workers, minimum=1)
     records = expand(recipe, n)
     ids = [sample_id(r) for r in records]
     if len(set(ids)) != len(ids):
         raise InputError("the recipe produced duplicate samples; change its seed or ranges")
-    file_config = {"simulation": config.as_dict(), "recipe": json.loads(recipe.to_json())}
-    with DatasetWriter(out, config=file_config, version=package_version()) as writer:
+    file_config = DatasetConfig(config.as_dict(), json.loads(recipe.to_json()))
+    with DatasetWriter(out, file_config, package_version()) as writer:
         pending = [r for r, i in zip(records, ids) if i not in writer.ids]
         counts = {"requested": n, "already_done": n - len(pending), "written": 0, "failed": 0}
         if not quiet:

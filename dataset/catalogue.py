@@ -7,6 +7,7 @@ from roughness.core.errors import InputError
 from roughness.simulate.heightmap import Heightmap, flat
 
 from . import natural, textures
+from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side
 
 
 def names() -> list[str]:
@@ -28,31 +29,45 @@ def parse_params(items: list[str]) -> dict[str, float | str]:
     return out
 
 
-def make_texture(name: str, seed: int = 0, size_mm: float = 12.0, pixel_mm: float = 0.05,
+def make_texture(name: str, seed: int = 0, size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM,
                  params: dict | None = None) -> tuple[Heightmap, dict]:
-    """The heightmap (mm) and its recipe (JSON-ready) for a texture name or family."""
+    """The heightmap (mm) and its recipe (JSON-ready) for a texture name or family.
+
+    An error about one of ``params`` names the parameter ``params``.
+    """
+    check_seed(seed)
+    map_side(size_mm, pixel_mm)
     params = dict(params or {})
-    recipe = {"name": name, "seed": seed, "size_mm": size_mm, "pixel_mm": pixel_mm, "params": params}
+    try:
+        return _make(name, seed, size_mm, pixel_mm, params), {"name": name, "seed": seed, "size_mm": size_mm,
+                                                               "pixel_mm": pixel_mm, "params": params}
+    except InputError as err:
+        if err.parameter in params:
+            raise InputError(str(err), parameter="params") from None
+        raise
+
+
+def _make(name: str, seed: int, size_mm: float, pixel_mm: float, params: dict) -> Heightmap:
     if name in natural.FAMILIES:
-        return natural.make(name, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm, **params), recipe
+        return natural.make(name, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm, **params)
     if name == "bumps":
         allowed = {f.name for f in fields(textures.BumpRecipe)} - {"size_mm", "pixel_mm", "seed"}
         unknown = sorted(set(params) - allowed)
         if unknown or "lambda_mm" not in params:
             raise InputError(f"bumps needs lambda_mm=...; valid parameters: {', '.join(sorted(allowed))}"
-                             + (f" (unknown: {', '.join(unknown)})" if unknown else ""))
+                             + (f" (unknown: {', '.join(unknown)})" if unknown else ""), "params")
         r = textures.BumpRecipe(size_mm=size_mm, pixel_mm=pixel_mm, seed=seed, **params)
-        return textures.bump_texture(r), recipe
+        return textures.bump_texture(r)
     if params:
-        raise InputError(f"{name} takes no parameters (use 'bumps' with lambda_mm=... for custom bumps)")
+        raise InputError(f"{name} takes no parameters (use 'bumps' with lambda_mm=... for custom bumps)", "params")
     if name.startswith("standard-"):
         lam = _number(name, "standard-")
-        return textures.standard_texture(lam, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm), recipe
+        return textures.standard_texture(lam, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm)
     if name.startswith("flattop-"):
         d = _number(name, "flattop-")
-        return textures.flat_top_texture(d, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm), recipe
+        return textures.flat_top_texture(d, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm)
     if name == "flat":
-        return flat(size_mm, pixel_mm), recipe
+        return flat(size_mm, pixel_mm)
     raise InputError(f"unknown texture {name!r}; valid: {', '.join(names())}")
 
 

@@ -3,22 +3,26 @@ from __future__ import annotations
 
 import numpy as np
 
+from roughness.core.checks import in_range, positive
 from roughness.core.errors import InputError
 from roughness.simulate.heightmap import Heightmap
 
+from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side
 
-def fbm_surface(size_mm: float = 12.0, pixel_mm: float = 0.05, hurst: float = 0.8, rms_mm: float = 0.15,
+
+def fbm_surface(size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, hurst: float = 0.8, rms_mm: float = 0.15,
                 cutoff_mm: float = 0.4, seed: int = 0) -> Heightmap:
     """Isotropic fBm heightmap with RMS height ``rms_mm``, rescaled to start at 0.
 
     The power spectrum falls as k^-(2 + 2 hurst) and is cut off below wavelength ``cutoff_mm``
     (features finer than a fingertip or a printer resolves are not generated).
     """
-    if not 0.0 < hurst < 1.0:
-        raise InputError(f"hurst exponent must lie in (0, 1), got {hurst}")
-    if min(size_mm, pixel_mm, rms_mm, cutoff_mm) <= 0:
-        raise InputError("size, pixel, rms and cutoff must be positive")
-    n = int(round(size_mm / pixel_mm))
+    if not 0.0 < in_range("hurst", hurst, 0.0, 1.0) < 1.0:
+        raise InputError(f"hurst must lie in (0, 1), got {hurst}", "hurst")
+    positive("rms_mm", rms_mm)
+    positive("cutoff_mm", cutoff_mm)
+    check_seed(seed)
+    n = map_side(size_mm, pixel_mm)
     rng = np.random.default_rng(seed)
     f = np.fft.fftfreq(n, d=pixel_mm)
     k = np.hypot(*np.meshgrid(f, f))

@@ -18,10 +18,12 @@ from collections.abc import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-from roughness.core.checks import positive
+from roughness.core.checks import in_range
 from roughness.core.errors import InputError
-from roughness.dataset.fractal import fbm_surface
 from roughness.simulate.heightmap import Heightmap
+
+from .fractal import fbm_surface
+from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side
 
 PARAMETER_RANGES: dict[str, dict[str, tuple]] = {
     "cellular": {"cell_mm": (0.5, 3.0), "profile": ("dome", "wall"), "height_mm": (0.05, 1.0),
@@ -60,10 +62,7 @@ def _check_value(family: str, name: str, value: object) -> None:
         if value not in allowed:
             raise InputError(f"{family} parameter {name}={value!r} must be one of {', '.join(allowed)}")
         return
-    low, high = allowed
-    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-    if not (ok and low <= value <= high):
-        raise InputError(f"{family} parameter {name}={value!r} is outside the allowed range {low:g}..{high:g}")
+    in_range(f"{family} parameter {name}", value, *allowed)
 
 
 def _check_scales(family: str, arguments: dict) -> None:
@@ -79,12 +78,6 @@ def _check_scales(family: str, arguments: dict) -> None:
                              f"got size_mm={size_mm:g}")
 
 
-def _check_seed(seed: object) -> None:
-    """InputError unless ``seed`` is a non-negative integer."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputError(f"seed must be a non-negative integer, got {seed!r}")
-
-
 def _validated(func: Callable[..., Heightmap]) -> Callable[..., Heightmap]:
     """Wrap a family so that its grid, seed and parameters are checked before it runs."""
     family, signature = func.__name__, inspect.signature(func)
@@ -94,20 +87,14 @@ def _validated(func: Callable[..., Heightmap]) -> Callable[..., Heightmap]:
         bound = signature.bind(*args, **kwargs)
         bound.apply_defaults()
         arguments = bound.arguments
-        positive("size_mm", arguments["size_mm"])
-        positive("pixel_mm", arguments["pixel_mm"])
-        _check_seed(arguments["seed"])
+        map_side(arguments["size_mm"], arguments["pixel_mm"])
+        check_seed(arguments["seed"])
         for name in PARAMETER_RANGES[family]:
             _check_value(family, name, arguments[name])
         _check_scales(family, arguments)
         return func(**arguments)
 
     return checked
-
-
-def _side(size_mm: float, pixel_mm: float) -> int:
-    """Pixels along each side of a map of side ``size_mm`` (mm)."""
-    return round(size_mm / pixel_mm)
 
 
 def _finish(heights: np.ndarray, pixel_mm: float) -> Heightmap:
@@ -161,7 +148,7 @@ def _stamp(n: int, pixel_mm: float, centres_mm: np.ndarray, radii_mm: np.ndarray
 
 
 @_validated
-def cellular(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, cell_mm: float = 1.5,
+def cellular(size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, seed: int = 0, cell_mm: float = 1.5,
              profile: str = "dome", height_mm: float = 0.5, wall_mm: float = 0.2) -> Heightmap:
     """Voronoi (Worley) cells, e.g. pebbles, leather grain or honeycomb; seamless periodic.
 
@@ -169,7 +156,7 @@ def cellular(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, cell_
     a rounded pillow, h (1 - (F1/F2)^2), 0 on the cell borders) or "wall" (rounded ridges of width
     ``wall_mm`` (mm) on the borders, ignored for domes); height_mm: peak height (mm).
     """
-    n = _side(size_mm, pixel_mm)
+    n = map_side(size_mm, pixel_mm)
     side = n * pixel_mm
     cells = max(2, round(side / cell_mm))
     rng = np.random.default_rng(seed)
@@ -189,7 +176,7 @@ def cellular(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, cell_
 
 
 @_validated
-def woven(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, pitch_mm: float = 1.0,
+def woven(size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, seed: int = 0, pitch_mm: float = 1.0,
           width_mm: float = 0.8, height_mm: float = 0.4, angle_deg: float = 0.0) -> Heightmap:
     """Plain over-under weave of elliptical threads, e.g. canvas or linen.
 
@@ -197,7 +184,7 @@ def woven(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, pitch_mm
     flat); height_mm: peak height (mm) at a crossing; angle_deg: warp direction (degrees from +y).
     ``seed`` sets the position of the weave.
     """
-    u, v = _centred_coords(_side(size_mm, pixel_mm), pixel_mm, angle_deg)
+    u, v = _centred_coords(map_side(size_mm, pixel_mm), pixel_mm, angle_deg)
     du, dv = _phases(seed, (2 * pitch_mm, 2 * pitch_mm))
     u, v = u + du, v + dv
     warp_index, weft_index = np.floor(u / pitch_mm), np.floor(v / pitch_mm)
@@ -210,7 +197,7 @@ def woven(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, pitch_mm
 
 
 @_validated
-def knit(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, wale_mm: float = 1.2,
+def knit(size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, seed: int = 0, wale_mm: float = 1.2,
          course_mm: float = 0.9, yarn_mm: float = 0.35, height_mm: float = 0.4) -> Heightmap:
     """Stockinette knit: columns (wales) of interlocking V-shaped stitches.
 
@@ -218,7 +205,7 @@ def knit(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, wale_mm: 
     diameter (mm); height_mm: peak height (mm), reached mid-leg where the yarn is on top.
     ``seed`` sets the position of the stitches.
     """
-    n = _side(size_mm, pixel_mm)
+    n = map_side(size_mm, pixel_mm)
     dx, dy = _phases(seed, (wale_mm, course_mm))
     c = (np.arange(n) + 0.5) * pixel_mm
     x, y = c[None, :] + dx, c[:, None] + dy
@@ -236,7 +223,7 @@ def knit(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, wale_mm: 
 
 
 @_validated
-def grating(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, period_mm: float = 1.0,
+def grating(size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, seed: int = 0, period_mm: float = 1.0,
             duty: float = 0.5, profile: str = "square", angle_deg: float = 0.0, height_mm: float = 0.5) -> Heightmap:
     """Parallel ridges, e.g. corduroy, ribbed plastic or wood grain.
 
@@ -245,7 +232,7 @@ def grating(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, period
     grating vector, degrees from +x; 0 gives ridges along y); height_mm: ridge height (mm).
     ``seed`` sets the position of the ridges.
     """
-    u, _ = _centred_coords(_side(size_mm, pixel_mm), pixel_mm, angle_deg)
+    u, _ = _centred_coords(map_side(size_mm, pixel_mm), pixel_mm, angle_deg)
     u = u + _phases(seed, (period_mm, period_mm))[0]
     if profile == "sine":
         return _finish(0.5 * height_mm * (1 + np.cos(2 * np.pi * u / period_mm)), pixel_mm)
@@ -262,7 +249,7 @@ def _spheroid(r: np.ndarray, radius: np.ndarray, height: np.ndarray) -> np.ndarr
 
 
 @_validated
-def grains(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, grain_min_mm: float = 0.3,
+def grains(size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, seed: int = 0, grain_min_mm: float = 0.3,
            grain_max_mm: float = 0.8, density: float = 1.0, height_mm: float = 0.5) -> Heightmap:
     """Random sand or grit: overlapping half-spheroid grains, uniformly placed; seamless periodic.
 
@@ -271,7 +258,7 @@ def grains(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, grain_m
     the allowed diameter ranges meet at 0.5 mm, so grain_min_mm <= grain_max_mm always;
     height_mm: height (mm) of the largest possible grain, smaller grains scale down with diameter.
     """
-    n = _side(size_mm, pixel_mm)
+    n = map_side(size_mm, pixel_mm)
     side = n * pixel_mm
     mean_area = math.pi / 12 * (grain_min_mm**2 + grain_min_mm * grain_max_mm + grain_max_mm**2)
     count = max(1, round(density * side**2 / mean_area))
@@ -315,7 +302,7 @@ def _dot_profile(shape: str, pixel_mm: float) -> ProfileFn:
 
 
 @_validated
-def dots(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, pitch_mm: float = 1.0,
+def dots(size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, seed: int = 0, pitch_mm: float = 1.0,
          diameter_mm: float = 0.5, shape: str = "dome", height_mm: float = 0.5, lattice: str = "square",
          jitter_mm: float = 0.0) -> Heightmap:
     """Dot arrays, e.g. Braille-like studs, rubber mats or perforated-sheet negatives.
@@ -325,7 +312,7 @@ def dots(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, pitch_mm:
     height_mm: dot height (mm); lattice: "square" or "hex"; jitter_mm: each centre moves by up to
     this much (mm, uniform) along x and y. ``seed`` sets the position of the lattice and the jitter.
     """
-    n = _side(size_mm, pixel_mm)
+    n = map_side(size_mm, pixel_mm)
     radius = diameter_mm / 2
     rng = np.random.default_rng(seed)
     origin = tuple(rng.random(2) * pitch_mm)
@@ -338,7 +325,7 @@ def dots(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, pitch_mm:
 
 
 @_validated
-def fbm(size_mm: float = 12.0, pixel_mm: float = 0.05, seed: int = 0, hurst: float = 0.8, rms_mm: float = 0.15,
+def fbm(size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, seed: int = 0, hurst: float = 0.8, rms_mm: float = 0.15,
         cutoff_mm: float = 0.4) -> Heightmap:
     """Isotropic fractal (fBm) roughness, e.g. stone or bark: dataset.fractal.fbm_surface.
 
@@ -353,7 +340,7 @@ FAMILIES: dict[str, Callable[..., Heightmap]] = {
 }
 
 
-def make(family: str, seed: int = 0, size_mm: float = 12.0, pixel_mm: float = 0.05, **params) -> Heightmap:
+def make(family: str, seed: int = 0, size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, **params) -> Heightmap:
     """Heightmap of a texture family by name; InputError names a bad family or parameter."""
     if family not in FAMILIES:
         raise InputError(f"unknown texture family {family!r}; valid families: {', '.join(FAMILIES)}")

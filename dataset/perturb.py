@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from roughness.core.checks import integer, non_negative, positive, real
 from roughness.core.errors import InputError
 from roughness.simulate.heightmap import Heightmap
 
@@ -104,34 +105,16 @@ def _quantise(h: np.ndarray, pixel_mm: float, rng: np.random.Generator, step_mm:
     return np.round(h / step_mm) * step_mm
 
 
-def _finite(value: float) -> bool:
-    """Any finite number."""
-    return math.isfinite(value)
-
-
-def _non_negative(value: float) -> bool:
-    """A finite number >= 0."""
-    return math.isfinite(value) and value >= 0
-
-
-def _positive(value: float) -> bool:
-    """A finite number > 0."""
-    return math.isfinite(value) and value > 0
-
-
-_RULES: dict[Callable[[float], bool], str] = {
-    _finite: "a finite number", _non_negative: "a finite number >= 0", _positive: "a finite number > 0",
-}
 # name -> (operation, {parameter: rule})
-OPERATIONS: dict[str, tuple[Operation, dict[str, Callable[[float], bool]]]] = {
-    "blur": (_blur, {"sigma_mm": _non_negative}),
-    "inflate": (_inflate, {"radius_mm": _finite}),
-    "height_scale": (_height_scale, {"factor": _positive}),
-    "lateral_scale": (_lateral_scale, {"factor": _positive}),
-    "rotate": (_rotate, {"angle_deg": _finite}),
-    "shift": (_shift, {"dx_mm": _finite, "dy_mm": _finite}),
-    "noise": (_noise, {"rms_mm": _non_negative, "correlation_mm": _non_negative}),
-    "quantise": (_quantise, {"step_mm": _positive}),
+OPERATIONS: dict[str, tuple[Operation, dict[str, Callable[[str, object], float]]]] = {
+    "blur": (_blur, {"sigma_mm": non_negative}),
+    "inflate": (_inflate, {"radius_mm": real}),
+    "height_scale": (_height_scale, {"factor": positive}),
+    "lateral_scale": (_lateral_scale, {"factor": positive}),
+    "rotate": (_rotate, {"angle_deg": real}),
+    "shift": (_shift, {"dx_mm": real, "dy_mm": real}),
+    "noise": (_noise, {"rms_mm": non_negative, "correlation_mm": non_negative}),
+    "quantise": (_quantise, {"step_mm": positive}),
 }
 
 
@@ -142,14 +125,7 @@ def _checked_params(name: str, params: dict) -> dict[str, float]:
     rules = OPERATIONS[name][1]
     if set(params) != set(rules):
         raise InputError(f"{name} takes parameters {', '.join(rules)}, got {', '.join(params) or 'none'}")
-    checked = {}
-    for key, rule in rules.items():
-        value = params[key]
-        valid = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-        if not (valid and rule(float(value))):
-            raise InputError(f"{name} parameter {key} must be {_RULES[rule]}, got {value!r}")
-        checked[key] = float(value)
-    return checked
+    return {key: check(f"{name} parameter {key}", params[key]) for key, check in rules.items()}
 
 
 @dataclass(frozen=True)
@@ -262,8 +238,7 @@ def random_pipeline(rng: np.random.Generator | int, max_steps: int = 3) -> Pipel
     Quantisation to LAYER_MM is included with probability QUANTISE_PROBABILITY; the other steps
     (0 up to the remaining budget, chosen uniformly) have parameters uniform in RANDOM_RANGES.
     """
-    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 0:
-        raise InputError(f"max_steps must be a non-negative integer, got {max_steps!r}")
+    integer("max_steps", max_steps, minimum=0)
     rng = np.random.default_rng(rng)
     with_quantise = max_steps > 0 and rng.random() < QUANTISE_PROBABILITY
     count = int(rng.integers(0, min(max_steps - with_quantise, len(RANDOM_RANGES)) + 1))

@@ -9,16 +9,18 @@ what the sample id is computed from.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
+from roughness.core.checks import in_range, integer, positive, real
 from roughness.core.errors import InputError
 from roughness.simulate.heightmap import Heightmap
 
 from . import natural
 from .catalogue import make_texture
+from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side
 from .perturb import Pipeline, random_pipeline
 
 # Custom bump textures (the paper's family) sampled around the standard scale.
@@ -37,48 +39,103 @@ def default_ranges(family: str) -> dict[str, tuple]:
 
 @dataclass(frozen=True)
 class Recipe:
-    """How to draw the samples of one dataset (lengths in mm)."""
+    """How to draw the samples of one dataset (lengths in mm); every field is checked on creation."""
 
     name: str = "dataset"
     seed: int = 0
     families: dict[str, float] = field(default_factory=lambda: {"bumps": 1.0})
-    ranges: dict[str, dict[str, list]] = field(default_factory=dict)
+    ranges: dict[str, dict[str, list]] = field(default_factory=dict)  # family -> parameter -> [low, high] or choices
     perturb_probability: float = 0.7
     max_perturb_steps: int = 3
-    size_mm: float = 12.0
-    pixel_mm: float = 0.05
+    size_mm: float = SIZE_MM
+    pixel_mm: float = PIXEL_MM
     holdout_family: str | None = None  # never trained on: the out-of-family score
     test_fraction: float = 0.1  # share of base recipes (by sample id) held out for testing
 
     def __post_init__(self) -> None:
-        if not self.families or min(self.families.values()) <= 0:
-            raise InputError("recipe families need positive weights")
-        for family in list(self.families) + list(self.ranges):
-            default_ranges(family)
-        if not 0.0 <= self.perturb_probability <= 1.0:
-            raise InputError("perturb_probability must lie in [0, 1]")
-        if self.holdout_family is not None and self.holdout_family not in self.families:
-            raise InputError(f"holdout_family {self.holdout_family!r} is not among the recipe's families")
-        if not 0.0 <= self.test_fraction < 1.0:
-            raise InputError("test_fraction must lie in [0, 1)")
+        if not isinstance(self.name, str) or not self.name:
+            raise InputError(f"name must be a non-empty string, got {self.name!r}", "name")
+        check_seed(self.seed)
+        if not isinstance(self.families, dict) or not self.families:
+            raise InputError(f"families must be a non-empty object of family: weight, got {self.families!r}",
+                             "families")
+        for family, weight in self.families.items():
+            _known("families", family)
+            positive(f"families.{family}", weight)
+        if not isinstance(self.ranges, dict):
+            raise InputError(f"ranges must be an object of family: {{parameter: range}}, got {self.ranges!r}",
+                             "ranges")
+        for family, ranges in self.ranges.items():
+            allowed = _known("ranges", family)
+            if not isinstance(ranges, dict):
+                raise InputError(f"ranges.{family} must be an object of parameter: range, got {ranges!r}", "ranges")
+            for key, spec in ranges.items():
+                _check_range(family, key, spec, allowed)
+        in_range("perturb_probability", self.perturb_probability, 0.0, 1.0)
+        integer("max_perturb_steps", self.max_perturb_steps, minimum=0)
+        map_side(self.size_mm, self.pixel_mm)
+        if self.holdout_family is not None and (not isinstance(self.holdout_family, str)
+                                                or self.holdout_family not in self.families):
+            raise InputError(f"holdout_family {self.holdout_family!r} is not among the recipe's families",
+                             "holdout_family")
+        if in_range("test_fraction", self.test_fraction, 0.0, 1.0) == 1.0:
+            raise InputError("test_fraction must be below 1, got 1", "test_fraction")
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), sort_keys=True)
 
 
-def load_recipe(path: str | Path) -> Recipe:
-    """Recipe from a JSON file; InputError names what is wrong."""
+def _known(field_name: str, family: object) -> dict[str, tuple]:
+    """The default ranges of ``family``, or InputError naming the recipe field."""
     try:
-        data = json.loads(Path(path).read_text())
+        return default_ranges(family)
+    except InputError as err:
+        raise InputError(f"{field_name}: {err}", field_name) from None
+
+
+def _check_range(family: str, key: str, spec: object, allowed: dict[str, tuple]) -> None:
+    """InputError unless ``spec`` is a usable range of parameter ``key``: choices among the allowed
+    ones, or [low, high] with low <= high (within the family's limits for natural families)."""
+    name = f"ranges.{family}.{key}"
+    if key not in allowed:
+        raise InputError(f"{name}: {family} has no parameter {key!r}; valid: {', '.join(allowed)}", "ranges")
+    choices = allowed[key]
+    if isinstance(choices[0], str):
+        if not isinstance(spec, list) or not spec or any(c not in choices for c in spec):
+            raise InputError(f"{name} must be a non-empty list of {', '.join(choices)}, got {spec!r}", "ranges")
+        return
+    if not isinstance(spec, list) or len(spec) != 2:
+        raise InputError(f"{name} must be [low, high], got {spec!r}", "ranges")
+    limits = natural.PARAMETER_RANGES.get(family, {}).get(key)
+    low, high = ((in_range(f"{name}[{i}]", v, *limits) if limits else real(f"{name}[{i}]", v))
+                 for i, v in enumerate(spec))
+    if low > high:
+        raise InputError(f"{name} must be [low, high] with low <= high, got {spec!r}", "ranges")
+
+
+def load_recipe(path: str | Path) -> Recipe:
+    """Recipe from a JSON file; InputError names what is wrong (the field, for a bad value)."""
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise InputError(f"recipe file not found: {path}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"recipe {path} is not a text (JSON) file") from None
+    except OSError as err:
+        raise InputError(f"cannot read recipe {path}: {err.strerror}") from None
     except json.JSONDecodeError as err:
         raise InputError(f"recipe {path} is not valid JSON: {err}") from None
+    if not isinstance(data, dict):
+        raise InputError(f"recipe {path} must be a JSON object of recipe fields, got a {type(data).__name__}")
     data.pop("_comment", None)
+    unknown = sorted(set(data) - {f.name for f in fields(Recipe)})
+    if unknown:
+        raise InputError(f"recipe {path}: unknown field(s) {', '.join(unknown)}; valid: "
+                         f"{', '.join(f.name for f in fields(Recipe))}")
     try:
         return Recipe(**data)
-    except TypeError as err:
-        raise InputError(f"recipe {path}: {err}") from None
+    except InputError as err:
+        raise InputError(f"recipe {path}: {err}") from None  # a field of the file, not a flag
 
 
 def _draw(rng: np.random.Generator, spec: tuple | list) -> float | str:
@@ -106,8 +163,7 @@ def sample_record(recipe: Recipe, index: int) -> dict:
 
 def expand(recipe: Recipe, n: int) -> list[dict]:
     """The first ``n`` sample records of the recipe."""
-    if n < 1:
-        raise InputError(f"--n must be at least 1, got {n}")
+    integer("n", n, minimum=1)
     return [sample_record(recipe, i) for i in range(n)]
 
 

@@ -14,8 +14,11 @@ import numpy as np
 from scipy import ndimage, optimize
 from scipy.spatial import cKDTree
 
+from roughness.core.checks import positive
 from roughness.core.errors import InputError
 from roughness.simulate.heightmap import Heightmap, flat
+
+from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side
 
 STANDARD_LAMBDAS_MM = (0.625, 0.6875, 0.75, 0.8125, 0.875, 0.9375, 1.0, 1.0625, 1.125, 1.25, 1.375, 1.5, 1.625)
 FLAT_TOP_DIAMETERS_MM = (0.1, 0.2, 0.3, 0.4, 0.5)
@@ -47,8 +50,8 @@ class BumpRecipe:
     top_diameter_mm: float = 0.3
     height_mm: float = 1.0
     base_diameter_mm: float | None = None
-    size_mm: float = 12.0
-    pixel_mm: float = 0.05
+    size_mm: float = SIZE_MM
+    pixel_mm: float = PIXEL_MM
     seed: int = 0
 
     @property
@@ -59,37 +62,36 @@ class BumpRecipe:
         return self.top_diameter_mm + 2 * FLANK_RUN_MM
 
 
-def _check_grid(lambda_mm: float, size_mm: float, pixel_mm: float) -> None:
-    """Raise InputError unless lambda, map side and pixel size (mm) are usable together."""
-    if not pixel_mm > 0:
-        raise InputError(f"pixel_mm must be positive, got {pixel_mm}")
-    if not size_mm > 0:
-        raise InputError(f"size_mm must be positive, got {size_mm}")
-    if not lambda_mm > 0:
-        raise InputError(f"lambda_mm must be positive, got {lambda_mm}")
+def _check_grid(lambda_mm: float, size_mm: float, pixel_mm: float) -> int:
+    """Pixels per side; InputError unless lambda, map side and pixel size (mm) are usable together."""
+    n = map_side(size_mm, pixel_mm)
+    positive("lambda_mm", lambda_mm)
     if lambda_mm < MIN_PIXELS_PER_LAMBDA * pixel_mm:
         raise InputError(f"lambda_mm={lambda_mm} is below {MIN_PIXELS_PER_LAMBDA} pixels of {pixel_mm} mm; "
-                         f"use lambda >= {MIN_PIXELS_PER_LAMBDA * pixel_mm} mm or smaller pixels")
+                         f"use lambda >= {MIN_PIXELS_PER_LAMBDA * pixel_mm} mm or smaller pixels", "lambda_mm")
     if size_mm < 2 * lambda_mm:
-        raise InputError(f"size_mm={size_mm} is too small for lambda_mm={lambda_mm} (need >= 2 lambda)")
+        raise InputError(f"size_mm={size_mm} is too small for lambda_mm={lambda_mm} (need >= 2 lambda)", "size_mm")
+    return n
 
 
-def _check_recipe(recipe: BumpRecipe) -> None:
-    """Raise InputError with a specific message for any invalid recipe parameter."""
-    _check_grid(recipe.lambda_mm, recipe.size_mm, recipe.pixel_mm)
+def _check_recipe(recipe: BumpRecipe) -> int:
+    """Pixels per side; InputError with a specific message for any invalid recipe parameter."""
+    check_seed(recipe.seed)
+    for name in ("lambda_mm", "top_diameter_mm", "height_mm"):
+        positive(name, getattr(recipe, name))
+    if recipe.base_diameter_mm is not None:
+        positive("base_diameter_mm", recipe.base_diameter_mm)
+    n = _check_grid(recipe.lambda_mm, recipe.size_mm, recipe.pixel_mm)
     if recipe.top not in TOPS:
-        raise InputError(f"top must be one of {TOPS}, got {recipe.top!r}")
-    if not recipe.height_mm > 0:
-        raise InputError(f"height_mm must be positive, got {recipe.height_mm}")
-    if not recipe.base_mm > 0:
-        raise InputError(f"base_diameter_mm must be positive, got {recipe.base_diameter_mm}")
+        raise InputError(f"top must be one of {TOPS}, got {recipe.top!r}", "top")
     if recipe.size_mm <= recipe.base_mm:
-        raise InputError(f"size_mm={recipe.size_mm} must exceed base_diameter_mm={recipe.base_mm}")
+        raise InputError(f"size_mm={recipe.size_mm} must exceed base_diameter_mm={recipe.base_mm}", "size_mm")
     d = recipe.top_diameter_mm
     if recipe.top == "flat" and not 0.1 - 1e-9 <= d <= 0.5 + 1e-9:
-        raise InputError(f"flat top_diameter_mm must be within 0.1..0.5 mm, got {d}")
-    if not 0 < d < recipe.base_mm:
-        raise InputError(f"top_diameter_mm={d} must be positive and below base_diameter_mm={recipe.base_mm}")
+        raise InputError(f"flat top_diameter_mm must be within 0.1..0.5 mm, got {d}", "top_diameter_mm")
+    if not d < recipe.base_mm:
+        raise InputError(f"top_diameter_mm={d} must be below base_diameter_mm={recipe.base_mm}", "top_diameter_mm")
+    return n
 
 
 def _ring_field(lambda_mm: float, n: int, pixel_mm: float, rng: np.random.Generator) -> np.ndarray:
@@ -115,8 +117,7 @@ def bump_centres(lambda_mm: float, size_mm: float, pixel_mm: float, rng: np.rand
 
     The side is rounded to whole pixels; all centres lie in [0, side).
     """
-    _check_grid(lambda_mm, size_mm, pixel_mm)
-    n = round(size_mm / pixel_mm)
+    n = _check_grid(lambda_mm, size_mm, pixel_mm)
     rows, cols = _strict_maxima(_ring_field(lambda_mm, n, pixel_mm, rng))
     return np.column_stack(((cols + 0.5) * pixel_mm, (rows + 0.5) * pixel_mm))
 
@@ -160,10 +161,9 @@ def _render(recipe: BumpRecipe, centres: np.ndarray, n: int) -> np.ndarray:
 
 def bump_texture(recipe: BumpRecipe) -> Heightmap:
     """Heightmap (mm) of a bump texture; deterministic per ``recipe.seed``, seamlessly periodic."""
-    _check_recipe(recipe)
+    n = _check_recipe(recipe)
     rng = np.random.default_rng(recipe.seed)
     centres = bump_centres(recipe.lambda_mm, recipe.size_mm, recipe.pixel_mm, rng)
-    n = round(recipe.size_mm / recipe.pixel_mm)
     return Heightmap(heights=_render(recipe, centres, n), pixel_mm=recipe.pixel_mm)
 
 

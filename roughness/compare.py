@@ -59,7 +59,7 @@ def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dic
     from roughness.simulate.config import SimConfig
 
     with open_dataset(path) as data:
-        table, recipes, simulation = data.table(), data.recipes, data.config.get("simulation", {})
+        table, recipes, simulation = data.table(), data.recipes, data.config.simulation
     fidelity = simulation.get("fidelity")
     ok = [i for i, status in enumerate(table["status"]) if status == "ok"]
 

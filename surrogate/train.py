@@ -86,7 +86,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
 
     # data: patches in mm (max 0) and log-V targets, split by base texture
     with open_dataset(cfg.data) as data:
-        recipe, simulation = data.config.get("recipe", {}), data.config.get("simulation", data.config)
+        recipe, simulation = data.config.recipe, data.config.simulation
         data_fem_seconds = float(np.nansum(data.table()["seconds"]))  # FEM solve time of every sample (one core each)
         holdout = recipe.get("holdout_family") if cfg.holdout_family is None else cfg.holdout_family
         holdout = None if holdout == "none" else holdout

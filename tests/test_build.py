@@ -84,7 +84,8 @@ def _count(path) -> int:
 
 
 def test_input_digest_is_reproducible_across_builds(tmp_path):
-    from roughness.dataset.digest import file_sha256, inputs_sha256
+    from roughness.core.hashing import file_sha256
+    from roughness.dataset.digest import inputs_sha256
 
     a, b = tmp_path / "a.h5", tmp_path / "b.h5"
     build(str(a), 3, RECIPE, SMALL, workers=1, quiet=True)

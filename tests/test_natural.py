@@ -194,18 +194,18 @@ def test_make_matches_the_family_function():
 @pytest.mark.parametrize("call,message", [
     (lambda: make("velvet"), "unknown texture family 'velvet'; valid families: cellular, woven, knit"),
     (lambda: make("grating", period=1.0), "unknown grating parameter(s) period; valid parameters: period_mm"),
-    (lambda: make("grating", period_mm=5.0), "grating parameter period_mm=5.0 is outside the allowed range 0.3..3"),
+    (lambda: make("grating", period_mm=5.0), "grating parameter period_mm must be between 0.3 and 3, got 5.0"),
     (lambda: make("grating", profile="zigzag"), "grating parameter profile='zigzag' must be one of sine, square"),
     (lambda: make("dots", lattice="triangular"), "dots parameter lattice='triangular' must be one of square, hex"),
-    (lambda: make("knit", height_mm="tall"), "knit parameter height_mm='tall' is outside the allowed range"),
-    (lambda: make("cellular", height_mm=True), "cellular parameter height_mm=True is outside"),
+    (lambda: make("knit", height_mm="tall"), "knit parameter height_mm must be a finite number, got 'tall'"),
+    (lambda: make("cellular", height_mm=True), "cellular parameter height_mm must be a finite number, got True"),
     (lambda: make("woven", pitch_mm=0.4, pixel_mm=0.2), "woven parameter pitch_mm=0.4 mm is below 4 pixels"),
     (lambda: make("cellular", cell_mm=3.0, size_mm=5.0), "cellular parameter cell_mm=3 mm needs a map of at least 6"),
-    (lambda: make("fbm", seed=-1), "seed must be a non-negative integer, got -1"),
-    (lambda: make("dots", seed=1.5), "seed must be a non-negative integer"),
+    (lambda: make("fbm", seed=-1), "seed must be an integer >= 0, got -1"),
+    (lambda: make("dots", seed=1.5), "seed must be an integer, got 1.5"),
     (lambda: make("dots", size_mm=0), "size_mm must be a positive finite number"),
     (lambda: grating(pixel_mm=float("nan")), "pixel_mm must be a positive finite number"),
-    (lambda: grating(duty=0.95), "grating parameter duty=0.95 is outside the allowed range 0.1..0.9"),
+    (lambda: grating(duty=0.95), "grating parameter duty must be between 0.1 and 0.9, got 0.95"),
 ])
 def test_bad_input_names_the_problem(call, message):
     with pytest.raises(InputError) as error:

@@ -196,13 +196,13 @@ def test_random_pipeline_respects_its_ranges_order_and_budget():
 
 
 @pytest.mark.parametrize("call,message", [
-    (lambda: blur(-0.1), "blur parameter sigma_mm must be a finite number >= 0, got -0.1"),
-    (lambda: height_scale(0), "height_scale parameter factor must be a finite number > 0, got 0"),
-    (lambda: lateral_scale(-1.0), "lateral_scale parameter factor must be a finite number > 0"),
+    (lambda: blur(-0.1), "blur parameter sigma_mm must be >= 0, got -0.1"),
+    (lambda: height_scale(0), "height_scale parameter factor must be a positive finite number, got 0"),
+    (lambda: lateral_scale(-1.0), "lateral_scale parameter factor must be a positive finite number"),
     (lambda: rotate(math.inf), "rotate parameter angle_deg must be a finite number, got inf"),
     (lambda: shift(float("nan"), 0.0), "shift parameter dx_mm must be a finite number, got nan"),
-    (lambda: noise(0.01, -1.0), "noise parameter correlation_mm must be a finite number >= 0"),
-    (lambda: quantise(0.0), "quantise parameter step_mm must be a finite number > 0"),
+    (lambda: noise(0.01, -1.0), "noise parameter correlation_mm must be >= 0"),
+    (lambda: quantise(0.0), "quantise parameter step_mm must be a positive finite number"),
     (lambda: inflate("0.1"), "inflate parameter radius_mm must be a finite number, got '0.1'"),
     (lambda: Perturbation("melt", {}), "unknown perturbation 'melt'; valid perturbations: blur, inflate"),
     (lambda: Perturbation("blur", {"sigma": 1.0}), "blur takes parameters sigma_mm, got sigma"),
@@ -210,7 +210,7 @@ def test_random_pipeline_respects_its_ranges_order_and_budget():
     (lambda: Pipeline.from_json("[{"), "pipeline JSON is malformed"),
     (lambda: Pipeline.from_json('{"steps": []}'), "pipeline JSON must be a list of perturbations, got dict"),
     (lambda: Pipeline(["blur"]), "pipeline steps must be Perturbations, got 'blur'"),
-    (lambda: random_pipeline(0, max_steps=-1), "max_steps must be a non-negative integer, got -1"),
+    (lambda: random_pipeline(0, max_steps=-1), "max_steps must be an integer >= 0, got -1"),
 ])
 def test_bad_parameters_name_the_problem(call, message):
     with pytest.raises(InputError) as error:

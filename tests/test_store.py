@@ -1,11 +1,12 @@
-"""The HDF5 training-set store: round trips, idempotent appends, checks, and crash safety."""
+"""The HDF5 training-set store: round trips, idempotent appends, checks, old files, and crash safety."""
 from __future__ import annotations
 
+import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
-import threading
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -15,18 +16,20 @@ import pytest
 
 from roughness.core.errors import InputError
 from roughness.dataset import store
+from roughness.dataset.digest import inputs_sha256
+from roughness.dataset.schema import DatasetConfig
 from roughness.dataset.store import (
     DatasetWriter,
     info,
-    journal_path,
     open_dataset,
+    parts_folder,
     result_fields,
     sample_id,
     verify,
 )
 
 ROOT = Path(__file__).parents[1]
-CONFIG = {"force_n": 10.0, "fidelity": "coarse", "h_contact_mm": None, "seed": 0}
+CONFIG = {"simulation": {"force_n": 10.0, "fidelity": "coarse", "h_contact_mm": None}, "recipe": {"seed": 0}}
 N = 12
 
 
@@ -60,13 +63,14 @@ def test_round_trip_of_results_and_failures(tmp_path):
         bad = {"family": "cellular", "seed": 7, "params": {}}
         assert writer.write_failure(bad, np.ones((40, 40)), 0.05, "contact did not converge")
         assert writer.write_failure({"family": "woven", "seed": 8}, None, 0.05, "generator raised")
-    assert not journal_path(path).exists()
+    assert not parts_folder(path).exists()
     with open_dataset(path) as ds:
         assert len(ds) == 5 and ds.ids == sorted(ds.ids)
         assert sorted(ds.ids) == sorted([sample_id(recipe(i)) for i in range(3)]
                                         + [sample_id(bad), sample_id({"family": "woven", "seed": 8})])
         assert recipe(1) in ds.recipes and bad in ds.recipes
-        assert ds.config == CONFIG and ds.attrs["roughness_version"] == "1.2.3" and ds.attrs["schema_version"] == 1
+        assert ds.config == DatasetConfig(**CONFIG) and ds.header.roughness_version == "1.2.3"
+        assert ds.header.schema_version == 2
         rec, heights, pixel, values, strain = sample(1)
         sid = sample_id(rec)
         hm = ds.heightmap(sid)
@@ -118,13 +122,16 @@ def test_reopen_appends_with_same_config_and_rejects_another(tmp_path):
     path = tmp_path / "d.h5"
     assert fill(path, range(3)) == [True] * 3
     assert fill(path, range(5)) == [False] * 3 + [True] * 2
-    with pytest.raises(InputError, match="force_n: file 10.0, given 5.0"):
-        DatasetWriter(path, {**CONFIG, "force_n": 5.0}, "test")
+    other = {**CONFIG, "simulation": {**CONFIG["simulation"], "force_n": 5.0}}
+    with pytest.raises(InputError, match="simulation.force_n: file 10.0, given 5.0"):
+        DatasetWriter(path, other, "test")
     with pytest.raises(InputError, match="another configuration"):
-        DatasetWriter(path, {**CONFIG, "extra": 1}, "test")
+        DatasetWriter(path, {**CONFIG, "recipe": {"seed": 1}}, "test")
+    with pytest.raises(InputError, match="'simulation' and 'recipe'"):
+        DatasetWriter(path, {"force_n": 10.0}, "test")
     with open_dataset(path) as ds:
         assert len(ds) == 5
-    assert not journal_path(path).exists()
+    assert not parts_folder(path).exists()
 
 
 def test_one_writer_at_a_time(tmp_path):
@@ -160,22 +167,23 @@ def test_an_exception_mid_sample_rolls_back(tmp_path, monkeypatch):
     path = tmp_path / "d.h5"
     with DatasetWriter(path, CONFIG, "test") as writer:
         writer.write_result(*sample(0))
-        real = store._put_map
+        real = np.savez_compressed
 
-        def broken(group, name, values):
-            if name == "fluctuation":
-                raise KeyboardInterrupt
-            return real(group, name, values)
+        def broken(file, **arrays):
+            Path(file).write_bytes(b"half a sample")
+            raise KeyboardInterrupt
 
-        monkeypatch.setattr(store, "_put_map", broken)
+        monkeypatch.setattr(np, "savez_compressed", broken)
         with pytest.raises(KeyboardInterrupt):
             writer.write_result(*sample(1))
-        monkeypatch.setattr(store, "_put_map", real)
+        monkeypatch.setattr(np, "savez_compressed", real)
         assert writer.ids == {sample_id(recipe(0))}
+        assert os.listdir(parts_folder(path)) == [f"{sample_id(recipe(0))}.npz"]
         assert writer.write_result(*sample(1))
     assert verify(path) == []
     with h5py.File(path, "r") as f:
-        assert sorted(f["samples"]) == sorted(sample_id(recipe(i)) for i in range(2))
+        assert sorted(f["samples"]) == sorted(f["index"]["id"].asstr()[()]) == sorted(sample_id(recipe(i))
+                                                                                        for i in range(2))
 
 
 def test_invalid_samples_are_refused_before_writing(tmp_path):
@@ -195,16 +203,23 @@ def test_invalid_samples_are_refused_before_writing(tmp_path):
 def test_verify_catches_tampering(tmp_path):
     path = tmp_path / "d.h5"
     fill(path, range(3))
-    first, second = sample_id(recipe(0)), sample_id(recipe(1))
+    ids = sorted(sample_id(recipe(i)) for i in range(3))
     with h5py.File(path, "r+") as f:
-        f["samples"][first].attrs["V"] = np.nan
-        f["samples"].move(second, "0123456789abcdef")
-        f["samples"].create_group(".tmp-feedfeedfeedfeed")
+        f["index"]["V"][0] = np.nan
+        f["index"]["status"][1] = "maybe"
+        f["samples"].create_group("feedfeedfeedfeed")
+        del f["samples"][ids[2]]["fluctuation"]
     problems = verify(path)
-    assert len(problems) == 3
-    assert f"samples/{first}: V is nan" in problems
-    assert f"samples/0123456789abcdef: id does not match its recipe (expected {second})" in problems
-    assert "samples/.tmp-feedfeedfeedfeed: unfinished sample left behind" in problems
+    assert sorted(problems) == sorted([f"samples/{ids[0]}: V is nan",
+                                       f"samples/{ids[1]}: status 'maybe' is neither 'ok' nor 'failed'",
+                                       "samples/feedfeedfeedfeed: not in the index (an unfinished sample)",
+                                       f"samples/{ids[2]}: fluctuation is missing or not 2-D"])
+    with h5py.File(path, "r+") as f:
+        f["index"]["id"][0] = "0123456789abcdef"
+    assert any("0123456789abcdef: id does not match its recipe" in p for p in verify(path))
+    parts_folder(path).mkdir()
+    (parts_folder(path) / "00000000000000aa.npz").write_bytes(b"torn")
+    assert any("00000000000000aa.npz: unreadable" in p for p in verify(path))
     with h5py.File(path, "r+") as f:
         del f.attrs["created"]
     assert "root attribute 'created' is missing" in verify(path)
@@ -243,46 +258,103 @@ def test_bad_files_raise_input_errors(tmp_path):
         DatasetWriter(text, CONFIG, "test")
     with pytest.raises(InputError, match="not a roughness dataset"):
         DatasetWriter(other, CONFIG, "test")
-    assert text.read_text() == "not HDF5" and not journal_path(text).exists()
+    assert text.read_text() == "not HDF5" and not parts_folder(text).exists()
     with h5py.File(other, "r") as f:
         assert list(f) == ["heightmap"]
+
+
+def test_version_1_files_are_read_and_converted_by_the_next_writer(tmp_path):
+    """A file of the old layout (one group per sample with its values as attributes, no index)."""
+    path = tmp_path / "old.h5"
+    with h5py.File(path, "w") as f:
+        f.attrs.update(schema="roughness.dataset", schema_version=1, config=json.dumps(CONFIG),
+                       roughness_version="0.0.0", created="2026-01-01T00:00:00+00:00")
+        for i in range(3):
+            rec, heights, pixel, values, strain = sample(i)
+            group = f.create_group(f"samples/{sample_id(rec)}")
+            group["heightmap"], group["fluctuation"] = heights.astype(np.float32), strain.astype(np.float32)
+            group["fluctuation"].attrs["grid_axis_mm"] = values["grid_axis_mm"]
+            group.attrs.update(recipe=json.dumps(rec), status="ok", pixel_mm=pixel, written="then",
+                               roughness_version="0.0.0", V=values["roughness"], V_stderr=0.002,
+                               contact_fraction=0.5, indentation_mm=0.6, converged=True, iterations=3,
+                               unresolved_nodes=0, cycled=False, seconds=1.5, contact_history=[10, 12])
+        f.create_group("samples/.tmp-feedfeedfeedfeed")  # an unfinished sample of the old writer
+    with open_dataset(path) as ds:
+        assert ds.header.schema_version == 1 and len(ds) == 3
+        assert ds.table()["V"].tolist() == [values_of(sid) for sid in ds.ids]
+    assert stored_indices(path, unfinished_ok=True) == [0, 1, 2]
+    checksum = inputs_sha256(path)
+    assert fill(path, range(3)) == [False] * 3  # nothing to add: the writer converts the file
+    with open_dataset(path) as ds:
+        assert ds.header.schema_version == 2 and ds.header.created == "2026-01-01T00:00:00+00:00"
+    assert stored_indices(path) == [0, 1, 2] and inputs_sha256(path) == checksum
+    assert fill(path, range(5)) == [False] * 3 + [True] * 2
+    assert stored_indices(path) == [0, 1, 2, 3, 4]
+    new = tmp_path / "new.h5"
+    fill(new, range(3))
+    assert inputs_sha256(new) == checksum  # ids, recipes and heightmaps read alike from both layouts
+
+
+def test_the_dataset_layer_imports_no_upper_layer():
+    import ast
+
+    upper = ("roughness.cli", "roughness.surrogate", "roughness.compare", "roughness.engines", "roughness.report")
+    for source in (ROOT / "dataset").glob("*.py"):
+        for node in ast.walk(ast.parse(source.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            assert not [n for n in names if n.startswith(upper)], f"{source.name} imports {names}"
+
+
+def values_of(sid: str) -> float:
+    return next(fields(i)["roughness"] for i in range(N) if sample_id(recipe(i)) == sid)
+
+
+def test_opening_reads_the_index_not_the_sample_groups(tmp_path, monkeypatch):
+    path = tmp_path / "d.h5"
+    fill(path, range(4))
+
+    def walked(*args, **kwargs):
+        raise AssertionError("a sample group was opened")
+
+    monkeypatch.setattr(h5py.Group, "items", walked)
+    with open_dataset(path) as ds:
+        assert len(ds) == 4 and len(ds.table()["V"]) == 4 and len(ds.recipes) == 4
+
+
+def test_reading_while_the_writer_packs(tmp_path):
+    path = tmp_path / "d.h5"
+    fill(path, range(2))
+    with open_dataset(path) as before:
+        with DatasetWriter(path, CONFIG, "test") as writer:
+            writer.write_result(*sample(2))
+            during = open_dataset(path)  # one packed file, one part
+        with during:
+            assert len(during) == 3 and len(before) == 2
+            maps = [s.fluctuation.shape for s in during.iter_samples()]  # the part is packed by now
+            assert maps == [(40, 40)] * 3
+        assert before.heightmap(sample_id(recipe(0))).shape == (40, 40)  # the replaced file stays readable
 
 
 # --- crash safety: writer processes that die ------------------------------------------------------
 
 CHILD = """
-import os, sys
+import sys
 sys.path[:0] = [{root!r}, {tests!r}]
 import test_store as t
 from roughness.dataset.store import DatasetWriter
-path, n, trap_at, crash_write = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
+path, n = sys.argv[1], int(sys.argv[2])
 with DatasetWriter(path, t.CONFIG, "test") as writer:
     for i in range(n):
-        if i == trap_at:
-            t.die_at_file_write(crash_write)
         if writer.write_result(*t.sample(i)):
             print(i, flush=True)
 """
 
 
-def die_at_file_write(k: int) -> None:
-    """Make the process exit abruptly at its k-th write into the dataset file (os.pwrite)."""
-    real, calls = os.pwrite, [0]
-
-    def pwrite(fd: int, data: bytes, offset: int) -> int:
-        calls[0] += 1
-        if calls[0] == k:
-            os._exit(9)
-        return real(fd, data, offset)
-
-    os.pwrite = pwrite
-
-
-def writer_process(tmp_path: Path, path: Path, n: int = N, trap_at: int = -1, crash_write: int = 0):
+def writer_process(tmp_path: Path, path: Path, n: int = N) -> subprocess.Popen:
     script = tmp_path / "child.py"
     script.write_text(CHILD.format(root=str(ROOT), tests=str(Path(__file__).parent)))
-    return subprocess.Popen([sys.executable, str(script), str(path), str(n), str(trap_at), str(crash_write)],
-                            stdout=subprocess.PIPE, text=True)
+    return subprocess.Popen([sys.executable, str(script), str(path), str(n)], stdout=subprocess.PIPE, text=True)
 
 
 def written_after(child: subprocess.Popen, lines: int, sig: int) -> list[int]:
@@ -293,16 +365,18 @@ def written_after(child: subprocess.Popen, lines: int, sig: int) -> list[int]:
     return done + [int(line) for line in child.stdout.read().split()]
 
 
-def stored_indices(path: Path) -> list[int]:
-    """Indices of the test samples in the file, checked to be intact; the file has no other samples."""
-    assert verify(path) == []
+def stored_indices(path: Path, unfinished_ok: bool = False) -> list[int]:
+    """Indices of the test samples in the dataset, checked to be intact; it has no other samples."""
+    problems = verify(path)
+    assert problems == [] or (unfinished_ok and all("unfinished" in p for p in problems)), problems
     with open_dataset(path) as ds:
         by_id = {sample_id(recipe(i)): i for i in range(N)}
-        assert set(ds.ids) <= set(by_id)
-        for sid in ds.ids:
-            rec, heights, pixel, values, strain = sample(by_id[sid])
-            assert np.array_equal(ds.heightmap(sid).heights, heights.astype(np.float32))
-            assert np.array_equal(ds.fluctuation(sid), strain.astype(np.float32))
+        assert set(ds.ids) <= set(by_id) and len(set(ds.ids)) == len(ds)
+        for s in ds.iter_samples(None):
+            rec, heights, _, values, strain = sample(by_id[s.id])
+            assert s.recipe == rec and s.values["V"] == values["roughness"]
+            assert np.array_equal(s.heightmap.heights, heights.astype(np.float32))
+            assert np.array_equal(s.fluctuation, strain.astype(np.float32))
         return sorted(by_id[sid] for sid in ds.ids)
 
 
@@ -311,47 +385,71 @@ def test_killed_writers_lose_and_duplicate_nothing(tmp_path):
     reported = written_after(writer_process(tmp_path, path), 3, signal.SIGKILL)
     stored = stored_indices(path)
     assert stored == list(range(len(stored))) and len(stored) - len(reported) in (0, 1)
+    assert parts_folder(path).exists()  # killed before packing: its samples are parts, read from there
     reported = written_after(writer_process(tmp_path, path), 2, signal.SIGINT)
     again = stored_indices(path)
     assert again[:len(stored)] == stored and again == list(range(len(again))) and set(reported) <= set(again)
-    assert not journal_path(path).exists()  # the interrupted writer closed cleanly
-    with h5py.File(path, "r") as f:  # so plain h5py reads it too
-        assert len(f["samples"]) == len(again)
+    assert not parts_folder(path).exists()  # the interrupted writer packed everything on its way out
+    with h5py.File(path, "r") as f:  # so plain h5py reads it all
+        assert len(f["samples"]) == len(f["index"]["id"]) == len(again)
     assert fill(path, range(N)).count(True) == N - len(again)
     assert stored_indices(path) == list(range(N))
 
 
-def test_writer_killed_while_copying_a_commit(tmp_path):
-    path = tmp_path / "d.h5"
-    child = writer_process(tmp_path, path, trap_at=4, crash_write=2)
-    assert child.wait(timeout=30) == 9 and child.stdout.read().split() == ["0", "1", "2", "3"]
-    assert journal_path(path).stat().st_size > 0
-    assert stored_indices(path) == [0, 1, 2, 3, 4]  # sample 4's record was complete: readers replay it
-    assert fill(path, range(6)) == [False] * 5 + [True]  # the writer repairs the file and goes on
-    with h5py.File(path, "r") as f:
-        assert len(f["samples"]) == 6
-    assert not journal_path(path).exists()
+STEPS = [(os, "replace"), (os, "unlink"), (os, "rmdir"), (shutil, "copyfile"), (np, "savez_compressed"),
+         (store, "_put_maps"), (store, "_write_index")]
 
 
-def test_torn_journal_record_is_ignored(tmp_path):
-    path = tmp_path / "d.h5"
-    child = writer_process(tmp_path, path, trap_at=3, crash_write=1)
-    assert child.wait(timeout=30) == 9
-    journal = journal_path(path)
-    journal.write_bytes(journal.read_bytes()[:-100])  # as if killed while writing the journal
-    assert stored_indices(path) == [0, 1, 2]
-    assert fill(path, range(5)) == [False] * 3 + [True] * 2
-    assert stored_indices(path) == [0, 1, 2, 3, 4]
+def run_until_step(path: Path, k: int, indices: range) -> tuple[int, list[int]]:
+    """Fork a writer of ``indices`` that dies (exit 9) at its k-th file operation (STEPS); its exit
+    status and the indices whose write returned."""
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: count the operations, die at the k-th
+        os.close(read)
+        calls = [0]
+
+        def dying(real):
+            def step(*args, **kwargs):
+                calls[0] += 1
+                if calls[0] == k:
+                    os._exit(9)
+                return real(*args, **kwargs)
+            return step
+
+        for module, name in STEPS:
+            setattr(module, name, dying(getattr(module, name)))
+        try:
+            with DatasetWriter(path, CONFIG, "test") as writer:
+                for i in indices:
+                    writer.write_result(*sample(i))
+                    os.write(write, bytes([i]))
+        finally:
+            os._exit(0)
+    os.close(write)
+    _, status = os.waitpid(pid, 0)
+    with os.fdopen(read, "rb") as pipe:
+        return os.waitstatus_to_exitcode(status), list(pipe.read())
 
 
-def test_commits_wait_for_plain_h5py_readers(tmp_path, monkeypatch):
-    path = tmp_path / "d.h5"
-    fill(path, range(1))
-    monkeypatch.setattr(store, "LOCK_PATIENCE_S", 0.05)
-    plain = h5py.File(path, "r")  # HDF5 holds a shared flock until closed
-    closer = threading.Timer(0.5, plain.close)
-    closer.start()
-    with pytest.warns(UserWarning, match="an open h5py.File"):
-        assert fill(path, range(2)) == [False, True]
-    closer.join()
-    assert stored_indices(path) == [0, 1]
+def test_writer_killed_at_every_file_operation(tmp_path):
+    """Kill a writer that adds three samples to a file of three at each of its file operations in
+    turn (parts, the pack's copy, maps, index and rename, the parts' removal): each time the dataset
+    holds exactly the samples whose write returned (and perhaps the one being written), all intact,
+    and the next writer completes it."""
+    base = tmp_path / "base.h5"
+    fill(base, range(3))
+    k, code = 0, 9
+    while code == 9:
+        k += 1
+        assert k < 40, "the writer should finish within 40 file operations"
+        path = tmp_path / f"k{k}" / "d.h5"
+        path.parent.mkdir()
+        shutil.copyfile(base, path)
+        code, reported = run_until_step(path, k, range(3, 6))
+        stored = stored_indices(path)
+        assert set(range(3)) | set(reported) <= set(stored) <= set(range(3)) | set(reported) | {3 + len(reported)}
+        assert fill(path, range(6)).count(True) == 6 - len(stored)
+        assert stored_indices(path) == list(range(6))
+        assert os.listdir(path.parent) == ["d.h5"]  # no temporary files or parts left
+    assert code == 0 and k > 12  # the last run finished: every step before it was a crash point

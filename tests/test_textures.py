@@ -104,18 +104,23 @@ def test_size_and_pixel_are_as_requested():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(lambda_mm=0.0), "lambda_mm must be positive"),
-    (dict(lambda_mm=-1.0), "lambda_mm must be positive"),
+    (dict(lambda_mm=0.0), "lambda_mm must be a positive finite number"),
+    (dict(lambda_mm=-1.0), "lambda_mm must be a positive finite number"),
     (dict(lambda_mm=0.15), "below 4 pixels"),
     (dict(lambda_mm=1.0, top="dome"), "top must be one of"),
     (dict(lambda_mm=1.0, top="flat", top_diameter_mm=0.05), "within 0.1..0.5"),
     (dict(lambda_mm=1.0, top="flat", top_diameter_mm=0.6), "within 0.1..0.5"),
     (dict(lambda_mm=1.0, top="flat", top_diameter_mm=0.5, base_diameter_mm=0.5), "below base_diameter_mm"),
-    (dict(lambda_mm=1.0, size_mm=0.0), "size_mm must be positive"),
-    (dict(lambda_mm=1.0, pixel_mm=-0.05), "pixel_mm must be positive"),
-    (dict(lambda_mm=1.0, height_mm=0.0), "height_mm must be positive"),
-    (dict(lambda_mm=1.0, base_diameter_mm=0.0), "base_diameter_mm must be positive"),
+    (dict(lambda_mm=1.0, size_mm=0.0), "size_mm must be a positive finite number"),
+    (dict(lambda_mm=1.0, pixel_mm=-0.05), "pixel_mm must be a positive finite number"),
+    (dict(lambda_mm=1.0, height_mm=0.0), "height_mm must be a positive finite number"),
+    (dict(lambda_mm=1.0, base_diameter_mm=0.0), "base_diameter_mm must be a positive finite number"),
     (dict(lambda_mm=2.0, size_mm=3.0), "too small for lambda"),
+    (dict(lambda_mm="abc"), "lambda_mm must be a positive finite number, got 'abc'"),
+    (dict(lambda_mm=1.0, top_diameter_mm=float("nan")), "top_diameter_mm must be a positive finite number"),
+    (dict(lambda_mm=1.0, seed=-1), "seed must be an integer >= 0, got -1"),
+    (dict(lambda_mm=1.0, seed=1.5), "seed must be an integer, got 1.5"),
+    (dict(lambda_mm=1.0, size_mm=1e5), "2000000 x 2000000 pixels: 29.1 TiB per map"),
 ])
 def test_bad_parameters_raise_input_error(kwargs, message):
     with pytest.raises(InputError, match=message):

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import inspect
 import math
+import os
 import re
 import sys
 
@@ -130,7 +131,9 @@ def error_message(err: InputError, flags: dict[str, str]) -> str:
     return f"{flag}: {message}" if flag and flag not in message else message
 
 
-def at_least_one(flag: str, value: int) -> int:
-    if value < 1:
-        raise InputError(f"{flag} must be at least 1, got {value}")
-    return value
+def write_stdout(text: str) -> None:
+    """Print ``text``; if the reader has gone (``| head``), the rest of the output goes nowhere, quietly."""
+    try:
+        print(text, flush=True)
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # so the flush at exit cannot fail

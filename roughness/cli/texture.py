@@ -4,37 +4,55 @@ from __future__ import annotations
 import argparse
 import json
 
+from .common import POSITIVE, SEED, add_overwrite, finish, write_stdout
+
 
 def add_parser(sub) -> None:
+    from roughness.dataset.grid import PIXEL_MM, SIZE_MM
+
     tex = sub.add_parser("texture", help="make textures: standard bumps, flat tops, natural families")
     tex_sub = tex.add_subparsers(dest="texture_command", required=True)
     make = tex_sub.add_parser("make", help="write a texture heightmap (.npy in mm, 16-bit .png, float .tif)")
-    make.add_argument("name", help="standard-<lambda>, flattop-<d>, flat, bumps, or a family (roughness texture list)")
-    make.add_argument("--param", action="append", default=[], metavar="KEY=VALUE", help="family parameter")
-    make.add_argument("--seed", type=int, default=0)
-    make.add_argument("--size-mm", type=float, default=12.0, help="side of the square map (mm)")
-    make.add_argument("--pixel-mm", type=float, default=0.05, help="pixel size (mm)")
-    make.add_argument("--height-mm", type=float, help="PNG only: height of full-scale white (default: the range)")
-    make.add_argument("--out", required=True, help="output file (.npy, .png, .tif)")
-    make.set_defaults(run=run_make)
+    make.add_argument("name", metavar="NAME",
+                      help="standard-<lambda>, flattop-<d>, flat, bumps, or a family (see: roughness texture list)")
+    make.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                      help="family parameter, repeatable (default: the family's defaults)")
+    make.add_argument("--seed", type=SEED, default=0, help="random seed, an integer >= 0 (default 0)")
+    make.add_argument("--size-mm", type=POSITIVE, default=SIZE_MM, help=f"side of the square map in mm (default {SIZE_MM:g})")
+    make.add_argument("--pixel-mm", type=POSITIVE, default=PIXEL_MM, help=f"pixel size in mm (default {PIXEL_MM:g})")
+    make.add_argument("--height-mm", type=POSITIVE,
+                      help="PNG only: height in mm of full-scale white (default: the height range)")
+    make.add_argument("--out", required=True, metavar="FILE", help="output file (.npy in mm, .png, .tif)")
+    add_overwrite(make)
+    finish(make, run_make, params="--param")
     listing = tex_sub.add_parser("list", help="texture names, families and their parameter ranges")
-    listing.set_defaults(run=run_list)
+    finish(listing, run_list)
 
 
 def run_make(args: argparse.Namespace) -> int:
+    from roughness.core.checks import positive
+    from roughness.core.errors import InputError
+    from roughness.core.files import check_output
     from roughness.dataset.catalogue import make_texture, parse_params
-    from roughness.simulate.io import save_heightmap
+    from roughness.simulate.io import SAVE_SUFFIXES, save_heightmap
 
+    out = check_output(args.out, args.overwrite, "out")
+    suffix = out.suffix.lower()
+    if suffix not in SAVE_SUFFIXES:
+        raise InputError(f"cannot save {out}: unsupported format {suffix or '(no suffix)'!r}; "
+                         f"supported: {', '.join(SAVE_SUFFIXES)}", "out")
+    if args.height_mm is not None:
+        positive("height_mm", args.height_mm)
+        if suffix != ".png":
+            raise InputError("applies only to PNG output", "height_mm")
     hm, recipe = make_texture(args.name, seed=args.seed, size_mm=args.size_mm, pixel_mm=args.pixel_mm,
                               params=parse_params(args.param))
-    save_heightmap(hm, args.out, height_mm=args.height_mm)
+    save_heightmap(hm, out, height_mm=args.height_mm)
     ny, nx = hm.shape
     full = args.height_mm if args.height_mm is not None else float(hm.heights.max() - hm.heights.min())
-    note = f"; full-scale white = {full:.4g} mm (pass --height-mm {full:.4g} when loading)" \
-        if args.out.lower().endswith(".png") else ""
-    print(f"wrote {args.out}: {nx} x {ny} px of {hm.pixel_mm} mm, heights {hm.heights.min():.3f} to "
-          f"{hm.heights.max():.3f} mm{note}")
-    print(json.dumps(recipe))
+    note = f"; full-scale white = {full:.4g} mm (pass --height-mm {full:.4g} when loading)" if suffix == ".png" else ""
+    write_stdout(f"wrote {out}: {nx} x {ny} px of {hm.pixel_mm} mm, heights {hm.heights.min():.3f} to "
+                 f"{hm.heights.max():.3f} mm{note}\n{json.dumps(recipe)}")
     return 0
 
 
@@ -42,9 +60,9 @@ def run_list(args: argparse.Namespace) -> int:
     from roughness.dataset.natural import PARAMETER_RANGES
     from roughness.dataset.textures import texture_names
 
-    print("named: " + ", ".join(texture_names()))
-    print("bumps: --param lambda_mm=... [top=cap|flat] [top_diameter_mm=] [height_mm=] [base_diameter_mm=]")
-    for family, ranges in PARAMETER_RANGES.items():
-        print(f"{family}: " + ", ".join(f"{k} {v[0]}..{v[1]}" if isinstance(v[0], float) else f"{k} {'|'.join(v)}"
-                                        for k, v in ranges.items()))
+    lines = ["named: " + ", ".join(texture_names()),
+             "bumps: --param lambda_mm=... [top=cap|flat] [top_diameter_mm=] [height_mm=] [base_diameter_mm=]"]
+    lines += [f"{family}: " + ", ".join(f"{k} {v[0]}..{v[1]}" if isinstance(v[0], float) else f"{k} {'|'.join(v)}"
+                                        for k, v in ranges.items()) for family, ranges in PARAMETER_RANGES.items()]
+    write_stdout("\n".join(lines))
     return 0
