@@ -35,10 +35,9 @@ class Number:
     def describe(self) -> str:
         what = "an integer" if self.kind is int else "a number"
         parts = []
-        if self.low is not None:
-            parts.append(f"{'>' if self.low_open else '>='} {self.low:g}")
-        if self.high is not None:
-            parts.append(f"{'<' if self.high_open else '<='} {self.high:g}")
+        for bound, sign in ((self.low, ">" if self.low_open else ">="), (self.high, "<" if self.high_open else "<=")):
+            if bound is not None:
+                parts.append(f"{sign} {bound if self.kind is int else format(bound, 'g')}")
         return what + (" " + " and ".join(parts) if parts else "")
 
     def __call__(self, text: str) -> int | float:
@@ -123,11 +122,9 @@ def error_message(err: InputError, flags: dict[str, str]) -> str:
     """An InputError in the CLI's words: parameters named by their flags."""
     if isinstance(err, OutputExists):
         return f"{err.path} already exists; pass --overwrite to replace it"
-    message = str(err)
-    for name, flag in flags.items():
-        if "_" in name:  # Python names (pixel_mm) read as their flags (--pixel-mm) in the message
-            message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, message)
-    flag = flags.get(err.parameter or "")
+    message, flag = str(err), flags.get(err.parameter or "")
+    if flag and "_" in err.parameter:  # the Python name (pixel_mm) reads as its flag (--pixel-mm)
+        message = re.sub(rf"(?<![\w-]){re.escape(err.parameter)}(?![\w-])", flag, message)
     return f"{flag}: {message}" if flag and flag not in message else message
 
 
