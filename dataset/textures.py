@@ -39,7 +39,7 @@ class BumpRecipe:
     has a fixed horizontal run of FLANK_RUN_MM, so base = top + 2 * FLANK_RUN_MM (1.9 mm for
     the standard 0.3 mm caps). With it both of the paper's orderings hold at its 10 N: V grows
     with lambda over the standard scale and falls as the flat top widens (see
-    benchmarks/results/ordering_coarse.md and flat_top.md; a 0.9 mm base breaks the first,
+    studies/results/ordering_coarse.md and flat_top.md; a 0.9 mm base breaks the first,
     a fixed 1.5 mm base the second). ``base_mm`` is the base in use. For ``top="cap"``,
     ``top_diameter_mm`` is the footprint diameter of a spherical cap tangent to the cone flank;
     for ``top="flat"`` it is the diameter of the plateau (0.1..0.5 mm).

@@ -158,7 +158,7 @@ def write_card(run: Path, model_path: Path, card: Path, plots: Path, latency_pat
         ]
     pixels = round(FOOTPRINT_MM / meta.patch_pixel_mm)
     given = lambda key, unit="": f"{sim[key]}{unit}" if key in sim else "(not recorded)"  # noqa: E731
-    coarse_note = (" The coarse labels sit a few %\n  below `default` FEM (benchmarks/results/mesh_convergence.md); the "
+    coarse_note = (" The coarse labels sit a few %\n  below `default` FEM (studies/results/mesh_convergence.md); the "
                    "standard scale used for the\n  equivalent wavelength is computed at the same fidelity, so "
                    "equivalent wavelengths and JNDs carry over." if meta.label_fidelity == "coarse" else "")
     text = f"""# Model card: {model_path.name}

@@ -1,7 +1,7 @@
 """Mesh convergence: V at ``default`` within 5% of ``fine`` (opt-in: pytest -m slow).
 
 Full-resolution runs take minutes; the numbers are kept in
-benchmarks/results/mesh_convergence.md (python benchmarks/mesh_convergence.py).
+studies/results/mesh_convergence.md (python studies/mesh_convergence.py).
 """
 from __future__ import annotations
 

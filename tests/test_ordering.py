@@ -1,7 +1,7 @@
 """The paper's ordering: V grows with bump spacing over the 13-texture standard scale.
 
 Judged statistically, as DESIGN.md asks: two random realisations per lambda (seeds 3 and
-4, not used by the parameter exploration in benchmarks/ordering_exploration.py), Spearman
+4, not used by the parameter exploration in studies/ordering_exploration.py), Spearman
 correlation between lambda and the per-lambda mean V, coarse fidelity, paper parameters
 (10 N, nu = 0.45, stick) with the documented bump geometry (base = top + 1.6 mm).
 """

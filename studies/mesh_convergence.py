@@ -1,7 +1,7 @@
 """Mesh convergence of V: coarse, default and fine fidelity on a standard bump texture
 (lambda = 1.0 mm, 0.3 mm caps) and a rough random fBm surface.
 
-    python benchmarks/mesh_convergence.py   # writes benchmarks/results/mesh_convergence.{md,json}
+    python studies/mesh_convergence.py   # writes studies/results/mesh_convergence.{md,json}
 """
 from __future__ import annotations
 

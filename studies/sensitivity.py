@@ -6,7 +6,7 @@ The 13 standard textures (lambda 0.625..1.625 mm), two realisations each (seeds 
 shown as V against lambda per setting, the change of V against the baseline, and whether the
 ordering by lambda survives (Spearman of lambda and V).
 
-    python benchmarks/sensitivity.py      # about 6 min on 2 cores; writes benchmarks/results/sensitivity.*
+    python studies/sensitivity.py      # about 6 min on 2 cores; writes studies/results/sensitivity.*
 """
 from __future__ import annotations
 
@@ -119,7 +119,7 @@ def plot(lambdas, force, poisson, sampling) -> None:
 def write_table(lambdas, force, poisson, sampling) -> None:
     base = force[10.0]
     lines = ["# Sensitivity of V (standard scale, coarse FEM, 2 seeds per lambda)\n",
-             "Regenerate: `python benchmarks/sensitivity.py`. Plot: [sensitivity.png](sensitivity.png).\n",
+             "Regenerate: `python studies/sensitivity.py`. Plot: [sensitivity.png](sensitivity.png).\n",
              "| setting | Spearman(lambda, V) | mean V / baseline | range over lambda |", "|---|---|---|---|"]
     rows = [(f"force {f:g} N", v) for f, v in force.items()] + [(f"nu {nu:g}", v) for nu, v in poisson.items()]
     rows += [(f"d = {d:g} mm, r = {r:g} mm", v) for (d, r), v in sampling.items()]

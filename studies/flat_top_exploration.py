@@ -3,7 +3,7 @@
 Five flat-top textures (top 0.1..0.5 mm, lambda 1.0 mm, 1 mm tall), three realisations each,
 coarse fidelity, stick contact; Spearman of top diameter vs mean V (the paper: negative).
 
-    python benchmarks/flat_top_exploration.py [--forces 2,5,10]   # writes benchmarks/results/flat_top.{md,json}
+    python studies/flat_top_exploration.py [--forces 2,5,10]   # writes studies/results/flat_top.{md,json}
 
 Settings already in flat_top.json are kept (resumable); the table lists every measured setting.
 """

@@ -7,7 +7,7 @@ the 13 standard textures with several random realisations; the verdict is the Sp
 correlation between lambda and the per-lambda mean V. Results are appended to a JSON-lines
 file as they arrive, so an interrupted run resumes where it stopped.
 
-    python benchmarks/ordering_exploration.py [--fidelity coarse] [--seeds 3]
+    python studies/ordering_exploration.py [--fidelity coarse] [--seeds 3]
 """
 from __future__ import annotations
 
