@@ -63,8 +63,27 @@ def test_wheel_installs_one_top_level_name(installed):
     assert all(line.startswith(("roughness/", "roughness-", "../../../bin/")) for line in record), record[:5]
 
 
+def _source_packages() -> set[str]:
+    """Every package of the source tree, by its installed name (roughness/x -> roughness.x, simulate -> roughness.simulate)."""
+    names = set()
+    for init in ROOT.glob("**/__init__.py"):
+        parts = init.parent.relative_to(ROOT).parts
+        if parts and parts[0] in ("roughness", *GENERIC_NAMES) and "build" not in parts:
+            names.add(".".join(parts if parts[0] == "roughness" else ("roughness", *parts)))
+    return names
+
+
+def test_wheel_holds_every_package_of_the_source_tree(installed):
+    site = _purelib(installed)
+    missing = [name for name in _source_packages() if not (site / name.replace(".", "/") / "__init__.py").is_file()]
+    assert not missing, f"packages not in the wheel (pyproject.toml [tool.setuptools] packages): {missing}"
+
+
 def test_installed_public_api_runs_outside_the_checkout(installed, tmp_path):
+    # -S: no .pth files, so an editable install of the checkout elsewhere cannot fill in what the wheel lacks
     code = f"""
+import sys
+sys.path[:0] = [{str(_purelib(installed))!r}, {sysconfig.get_paths()["purelib"]!r}]
 import roughness
 assert sorted(roughness.__all__) == sorted({list(PUBLIC_API)!r} + ["__version__"])
 for name in roughness.__all__:
@@ -79,7 +98,7 @@ for name in {list(GENERIC_NAMES)!r}:
 print("ok", p.roughness)
 """
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    out = subprocess.run([str(installed), "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
+    out = subprocess.run([str(installed), "-S", "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith("ok")
 
