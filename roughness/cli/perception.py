@@ -104,7 +104,7 @@ def add_parser(sub) -> None:
 
 
 def _outputs(folder: str, names: tuple[str, ...], overwrite: bool) -> dict[str, Path]:
-    """The output files in ``folder`` (created if missing), checked before any computation."""
+    """The output files in ``folder``, checked before any computation (the folder is made by ``_made``)."""
     from roughness.core.errors import InputError
     from roughness.core.files import check_output
 
@@ -114,8 +114,16 @@ def _outputs(folder: str, names: tuple[str, ...], overwrite: bool) -> dict[str, 
     if not out.exists():
         if not out.parent.is_dir():
             raise InputError(f"cannot create {out}: folder {out.parent} does not exist", parameter="out")
-        out.mkdir()
+        if not os.access(out.parent, os.W_OK | os.X_OK):
+            raise InputError(f"cannot create {out}: folder {out.parent} is not writable", parameter="out")
+        return {name: out / name for name in names}
     return {name: check_output(out / name, overwrite, "out") for name in names}
+
+
+def _made(files: dict[str, Path]) -> dict[str, Path]:
+    """``files`` after creating their folder (once the inputs have been read and the work is done)."""
+    next(iter(files.values())).parent.mkdir(exist_ok=True)
+    return files
 
 
 def run_embed(args: argparse.Namespace) -> int:
@@ -137,6 +145,7 @@ def run_embed(args: argparse.Namespace) -> int:
                        workers=args.workers, roughest=args.roughest,
                        progress=lambda what: stderr_progress(what, args.quiet))
     summary = {"trials_file": str(args.trials), **analysis.summary(trials), "seed": args.seed}
+    _made(files)
     write_embedding_csv(files["embedding.csv"], analysis)
     write_json(files["embedding.json"], summary)
     plot_embedding(analysis, files["embedding.png"])
@@ -204,6 +213,7 @@ def run_fit(args: argparse.Namespace) -> int:
                "sampling": fit.sampling.as_dict() if fit.sampling else None,
                "forces": fit.force_correlations() if fit.forces else None,
                "fem_configuration": values[0].config if fem else None, "fem_cache": str(cache) if fem else None}
+    _made(files)
     _write_fit_csv(files["fit.csv"], fit)
     write_json(files["fit.json"], summary)
     plot_fit(fit, files["fit.png"])
@@ -268,7 +278,7 @@ def run_design(args: argparse.Namespace) -> int:
 def run_simulate(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from roughness.perception.design import balanced_design
+    from roughness.perception.design import FIELDNAMES, balanced_design
     from roughness.perception.observer import DEFAULT_SIGMA, Observer, noiseless_answer, perceptual_coordinate
     from roughness.perception.stimuli import read_stimuli
     from roughness.perception.trials import write_trials
@@ -276,10 +286,10 @@ def run_simulate(args: argparse.Namespace) -> int:
 
     stimuli = read_stimuli(args.stimuli)
     ids = [s.stimulus for s in stimuli]
-    files = _outputs(args.out, ("trials.csv", "truth.csv"), args.overwrite)
     observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
-    if args.truth:
-        v = _read_truth(args.truth, ids)
+    v = _read_truth(args.truth, ids) if args.truth else None
+    files = _outputs(args.out, ("trials.csv", "truth.csv"), args.overwrite)
+    if v is not None:
         source = f"--truth {args.truth}"
     else:
         cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
@@ -294,9 +304,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     triplets = np.array([[index[t.reference], index[t.left], index[t.right]] for t in design])
     left = observer.answer(truth, triplets, np.random.default_rng([args.seed, 1]))
     rows = [{**t.row(), "answer": "left" if a else "right"} for t, a in zip(design, left)]
-    from roughness.perception.design import FIELDNAMES
-
-    write_trials(files["trials.csv"], rows, FIELDNAMES)
+    write_trials(_made(files)["trials.csv"], rows, FIELDNAMES)
     _write_truth(files["truth.csv"], ids, v, truth)
     disagree = float(np.mean(left != noiseless_answer(truth, triplets)))
     roughest = ids[int(np.argmax(v))]
@@ -320,8 +328,9 @@ def _read_truth(path: str, ids: list[str]):
             rows = {r["stimulus"].strip(): float(r["roughness"]) for r in csv.DictReader(f)}
     except FileNotFoundError:
         raise InputError(f"truth file not found: {path}", parameter="truth") from None
-    except (KeyError, TypeError, ValueError, AttributeError):
-        raise InputError(f"{path}: expected columns stimulus,roughness with numbers", parameter="truth") from None
+    except (KeyError, TypeError, ValueError, AttributeError, csv.Error):  # UnicodeDecodeError is a ValueError
+        raise InputError(f"{path}: expected a CSV table with columns stimulus,roughness (numbers)",
+                         parameter="truth") from None
     missing = [i for i in ids if i not in rows]
     if missing:
         raise InputError(listed(f"{path}: no roughness for", missing), parameter="truth")

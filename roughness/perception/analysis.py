@@ -131,6 +131,13 @@ def read_embedding_csv(path: str | Path) -> EmbeddingTable:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"embedding file not found: {path}", parameter="embedding")
+    try:
+        return _embedding_table(path)
+    except (UnicodeDecodeError, csv.Error) as err:
+        raise InputError(f"{path}: not a readable CSV table ({err})", parameter="embedding") from None
+
+
+def _embedding_table(path: Path) -> EmbeddingTable:
     with open(path, newline="", encoding="utf-8-sig") as f:
         reader = csv.DictReader(f)
         missing = [c for c in ("stimulus", "coordinate") if c not in (reader.fieldnames or ())]
