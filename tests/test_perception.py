@@ -17,8 +17,7 @@ from roughness.perception import values as values_module
 from roughness.perception.bootstrap import bootstrap
 from roughness.perception.crossval import cross_validate
 from roughness.perception.design import balanced_design
-from roughness.perception.embed import (SOLVER_EPS, TripletSDP, lambda_max, margin_matrix, triplet_error,
-                                        triplet_margins)
+from roughness.perception.embed import SOLVER_EPS, TripletSDP, lambda_max, margin_matrix, triplet_error, triplet_margins
 from roughness.perception.fit import correlate, sampling_fit
 from roughness.perception.observer import DEFAULT_SIGMA, Observer, noiseless_answer
 from roughness.perception.trials import parse_trials

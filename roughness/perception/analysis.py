@@ -43,7 +43,7 @@ class EmbeddingAnalysis:
         unique, inverse = trials.unique()
         weights = np.bincount(inverse, minlength=len(unique)).astype(float)
         return {
-            "stimuli": len(self.stimuli), "trials": len(trials), "distinct_triplets": int(len(unique)),
+            "stimuli": len(self.stimuli), "trials": len(trials), "distinct_triplets": len(unique),
             "subjects": len(set(trials.subjects)), "lambda": self.fit.lam,
             "lambda_source": "cross-validation" if self.cv else "given",
             "cross_validation": self.cv.summary() if self.cv else None,
@@ -53,7 +53,7 @@ class EmbeddingAnalysis:
             "training_error_1d": triplet_error(_gram_1d(self.coordinate), unique, weights),
             "orientation": self.orientation,
             "bootstrap": None if self.boot is None else {
-                "resamples": int(len(self.boot.samples)), "failed_solves": self.boot.failed_solves,
+                "resamples": len(self.boot.samples), "failed_solves": self.boot.failed_solves,
                 "percentiles": list(PERCENTILES)},
             "solver": {"name": "SCS via cvxpy", "status": self.fit.status, "iterations": self.fit.iterations,
                        "seconds": self.fit.seconds, "objective": self.fit.objective},

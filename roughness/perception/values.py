@@ -20,7 +20,6 @@ from roughness.core.errors import InputError
 from roughness.core.files import atomic_write
 from roughness.core.hashing import array_digest, digest
 
-
 ENGINES = ("surrogate", "auto", "fem:coarse", "fem:default", "fem:fine")
 
 
