@@ -102,11 +102,13 @@ def plot_sampling(fit: Fit, path: str | Path) -> Path:
     s = fit.sampling
     ax = axes[0]
     image = ax.imshow(s.pearson.T, origin="lower", aspect="auto", vmin=min(0.5, np.nanmin(s.pearson)), vmax=1.0,
-                      extent=_extent(s.distances_mm, s.radii_mm), cmap="viridis")
-    for i, d in enumerate(s.distances_mm):
-        for j, r in enumerate(s.radii_mm):
+                      cmap="viridis")  # one cell per grid value (the grid need not be evenly spaced)
+    for i in range(len(s.distances_mm)):
+        for j in range(len(s.radii_mm)):
             if np.isfinite(s.pearson[i, j]):
-                ax.text(d, r, f"{s.pearson[i, j]:.2f}", ha="center", va="center", fontsize=7, color="w")
+                ax.text(i, j, f"{s.pearson[i, j]:.2f}", ha="center", va="center", fontsize=7, color="w")
+    ax.set_xticks(range(len(s.distances_mm)), [f"{d:g}" for d in s.distances_mm])
+    ax.set_yticks(range(len(s.radii_mm)), [f"{r:g}" for r in s.radii_mm])
     fig.colorbar(image, ax=ax, label="Pearson R of V with the embedding")
     ax.set_xlabel("pair distance d (mm)")
     ax.set_ylabel("disk radius r (mm)")
@@ -119,9 +121,3 @@ def plot_sampling(fit: Fit, path: str | Path) -> Path:
         axes[1].set_ylabel("Pearson R of V with the embedding")
         axes[1].set_title("R over force")
     return _save(plt, fig, path)
-
-
-def _extent(x: np.ndarray, y: np.ndarray) -> list[float]:
-    dx = (x[1] - x[0]) / 2 if len(x) > 1 else 0.05
-    dy = (y[1] - y[0]) / 2 if len(y) > 1 else 0.05
-    return [x[0] - dx, x[-1] + dx, y[0] - dy, y[-1] + dy]
