@@ -373,3 +373,25 @@ def test_cli_design_simulate_embed_fit(tmp_path, capsys):
     assert main(["perception", "fit", str(emb / "embedding.csv"), "--stimuli", str(table), "--out",
                  str(tmp_path / "f2"), "--engine", "surrogate", "--exclude", "nope"]) == 2
     assert "excluded stimuli not in the embedding: nope" in capsys.readouterr().err
+
+
+def test_stimuli_table_files_textures_and_errors(tmp_path):
+    from roughness.perception.stimuli import read_stimuli
+
+    (tmp_path / "maps").mkdir()
+    np.save(tmp_path / "maps" / "a.npy", np.zeros((40, 40)))
+    table = _write(tmp_path / "s.csv", "stimulus,file,pixel_mm,texture,seed,params,note\n"
+                   "a,maps/a.npy,0.3,,,,a scan\nb,,,standard-1.0,2,,\nc,,,knit,0,wale_mm=1.2;height_mm=0.5,\n")
+    a, b, c = read_stimuli(table)
+    assert a.file == tmp_path / "maps" / "a.npy" and a.heightmap().pixel_mm == 0.3
+    assert (b.texture, b.seed) == ("standard-1.0", 2)
+    assert c.params == {"wale_mm": 1.2, "height_mm": 0.5}
+    for rows, message in [("a,maps/a.npy,0.3,flat,,,\n", "exactly one of file or texture"),
+                          ("a,maps/none.npy,0.3,,,,\n", "not found"),
+                          ("a,,,flat,x,,\n", "seed must be"),
+                          ("a,,,flat,,,\na,,,flat,,,\n", "repeated stimulus ids: a"),
+                          ("a,,,flat,,w,\n", "key=value")]:
+        bad = _write(tmp_path / "bad.csv", "stimulus,file,pixel_mm,texture,seed,params,note\n" + rows
+                     + "y,,,flat,,,\nz,,,flat,,,\n")
+        with pytest.raises(InputError, match=message):
+            read_stimuli(bad)
