@@ -38,8 +38,8 @@ RESULTS = Path(__file__).resolve().parent / "results"
 
 
 def estimand(n: int, trials_count: int, seed: int, lam: float, factor: int, ids: tuple[str, ...]) -> np.ndarray:
-    """1-D embedding of ``factor`` times the trials (another seed) at ``factor`` * lam, in ``ids`` order."""
-    big, _ = simulated(n, factor * trials_count, seed + 1000)
+    """1-D embedding of ``factor`` times the trials (same truth, other trials) at ``factor`` * lam, in ``ids`` order."""
+    big, _ = simulated(n, factor * trials_count, seed, trial_seed=seed + 1000)
     unique, inverse = big.unique()
     result = TripletSDP(len(big.stimuli), unique).solve(np.bincount(inverse, minlength=len(unique)), factor * lam)
     order = [big.stimuli.index(s) for s in ids]

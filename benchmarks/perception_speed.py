@@ -32,12 +32,17 @@ RESULTS = Path(__file__).resolve().parent / "results"
 HEADER = "subject,reference,left,right,answer"
 
 
-def simulated(n: int, trials: int, seed: int):
-    """Trials of the default observer on n stimuli with ln(lambda) uniform over the standard scale."""
+def simulated(n: int, trials: int, seed: int, trial_seed: int | None = None):
+    """Trials of the default observer on n stimuli with ln(lambda) uniform over the standard scale.
+
+    ``seed`` draws the truth (and, unless ``trial_seed`` is given, the design and the answers).
+    """
     rng = np.random.default_rng(seed)
     truth = np.log(np.sort(rng.uniform(0.625, 1.625, n)))
+    if trial_seed is not None:
+        rng = np.random.default_rng(trial_seed)
     ids = [f"s{i:02d}" for i in range(n)]
-    design = balanced_design(ids, trials, seed=seed)
+    design = balanced_design(ids, trials, seed=seed if trial_seed is None else trial_seed)
     index = {s: i for i, s in enumerate(ids)}
     triplets = np.array([[index[t.reference], index[t.left], index[t.right]] for t in design])
     left = Observer().answer(truth, triplets, rng)

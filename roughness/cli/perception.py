@@ -203,6 +203,8 @@ def run_fit(args: argparse.Namespace) -> int:
         keep = [v for v, k in zip(values, included) if k]
         fit.sampling = sampling_fit(keep, embedding.coordinate[included], args.distances, args.radii,
                                     config["window_mm"], config["pairs"], config["seed"])
+        if args.forces:
+            fit.forces[float(config["force_n"])] = fit.roughness  # the configuration's own force
         for force in args.forces:
             log(args, f"re-fit at {force:g} N ...")
             runs = stimulus_values(embedding.stimuli, heightmaps, args.engine, cache, lambda m: log(args, m),

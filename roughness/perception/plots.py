@@ -116,7 +116,9 @@ def plot_sampling(fit: Fit, path: str | Path) -> Path:
     if fit.forces:
         corr = fit.force_correlations()
         forces = sorted(fit.forces)
-        axes[1].plot(forces, [corr[f"{f:g}"]["pearson"] for f in forces], "o-")
+        r = [corr[f"{f:g}"]["pearson"] for f in forces]
+        axes[1].plot(forces, r, "o-")
+        axes[1].set_ylim(min(0.5, min(x for x in r if x is not None) - 0.05), 1.0)
         axes[1].set_xlabel("normal force (N)")
         axes[1].set_ylabel("Pearson R of V with the embedding")
         axes[1].set_title("R over force")
