@@ -1,0 +1,353 @@
+"""`roughness perception embed|fit|design|simulate`: triplet experiments and the fit of V to them."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from pathlib import Path
+
+from .common import COUNT, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, log
+
+NON_NEGATIVE = Number(float, low=0)
+PROBABILITY = Number(float, low=0, high=1)
+
+
+def positive_list(text: str) -> list[float]:
+    """``0.4,0.8,1.2``: positive finite numbers (mm or N), for argparse."""
+    try:
+        values = [POSITIVE(v) for v in text.split(",")]
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated positive numbers, got {text!r}") from None
+    return sorted(set(values))
+
+
+def id_list(text: str) -> list[str]:
+    return [v.strip() for v in text.split(",") if v.strip()]
+
+
+def add_parser(sub) -> None:
+    per = sub.add_parser("perception", help="triplet experiments: design trials, simulate an observer, embed the "
+                                            "answers, fit V to the embedding")
+    ps = per.add_subparsers(dest="perception_command", required=True)
+
+    emb = ps.add_parser("embed", help="1-D perceptual scale from triplet answers (Wills et al. 2009 SDP), with "
+                                      "cross-validated lambda, spectrum and bootstrap intervals")
+    emb.add_argument("trials", metavar="TRIALS", help="trials CSV: subject,reference,left,right,answer (answer = "
+                                                      "left|right, the one closer in roughness to the reference)")
+    emb.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
+    emb.add_argument("--stimuli", metavar="TABLE", help="stimuli table: every id in TRIALS must be listed in it")
+    emb.add_argument("--roughest", metavar="ID", help="a stimulus known to be rough: orients the scale so that it "
+                                                      "is positive (default: arbitrary sign, said in the summary)")
+    emb.add_argument("--lambda", dest="lam", type=NON_NEGATIVE, metavar="L",
+                     help="fixed regulariser (skips cross-validation)")
+    emb.add_argument("--folds", type=Number(int, low=2), default=10, help="cross-validation folds (default 10)")
+    emb.add_argument("--resamples", type=Number(int, low=0), default=500,
+                     help="bootstrap resamples for the 5-95%% intervals (default 500; 0: none)")
+    emb.add_argument("--workers", type=COUNT, default=os.cpu_count() or 1,
+                     help="processes for cross-validation and bootstrap (default: all cores)")
+    emb.add_argument("--repeats", choices=("error", "keep"), default="error",
+                     help="contradictory answers of one subject to the same trial: error (default) or keep both")
+    emb.add_argument("--seed", type=SEED, default=0, help="seed of the folds and resamples")
+    add_overwrite(emb)
+    add_quiet(emb)
+    finish(emb, run_embed)
+
+    fit = ps.add_parser("fit", help="V of the stimuli against the embedding: Pearson/Spearman, classical measures, "
+                                    "re-fit over the pair sampling (d, r) and force")
+    fit.add_argument("embedding", metavar="EMBEDDING", help="embedding.csv from `roughness perception embed`")
+    fit.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (ids -> heightmaps)")
+    fit.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
+    fit.add_argument("--engine", choices=("fem:coarse", "fem:default", "fem:fine", "surrogate", "auto"),
+                     default="fem:default", help="engine for V (default fem:default; the (d, r) and force re-fits "
+                                                 "need a FEM engine)")
+    fit.add_argument("--cache", metavar="DIR", help="FEM result cache (default: DIR/fem-cache); keyed by heights and "
+                                                    "configuration, shareable between runs")
+    fit.add_argument("--exclude", type=id_list, default=[], metavar="ID,ID",
+                     help="stimuli left out of the 'included' fit (e.g. the least homogeneous ones)")
+    fit.add_argument("--distances", type=positive_list, default=[0.4, 0.6, 0.8, 1.0, 1.2, 1.6], metavar="MM,MM",
+                     help="pair distances d of the re-fit (mm)")
+    fit.add_argument("--radii", type=positive_list, default=[0.2, 0.4, 0.6, 0.8, 1.0, 1.2], metavar="MM,MM",
+                     help="disk radii r of the re-fit (mm)")
+    fit.add_argument("--forces", type=positive_list, default=[], metavar="N,N",
+                     help="forces (N) of a re-fit over force (new FEM runs, cached; default: none)")
+    add_overwrite(fit)
+    add_quiet(fit)
+    finish(fit, run_fit)
+
+    des = ps.add_parser("design", help="a balanced, randomised triplet trial list for an experiment")
+    des.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (its ids are used)")
+    des.add_argument("--trials", required=True, type=COUNT, help="trials per subject")
+    des.add_argument("--subjects", type=COUNT, default=1, help="number of subjects s1..sN (default 1)")
+    des.add_argument("--seed", type=SEED, default=0)
+    des.add_argument("--out", required=True, metavar="CSV", help="trial list (answer column left blank)")
+    add_overwrite(des)
+    finish(des, run_design)
+
+    sim = ps.add_parser("simulate", help="answer a balanced trial list with a simulated observer (Thurstone, "
+                                         "Weber noise on ln V / 2), for testing and planning")
+    sim.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (ids -> heightmaps)")
+    sim.add_argument("--truth", metavar="CSV", help="known V per stimulus (columns stimulus,roughness) instead of "
+                                                    "computing it with --engine")
+    sim.add_argument("--engine", choices=("fem:coarse", "fem:default", "fem:fine", "surrogate", "auto"),
+                     default="surrogate", help="engine for the true V (default surrogate)")
+    sim.add_argument("--cache", metavar="DIR", help="FEM result cache (default: DIR/fem-cache)")
+    sim.add_argument("--trials", required=True, type=COUNT, help="trials per subject")
+    sim.add_argument("--subjects", type=COUNT, default=1, help="number of simulated subjects (default 1)")
+    sim.add_argument("--sigma", type=NON_NEGATIVE, default=None,
+                     help="noise SD on the coordinate ln(V)/2 (default 0.18, from the Weber fraction 0.19)")
+    sim.add_argument("--lapse", type=PROBABILITY, default=0.0, help="probability of a random answer (default 0)")
+    sim.add_argument("--seed", type=SEED, default=0)
+    sim.add_argument("--out", required=True, metavar="DIR", help="output folder: trials.csv, truth.csv")
+    add_overwrite(sim)
+    add_quiet(sim)
+    finish(sim, run_simulate)
+
+
+def _outputs(folder: str, names: tuple[str, ...], overwrite: bool) -> dict[str, Path]:
+    """The output files in ``folder``, checked before any computation (the folder is made by ``_made``)."""
+    from roughness.core.errors import InputError
+    from roughness.core.files import check_output
+
+    out = Path(folder)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out} is a file, not a folder", parameter="out")
+    if not out.exists():
+        if not out.parent.is_dir():
+            raise InputError(f"cannot create {out}: folder {out.parent} does not exist", parameter="out")
+        if not os.access(out.parent, os.W_OK | os.X_OK):
+            raise InputError(f"cannot create {out}: folder {out.parent} is not writable", parameter="out")
+        return {name: out / name for name in names}
+    return {name: check_output(out / name, overwrite, "out") for name in names}
+
+
+def _made(files: dict[str, Path]) -> dict[str, Path]:
+    """``files`` after creating their folder (once the inputs have been read and the work is done)."""
+    next(iter(files.values())).parent.mkdir(exist_ok=True)
+    return files
+
+
+def run_embed(args: argparse.Namespace) -> int:
+    from roughness.perception.analysis import analyse, write_embedding_csv, write_json
+    from roughness.perception.embed import require_cvxpy
+    from roughness.perception.parallel import stderr_progress
+    from roughness.perception.plots import plot_cross_validation, plot_embedding
+    from roughness.perception.stimuli import read_stimuli
+    from roughness.perception.trials import read_trials
+
+    require_cvxpy()
+    ids = [s.stimulus for s in read_stimuli(args.stimuli)] if args.stimuli else None
+    trials = read_trials(args.trials, ids, args.repeats)
+    files = _outputs(args.out, ("embedding.csv", "embedding.json", "embedding.png", "cross_validation.png"),
+                     args.overwrite)
+    log(args, f"{args.trials}: {len(trials)} trials, {len(trials.stimuli)} stimuli, "
+              f"{len(set(trials.subjects))} subject(s); {args.workers} worker(s)")
+    analysis = analyse(trials, lam=args.lam, folds=args.folds, resamples=args.resamples, seed=args.seed,
+                       workers=args.workers, roughest=args.roughest,
+                       progress=lambda what: stderr_progress(what, args.quiet))
+    summary = {"trials_file": str(args.trials), **analysis.summary(trials), "seed": args.seed}
+    _made(files)
+    write_embedding_csv(files["embedding.csv"], analysis)
+    write_json(files["embedding.json"], summary)
+    plot_embedding(analysis, files["embedding.png"])
+    plot_cross_validation(analysis, files["cross_validation.png"])
+    share = summary["first_dimension_share"]
+    print(f"lambda {analysis.fit.lam:.4g} ({summary['lambda_source']}); first dimension "
+          f"{share:.1%} of the spectrum; training triplet error {summary['training_error']:.3f} "
+          f"(1-D: {summary['training_error_1d']:.3f})" if share is not None else
+          f"lambda {analysis.fit.lam:.4g}: the embedding collapsed to a point (lambda too large)")
+    log(args, f"wrote {', '.join(str(p) for p in files.values())}")
+    return 0
+
+
+def _table_subset(table, ids):
+    from roughness.core.errors import InputError
+    from roughness.perception.trials import listed
+
+    by_id = {s.stimulus: s for s in table}
+    missing = [i for i in ids if i not in by_id]
+    if missing:
+        raise InputError(listed("stimuli not in the stimuli table", missing), parameter="stimuli")
+    return [by_id[i] for i in ids]
+
+
+def run_fit(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from roughness.core.errors import InputError
+    from roughness.perception.analysis import read_embedding_csv, write_json
+    from roughness.perception.fit import Fit, classical_measures, sampling_fit
+    from roughness.perception.plots import plot_fit, plot_sampling
+    from roughness.perception.stimuli import read_stimuli
+    from roughness.perception.trials import listed
+    from roughness.perception.values import stimulus_values
+
+    embedding = read_embedding_csv(args.embedding)
+    stimuli = _table_subset(read_stimuli(args.stimuli), embedding.stimuli)
+    unknown = [i for i in args.exclude if i not in embedding.stimuli]
+    if unknown:
+        raise InputError(listed("excluded stimuli not in the embedding", unknown), parameter="exclude")
+    fem = args.engine.startswith("fem:")
+    if args.forces and not fem:
+        raise InputError("--forces re-runs the FEM: use a FEM --engine", parameter="forces")
+    names = ("fit.csv", "fit.json", "fit.png") + (("sampling.png",) if fem else ())
+    files = _outputs(args.out, names, args.overwrite)
+    cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
+    heightmaps = [s.heightmap() for s in stimuli]
+    log(args, f"V of {len(stimuli)} stimuli with {args.engine} ...")
+    values = stimulus_values(embedding.stimuli, heightmaps, args.engine, cache, lambda m: log(args, m))
+    included = np.array([s not in args.exclude for s in embedding.stimuli])
+    fit = Fit(embedding.stimuli, embedding.coordinate, embedding.low, embedding.high, values, included,
+              classical_measures(heightmaps))
+    if fem:
+        config = values[0].config
+        keep = [v for v, k in zip(values, included) if k]
+        fit.sampling = sampling_fit(keep, embedding.coordinate[included], args.distances, args.radii,
+                                    config["window_mm"], config["pairs"], config["seed"])
+        if args.forces:
+            fit.forces[float(config["force_n"])] = fit.roughness  # the configuration's own force
+        for force in args.forces:
+            log(args, f"re-fit at {force:g} N ...")
+            runs = stimulus_values(embedding.stimuli, heightmaps, args.engine, cache, lambda m: log(args, m),
+                                   force_n=force)
+            fit.forces[force] = np.array([v.roughness for v in runs])
+    summary = {"embedding_file": str(args.embedding), "stimuli_table": str(args.stimuli), "engine": args.engine,
+               "excluded": list(args.exclude), "correlations": fit.correlations(),
+               "sampling": fit.sampling.as_dict() if fit.sampling else None,
+               "forces": fit.force_correlations() if fit.forces else None,
+               "fem_configuration": values[0].config if fem else None, "fem_cache": str(cache) if fem else None}
+    _made(files)
+    _write_fit_csv(files["fit.csv"], fit)
+    write_json(files["fit.json"], summary)
+    plot_fit(fit, files["fit.png"])
+    if fem:
+        plot_sampling(fit, files["sampling.png"])
+    c = summary["correlations"]["V"]
+    line = f"V ({args.engine}) vs embedding: Pearson R {_fmt(c['all']['pearson'])}, Spearman {_fmt(c['all']['spearman'])}"
+    if args.exclude:
+        line += (f"; without {len(args.exclude)} excluded: R {_fmt(c['included']['pearson'])}, "
+                 f"Spearman {_fmt(c['included']['spearman'])}")
+    print(line)
+    log(args, f"wrote {', '.join(str(p) for p in files.values())}")
+    return 0
+
+
+def _fmt(x) -> str:
+    return "undefined" if x is None else f"{x:.3f}"
+
+
+def _write_fit_csv(path: Path, fit) -> None:
+    import csv
+
+    from roughness.core.files import atomic_write
+
+    measures = list(fit.measures)
+
+    def write(tmp: str) -> None:
+        with open(tmp, "w", newline="", encoding="utf-8") as f:
+            out = csv.writer(f, lineterminator="\n")
+            out.writerow(["stimulus", "coordinate", "low", "high", "roughness", "roughness_stderr", "engine",
+                          "included", *measures])
+            for i, v in enumerate(fit.values):
+                out.writerow([v.stimulus, f"{fit.coordinate[i]:.6g}", _num(fit.low[i]), _num(fit.high[i]),
+                              f"{v.roughness:.6g}", _num(v.roughness_stderr), v.engine, int(fit.included[i]),
+                              *(f"{fit.measures[m][i]:.6g}" for m in measures)])
+
+    atomic_write(path, write)
+
+
+def _num(x: float) -> str:
+    import math
+
+    return f"{x:.6g}" if math.isfinite(x) else ""
+
+
+def run_design(args: argparse.Namespace) -> int:
+    from roughness.core.files import check_output
+    from roughness.perception.design import FIELDNAMES, balanced_design
+    from roughness.perception.stimuli import read_stimuli
+    from roughness.perception.trials import write_trials
+
+    ids = [s.stimulus for s in read_stimuli(args.stimuli)]
+    out = check_output(args.out, args.overwrite, "out")
+    subjects = [f"s{i}" for i in range(1, args.subjects + 1)]
+    trials = balanced_design(ids, args.trials, subjects, args.seed)
+    write_trials(out, (t.row() for t in trials), FIELDNAMES)
+    print(f"wrote {out}: {len(trials)} trials ({args.trials} per subject, {len(subjects)} subject(s)) over "
+          f"{len(ids)} stimuli; fill the answer column with left or right")
+    return 0
+
+
+def run_simulate(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from roughness.perception.design import FIELDNAMES, balanced_design
+    from roughness.perception.observer import DEFAULT_SIGMA, Observer, noiseless_answer, perceptual_coordinate
+    from roughness.perception.stimuli import read_stimuli
+    from roughness.perception.trials import write_trials
+    from roughness.perception.values import stimulus_values
+
+    stimuli = read_stimuli(args.stimuli)
+    ids = [s.stimulus for s in stimuli]
+    observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
+    v = _read_truth(args.truth, ids) if args.truth else None
+    files = _outputs(args.out, ("trials.csv", "truth.csv"), args.overwrite)
+    if v is not None:
+        source = f"--truth {args.truth}"
+    else:
+        cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
+        log(args, f"true V of {len(ids)} stimuli with {args.engine} ...")
+        values = stimulus_values(ids, [s.heightmap() for s in stimuli], args.engine, cache, lambda m: log(args, m))
+        v = np.array([x.roughness for x in values])
+        source = args.engine
+    truth = perceptual_coordinate(v)
+    subjects = [f"s{i}" for i in range(1, args.subjects + 1)]
+    design = balanced_design(ids, args.trials, subjects, args.seed)
+    index = {s: i for i, s in enumerate(ids)}
+    triplets = np.array([[index[t.reference], index[t.left], index[t.right]] for t in design])
+    left = observer.answer(truth, triplets, np.random.default_rng([args.seed, 1]))
+    rows = [{**t.row(), "answer": "left" if a else "right"} for t, a in zip(design, left)]
+    write_trials(_made(files)["trials.csv"], rows, FIELDNAMES)
+    _write_truth(files["truth.csv"], ids, v, truth)
+    disagree = float(np.mean(left != noiseless_answer(truth, triplets)))
+    roughest = ids[int(np.argmax(v))]
+    print(json.dumps({"trials": len(rows), "stimuli": len(ids), "truth": source, "sigma": observer.sigma,
+                      "lapse": observer.lapse, "noise_floor": disagree, "roughest": roughest}))
+    log(args, f"the observer's answers disagree with the noise-free ones in {disagree:.1%} of trials (the best "
+              f"achievable triplet error); embed with --roughest {roughest}")
+    return 0
+
+
+def _read_truth(path: str, ids: list[str]):
+    import csv
+
+    import numpy as np
+
+    from roughness.core.errors import InputError
+    from roughness.perception.trials import listed
+
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as f:
+            rows = {r["stimulus"].strip(): float(r["roughness"]) for r in csv.DictReader(f)}
+    except FileNotFoundError:
+        raise InputError(f"truth file not found: {path}", parameter="truth") from None
+    except (KeyError, TypeError, ValueError, AttributeError, csv.Error):  # UnicodeDecodeError is a ValueError
+        raise InputError(f"{path}: expected a CSV table with columns stimulus,roughness (numbers)",
+                         parameter="truth") from None
+    missing = [i for i in ids if i not in rows]
+    if missing:
+        raise InputError(listed(f"{path}: no roughness for", missing), parameter="truth")
+    return np.array([rows[i] for i in ids])
+
+
+def _write_truth(path: Path, ids, v, coordinate) -> None:
+    import csv
+
+    from roughness.core.files import atomic_write
+
+    def write(tmp: str) -> None:
+        with open(tmp, "w", newline="", encoding="utf-8") as f:
+            out = csv.writer(f, lineterminator="\n")
+            out.writerow(["stimulus", "roughness", "coordinate"])
+            out.writerows([s, f"{a:.6g}", f"{p:.6g}"] for s, a, p in zip(ids, v, coordinate))
+
+    atomic_write(path, write)
