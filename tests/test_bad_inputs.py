@@ -32,6 +32,10 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("export",): ["checkpoint.pt", "--out", "new.onnx"],
     ("predict",): ["map.npy", "--pixel-mm", "0.05", "--engine", "surrogate"],
     ("compare",): ["maps", "--pixel-mm", "0.05", "--out", "report", "--engines", "ra", "--reference", "p90"],
+    ("perception", "embed"): ["trials.csv", "--out", "emb", "--folds", "2", "--resamples", "2", "--workers", "1"],
+    ("perception", "fit"): ["embedding.csv", "--stimuli", "stimuli.csv", "--out", "fit", "--engine", "fem:coarse"],
+    ("perception", "design"): ["--stimuli", "stimuli.csv", "--trials", "10", "--out", "design.csv"],
+    ("perception", "simulate"): ["--stimuli", "stimuli.csv", "--truth", "truth.csv", "--trials", "10", "--out", "sim"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -43,6 +47,10 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("export",): [(0, ".pt", [])],
     ("predict",): [(0, ".npy", []), ("--model", ".onnx", [])],
     ("compare",): [(0, ".json", ["--n", "2"]), (0, ".h5", [])],
+    ("perception", "embed"): [(0, ".csv", []), ("--stimuli", ".csv", [])],
+    ("perception", "fit"): [(0, ".csv", []), ("--stimuli", ".csv", [])],
+    ("perception", "design"): [("--stimuli", ".csv", [])],
+    ("perception", "simulate"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
@@ -51,6 +59,7 @@ FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("train",): ["--out"],
     ("export",): ["--out"],
     ("predict",): ["--map"],
+    ("perception", "design"): ["--out"],
 }
 OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy"}
 
@@ -96,6 +105,10 @@ def workdir(tmp_path, monkeypatch):
     np.save(tmp_path / "maps" / "a.npy", rng.random((240, 240)) * 0.5)
     (tmp_path / "data.h5").write_bytes(b"placeholder")
     (tmp_path / "checkpoint.pt").write_bytes(b"placeholder")
+    (tmp_path / "trials.csv").write_text("subject,reference,left,right,answer\ns1,a,b,c,left\ns1,b,a,c,left\n")
+    (tmp_path / "stimuli.csv").write_text("stimulus,texture\na,standard-1.0\nb,standard-1.25\nc,flattop-0.3\n")
+    (tmp_path / "embedding.csv").write_text("stimulus,coordinate,low,high\na,-1,-1.2,-0.8\nb,0.1,0,0.2\nc,0.9,0.8,1\n")
+    (tmp_path / "truth.csv").write_text("stimulus,roughness\na,0.05\nb,0.08\nc,0.1\n")
     monkeypatch.chdir(tmp_path)
     _tripwires(monkeypatch)
     return tmp_path

@@ -78,7 +78,7 @@ def add_parser(sub) -> None:
     des.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (its ids are used)")
     des.add_argument("--trials", required=True, type=COUNT, help="trials per subject")
     des.add_argument("--subjects", type=COUNT, default=1, help="number of subjects s1..sN (default 1)")
-    des.add_argument("--seed", type=SEED, default=0)
+    des.add_argument("--seed", type=SEED, default=0, help="seed of the trial order (default: %(default)s)")
     des.add_argument("--out", required=True, metavar="CSV", help="trial list (answer column left blank)")
     add_overwrite(des)
     finish(des, run_design)
@@ -96,7 +96,7 @@ def add_parser(sub) -> None:
     sim.add_argument("--sigma", type=NON_NEGATIVE, default=None,
                      help="noise SD on the coordinate ln(V)/2 (default 0.18, from the Weber fraction 0.19)")
     sim.add_argument("--lapse", type=PROBABILITY, default=0.0, help="probability of a random answer (default 0)")
-    sim.add_argument("--seed", type=SEED, default=0)
+    sim.add_argument("--seed", type=SEED, default=0, help="seed of the observer's noise (default: %(default)s)")
     sim.add_argument("--out", required=True, metavar="DIR", help="output folder: trials.csv, truth.csv")
     add_overwrite(sim)
     add_quiet(sim)
