@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import COUNT, POSITIVE, add_overwrite, add_quiet, finish, log
+from .common import COUNT, add_overwrite, add_quiet, add_reading_args, finish, log
 
 COMPARE_ENGINES = ("fem:coarse", "fem:default", "surrogate", "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance")
 REFERENCE = "fem:fine"
@@ -23,10 +23,7 @@ def add_parser(sub) -> None:
     cmp.add_argument("--reference", default=REFERENCE,
                      help=f"engine the others are scored against (default: {REFERENCE})")
     cmp.add_argument("--n", type=COUNT, help="number of textures, the first n (default: all; required for a recipe)")
-    cmp.add_argument("--pixel-mm", type=POSITIVE,
-                     help="pixel size of a folder's heightmaps in mm (default: none; required unless the files state it)")
-    cmp.add_argument("--height-mm", type=POSITIVE,
-                     help="full-scale height of a folder's PNG/TIFF heightmaps in mm (default: the file's own)")
+    add_reading_args(cmp)
     add_quiet(cmp)
     add_overwrite(cmp)
     finish(cmp, run)

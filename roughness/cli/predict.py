@@ -7,7 +7,7 @@ import os
 import sys
 import time
 
-from .common import COUNT, POSITIVE, add_overwrite, add_quiet, defaults, finish, float_pair, log
+from .common import COUNT, POSITIVE, add_overwrite, add_quiet, add_reading_args, defaults, finish, float_pair, log
 
 MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
 
@@ -27,10 +27,7 @@ def add_parser(sub) -> None:
     pr.add_argument("--fidelity", choices=("coarse", "default"),
                     help="FEM fidelity (default: that of the model's training labels; the standard scale "
                          "is tabulated for these two)")
-    pr.add_argument("--pixel-mm", type=POSITIVE, help="pixel size in mm (default: none; required unless the file "
-                                                   "states it)")
-    pr.add_argument("--height-mm", type=POSITIVE, help="height of full-scale white in mm for PNG/TIFF (default: the "
-                                                    "file's own)")
+    add_reading_args(pr)
     pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures (default: off)")
     pr.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
     pr.add_argument("--batch-size", type=COUNT, default=given["batch_size"],
