@@ -28,9 +28,10 @@ from roughness.core.errors import InputError
 from roughness.core.files import atomic_write
 
 from .heightmap import Heightmap
+from .stl import DEFAULT_BASE_MM, plate, stl_bytes
 
 SUFFIXES = (".npy", ".npz", ".png", ".tif", ".tiff", ".h5", ".hdf5")
-SAVE_SUFFIXES = (".npy", ".npz", ".png", ".tif", ".tiff", ".h5", ".hdf5")
+SAVE_SUFFIXES = (".npy", ".npz", ".png", ".tif", ".tiff", ".h5", ".hdf5", ".stl")
 DEFAULT_DATASET = "heightmap"
 FULL_SCALE = {1: 255, 2: 65535}  # unsigned integer samples: bytes per sample -> white
 PNG_16BIT = ("I;16", "I;16B", "I;16L")
@@ -94,14 +95,17 @@ def heightmap_files(folder: str | Path) -> list[Path]:
     return files
 
 
-def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = None) -> None:
+def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = None,
+                   base_mm: float | None = None) -> None:
     """Write ``hm`` atomically, with its pixel size wherever the format can hold it.
 
     .npy: heights in mm (no room for the pixel size); .npz and .h5: heights in mm and
     ``pixel_mm``; float32 .tif/.tiff: heights in mm, the pixel size in the ImageDescription
     (and as resolution tags for other software); 16-bit .png: (H - min) / height_mm * 65535,
     ``height_mm`` defaulting to the height range, with pixel size, full-scale height and the
-    minimum in a text chunk, so that the file loads back without flags.
+    minimum in a text chunk, so that the file loads back without flags; .stl: a watertight
+    printable plate in mm, the texture standing on ``base_mm`` of solid (default 2 mm; see
+    ``stl.plate``), written but not read back.
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -110,6 +114,8 @@ def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = No
                          f"supported: {', '.join(SAVE_SUFFIXES)}", parameter="out")
     if height_mm is not None and suffix != ".png":
         raise InputError(f"cannot save {path}: height_mm applies only to PNG output", parameter="height_mm")
+    if base_mm is not None and suffix != ".stl":
+        raise InputError(f"cannot save {path}: base_mm applies only to STL output", parameter="base_mm")
     if not path.parent.is_dir():
         raise InputError(f"cannot write {path}: its folder does not exist", parameter="out")
     units = {"pixel_mm": hm.pixel_mm}
@@ -122,6 +128,9 @@ def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = No
         info = PngImagePlugin.PngInfo()
         info.add_text(UNITS_KEY, json.dumps(units | {"height_mm": full, "base_mm": float(hm.heights.min())}))
         atomic_write(path, lambda tmp: Image.fromarray(counts).save(tmp, format="PNG", pnginfo=info))
+    elif suffix == ".stl":
+        data = stl_bytes(plate(hm, DEFAULT_BASE_MM if base_mm is None else base_mm))
+        atomic_write(path, lambda tmp: Path(tmp).write_bytes(data))
     elif suffix in (".tif", ".tiff"):
         per_cm = 10.0 / hm.pixel_mm
         atomic_write(path, lambda tmp: tifffile.imwrite(

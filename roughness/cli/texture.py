@@ -9,10 +9,12 @@ from .common import POSITIVE, SEED, add_overwrite, finish, write_stdout
 
 def add_parser(sub) -> None:
     from roughness.dataset.grid import PIXEL_MM, SIZE_MM
+    from roughness.simulate.stl import DEFAULT_BASE_MM
 
     tex = sub.add_parser("texture", help="make textures: standard bumps, flat tops, natural families")
     tex_sub = tex.add_subparsers(dest="texture_command", required=True)
-    make = tex_sub.add_parser("make", help="write a texture heightmap (.npy in mm, 16-bit .png, float .tif)")
+    make = tex_sub.add_parser("make", help="write a texture heightmap (.npz/.npy/.h5 in mm, 16-bit .png, float .tif) "
+                              "or a printable plate (.stl)")
     make.add_argument("name", metavar="NAME",
                       help="standard-<lambda>, flattop-<d>, flat, bumps, or a family (see: roughness texture list)")
     make.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
@@ -22,7 +24,10 @@ def add_parser(sub) -> None:
     make.add_argument("--pixel-mm", type=POSITIVE, default=PIXEL_MM, help=f"pixel size in mm (default {PIXEL_MM:g})")
     make.add_argument("--height-mm", type=POSITIVE,
                       help="PNG only: height in mm of full-scale white (default: the height range)")
-    make.add_argument("--out", required=True, metavar="FILE", help="output file (.npy in mm, .png, .tif)")
+    make.add_argument("--base-mm", type=POSITIVE,
+                      help=f"STL only: plate thickness below the texture's lowest point in mm (default {DEFAULT_BASE_MM:g})")
+    make.add_argument("--out", required=True, metavar="FILE",
+                      help="output file: .npz, .npy, .h5 (mm), .png (16-bit), .tif (float mm), .stl (printable plate)")
     add_overwrite(make)
     finish(make, run_make, params="--param")
     listing = tex_sub.add_parser("list", help="texture names, families and their parameter ranges")
@@ -45,12 +50,14 @@ def run_make(args: argparse.Namespace) -> int:
         positive("height_mm", args.height_mm)
         if suffix != ".png":
             raise InputError("applies only to PNG output", "height_mm")
+    if args.base_mm is not None and suffix != ".stl":
+        raise InputError("applies only to STL output", "base_mm")
     hm, recipe = make_texture(args.name, seed=args.seed, size_mm=args.size_mm, pixel_mm=args.pixel_mm,
                               params=parse_params(args.param))
-    save_heightmap(hm, out, height_mm=args.height_mm)
+    save_heightmap(hm, out, height_mm=args.height_mm, base_mm=args.base_mm)
     ny, nx = hm.shape
-    full = args.height_mm if args.height_mm is not None else float(hm.heights.max() - hm.heights.min())
-    note = f"; full-scale white = {full:.4g} mm (pass --height-mm {full:.4g} when loading)" if suffix == ".png" else ""
+    note = "; a printable plate in mm" if suffix == ".stl" else "; the file states its pixel size" \
+        if suffix != ".npy" else ""
     write_stdout(f"wrote {out}: {nx} x {ny} px of {hm.pixel_mm} mm, heights {hm.heights.min():.3f} to "
                  f"{hm.heights.max():.3f} mm{note}\n{json.dumps(recipe)}")
     return 0
