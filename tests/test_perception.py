@@ -395,3 +395,22 @@ def test_stimuli_table_files_textures_and_errors(tmp_path):
                      + "y,,,flat,,,\nz,,,flat,,,\n")
         with pytest.raises(InputError, match=message):
             read_stimuli(bad)
+
+
+def test_design_writes_printable_plates_of_every_stimulus(tmp_path):
+    import trimesh
+
+    table = tmp_path / "stimuli.csv"
+    np.save(tmp_path / "scan.npy", np.random.default_rng(0).random((120, 130)) * 0.3)
+    table.write_text("stimulus,texture,file,pixel_mm\nbumps 1.0,standard-1.0,,\nknit,knit,,\nscan,,scan.npy,0.05\n")
+    plates = tmp_path / "plates"
+    args = ["perception", "design", "--stimuli", str(table), "--trials", "4", "--out", str(tmp_path / "d.csv"),
+            "--plates", str(plates), "--plate-mm", "5", "--base-mm", "1"]
+    assert main(args) == 0
+    assert sorted(p.name for p in plates.iterdir()) == ["bumps_1.0.stl", "knit.stl", "scan.stl"]
+    for p in plates.iterdir():
+        mesh = trimesh.load(p)
+        assert mesh.is_watertight and mesh.extents[0] == pytest.approx(5 - 0.05, abs=1e-4)
+    assert main(args) == 2  # outputs exist: refused without --overwrite
+    small = [*args[:-6], "--out", str(tmp_path / "e.csv"), "--plates", str(tmp_path / "p2"), "--plate-mm", "25"]
+    assert main(small) == 2 and not (tmp_path / "p2").exists()  # the 6 mm scan cannot make a 25 mm plate

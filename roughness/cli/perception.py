@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 from pathlib import Path
 
 from .common import COUNT, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, log
@@ -80,6 +81,12 @@ def add_parser(sub) -> None:
     des.add_argument("--subjects", type=COUNT, default=1, help="number of subjects s1..sN (default 1)")
     des.add_argument("--seed", type=SEED, default=0, help="seed of the trial order (default: %(default)s)")
     des.add_argument("--out", required=True, metavar="CSV", help="trial list (answer column left blank)")
+    des.add_argument("--plates", metavar="DIR", help="also write every stimulus as a printable plate DIR/<id>.stl "
+                                                     "(default: none)")
+    des.add_argument("--plate-mm", type=POSITIVE, default=25.0, help="side of the plates in mm (default: %(default)s, "
+                                                                     "as in the paper)")
+    des.add_argument("--base-mm", type=POSITIVE, default=2.0, help="plate thickness below the texture in mm "
+                                                                   "(default: %(default)s)")
     add_overwrite(des)
     finish(des, run_design)
 
@@ -262,19 +269,38 @@ def _num(x: float) -> str:
 
 
 def run_design(args: argparse.Namespace) -> int:
-    from roughness.core.files import check_output
+    from roughness.core.errors import InputError
+    from roughness.core.files import check_output, check_output_folder
     from roughness.perception.design import FIELDNAMES, balanced_design
     from roughness.perception.stimuli import read_stimuli
     from roughness.perception.trials import write_trials
+    from roughness.simulate.io import save_heightmap
 
-    ids = [s.stimulus for s in read_stimuli(args.stimuli)]
+    stimuli = read_stimuli(args.stimuli)
+    ids = [s.stimulus for s in stimuli]
     out = check_output(args.out, args.overwrite, "out")
+    plates = check_output_folder(args.plates, args.overwrite, "plates") if args.plates else None
     subjects = [f"s{i}" for i in range(1, args.subjects + 1)]
     trials = balanced_design(ids, args.trials, subjects, args.seed)
+    if plates is not None:
+        names = {s.stimulus: _file_name(s.stimulus) for s in stimuli}
+        if len(set(names.values())) < len(names):
+            raise InputError("stimulus ids that differ only in characters other than letters, digits, '.', '-' "
+                             "and '_' would share a plate file name", parameter="plates")
+        maps = {s.stimulus: s.plate_heightmap(args.plate_mm) for s in stimuli}  # every map, before writing any
+        plates.mkdir(exist_ok=True)
+        for stimulus, hm in maps.items():
+            save_heightmap(hm, plates / f"{names[stimulus]}.stl", base_mm=args.base_mm)
     write_trials(out, (t.row() for t in trials), FIELDNAMES)
     print(f"wrote {out}: {len(trials)} trials ({args.trials} per subject, {len(subjects)} subject(s)) over "
-          f"{len(ids)} stimuli; fill the answer column with left or right")
+          f"{len(ids)} stimuli; fill the answer column with left or right"
+          + (f"; {len(ids)} plates of {args.plate_mm:g} mm in {plates}" if plates is not None else ""))
     return 0
+
+
+def _file_name(stimulus: str) -> str:
+    """A stimulus id as a file name: characters other than letters, digits, '.', '-' and '_' become '_'."""
+    return re.sub(r"[^\w.-]", "_", stimulus)
 
 
 def run_simulate(args: argparse.Namespace) -> int:

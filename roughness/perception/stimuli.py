@@ -49,6 +49,23 @@ class Stimulus:
         hm, _ = make_texture(self.texture, seed=self.seed, params=self.params)
         return hm
 
+    def plate_heightmap(self, size_mm: float):
+        """The stimulus as a square map of side ``size_mm`` (mm) for printing: a texture made at that
+        size, or the centre of its file's map (InputError if the map is smaller)."""
+        if self.file is None:
+            from roughness.dataset.catalogue import make_texture
+
+            hm, _ = make_texture(self.texture, seed=self.seed, size_mm=size_mm, params=self.params)
+            return hm
+        hm = self.heightmap()
+        n = round(size_mm / hm.pixel_mm)
+        ny, nx = hm.shape
+        if n > min(ny, nx):
+            raise InputError(f"stimulus {self.stimulus}: its map ({self.describe()}) is {nx * hm.pixel_mm:g} x "
+                             f"{ny * hm.pixel_mm:g} mm, smaller than the {size_mm:g} mm plate", parameter="plate_mm")
+        i, j = (ny - n) // 2, (nx - n) // 2
+        return type(hm)(hm.heights[i:i + n, j:j + n], hm.pixel_mm)
+
     def describe(self) -> str:
         if self.file is not None:
             return str(self.file) + (f":{self.dataset}" if self.dataset else "")
