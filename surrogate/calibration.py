@@ -1,9 +1,12 @@
 """The 13-texture standard reference scale: V -> equivalent bump wavelength and JND distance.
 
 The table holds, per FEM fidelity, the mean FEM V of each standard texture (cap-topped bumps at
-the paper's lambdas) over several seeds. A roughness V is placed on the scale by interpolating
-lambda in log V (V rises with lambda on this scale); its distance from the nearest standard
-texture is counted in just-noticeable differences of Weber fraction 0.19: ln(V / V_ref) / ln(1.19).
+the paper's lambdas) over several seeds. A roughness V is placed on the scale by its equivalent
+wavelength: log lambda interpolated in log V between the standard textures (V rises with lambda,
+about as lambda^2), and beyond either end the power law V = a lambda^b fitted to the whole table
+(the placement then says it is extrapolated). The paper measured its Weber fraction, 0.19, on
+lambda, so distances are counted in just-noticeable differences of the equivalent wavelength:
+ln(lambda_A / lambda_B) / ln(1.19). (A 19% step in V is only about half a JND.)
 
 Regenerate the shipped table (``models/standard_scale.json``, a few minutes on 2 cores)::
 
@@ -32,14 +35,20 @@ SCALE_PATH = MODELS_DIR / "standard_scale.json"
 class Placement:
     """Where a roughness V sits on the standard scale."""
 
-    equivalent_lambda_mm: float  # interpolated; clipped to the scale's ends
-    on_scale: bool  # False if V lies below the finest or above the coarsest standard texture
+    equivalent_lambda_mm: float  # interpolated on the scale; the fitted power law beyond its ends
+    on_scale: bool  # False if V lies below the finest or above the coarsest standard texture (extrapolated)
     nearest_standard: str  # e.g. "standard-1.0"
-    jnd_from_nearest: float  # signed: positive = rougher than the nearest standard texture
+    jnd_from_nearest: float  # signed, on lambda: positive = rougher than the nearest standard texture
 
     def as_dict(self) -> dict:
         return {"equivalent_lambda_mm": self.equivalent_lambda_mm, "on_scale": self.on_scale,
-                "nearest_standard": self.nearest_standard, "jnd_from_nearest": self.jnd_from_nearest}
+                "extrapolated": not self.on_scale, "nearest_standard": self.nearest_standard,
+                "jnd_from_nearest": self.jnd_from_nearest}
+
+
+def jnd(lambda_a_mm: float, lambda_b_mm: float) -> float:
+    """Signed distance of two (equivalent) wavelengths in JNDs: ln(lambda_a / lambda_b) / ln(1 + 0.19)."""
+    return math.log(lambda_a_mm / lambda_b_mm) / math.log(1 + WEBER_FRACTION)
 
 
 @dataclass(frozen=True)
@@ -55,16 +64,28 @@ class StandardScale:
         if len(v) != len(self.lambdas_mm) or len(v) < 2 or not np.all(v > 0) or not np.all(np.diff(v) > 0):
             raise ValueError(f"standard scale ({self.fidelity}) must be positive and rise with lambda: {self.roughness}")
 
-    def place(self, roughness: float) -> Placement:
-        """Equivalent lambda (mm) and signed JND distance from the nearest standard texture."""
+    @property
+    def power_law(self) -> tuple[float, float]:
+        """(a, b) of V = a lambda^b, least squares in log-log over the table (lambda in mm)."""
+        b, log_a = np.polyfit(np.log(self.lambdas_mm), np.log(self.roughness), 1)
+        return float(math.exp(log_a)), float(b)
+
+    def equivalent_lambda(self, roughness: float) -> tuple[float, bool]:
+        """Equivalent wavelength (mm) of a roughness V, and whether it lies on the scale (not extrapolated)."""
         if not math.isfinite(roughness) or roughness < 0:
             raise ValueError(f"roughness must be finite and >= 0, got {roughness}")
         log_v = np.log(self.roughness)
-        x = math.log(max(roughness, 1e-12))
-        lam = float(np.interp(x, log_v, self.lambdas_mm))
-        nearest = int(np.argmin(np.abs(log_v - x)))
-        jnd = (x - log_v[nearest]) / math.log(1 + WEBER_FRACTION)
-        return Placement(lam, bool(log_v[0] <= x <= log_v[-1]), f"standard-{self.lambdas_mm[nearest]:g}", float(jnd))
+        x = math.log(max(roughness, 1e-12))  # V = 0 (flat): the smallest V a float field resolves
+        if log_v[0] <= x <= log_v[-1]:
+            return float(np.exp(np.interp(x, log_v, np.log(self.lambdas_mm)))), True
+        a, b = self.power_law
+        return float(math.exp((x - math.log(a)) / b)), False
+
+    def place(self, roughness: float) -> Placement:
+        """Equivalent lambda (mm) and signed JND distance (on lambda) from the nearest standard texture."""
+        lam, on_scale = self.equivalent_lambda(roughness)
+        nearest = int(np.argmin(np.abs(np.log(self.lambdas_mm) - math.log(lam))))
+        return Placement(lam, on_scale, f"standard-{self.lambdas_mm[nearest]:g}", jnd(lam, self.lambdas_mm[nearest]))
 
 
 @lru_cache(maxsize=8)

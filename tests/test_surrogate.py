@@ -3,6 +3,7 @@ the domain flag, batch/single agreement, the standard scale, and errors for bad 
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -263,13 +264,19 @@ def test_onnx_without_roughness_metadata_is_refused(tiny, tmp_path):
 
 
 def test_standard_scale_placement():
-    scale = StandardScale((0.5, 1.0, 1.5), (0.05, 0.1, 0.2), "test")
+    scale = StandardScale((0.5, 1.0, 2.0), (0.025, 0.1, 0.4), "test")  # V = 0.1 lambda^2 exactly
     mid = scale.place(0.1)
     assert mid.equivalent_lambda_mm == pytest.approx(1.0) and mid.on_scale and mid.nearest_standard == "standard-1"
-    assert scale.place(0.1 * 1.19).jnd_from_nearest == pytest.approx(1.0)
-    assert scale.place(0.05 * np.sqrt(2)).equivalent_lambda_mm == pytest.approx(0.75)
+    # JNDs count on lambda (the paper's Weber fraction): V grows as lambda^2, so 1.19^2 in V is one JND
+    assert scale.place(0.1 * 1.19**2).jnd_from_nearest == pytest.approx(1.0)
+    assert scale.place(0.1 * 1.19).jnd_from_nearest == pytest.approx(0.5)
+    assert scale.place(0.1 * 1.5**2).equivalent_lambda_mm == pytest.approx(1.5)  # interpolated as a power law
+    assert scale.power_law == pytest.approx((0.1, 2.0))
+    high = scale.place(0.1 * 4.0**2)  # beyond the coarsest standard: extrapolated with the fitted power law
+    assert not high.on_scale and high.as_dict()["extrapolated"] and high.equivalent_lambda_mm == pytest.approx(4.0)
+    assert high.jnd_from_nearest == pytest.approx(math.log(2) / math.log(1.19)) and high.nearest_standard == "standard-2"
     low = scale.place(0.0)
-    assert not low.on_scale and low.equivalent_lambda_mm == 0.5 and np.isfinite(low.jnd_from_nearest)
+    assert not low.on_scale and 0 < low.equivalent_lambda_mm < 0.5 and np.isfinite(low.jnd_from_nearest)
     with pytest.raises(ValueError):
         scale.place(float("nan"))
     with pytest.raises(ValueError, match="rise with lambda"):

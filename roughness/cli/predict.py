@@ -111,6 +111,7 @@ def _prediction_line(p) -> str:
     where = p.placement
     scale = (f"~ lambda {where.equivalent_lambda_mm:.3f} mm on the standard scale, {where.jnd_from_nearest:+.1f} JND "
              f"from {where.nearest_standard}" if where.on_scale else
-             f"off the standard scale ({where.jnd_from_nearest:+.1f} JND from {where.nearest_standard})")
+             f"off the standard scale: ~ lambda {where.equivalent_lambda_mm:.3f} mm extrapolated by the scale's power "
+             f"law, {where.jnd_from_nearest:+.1f} JND from {where.nearest_standard}")
     domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
     return f"{p.source}: V = {p.roughness:.4f} ({p.engine}, {domain}, {1e3 * p.seconds:.1f} ms), {scale}"
