@@ -1,5 +1,6 @@
 """Dataset generation on a real distributed Dask deployment: a scheduler and two worker processes
-started with the `dask` command line on the loopback interface, one worker killed mid-build."""
+started with the `dask` command line of the running interpreter (python -m dask) on the loopback
+interface, one worker killed mid-build."""
 from __future__ import annotations
 
 import json
@@ -52,13 +53,15 @@ def test_build_survives_a_killed_worker(tmp_path):
     processes: list[subprocess.Popen] = []
     client = None
     try:
-        processes.append(start(["dask", "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
-                                "--scheduler-file", str(scheduler_file)], env, tmp_path / "scheduler.log"))
+        processes.append(start([sys.executable, "-m", "dask", "scheduler", "--host", "127.0.0.1", "--port", "0",
+                                "--no-dashboard", "--scheduler-file", str(scheduler_file)], env,
+                               tmp_path / "scheduler.log"))
         wait_for(lambda: scheduler_file.exists() and scheduler_file.stat().st_size > 0, "the scheduler file", deadline)
         address = json.loads(scheduler_file.read_text())["address"]
         assert address.startswith("tcp://127.0.0.1:")
-        workers = {f"w{i}": start(["dask", "worker", address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
-                                   "--host", "127.0.0.1", "--name", f"w{i}"], env, tmp_path / f"w{i}.log")
+        workers = {f"w{i}": start([sys.executable, "-m", "dask", "worker", address, "--nthreads", "1", "--no-nanny",
+                                   "--no-dashboard", "--host", "127.0.0.1", "--name", f"w{i}"], env,
+                                  tmp_path / f"w{i}.log")
                    for i in range(2)}
         processes += workers.values()
         client = Client(address, timeout=30)
