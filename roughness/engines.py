@@ -78,7 +78,8 @@ class FemEngine:
     def identity(self) -> str:
         return fem_identity(self.config.as_dict())
 
-    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
+    def simulate(self, heightmap: Heightmap):
+        """The FEM ``Result`` of one heightmap (the block is prepared on first use)."""
         if self._simulator is None:
             from roughness.simulate.model import Simulator
 
@@ -86,7 +87,10 @@ class FemEngine:
             self._simulator = Simulator(self.config)
             self._simulator.block(self.config.resolved()).base(self.config.force_n, self.config.contact)
             self.setup_seconds = time.perf_counter() - start
-        result = self._simulator.run(heightmap, self.centre_mm, self.tile)
+        return self._simulator.run(heightmap, self.centre_mm, self.tile)
+
+    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
+        result = self.simulate(heightmap)
         return result.roughness, result.seconds
 
 
@@ -168,11 +172,12 @@ class Prediction:
     seconds: float  # wall time spent on this input (batched surrogate time is shared out)
     placement: object  # roughness.surrogate.calibration.Placement on the standard scale
     domain_notes: list[str] = field(default_factory=list)
+    roughness_stderr: float | None = None  # FEM: Monte Carlo standard error of V; surrogate: not estimated yet
 
     def as_dict(self) -> dict:
-        return {"input": self.source, "roughness": self.roughness, "engine": self.engine, "fidelity": self.fidelity,
-                "in_domain": self.in_domain, "seconds": self.seconds, **self.placement.as_dict(),
-                "domain_notes": self.domain_notes}
+        return {"input": self.source, "roughness": self.roughness, "roughness_stderr": self.roughness_stderr,
+                "engine": self.engine, "fidelity": self.fidelity, "in_domain": self.in_domain,
+                "seconds": self.seconds, **self.placement.as_dict(), "domain_notes": self.domain_notes}
 
 
 def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
@@ -206,8 +211,9 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
         share = (time.perf_counter() - start) / len(batch)
         for (source, hm), v, why in zip(batch, values, reasons):
             if engine == "fem" or (engine == "auto" and why):
-                v_fem, seconds = fem.measure(hm)
-                result = Prediction(source, v_fem, "fem", fem.fidelity, not why, seconds, fem_scale.place(v_fem), why)
+                r = fem.simulate(hm)
+                result = Prediction(source, r.roughness, "fem", fem.fidelity, not why, r.seconds,
+                                    fem_scale.place(r.roughness), why, r.roughness_stderr)
             else:
                 result = Prediction(source, float(v), "surrogate", model.fidelity, not why, share,
                                     surrogate_scale.place(float(v)), why)

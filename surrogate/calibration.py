@@ -88,6 +88,36 @@ class StandardScale:
         return Placement(lam, on_scale, f"standard-{self.lambdas_mm[nearest]:g}", jnd(lam, self.lambdas_mm[nearest]))
 
 
+@dataclass(frozen=True)
+class JndDistance:
+    """Signed distance of two roughness values on the standard scale, in JNDs of the equivalent wavelength."""
+
+    jnd: float  # ln(lambda_a / lambda_b) / ln(1.19): positive = a feels rougher
+    jnd_stderr: float | None  # from the values' standard errors (None if either has none)
+    a: Placement
+    b: Placement
+
+    @property
+    def verdict(self) -> str:
+        """"tell apart" at one JND or more, "too close" below; "borderline" if +-2 standard errors straddle 1."""
+        d = abs(self.jnd)
+        if self.jnd_stderr is not None and d - 2 * self.jnd_stderr < 1 <= d + 2 * self.jnd_stderr:
+            return "borderline"
+        return "tell apart" if d >= 1 else "too close"
+
+
+def jnd_distance(scale: StandardScale, v_a: float, v_b: float, se_a: float | None = None,
+                 se_b: float | None = None) -> JndDistance:
+    """JND distance of V_a from V_b; standard errors propagate through lambda ~ V^(1/b) of the fitted power law."""
+    a, b = scale.place(v_a), scale.place(v_b)
+    se = None
+    if se_a is not None and se_b is not None:
+        exponent = scale.power_law[1]
+        se_ln = math.hypot(se_a / max(v_a, 1e-12), se_b / max(v_b, 1e-12)) / exponent  # of ln(lambda_a / lambda_b)
+        se = se_ln / math.log(1 + WEBER_FRACTION)
+    return JndDistance(jnd(a.equivalent_lambda_mm, b.equivalent_lambda_mm), se, a, b)
+
+
 @lru_cache(maxsize=8)
 def load_scale(fidelity: str, path: str | Path = SCALE_PATH) -> StandardScale:
     """The shipped standard scale for a FEM fidelity ("coarse", "default", "fine")."""
