@@ -114,4 +114,5 @@ def _prediction_line(p) -> str:
              f"off the standard scale: ~ lambda {where.equivalent_lambda_mm:.3f} mm extrapolated by the scale's power "
              f"law, {where.jnd_from_nearest:+.1f} JND from {where.nearest_standard}")
     domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
-    return f"{p.source}: V = {p.roughness:.4f} ({p.engine}, {domain}, {1e3 * p.seconds:.1f} ms), {scale}"
+    sure = f" ± {p.roughness_stderr:.4f}" if p.roughness_stderr is not None else ""  # FEM: Monte Carlo error
+    return f"{p.source}: V = {p.roughness:.4f}{sure} ({p.engine}, {domain}, {1e3 * p.seconds:.1f} ms), {scale}"
