@@ -112,17 +112,11 @@ def add_parser(sub) -> None:
 
 def _outputs(folder: str, names: tuple[str, ...], overwrite: bool) -> dict[str, Path]:
     """The output files in ``folder``, checked before any computation (the folder is made by ``_made``)."""
-    from roughness.core.errors import InputError
-    from roughness.core.files import check_output
+    from roughness.core.files import check_output, check_output_folder
 
     out = Path(folder)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"{out} is a file, not a folder", parameter="out")
-    if not out.exists():
-        if not out.parent.is_dir():
-            raise InputError(f"cannot create {out}: folder {out.parent} does not exist", parameter="out")
-        if not os.access(out.parent, os.W_OK | os.X_OK):
-            raise InputError(f"cannot create {out}: folder {out.parent} is not writable", parameter="out")
+    if not out.is_dir():  # a new folder (its parent must be writable), or a file in the way: refused
+        check_output_folder(out, name="out")
         return {name: out / name for name in names}
     return {name: check_output(out / name, overwrite, "out") for name in names}
 
@@ -243,23 +237,14 @@ def _fmt(x) -> str:
 
 
 def _write_fit_csv(path: Path, fit) -> None:
-    import csv
-
-    from roughness.core.files import atomic_write
+    from roughness.core.files import write_csv
 
     measures = list(fit.measures)
-
-    def write(tmp: str) -> None:
-        with open(tmp, "w", newline="", encoding="utf-8") as f:
-            out = csv.writer(f, lineterminator="\n")
-            out.writerow(["stimulus", "coordinate", "low", "high", "roughness", "roughness_stderr", "engine",
-                          "included", *measures])
-            for i, v in enumerate(fit.values):
-                out.writerow([v.stimulus, f"{fit.coordinate[i]:.6g}", _num(fit.low[i]), _num(fit.high[i]),
-                              f"{v.roughness:.6g}", _num(v.roughness_stderr), v.engine, int(fit.included[i]),
-                              *(f"{fit.measures[m][i]:.6g}" for m in measures)])
-
-    atomic_write(path, write)
+    header = ["stimulus", "coordinate", "low", "high", "roughness", "roughness_stderr", "engine", "included", *measures]
+    rows = ([v.stimulus, f"{fit.coordinate[i]:.6g}", _num(fit.low[i]), _num(fit.high[i]), f"{v.roughness:.6g}",
+             _num(v.roughness_stderr), v.engine, int(fit.included[i]), *(f"{fit.measures[m][i]:.6g}" for m in measures)]
+            for i, v in enumerate(fit.values))
+    write_csv(path, header, rows)
 
 
 def _num(x: float) -> str:
@@ -366,14 +351,7 @@ def _read_truth(path: str, ids: list[str]):
 
 
 def _write_truth(path: Path, ids, v, coordinate) -> None:
-    import csv
+    from roughness.core.files import write_csv
 
-    from roughness.core.files import atomic_write
-
-    def write(tmp: str) -> None:
-        with open(tmp, "w", newline="", encoding="utf-8") as f:
-            out = csv.writer(f, lineterminator="\n")
-            out.writerow(["stimulus", "roughness", "coordinate"])
-            out.writerows([s, f"{a:.6g}", f"{p:.6g}"] for s, a, p in zip(ids, v, coordinate))
-
-    atomic_write(path, write)
+    write_csv(path, ["stimulus", "roughness", "coordinate"],
+              ([s, f"{a:.6g}", f"{p:.6g}"] for s, a, p in zip(ids, v, coordinate)))

@@ -1,9 +1,10 @@
 """Writing files safely: refuse to replace outputs unasked, never leave a partial file."""
 from __future__ import annotations
 
+import csv
 import os
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 from .errors import InputError, OutputExists
@@ -58,6 +59,19 @@ def atomic_write(path: str | Path, write: Callable[[str], object]) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return path
+
+
+def write_csv(path: str | Path, header: Sequence[str], rows: Iterable[Sequence[object]]) -> Path:
+    """A UTF-8 CSV file (LF line ends) of a header and rows, written atomically."""
+    rows = list(rows)
+
+    def write(tmp: str) -> None:
+        with open(tmp, "w", newline="", encoding="utf-8") as f:
+            out = csv.writer(f, lineterminator="\n")
+            out.writerow(header)
+            out.writerows(rows)
+
+    return atomic_write(path, write)
 
 
 def _umask() -> int:

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from roughness.core.errors import InputError, SimulationError
-from roughness.core.files import atomic_write
+from roughness.core.files import atomic_write, write_csv
 
 from .bootstrap import PERCENTILES, Bootstrap, bootstrap
 from .crossval import CrossValidation, cross_validate
@@ -105,16 +105,12 @@ def analyse(trials: Trials, lam: float | None = None, lambdas: Sequence[float] |
 
 
 def write_embedding_csv(path: str | Path, analysis: EmbeddingAnalysis) -> Path:
-    def write(tmp: str) -> None:
-        with open(tmp, "w", newline="", encoding="utf-8") as f:
-            out = csv.writer(f, lineterminator="\n")
-            out.writerow(EMBEDDING_COLUMNS)
-            for i, stimulus in enumerate(analysis.stimuli):
-                low = "" if analysis.low is None else f"{analysis.low[i]:.6g}"
-                high = "" if analysis.high is None else f"{analysis.high[i]:.6g}"
-                out.writerow([stimulus, f"{analysis.coordinate[i]:.6g}", low, high])
+    def interval(bound: np.ndarray | None, i: int) -> str:
+        return "" if bound is None else f"{bound[i]:.6g}"
 
-    return atomic_write(path, write)
+    rows = ([stimulus, f"{analysis.coordinate[i]:.6g}", interval(analysis.low, i), interval(analysis.high, i)]
+            for i, stimulus in enumerate(analysis.stimuli))
+    return write_csv(path, EMBEDDING_COLUMNS, rows)
 
 
 @dataclass(frozen=True)
