@@ -25,6 +25,7 @@ from typing import Protocol
 
 import numpy as np
 
+from roughness.core.checks import integer
 from roughness.core.errors import InputError
 from roughness.core.hashing import digest, file_sha256
 from roughness.simulate.heightmap import Heightmap
@@ -196,8 +197,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
 
     if engine not in PREDICT_ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(PREDICT_ENGINES)}", parameter="engine")
-    if isinstance(batch_size, bool) or not isinstance(batch_size, int) or batch_size < 1:
-        raise InputError(f"batch size must be an integer >= 1, got {batch_size!r}", parameter="batch_size")
+    integer("batch_size", batch_size, minimum=1)
     model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
     fem = FemEngine.of(fidelity or model.fidelity, model.meta.simulation, centre_mm, tile)
     surrogate_scale, fem_scale = load_scale(model.fidelity), load_scale(fem.fidelity)
