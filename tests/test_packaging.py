@@ -36,8 +36,10 @@ def installed(tmp_path_factory) -> Path:
     venv = root / "venv"
     subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
     python = venv / "bin" / "python"
-    subprocess.run([str(python), "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", str(wheel)],
-                   check=True, cwd=root)
+    # --ignore-installed: the running environment may already hold roughness (CI installs it there), and the
+    # venv sees it through --system-site-packages; without the flag pip would call the wheel satisfied and skip it
+    subprocess.run([str(python), "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", "--ignore-installed",
+                    str(wheel)], check=True, cwd=root)
     return python
 
 
