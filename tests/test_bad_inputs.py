@@ -37,6 +37,7 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("perception", "fit"): ["embedding.csv", "--stimuli", "stimuli.csv", "--out", "fit", "--engine", "fem:coarse"],
     ("perception", "design"): ["--stimuli", "stimuli.csv", "--trials", "10", "--out", "design.csv"],
     ("perception", "simulate"): ["--stimuli", "stimuli.csv", "--truth", "truth.csv", "--trials", "10", "--out", "sim"],
+    ("homogeneity",): ["map.npy", "--pixel-mm", "0.05", "--n", "5"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -53,6 +54,7 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("perception", "fit"): [(0, ".csv", []), ("--stimuli", ".csv", [])],
     ("perception", "design"): [("--stimuli", ".csv", [])],
     ("perception", "simulate"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
+    ("homogeneity",): [(0, ".npy", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
@@ -62,8 +64,10 @@ FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("export",): ["--out"],
     ("predict",): ["--map"],
     ("perception", "design"): ["--out"],
+    ("homogeneity",): ["--map"],
 }
 OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy"}
+OUTPUT_SUFFIX_OF = {("homogeneity",): {"--map": ".png"}}
 
 
 def _subcommands(parser: argparse.ArgumentParser, path: tuple[str, ...] = ()):
@@ -201,7 +205,7 @@ def test_broken_input_file(path, where, suffix, extra, kind, workdir, capsys):
 @pytest.mark.parametrize("path, flag, kind", _output_cases(), ids=lambda v: str(v))
 def test_output_that_exists_or_cannot_be_written(path, flag, kind, workdir, capsys):
     argv = list(BASE[path])
-    suffix = OUTPUT_SUFFIX.get(flag, "")
+    suffix = OUTPUT_SUFFIX_OF.get(path, {}).get(flag, OUTPUT_SUFFIX.get(flag, ""))
     if flag in argv:
         name = argv[argv.index(flag) + 1]
     else:

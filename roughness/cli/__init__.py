@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import compare, dataset, jnd, perception, predict, simulate, texture, train
+from . import compare, dataset, homogeneity, jnd, perception, predict, simulate, texture, train
 from .common import error_message
 
 DESCRIPTION = ("Predict how rough a surface texture feels to a fingertip (the FEM model of Tymms, Gardner & Zorin "
@@ -15,7 +15,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="roughness", description=DESCRIPTION)
     parser.add_argument("--version", action="version", version=_version())
     sub = parser.add_subparsers(dest="command", required=True)
-    for command in (simulate, texture, dataset, train, predict, compare, jnd, perception):
+    for command in (simulate, texture, dataset, train, predict, compare, jnd, perception, homogeneity):
         command.add_parser(sub)
     return parser
 
