@@ -38,6 +38,9 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("perception", "design"): ["--stimuli", "stimuli.csv", "--trials", "10", "--out", "design.csv"],
     ("perception", "simulate"): ["--stimuli", "stimuli.csv", "--truth", "truth.csv", "--trials", "10", "--out", "sim"],
     ("homogeneity",): ["map.npy", "--pixel-mm", "0.05", "--n", "5"],
+    ("tune",): ["map.npy", "--pixel-mm", "0.05", "--target-lambda", "1.0", "--out", "new.npz"],
+    ("palette",): ["--k", "3", "--out", "pal"],
+    ("tactile-image",): ["picture.png", "--out", "plate"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -55,6 +58,8 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("perception", "design"): [("--stimuli", ".csv", [])],
     ("perception", "simulate"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
     ("homogeneity",): [(0, ".npy", [])],
+    ("tune",): [(0, ".npy", [])],
+    ("tactile-image",): [(0, ".png", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
@@ -65,6 +70,9 @@ FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("predict",): ["--map"],
     ("perception", "design"): ["--out"],
     ("homogeneity",): ["--map"],
+    ("tune",): ["--out"],
+    ("palette",): ["--out"],
+    ("tactile-image",): ["--out"],
 }
 OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy"}
 OUTPUT_SUFFIX_OF = {("homogeneity",): {"--map": ".png"}}
@@ -115,6 +123,10 @@ def workdir(tmp_path, monkeypatch):
     (tmp_path / "stimuli.csv").write_text("stimulus,texture\na,standard-1.0\nb,standard-1.25\nc,flattop-0.3\n")
     (tmp_path / "embedding.csv").write_text("stimulus,coordinate,low,high\na,-1,-1.2,-0.8\nb,0.1,0,0.2\nc,0.9,0.8,1\n")
     (tmp_path / "truth.csv").write_text("stimulus,roughness\na,0.05\nb,0.08\nc,0.1\n")
+    from PIL import Image
+
+    Image.fromarray(np.repeat(np.uint8([[0, 128, 255]]), 30, axis=0).repeat(3, axis=1)[..., None].repeat(3, axis=2)
+                    ).save(tmp_path / "picture.png")  # three flat colours
     monkeypatch.chdir(tmp_path)
     _tripwires(monkeypatch)
     return tmp_path
