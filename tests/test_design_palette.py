@@ -11,7 +11,6 @@ from roughness.core.errors import InputError
 from roughness.dataset.textures import standard_texture
 from roughness.design.evaluation import Evaluator
 from roughness.design.palette import family_palette, folder_palette, load_palette, widest_selection
-from roughness.simulate.io import save_heightmap
 
 EVALUATOR = Evaluator()
 

@@ -85,3 +85,17 @@ def test_compose_puts_each_texture_on_the_floor():
     a, b = standard_texture(1.0, seed=1), standard_texture(1.0, seed=2)
     relief = compose(labels, [a, b], 0.1)
     assert relief.heights[:, :50].min() >= 0 and relief.heights.max() <= max(np.ptp(a.heights), np.ptp(b.heights))
+
+
+def test_strain_image_tiles_fem_windows_over_the_plate():
+    """A 20 x 12 mm plate: two footprints whose 8 mm strain windows abut (coarse FEM, 2 runs)."""
+    rgb = np.zeros((24, 40, 3), dtype=np.uint8)
+    rgb[:, :20], rgb[:, 20:] = WHITE, BLACK
+    textures = [(f"standard-{lam}", standard_texture(lam, seed=1), None) for lam in (0.625, 1.625)]
+    plate = tactile_image(rgb, textures, width_mm=20.0, pixel_mm=0.1, step_mm=2.0, strain=True, evaluator=EVALUATOR)
+    ny, nx = plate.strain.shape
+    assert nx == 2 * ny and np.isfinite(plate.strain).all()
+    left, right = plate.strain[:, : nx // 2], plate.strain[:, nx // 2:]
+    assert abs(left.mean()) < 1e-9 and abs(right.mean()) < 1e-9  # each window shown minus its mean
+    x0, x1, y1, y0 = plate.strain_extent_mm
+    assert (x0, x1, y0, y1) == pytest.approx((1.0, 17.0, 1.0, 9.0))  # centres x 5, 13 mm; y 5 mm

@@ -48,10 +48,10 @@ def main(argv: list[str] | None = None) -> None:
     minutes = (time.perf_counter() - start) / 60
     text = "\n".join([
         "# `roughness tune`: FEM-verified results (height factor, coarse FEM)", "",
-        f"Made by `python examples/design/validate_tune.py` in {minutes:.1f} min ({evaluator.fem_runs} FEM runs, "
-        "on a shared 2-core machine).", "",
-        "| texture | target lambda (mm) | factor | FEM V | FEM lambda (mm) | JND error ± SE | FEM runs | "
-        "surrogate in domain |", "|---|---|---|---|---|---|---|---|", *rows, "", *verdicts, ""])
+        (f"Made by `python examples/design/validate_tune.py` in {minutes:.1f} min ({evaluator.fem_runs} FEM runs, "
+         "on a shared 2-core machine)."), "",
+        ("| texture | target lambda (mm) | factor | FEM V | FEM lambda (mm) | JND error ± SE | FEM runs | "
+         "surrogate in domain |"), "|---|---|---|---|---|---|---|---|", *rows, "", *verdicts, ""])
     atomic_write(Path(args.out), lambda tmp: Path(tmp).write_text(text))
     print("\n".join(verdicts))
 

@@ -4,8 +4,20 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import compare, dataset, homogeneity, jnd, palette, perception, predict, simulate, tactile_image, \
-    texture, train, tune
+from . import (
+    compare,
+    dataset,
+    homogeneity,
+    jnd,
+    palette,
+    perception,
+    predict,
+    simulate,
+    tactile_image,
+    texture,
+    train,
+    tune,
+)
 from .common import error_message
 
 DESCRIPTION = ("Predict how rough a surface texture feels to a fingertip (the FEM model of Tymms, Gardner & Zorin "

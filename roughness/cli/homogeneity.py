@@ -4,8 +4,18 @@ from __future__ import annotations
 import argparse
 import json
 
-from .common import COUNT, POSITIVE, SEED, add_overwrite, add_quiet, add_reading_args, defaults, finish, log, \
-    write_stdout
+from .common import (
+    COUNT,
+    POSITIVE,
+    SEED,
+    add_overwrite,
+    add_quiet,
+    add_reading_args,
+    defaults,
+    finish,
+    log,
+    write_stdout,
+)
 
 
 def add_parser(sub) -> None:

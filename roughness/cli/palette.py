@@ -4,8 +4,18 @@ from __future__ import annotations
 import argparse
 import json
 
-from .common import COUNT, POSITIVE, SEED, add_overwrite, add_quiet, add_reading_args, defaults, finish, log, \
-    write_stdout
+from .common import (
+    COUNT,
+    POSITIVE,
+    SEED,
+    add_overwrite,
+    add_quiet,
+    add_reading_args,
+    defaults,
+    finish,
+    log,
+    write_stdout,
+)
 
 
 def add_parser(sub) -> None:
@@ -55,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     if args.base_mm is not None and not args.stl:
         raise InputError("applies only with --stl", "base_mm")
     evaluator = Evaluator(args.model)
-    progress = lambda line: log(args, "  " + line)  # noqa: E731
+    progress = lambda line: log(args, "  " + line)
     if args.candidates:
         from roughness.simulate.io import heightmap_files, load_heightmap
 

@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.files import atomic_write, check_output_folder
     from roughness.design.evaluation import Evaluator
     from roughness.design.palette import family_palette, load_palette, save_palette
-    from roughness.design.tactile_image import flat_colours, read_image, save_figures, tactile_image
+    from roughness.design.tactile_image import flat_colours, hex_colour, read_image, save_figures, tactile_image
     from roughness.simulate.io import save_heightmap
 
     out = check_output_folder(args.out, args.overwrite, "out")
@@ -71,8 +71,12 @@ def run(args: argparse.Namespace) -> int:
         textures = [(m.name, m.heightmap, m.fem.roughness) for m in palette.members]
     log(args, "tactile-image: composing the plate and mapping its roughness (surrogate)"
         + ("; FEM strain image" if args.strain else ""))
+    def progress(stage: str, done: int, total: int) -> None:
+        if stage == "strain image" or done == total:
+            log(args, f"  {stage}: {done}/{total}" + (" FEM footprints" if stage == "strain image" else " positions"))
+
     plate = tactile_image(rgb, textures, args.size_mm, args.pixel_mm, args.outline_mm, args.outline_height_mm,
-                          args.step_mm, args.strain, evaluator)
+                          args.step_mm, args.strain, evaluator, progress)
     out.mkdir(parents=True, exist_ok=True)
     if not args.palette:
         save_palette(palette, out / "palette")
@@ -92,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
         fem = f"texture V {r.fem_roughness:.4f} (FEM)" if r.fem_roughness else "texture V not verified"
         on_plate = (f"on the plate V {r.plate_roughness:.4f}, lambda {r.plate_lambda_mm:.3f} mm over {r.footprints} "
                     "footprints" if r.plate_roughness else "no footprint fits inside the region")
-        lines.append(f"#{'%02x%02x%02x' % r.colour} -> {r.texture}: {fem}; {on_plate}")
+        lines.append(f"{hex_colour(r.colour)} -> {r.texture}: {fem}; {on_plate}")
     d = plate.distances_jnd("plate")
     pairs = [abs(d[i, j]) for i in range(len(d)) for j in range(i + 1, len(d)) if not np.isnan(d[i, j])]
     if pairs:

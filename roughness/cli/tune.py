@@ -77,10 +77,10 @@ def run(args: argparse.Namespace) -> int:
         a = result.achieved
         lines = [f"{args.heightmap} -> {out}: {args.by} x {result.factor:.4f}",
                  f"target: V {target.roughness:.4f}, lambda {target.lambda_mm:.3f} mm ({target.given_as})",
-                 f"achieved (FEM {evaluator.fem.fidelity}): V {a.roughness:.4f} ± {a.roughness_stderr:.4f}, lambda "
-                 f"{a.equivalent_lambda_mm:.3f} mm; error {result.jnd_error:+.2f} ± {result.jnd_stderr:.2f} JND "
-                 f"({'within' if result.reached else 'NOT within'} {result.tolerance_jnd:g} JND after "
-                 f"{len(result.steps)} FEM run(s)); surrogate V {result.surrogate_roughness:.4f}",
+                 (f"achieved (FEM {evaluator.fem.fidelity}): V {a.roughness:.4f} ± {a.roughness_stderr:.4f}, lambda "
+                  f"{a.equivalent_lambda_mm:.3f} mm; error {result.jnd_error:+.2f} ± {result.jnd_stderr:.2f} JND "
+                  f"({'within' if result.reached else 'NOT within'} {result.tolerance_jnd:g} JND after "
+                  f"{len(result.steps)} FEM run(s)); surrogate V {result.surrogate_roughness:.4f}"),
                  *(f"note: {n}" for n in result.notes)]
         write_stdout("\n".join(lines))
     return 0 if result.reached else 1

@@ -71,7 +71,7 @@ class Homogeneity:
         return "inhomogeneous" if self.relative_variance > PAPER_THRESHOLD else "homogeneous"
 
     def summary(self) -> dict:
-        return {"engine": self.engine, "windows": int(len(self.roughness)), "window_mm": self.window_mm,
+        return {"engine": self.engine, "windows": len(self.roughness), "window_mm": self.window_mm,
                 "mean_roughness": self.mean_roughness, "relative_variance": self.relative_variance,
                 "spread_jnd": self.spread_jnd, "range_jnd": self.range_jnd, "verdict": self.verdict,
                 "paper_threshold": PAPER_THRESHOLD, "paper_verdict": self.paper_verdict,
@@ -89,7 +89,7 @@ def window_centres(heightmap: Heightmap, window_mm: float, footprint_mm: float, 
     rng = np.random.default_rng(seed)
     if tile:
         return np.column_stack([rng.uniform(0, width, n), rng.uniform(0, height, n)])
-    half = max(window_mm, footprint_mm if window_mm >= footprint_mm else window_mm) / 2
+    half = max(window_mm, min(footprint_mm, window_mm)) / 2
     if 2 * half > min(width, height) + 1e-9:
         raise InputError(f"a {2 * half:g} mm window does not fit on the {width:.2f} mm x {height:.2f} mm map; "
                          "use a smaller window (or tile, for a periodic texture)", parameter="window_mm")
@@ -183,5 +183,5 @@ def save_map(result: Homogeneity, heightmap: Heightmap, path) -> None:
            title=f"{result.verdict}: relative variance {result.relative_variance:.1e}, "
                  f"spread {result.spread_jnd:.2f} JND")
     fig.tight_layout()
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110))
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=80))
     plt.close(fig)

@@ -86,9 +86,9 @@ def family_palette(k: int, min_jnd: float = 2.0, family: str = DEFAULT_FAMILY, b
     k, min_jnd = _check(k, min_jnd)
     evaluator = evaluator or Evaluator()
     base, recipe = make_texture(family, seed=seed)
-    lo, hi = FACTOR_RANGE[by] if by in FACTOR_RANGE else (None, None)
-    if lo is None:
+    if by not in FACTOR_RANGE:
         raise InputError(f"unknown knob {by!r}; choose one of {', '.join(FACTOR_RANGE)}", parameter="by")
+    lo, hi = FACTOR_RANGE[by]
     v, _ = evaluator.surrogate([scaled(base, by, f) for f in np.geomspace(lo, hi, GRID)])
     lam_lo, lam_hi = evaluator.lambda_of(float(v.min())), evaluator.lambda_of(float(v.max()))
     span = jnd_between(lam_hi, lam_lo) - 2 * margin_jnd

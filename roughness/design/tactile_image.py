@@ -6,12 +6,15 @@ palette members by lightness: the lightest colour gets the smoothest texture, th
 roughest. The picture is scaled to ``width_mm`` (nearest neighbour) on ``pixel_mm`` pixels; each
 region carries its texture read periodically, every texture standing on the plate's floor (z = 0 at
 its lowest point). Outlines (optional) are smooth raised lines along the region boundaries, as in
-the paper's lion: a raised cosine of width ``outline_mm`` and height ``outline_height_mm``.
+the paper's lion: a raised cosine of width ``outline_mm`` and height ``outline_height_mm``
+(default: the median relief of the textures).
 
 The plate's roughness map is the surrogate's V at footprint positions ``step_mm`` apart; the
-regions' values are read at positions whose whole footprint lies in one region. The strain image
+regions' values are read at positions whose whole footprint lies in one region, clear of outlines. The strain image
 (optional, FEM) tiles the plate with footprints whose central 8 mm strain windows abut and shows the
-fluctuation of the maximum compressive strain, as the paper's figure of its lion.
+fluctuation of the maximum compressive strain, as the paper's figure of its lion; each footprint's field
+is shown minus its mean (V, built from differences, is blind to that offset; without it the tiles'
+seams would show the footprints' different indentations rather than the texture).
 """
 from __future__ import annotations
 
@@ -69,12 +72,18 @@ class TactilePlate:
         width, height = self.heightmap.size_mm
         return {"width_mm": width, "height_mm": height, "pixel_mm": self.heightmap.pixel_mm,
                 "relief_mm": float(np.ptp(self.heightmap.heights)),
-                "regions": [{"colour": "#%02x%02x%02x" % r.colour, "texture": r.texture, "pixels": r.pixels,
+                "regions": [{"colour": hex_colour(r.colour), "texture": r.texture, "pixels": r.pixels,
                              "fem_roughness": r.fem_roughness, "fem_lambda_mm": r.fem_lambda_mm,
                              "plate_roughness": r.plate_roughness, "plate_lambda_mm": r.plate_lambda_mm,
                              "footprints_inside": r.footprints} for r in self.regions],
                 "plate_distances_jnd": _rounded(self.distances_jnd("plate")),
                 "texture_distances_jnd": _rounded(self.distances_jnd("fem")), "notes": list(self.notes)}
+
+
+def hex_colour(rgb) -> str:
+    """#rrggbb of an RGB triple."""
+    r, g, b = (int(c) for c in rgb)
+    return f"#{r:02x}{g:02x}{b:02x}"
 
 
 def _rounded(a: np.ndarray) -> list:
@@ -145,7 +154,8 @@ def compose(labels: np.ndarray, textures: list[Heightmap], pixel_mm: float, outl
             h = texture.sample(x[None, :], y[:, None], periodic=True)
             relief[inside] = (h - texture.heights.min())[inside]
     if outline_mm:
-        height = outline_height_mm if outline_height_mm is not None else 1.2 * max(np.ptp(t.heights) for t in textures)
+        height = outline_height_mm if outline_height_mm is not None else float(np.median([np.ptp(t.heights)
+                                                                                          for t in textures]))
         relief = np.maximum(relief, outline(labels, pixel_mm, outline_mm, height))
     return Heightmap(relief, pixel_mm)
 
@@ -160,7 +170,7 @@ def footprint_labels(labels: np.ndarray, pixel_mm: float, xs: np.ndarray, ys: np
             i, j = round(cy / pixel_mm), round(cx / pixel_mm)
             window = labels[max(i - half, 0):i + half, max(j - half, 0):j + half]
             first = window.flat[0]
-            if np.all(window == first):
+            if first >= 0 and np.all(window == first):
                 out[a, b] = first
     return out
 
@@ -169,7 +179,11 @@ def tactile_image(rgb: np.ndarray, textures: list[tuple[str, Heightmap, float | 
                   pixel_mm: float = PIXEL_MM, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = STEP_MM, strain: bool = False,
                   evaluator: Evaluator | None = None, progress=None) -> TactilePlate:
-    """A plate from a picture and textures ``(name, heightmap, FEM V or None)`` ordered smoothest first (module docstring)."""
+    """A plate from a picture and textures ``(name, heightmap, FEM V or None)`` ordered smoothest first (module docstring).
+
+    ``progress(stage, done, total)``: after each batch of the roughness map (stage "roughness map") and each
+    FEM footprint of the strain image (stage "strain image").
+    """
     width_mm, pixel_mm, step_mm = positive("size_mm", width_mm), positive("pixel_mm", pixel_mm), positive("step_mm", step_mm)
     if outline_mm is not None:
         positive("outline_mm", outline_mm)
@@ -193,28 +207,33 @@ def tactile_image(rgb: np.ndarray, textures: list[tuple[str, Heightmap, float | 
                          f"{footprint:g} mm skin footprint: its roughness cannot be mapped", parameter="size_mm")
     from roughness.surrogate.roughness_map import roughness_map
 
-    rmap = roughness_map(evaluator.model, plate, step_mm, progress=progress)
-    where = footprint_labels(labels, pixel_mm, rmap.x_mm, rmap.y_mm, footprint)
+    rmap = roughness_map(evaluator.model, plate, step_mm,
+                         progress=(lambda done, total: progress("roughness map", done, total)) if progress else None)
+    clear = labels if not outline_mm else np.where(outline(labels, pixel_mm, outline_mm, 1.0) > 0, -1, labels)
+    where = footprint_labels(clear, pixel_mm, rmap.x_mm, rmap.y_mm, footprint)
     regions = []
     for i, (colour, (name, _, fem_v)) in enumerate(zip(colours, textures)):
         inside = rmap.roughness[where == i]
         v = float(np.median(inside)) if inside.size else None
         if v is None:
             notes.append(f"no {footprint:g} mm footprint fits wholly inside the region of colour "
-                         f"#{'%02x%02x%02x' % tuple(colour)}: its plate value is not measured")
+                         f"{hex_colour(colour)}: its plate value is not measured")
         regions.append(Region(tuple(int(c) for c in colour), name, int((labels == i).sum()), fem_v,
                               evaluator.lambda_of(fem_v) if fem_v else None, v,
                               evaluator.lambda_of(v) if v else None, int(inside.size)))
-    strain_mosaic, extent = (strain_image(plate, evaluator) if strain else (None, None))
+    strain_progress = (lambda done, total: progress("strain image", done, total)) if progress else None
+    strain_mosaic, extent = (strain_image(plate, evaluator, strain_progress) if strain else (None, None))
     return TactilePlate(plate, labels, tuple(regions), rmap.x_mm, rmap.y_mm, rmap.roughness, where,
                         strain_mosaic, extent, tuple(notes))
 
 
-def strain_image(plate: Heightmap, evaluator: Evaluator) -> tuple[np.ndarray, tuple[float, float, float, float]]:
-    """The FEM's strain fluctuation over the plate: footprints whose central strain windows abut, stitched."""
-    first = evaluator.fem.simulate(plate)  # the map centre: tells the window's size and grid
-    axis = first.grid_axis_mm
-    window = float(axis[-1] - axis[0]) + float(axis[1] - axis[0])
+def strain_image(plate: Heightmap, evaluator: Evaluator, progress=None
+                 ) -> tuple[np.ndarray, tuple[float, float, float, float]]:
+    """The FEM's strain fluctuation over the plate: footprints whose central strain windows abut, stitched.
+
+    ``progress(done, total)`` is called after each footprint.
+    """
+    window = float(evaluator.fem.config.window_mm)  # the strain window: the tiles' step
     footprint = evaluator.footprint_mm
     width, height = plate.size_mm
     xs = np.arange(footprint / 2, width - footprint / 2 + 1e-9, window)
@@ -224,7 +243,10 @@ def strain_image(plate: Heightmap, evaluator: Evaluator) -> tuple[np.ndarray, tu
         row = []
         for cx in xs:
             evaluator.fem.centre_mm = (float(cx), float(cy))
-            row.append(evaluator.fem.simulate(plate).fluctuation)
+            field = evaluator.fem.simulate(plate).fluctuation
+            row.append(field - field.mean())
+            if progress:
+                progress(len(rows) * len(xs) + len(row), len(xs) * len(ys))
         rows.append(np.hstack(row))
     evaluator.fem.centre_mm = None
     mosaic = np.vstack(rows)
@@ -245,14 +267,14 @@ def save_figures(plate: TactilePlate, folder: Path) -> None:
 
     def save(fig, name: str) -> None:
         fig.tight_layout()
-        atomic_write(folder / name, lambda tmp: fig.savefig(tmp, dpi=110))
+        atomic_write(folder / name, lambda tmp: fig.savefig(tmp, dpi=90))
         plt.close(fig)
 
     fig, ax = plt.subplots(figsize=(6.4, 6.4 * height / width + 0.8))
     image = ax.imshow(plate.heightmap.heights, cmap="gray", extent=extent)
     fig.colorbar(image, ax=ax, label="height (mm)", shrink=0.8)
     ax.set(xlabel="x (mm)", ylabel="y (mm)", title="plate relief: " + ", ".join(
-        f"#{'%02x%02x%02x' % r.colour}: {r.texture}" for r in plate.regions))
+        f"{hex_colour(r.colour)}: {r.texture}" for r in plate.regions))
     ax.title.set_fontsize(8)
     save(fig, "relief.png")
 
@@ -275,7 +297,7 @@ def save_figures(plate: TactilePlate, folder: Path) -> None:
         limit = float(np.percentile(np.abs(plate.strain), 99))
         image = ax.imshow(plate.strain, extent=plate.strain_extent_mm, cmap="RdBu_r", vmin=-limit, vmax=limit)
         ax.set(xlim=(0, width), ylim=(height, 0), xlabel="x (mm)", ylabel="y (mm)",
-               title="fluctuation of max. compressive strain at the receptors (FEM)")
+               title="strain fluctuation at the receptors (FEM, per 8 mm window)")
         ax.title.set_fontsize(9)
         fig.colorbar(image, ax=ax, label="strain", shrink=0.8)
         save(fig, "strain.png")

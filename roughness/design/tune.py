@@ -142,7 +142,7 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
         return evaluator.surrogate([scaled(heightmap, by, f) for f in factors], tile=tile)
 
     grid = np.geomspace(lo, hi, GRID)
-    v_grid, domain_grid = surrogate(grid)
+    v_grid, _ = surrogate(grid)
     reachable = (float(v_grid.min()), float(v_grid.max()))
     lam_lo, lam_hi = evaluator.lambda_of(reachable[0]), evaluator.lambda_of(reachable[1])
     if not reachable[0] <= target.roughness <= reachable[1]:
