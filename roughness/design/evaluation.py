@@ -37,8 +37,7 @@ class Evaluator:
     fidelity: str | None = None  # FEM fidelity (default: the model's training labels')
     _model: object = field(default=None, repr=False)
     _fem: object = field(default=None, repr=False)
-    fem_runs: int = 0
-    fem_seconds: float = 0.0
+    fem_runs: int = 0  # FEM verifications so far
 
     @property
     def model(self):
@@ -86,17 +85,12 @@ class Evaluator:
         fem.centre_mm, fem.tile = centre_mm, tile
         result = fem.simulate(heightmap)
         self.fem_runs += 1
-        self.fem_seconds += result.seconds
         lam, on_scale = self.scale.equivalent_lambda(result.roughness)
         return Verified(result.roughness, result.roughness_stderr, lam, on_scale, result.seconds)
 
     def lambda_of(self, roughness: float) -> float:
         """Equivalent wavelength (mm) of V on the standard scale (extrapolated off its ends)."""
         return self.scale.equivalent_lambda(max(float(roughness), 1e-12))[0]
-
-    def roughness_of(self, lambda_mm: float) -> float:
-        """V of an equivalent wavelength (mm): the scale's inverse (log-log interpolation, power law off its ends)."""
-        return roughness_of_lambda(self.scale, lambda_mm)
 
 
 def roughness_of_lambda(scale, lambda_mm: float) -> float:

@@ -30,6 +30,7 @@ from .tune import FACTOR_RANGE, GRID, TOLERANCE_JND, scaled, target_of, tune
 DEFAULT_FAMILY = "standard-1.0"
 MARGIN_JND = 0.2  # targets stay this far inside the reachable range (room for the FEM's correction)
 MAX_ROUNDS = 4  # folder mode: choose, verify, choose again with the FEM's answers
+PALETTE_FILE = "palette.json"
 
 
 @dataclass(frozen=True)
@@ -208,8 +209,6 @@ def save_palette(palette: Palette, folder, stl: bool = False, base_mm: float | N
     text = json.dumps(palette.summary(), indent=1) + "\n"
     atomic_write(folder / PALETTE_FILE, lambda tmp: Path(tmp).write_text(text))
 
-
-PALETTE_FILE = "palette.json"
 
 
 def load_palette(folder) -> list[tuple[str, Heightmap, dict]]:
