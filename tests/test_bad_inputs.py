@@ -37,6 +37,10 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("perception", "fit"): ["embedding.csv", "--stimuli", "stimuli.csv", "--out", "fit", "--engine", "fem:coarse"],
     ("perception", "design"): ["--stimuli", "stimuli.csv", "--trials", "10", "--out", "design.csv"],
     ("perception", "simulate"): ["--stimuli", "stimuli.csv", "--truth", "truth.csv", "--trials", "10", "--out", "sim"],
+    ("homogeneity",): ["map.npy", "--pixel-mm", "0.05", "--n", "5"],
+    ("tune",): ["map.npy", "--pixel-mm", "0.05", "--target-lambda", "1.0", "--out", "new.npz"],
+    ("palette",): ["--k", "3", "--out", "pal"],
+    ("tactile-image",): ["picture.png", "--out", "plate"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -53,6 +57,9 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("perception", "fit"): [(0, ".csv", []), ("--stimuli", ".csv", [])],
     ("perception", "design"): [("--stimuli", ".csv", [])],
     ("perception", "simulate"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
+    ("homogeneity",): [(0, ".npy", [])],
+    ("tune",): [(0, ".npy", [])],
+    ("tactile-image",): [(0, ".png", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
@@ -62,8 +69,13 @@ FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("export",): ["--out"],
     ("predict",): ["--map"],
     ("perception", "design"): ["--out"],
+    ("homogeneity",): ["--map"],
+    ("tune",): ["--out"],
+    ("palette",): ["--out"],
+    ("tactile-image",): ["--out"],
 }
 OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy"}
+OUTPUT_SUFFIX_OF = {("homogeneity",): {"--map": ".png"}}
 
 
 def _subcommands(parser: argparse.ArgumentParser, path: tuple[str, ...] = ()):
@@ -111,6 +123,10 @@ def workdir(tmp_path, monkeypatch):
     (tmp_path / "stimuli.csv").write_text("stimulus,texture\na,standard-1.0\nb,standard-1.25\nc,flattop-0.3\n")
     (tmp_path / "embedding.csv").write_text("stimulus,coordinate,low,high\na,-1,-1.2,-0.8\nb,0.1,0,0.2\nc,0.9,0.8,1\n")
     (tmp_path / "truth.csv").write_text("stimulus,roughness\na,0.05\nb,0.08\nc,0.1\n")
+    from PIL import Image
+
+    Image.fromarray(np.repeat(np.uint8([[0, 128, 255]]), 30, axis=0).repeat(3, axis=1)[..., None].repeat(3, axis=2)
+                    ).save(tmp_path / "picture.png")  # three flat colours
     monkeypatch.chdir(tmp_path)
     _tripwires(monkeypatch)
     return tmp_path
@@ -201,7 +217,7 @@ def test_broken_input_file(path, where, suffix, extra, kind, workdir, capsys):
 @pytest.mark.parametrize("path, flag, kind", _output_cases(), ids=lambda v: str(v))
 def test_output_that_exists_or_cannot_be_written(path, flag, kind, workdir, capsys):
     argv = list(BASE[path])
-    suffix = OUTPUT_SUFFIX.get(flag, "")
+    suffix = OUTPUT_SUFFIX_OF.get(path, {}).get(flag, OUTPUT_SUFFIX.get(flag, ""))
     if flag in argv:
         name = argv[argv.index(flag) + 1]
     else:

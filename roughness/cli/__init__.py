@@ -4,7 +4,20 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import compare, dataset, jnd, perception, predict, simulate, texture, train
+from . import (
+    compare,
+    dataset,
+    homogeneity,
+    jnd,
+    palette,
+    perception,
+    predict,
+    simulate,
+    tactile_image,
+    texture,
+    train,
+    tune,
+)
 from .common import error_message
 
 DESCRIPTION = ("Predict how rough a surface texture feels to a fingertip (the FEM model of Tymms, Gardner & Zorin "
@@ -15,7 +28,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="roughness", description=DESCRIPTION)
     parser.add_argument("--version", action="version", version=_version())
     sub = parser.add_subparsers(dest="command", required=True)
-    for command in (simulate, texture, dataset, train, predict, compare, jnd, perception):
+    for command in (simulate, texture, dataset, train, predict, compare, jnd, perception, tune, palette,
+                    tactile_image, homogeneity):
         command.add_parser(sub)
     return parser
 

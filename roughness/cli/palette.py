@@ -1,0 +1,91 @@
+"""`roughness palette --k K [--min-jnd M] [--family F | --from FOLDER] --out DIR`: textures a fingertip tells apart."""
+from __future__ import annotations
+
+import argparse
+import json
+
+from .common import (
+    COUNT,
+    POSITIVE,
+    SEED,
+    add_overwrite,
+    add_quiet,
+    add_reading_args,
+    defaults,
+    finish,
+    log,
+    write_stdout,
+)
+
+
+def add_parser(sub) -> None:
+    from roughness.design.palette import DEFAULT_FAMILY, family_palette
+    from roughness.design.tune import KNOBS
+    from roughness.simulate.stl import DEFAULT_BASE_MM
+
+    given = defaults(family_palette)
+    p = sub.add_parser("palette", help="K textures pairwise at least M JND apart (FEM-verified), with a preview sheet")
+    p.add_argument("--k", type=COUNT, required=True, help="number of textures, >= 2")
+    p.add_argument("--min-jnd", type=POSITIVE, default=given["min_jnd"],
+                   help=f"smallest pairwise distance in JNDs of equivalent wavelength (default {given['min_jnd']:g})")
+    source = p.add_mutually_exclusive_group()
+    source.add_argument("--family", default=DEFAULT_FAMILY,
+                        help="texture to scale into K members: a name or family of `roughness texture list` "
+                             f"(default {DEFAULT_FAMILY})")
+    source.add_argument("--from", dest="candidates", metavar="FOLDER",
+                        help="choose K from the heightmaps in this folder instead")
+    p.add_argument("--by", choices=KNOBS, default=given["by"],
+                   help=f"--family: scale the heights or the lateral size (default {given['by']})")
+    p.add_argument("--seed", type=SEED, default=given["seed"], help="--family: the texture's seed (default 0)")
+    p.add_argument("--tolerance-jnd", type=POSITIVE, default=given["tolerance_jnd"],
+                   help=f"--family: each member within this of its target, FEM (default {given['tolerance_jnd']:g})")
+    add_reading_args(p)
+    p.add_argument("--tile", action="store_true", help="--from: the heightmaps are periodic tiles")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="new folder: texture-N.npz (mm), palette.json (V, lambda, pairwise JNDs), preview.png")
+    p.add_argument("--stl", action="store_true", help="also write each texture as a printable plate texture-N.stl")
+    p.add_argument("--base-mm", type=POSITIVE,
+                   help=f"--stl: plate thickness below the texture's lowest point in mm (default {DEFAULT_BASE_MM:g})")
+    p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
+    p.add_argument("--json", action="store_true", help="print palette.json's content (default: text)")
+    add_quiet(p)
+    add_overwrite(p)
+    finish(p, run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from roughness.core.errors import InputError
+    from roughness.core.files import check_output_folder
+    from roughness.design.evaluation import Evaluator
+    from roughness.design.palette import family_palette, folder_palette, save_palette
+
+    out = check_output_folder(args.out, args.overwrite, "out")
+    if args.k < 2:
+        raise InputError(f"a palette needs at least 2 textures, got {args.k}", "k")
+    if args.base_mm is not None and not args.stl:
+        raise InputError("applies only with --stl", "base_mm")
+    evaluator = Evaluator(args.model)
+    progress = lambda line: log(args, "  " + line)
+    if args.candidates:
+        from roughness.simulate.io import heightmap_files, load_heightmap
+
+        files = heightmap_files(args.candidates)
+        candidates = [(f.stem, load_heightmap(f, args.pixel_mm, args.height_mm)) for f in files]
+        log(args, f"palette: choosing {args.k} of {len(candidates)} textures, {args.min_jnd:g} JND apart")
+        palette = folder_palette(candidates, args.k, args.min_jnd, evaluator, args.tile, progress)
+    else:
+        log(args, f"palette: {args.k} variants of {args.family} by {args.by}, {args.min_jnd:g} JND apart")
+        palette = family_palette(args.k, args.min_jnd, args.family, args.by, evaluator, args.tolerance_jnd,
+                                 seed=args.seed, progress=progress)
+    save_palette(palette, out, args.stl, args.base_mm)
+    summary = palette.summary()
+    if args.json:
+        write_stdout(json.dumps(summary))
+    else:
+        lines = [f"{m.name}: V {m.fem.roughness:.4f} ± {m.fem.roughness_stderr:.4f} (FEM), lambda "
+                 f"{m.fem.equivalent_lambda_mm:.3f} mm" + ("" if m.fem.on_scale else " (extrapolated off the scale)")
+                 for m in palette.members]
+        lines.append(f"closest pair {palette.closest_jnd:.2f} JND (FEM): "
+                     f"{'VERIFIED' if palette.verified else 'NOT VERIFIED'} >= {args.min_jnd:g} JND; written to {out}")
+        write_stdout("\n".join(lines))
+    return 0 if palette.verified else 1

@@ -1,0 +1,106 @@
+"""`roughness tactile-image IMAGE --out DIR`: a flat-colour picture as a textured, printable plate."""
+from __future__ import annotations
+
+import argparse
+import json
+
+from .common import COUNT, POSITIVE, add_overwrite, add_quiet, defaults, finish, log, write_stdout
+
+
+def add_parser(sub) -> None:
+    from roughness.design.palette import family_palette
+    from roughness.design.tactile_image import tactile_image
+    from roughness.simulate.stl import DEFAULT_BASE_MM
+
+    given, pal = defaults(tactile_image), defaults(family_palette)
+    p = sub.add_parser("tactile-image", help="a picture with a few flat colours as a plate whose regions carry "
+                                             "distinguishable textures (height map, STL, roughness map)")
+    p.add_argument("image", metavar="IMAGE", help="picture (.png, .jpg, ...) with a few flat colours")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="new folder: plate.npz (mm), plate.stl, plate.json, relief.png, roughness_map.png/.npy, "
+                        "strain.png (with --strain)")
+    p.add_argument("--size-mm", type=POSITIVE, default=given["width_mm"],
+                   help=f"plate width in mm; the height follows the picture (default {given['width_mm']:g})")
+    p.add_argument("--pixel-mm", type=POSITIVE, default=given["pixel_mm"],
+                   help=f"plate pixel size in mm (default {given['pixel_mm']:g})")
+    source = p.add_mutually_exclusive_group()
+    source.add_argument("--palette", metavar="DIR", help="textures from a `roughness palette` folder")
+    source.add_argument("--k", type=COUNT,
+                        help="make a palette of K textures first (default: as many as the picture has colours)")
+    p.add_argument("--min-jnd", type=POSITIVE, default=pal["min_jnd"],
+                   help=f"new palette: smallest pairwise distance in JND (default {pal['min_jnd']:g})")
+    p.add_argument("--family", default="standard-1.0", help="new palette: the texture to scale (default standard-1.0)")
+    p.add_argument("--outline-mm", type=POSITIVE, help="width of smooth raised lines along region edges (default: none)")
+    p.add_argument("--outline-height-mm", type=POSITIVE,
+                   help="height of the raised lines in mm (default: 1.2 x the tallest texture)")
+    p.add_argument("--step-mm", type=POSITIVE, default=given["step_mm"],
+                   help=f"roughness map: distance between footprint positions in mm (default {given['step_mm']:g})")
+    p.add_argument("--strain", action="store_true",
+                   help="also the FEM strain image (one FEM run per 8 mm of plate squared: minutes)")
+    p.add_argument("--base-mm", type=POSITIVE,
+                   help=f"plate thickness below the relief's lowest point in mm (default {DEFAULT_BASE_MM:g})")
+    p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
+    p.add_argument("--json", action="store_true", help="print plate.json's content (default: text)")
+    add_quiet(p)
+    add_overwrite(p)
+    finish(p, run, width_mm="--size-mm")
+
+
+def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    from roughness.core.files import atomic_write, check_output_folder
+    from roughness.design.evaluation import Evaluator
+    from roughness.design.palette import family_palette, load_palette, save_palette
+    from roughness.design.tactile_image import flat_colours, hex_colour, read_image, save_figures, tactile_image
+    from roughness.simulate.io import save_heightmap
+
+    out = check_output_folder(args.out, args.overwrite, "out")
+    rgb = read_image(args.image)
+    colours, _ = flat_colours(rgb)
+    evaluator = Evaluator(args.model)
+    if args.palette:
+        textures = [(name, hm, m.get("fem_roughness")) for name, hm, m in load_palette(args.palette)]
+    else:
+        k = args.k or len(colours)
+        log(args, f"tactile-image: {len(colours)} colours; making a palette of {k} textures {args.min_jnd:g} JND apart")
+        palette = family_palette(k, args.min_jnd, args.family, "height", evaluator,
+                                 progress=lambda line: log(args, "  " + line))
+        textures = [(m.name, m.heightmap, m.fem.roughness) for m in palette.members]
+    log(args, "tactile-image: composing the plate and mapping its roughness (surrogate)"
+        + ("; FEM strain image" if args.strain else ""))
+    def progress(stage: str, done: int, total: int) -> None:
+        if stage == "strain image" or done == total:
+            log(args, f"  {stage}: {done}/{total}" + (" FEM footprints" if stage == "strain image" else " positions"))
+
+    plate = tactile_image(rgb, textures, args.size_mm, args.pixel_mm, args.outline_mm, args.outline_height_mm,
+                          args.step_mm, args.strain, evaluator, progress)
+    out.mkdir(parents=True, exist_ok=True)
+    if not args.palette:
+        save_palette(palette, out / "palette")
+    save_heightmap(plate.heightmap, out / "plate.npz")
+    save_heightmap(plate.heightmap, out / "plate.stl", base_mm=args.base_mm)
+    atomic_write(out / "roughness_map.npy", lambda tmp: np.save(tmp, plate.roughness_map))
+    save_figures(plate, out)
+    summary = {"image": args.image, "out": str(out), **plate.summary()}
+    atomic_write(out / "plate.json", lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=1) + "\n"))
+    if args.json:
+        write_stdout(json.dumps(summary))
+        return 0
+    lines = [f"plate {summary['width_mm']:.1f} x {summary['height_mm']:.1f} mm, relief {summary['relief_mm']:.2f} mm, "
+             f"written to {out} (plate.npz, plate.stl, plate.json, relief.png, roughness_map.png"
+             + (", strain.png)" if args.strain else ")")]
+    for r in plate.regions:
+        fem = f"texture V {r.fem_roughness:.4f} (FEM)" if r.fem_roughness else "texture V not verified"
+        on_plate = (f"on the plate V {r.plate_roughness:.4f}, lambda {r.plate_lambda_mm:.3f} mm over {r.footprints} "
+                    "footprints" if r.plate_roughness else "no footprint fits inside the region")
+        lines.append(f"{hex_colour(r.colour)} -> {r.texture}: {fem}; {on_plate}")
+    d = plate.distances_jnd("plate")
+    pairs = [abs(d[i, j]) for i in range(len(d)) for j in range(i + 1, len(d)) if not np.isnan(d[i, j])]
+    if pairs:
+        lines.append(f"closest regions on the plate's map: {min(pairs):.2f} JND apart (surrogate)")
+    lines += [f"note: {n}" for n in plate.notes]
+    write_stdout("\n".join(lines))
+    return 0

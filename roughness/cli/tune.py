@@ -1,0 +1,86 @@
+"""`roughness tune HEIGHTMAP --target-lambda L | --target-v V | --like REF --out OUT`: reach a target roughness."""
+from __future__ import annotations
+
+import argparse
+import json
+
+from .common import COUNT, POSITIVE, add_overwrite, add_quiet, add_reading_args, defaults, finish, log, write_stdout
+
+
+def add_parser(sub) -> None:
+    from roughness.design.tune import FACTOR_RANGE, KNOBS, tune
+    from roughness.simulate.stl import DEFAULT_BASE_MM
+
+    given = defaults(tune)
+    p = sub.add_parser("tune", help="scale a texture's heights or lateral size to reach a target roughness "
+                                    "(surrogate search, FEM-verified)")
+    p.add_argument("heightmap", metavar="HEIGHTMAP", help="texture to scale: .npy (mm), 8/16-bit .png/.tif, .npz, .h5")
+    target = p.add_mutually_exclusive_group(required=True)
+    target.add_argument("--target-lambda", type=POSITIVE, metavar="MM",
+                        help="target equivalent wavelength on the standard scale (mm)")
+    target.add_argument("--target-v", type=POSITIVE, metavar="V", help="target roughness V (FEM scale)")
+    target.add_argument("--like", metavar="REF", help="feel like this texture (its FEM V is the target)")
+    p.add_argument("--by", choices=KNOBS, default=given["by"],
+                   help=f"scale the heights or the lateral size (default: {given['by']})")
+    p.add_argument("--out", required=True, metavar="FILE",
+                   help="the scaled texture: .npz, .npy, .h5 (mm), .png (16-bit), .tif, or .stl (printable plate)")
+    p.add_argument("--base-mm", type=POSITIVE,
+                   help=f"STL only: plate thickness below the texture's lowest point in mm (default {DEFAULT_BASE_MM:g})")
+    ranges = ", ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in FACTOR_RANGE.items())
+    p.add_argument("--min-factor", type=POSITIVE, help=f"smallest scale factor searched (default: {ranges})")
+    p.add_argument("--max-factor", type=POSITIVE, help="largest scale factor searched (default: see --min-factor)")
+    p.add_argument("--tolerance-jnd", type=POSITIVE, default=given["tolerance_jnd"],
+                   help=f"stop when the FEM is this close to the target, in JND (default {given['tolerance_jnd']:g})")
+    p.add_argument("--max-fem", type=COUNT, default=given["max_fem"],
+                   help=f"most FEM verifications (default {given['max_fem']})")
+    add_reading_args(p)
+    p.add_argument("--tile", action="store_true", help="the texture is a periodic tile (for maps under 10 mm)")
+    p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
+    p.add_argument("--json", action="store_true", help="one JSON object (default: text)")
+    add_quiet(p)
+    add_overwrite(p)
+    finish(p, run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from roughness.core.errors import InputError
+    from roughness.core.files import check_output
+    from roughness.design.evaluation import Evaluator
+    from roughness.design.tune import FACTOR_RANGE, target_of, tune
+    from roughness.simulate.io import SAVE_SUFFIXES, load_heightmap, save_heightmap
+
+    out = check_output(args.out, args.overwrite, "out")
+    if out.suffix.lower() not in SAVE_SUFFIXES:
+        raise InputError(f"cannot save {out}: unsupported format {out.suffix or '(no suffix)'!r}; "
+                         f"supported: {', '.join(SAVE_SUFFIXES)}", "out")
+    if args.base_mm is not None and out.suffix.lower() != ".stl":
+        raise InputError("applies only to STL output", "base_mm")
+    lo, hi = FACTOR_RANGE[args.by]
+    factors = (args.min_factor or lo, args.max_factor or hi)
+    if not factors[0] < factors[1]:
+        raise InputError(f"the factor range must rise, got {factors[0]:g}..{factors[1]:g}", "min_factor")
+    hm = load_heightmap(args.heightmap, args.pixel_mm, args.height_mm)
+    reference = load_heightmap(args.like, args.pixel_mm, args.height_mm) if args.like else None
+    evaluator = Evaluator(args.model)
+    if reference is not None:
+        log(args, f"tune: FEM of the reference {args.like}")
+    target = target_of(evaluator, args.target_lambda, args.target_v, reference, args.like or "", args.tile)
+    log(args, f"tune: target V {target.roughness:.4f} (lambda {target.lambda_mm:.3f} mm); surrogate search over "
+              f"{args.by} factors {factors[0]:g}..{factors[1]:g}")
+    result = tune(hm, target, args.by, evaluator, factors, args.tolerance_jnd, args.max_fem, args.tile,
+                  progress=lambda line: log(args, "  " + line))
+    save_heightmap(result.heightmap, out, base_mm=args.base_mm)
+    summary = {"input": args.heightmap, "out": str(out), **result.summary()}
+    if args.json:
+        write_stdout(json.dumps(summary))
+    else:
+        a = result.achieved
+        lines = [f"{args.heightmap} -> {out}: {args.by} x {result.factor:.4f}",
+                 f"target: V {target.roughness:.4f}, lambda {target.lambda_mm:.3f} mm ({target.given_as})",
+                 (f"achieved (FEM {evaluator.fem.fidelity}): V {a.roughness:.4f} ± {a.roughness_stderr:.4f}, lambda "
+                  f"{a.equivalent_lambda_mm:.3f} mm; error {result.jnd_error:+.2f} ± {result.jnd_stderr:.2f} JND "
+                  f"({'within' if result.reached else 'NOT within'} {result.tolerance_jnd:g} JND after "
+                  f"{len(result.steps)} FEM run(s)); surrogate V {result.surrogate_roughness:.4f}"),
+                 *(f"note: {n}" for n in result.notes)]
+        write_stdout("\n".join(lines))
+    return 0 if result.reached else 1

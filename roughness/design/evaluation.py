@@ -1,0 +1,110 @@
+"""One evaluator for the design tools: the surrogate for searches, the FEM to verify, on one standard scale.
+
+The surrogate runs through ``roughness.engines.predict``; the FEM is the engines' ``FemEngine`` with
+the model's simulation parameters at the fidelity of its training labels (prepared once, reused for
+every verification), so both answers are placed on the same standard scale and their distances are
+JNDs of the equivalent wavelength (``roughness.surrogate.calibration``).
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from roughness.simulate.heightmap import Heightmap
+
+ENGINES = ("surrogate", "fem")
+
+
+@dataclass(frozen=True)
+class Verified:
+    """One FEM answer: V, its Monte Carlo standard error, and the equivalent wavelength (mm)."""
+
+    roughness: float
+    roughness_stderr: float
+    equivalent_lambda_mm: float
+    on_scale: bool
+    seconds: float
+
+
+@dataclass
+class Evaluator:
+    """The shipped (or a given) surrogate and the FEM at its label fidelity, loaded on first use."""
+
+    model_path: str | None = None
+    fidelity: str | None = None  # FEM fidelity (default: the model's training labels')
+    _model: object = field(default=None, repr=False)
+    _fem: object = field(default=None, repr=False)
+    fem_runs: int = 0  # FEM verifications so far
+
+    @property
+    def model(self):
+        from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
+
+        if self._model is None:
+            self._model = SurrogateModel(self.model_path or DEFAULT_MODEL)
+        return self._model
+
+    @property
+    def fem(self):
+        from roughness.engines import FemEngine
+
+        if self._fem is None:
+            self._fem = FemEngine.of(self.fidelity or self.model.fidelity, self.model.meta.simulation)
+        return self._fem
+
+    @property
+    def scale(self):
+        """The standard scale of the FEM fidelity (the surrogate's labels share it by default)."""
+        from roughness.surrogate.calibration import load_scale
+
+        return load_scale(self.fidelity or self.model.fidelity)
+
+    @property
+    def footprint_mm(self) -> float:
+        return self.model.footprint_mm
+
+    def surrogate(self, heightmaps: Sequence[Heightmap], tile: bool = False,
+                  centres_mm: Sequence[tuple[float, float]] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Surrogate V of each heightmap (at each centre, if given) and whether it was in the model's domain."""
+        from roughness.engines import predict
+
+        if centres_mm is None or all(c is None for c in centres_mm):
+            results = predict(list(heightmaps), engine="surrogate", model=self.model, tile=tile)
+        else:  # one footprint centre per map: batched through the model directly
+            model = self.model
+            values, reasons = model.run(np.stack([model.patch(hm, c, tile) for hm, c in zip(heightmaps, centres_mm)]))
+            return np.asarray(values, dtype=float), np.array([not r for r in reasons])
+        return np.array([p.roughness for p in results]), np.array([p.in_domain for p in results])
+
+    def verify(self, heightmap: Heightmap, tile: bool = False, centre_mm: tuple[float, float] | None = None) -> Verified:
+        """The FEM's V of one heightmap, placed on the standard scale."""
+        fem = self.fem
+        fem.centre_mm, fem.tile = centre_mm, tile
+        result = fem.simulate(heightmap)
+        self.fem_runs += 1
+        lam, on_scale = self.scale.equivalent_lambda(result.roughness)
+        return Verified(result.roughness, result.roughness_stderr, lam, on_scale, result.seconds)
+
+    def lambda_of(self, roughness: float) -> float:
+        """Equivalent wavelength (mm) of V on the standard scale (extrapolated off its ends)."""
+        return self.scale.equivalent_lambda(max(float(roughness), 1e-12))[0]
+
+
+def roughness_of_lambda(scale, lambda_mm: float) -> float:
+    """Inverse of ``StandardScale.equivalent_lambda``: V at an equivalent wavelength (mm)."""
+    lams, vs = np.log(scale.lambdas_mm), np.log(scale.roughness)
+    x = math.log(lambda_mm)
+    if lams[0] <= x <= lams[-1]:
+        return float(np.exp(np.interp(x, lams, vs)))
+    a, b = scale.power_law
+    return a * lambda_mm**b
+
+
+def jnd_between(lambda_a_mm: float, lambda_b_mm: float) -> float:
+    """Signed JNDs of equivalent wavelength: ln(lambda_a / lambda_b) / ln(1.19)."""
+    from roughness.surrogate.calibration import jnd
+
+    return jnd(lambda_a_mm, lambda_b_mm)

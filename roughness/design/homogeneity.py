@@ -1,0 +1,187 @@
+"""Does a texture feel the same everywhere? The paper's homogeneity test on windows across the surface.
+
+Definition (written down, as the paper leaves the details open):
+
+* ``n`` windows (default 50) of side ``window_mm`` are placed uniformly at random (seeded): wholly on
+  the map, or anywhere if the map is a periodic tile (``tile``).
+* The local roughness V_i of a window is V of the skin footprint (10 mm) centred on it. A window
+  smaller than the footprint (the paper's 5 mm) is felt alone: it and its three mirror images make a
+  seamless periodic tile, read periodically under the footprint. The default window is the footprint.
+* ``relative_variance`` = var(V_i) / mean(V_i)^2 (sample variance, n - 1): the squared coefficient
+  of variation, dimensionless. The paper reports about 1e-4 for most of its textures and calls
+  textures above 1e-3 inhomogeneous (``PAPER_THRESHOLD``; ``paper_verdict``).
+* ``spread_jnd`` = standard deviation over the windows of ln(lambda_i) / ln(1.19), lambda_i the
+  equivalent wavelength of V_i on the standard scale; ``range_jnd`` = the 10th to 90th percentile of
+  the same. The ``verdict`` is perceptual: "inhomogeneous" if ``range_jnd`` >= 1, i.e. a fingertip
+  moved over the surface finds parts a just-noticeable difference apart.
+
+Measured (coarse FEM, footprint windows; see the README): a grating varies by 1e-4, as the paper's
+textures; random bump textures by about 1.5e-3 (the bumps under a 10 mm footprint differ from place
+to place), 0.1 JND. The surrogate adds its own position-to-position error (about 5e-3 on bump textures,
+2e-2 on gratings): use ``engine="fem"`` when the relative variance itself matters.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughness.core.checks import integer, positive
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap
+
+from .evaluation import ENGINES, Evaluator
+
+PAPER_THRESHOLD = 1e-3  # relative variance above which the paper calls a texture inhomogeneous
+JND_RANGE = 1.0  # 10th-90th percentile range (JND) at and above which parts of a surface feel different
+N_WINDOWS = 50
+MIN_WINDOW_PIXELS = 8
+
+
+@dataclass(frozen=True)
+class Homogeneity:
+    """Local roughness over ``n`` windows of a texture, its spread and the verdicts.
+
+    ``x_mm``, ``y_mm``: window centres (mm); ``roughness``: V per window; ``lambda_mm``: its
+    equivalent wavelength (mm); ``in_domain``: whether the surrogate was inside its training
+    domain (always True for the FEM).
+    """
+
+    window_mm: float
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    roughness: np.ndarray
+    lambda_mm: np.ndarray
+    in_domain: np.ndarray
+    engine: str
+    relative_variance: float  # var(V) / mean(V)^2 over the windows
+    spread_jnd: float  # SD of ln(lambda_eq) / ln(1.19) over the windows
+    range_jnd: float  # 10th to 90th percentile of ln(lambda_eq) / ln(1.19)
+    mean_roughness: float
+
+    @property
+    def verdict(self) -> str:
+        """Perceptual: "inhomogeneous" if the windows' 10-90% range spans a JND or more."""
+        return "inhomogeneous" if self.range_jnd >= JND_RANGE else "homogeneous"
+
+    @property
+    def paper_verdict(self) -> str:
+        """The paper's: "inhomogeneous" above a relative variance of 1e-3."""
+        return "inhomogeneous" if self.relative_variance > PAPER_THRESHOLD else "homogeneous"
+
+    def summary(self) -> dict:
+        return {"engine": self.engine, "windows": len(self.roughness), "window_mm": self.window_mm,
+                "mean_roughness": self.mean_roughness, "relative_variance": self.relative_variance,
+                "spread_jnd": self.spread_jnd, "range_jnd": self.range_jnd, "verdict": self.verdict,
+                "paper_threshold": PAPER_THRESHOLD, "paper_verdict": self.paper_verdict,
+                "in_domain_fraction": float(np.mean(self.in_domain)),
+                "definition": "V_i: V of the footprint centred on window i (a window smaller than the footprint "
+                              "is felt alone, mirror-tiled); relative_variance = var(V_i) / mean(V_i)^2; "
+                              "spread_jnd = SD of ln(lambda_i) / ln 1.19; range_jnd = its 10-90% range; "
+                              "verdict: inhomogeneous if range_jnd >= 1"}
+
+
+def window_centres(heightmap: Heightmap, window_mm: float, footprint_mm: float, n: int, seed: int = 0,
+                   tile: bool = False) -> np.ndarray:
+    """(n, 2) random window centres (x, y in mm): anywhere on a tile, else with window and footprint on the map."""
+    width, height = heightmap.size_mm
+    rng = np.random.default_rng(seed)
+    if tile:
+        return np.column_stack([rng.uniform(0, width, n), rng.uniform(0, height, n)])
+    half = max(window_mm, min(footprint_mm, window_mm)) / 2
+    if 2 * half > min(width, height) + 1e-9:
+        raise InputError(f"a {2 * half:g} mm window does not fit on the {width:.2f} mm x {height:.2f} mm map; "
+                         "use a smaller window (or tile, for a periodic texture)", parameter="window_mm")
+    return np.column_stack([rng.uniform(half, width - half, n), rng.uniform(half, height - half, n)])
+
+
+def mirrored_window(heightmap: Heightmap, centre_mm: tuple[float, float], window_mm: float,
+                    tile: bool = False) -> Heightmap:
+    """The window (side ``window_mm``, whole pixels) and its mirror images: a seamless periodic tile."""
+    side = round(window_mm / heightmap.pixel_mm)
+    ny, nx = heightmap.shape
+    j0 = round(centre_mm[0] / heightmap.pixel_mm - side / 2)
+    i0 = round(centre_mm[1] / heightmap.pixel_mm - side / 2)
+    if tile:
+        w = heightmap.heights[np.ix_(np.arange(i0, i0 + side) % ny, np.arange(j0, j0 + side) % nx)]
+    else:
+        j0, i0 = min(max(j0, 0), nx - side), min(max(i0, 0), ny - side)
+        w = heightmap.heights[i0:i0 + side, j0:j0 + side]
+    top = np.hstack([w, w[:, ::-1]])
+    return Heightmap(np.vstack([top, top[::-1]]), heightmap.pixel_mm)
+
+
+def homogeneity(heightmap: Heightmap, engine: str = "surrogate", window_mm: float | None = None,
+                n: int = N_WINDOWS, seed: int = 0, tile: bool = False, evaluator: Evaluator | None = None,
+                progress=None) -> Homogeneity:
+    """The homogeneity test (module docstring) of a heightmap (mm) with ``engine`` ("surrogate" or "fem").
+
+    ``window_mm``: window side (default: the 10 mm footprint); ``tile``: the map is a periodic tile;
+    ``progress(done, total)`` is called after each FEM window.
+    """
+    if engine not in ENGINES:
+        raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}", parameter="engine")
+    n = integer("n", n, minimum=3)
+    seed = integer("seed", seed, minimum=0)
+    evaluator = evaluator or Evaluator()
+    footprint = evaluator.footprint_mm
+    window_mm = footprint if window_mm is None else positive("window_mm", window_mm)
+    if window_mm / heightmap.pixel_mm < MIN_WINDOW_PIXELS:
+        raise InputError(f"window_mm={window_mm:g} spans fewer than {MIN_WINDOW_PIXELS} pixels of "
+                         f"{heightmap.pixel_mm:g} mm", parameter="window_mm")
+    if not tile:
+        heightmap.require_footprint(footprint)
+    centres = window_centres(heightmap, window_mm, footprint, n, seed, tile)
+    if window_mm < footprint:  # each window felt alone
+        maps = [mirrored_window(heightmap, tuple(c), window_mm, tile) for c in centres]
+        places, periodic = [None] * n, True
+    else:
+        maps, places, periodic = [heightmap] * n, [tuple(c) for c in centres], tile
+    if engine == "surrogate":
+        v, in_domain = evaluator.surrogate(maps, tile=periodic, centres_mm=places)
+    else:
+        v = np.empty(n)
+        for i, (hm, c) in enumerate(zip(maps, places)):
+            v[i] = evaluator.verify(hm, tile=periodic, centre_mm=c).roughness
+            if progress:
+                progress(i + 1, n)
+        in_domain = np.ones(n, dtype=bool)
+    lam = np.array([evaluator.lambda_of(x) for x in v])
+    steps = np.log(lam) / math.log(1.19)
+    mean = float(v.mean())
+    relative_variance = float(v.var(ddof=1) / mean**2) if mean > 0 else math.inf
+    p10, p90 = np.percentile(steps, [10, 90])
+    return Homogeneity(window_mm, centres[:, 0], centres[:, 1], v, lam, in_domain, engine, relative_variance,
+                       float(np.std(steps, ddof=1)), float(p90 - p10), mean)
+
+
+def save_map(result: Homogeneity, heightmap: Heightmap, path) -> None:
+    """PNG: the heightmap in grey with each window outlined and coloured by its V."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
+
+    from roughness.core.files import atomic_write
+
+    width, height = heightmap.size_mm
+    fig, ax = plt.subplots(figsize=(6.4, 5))
+    ax.imshow(heightmap.heights, cmap="gray", extent=(0, width, height, 0))
+    cmap = plt.get_cmap("magma")
+    lo, hi = float(result.roughness.min()), float(result.roughness.max())
+    norm = matplotlib.colors.Normalize(lo, hi if hi > lo else lo + 1e-9)
+    half = result.window_mm / 2
+    for x, y, v in zip(result.x_mm, result.y_mm, result.roughness):
+        ax.add_patch(Rectangle((x - half, y - half), result.window_mm, result.window_mm, fill=False,
+                               edgecolor=cmap(norm(v)), linewidth=0.8, alpha=0.8))
+    ax.scatter(result.x_mm, result.y_mm, c=result.roughness, cmap=cmap, norm=norm, s=25, edgecolors="white",
+               linewidths=0.4)
+    fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="V of the window")
+    ax.set(xlabel="x (mm)", ylabel="y (mm)",
+           title=f"{result.verdict}: relative variance {result.relative_variance:.1e}, "
+                 f"spread {result.spread_jnd:.2f} JND")
+    fig.tight_layout()
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=80))
+    plt.close(fig)

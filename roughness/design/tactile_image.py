@@ -1,0 +1,303 @@
+"""Tactile images: a picture with a few flat colours becomes a plate whose regions carry distinguishable textures.
+
+Colours: the picture's colours covering at least ``MIN_COLOUR_FRACTION`` of its pixels are its
+regions; other pixels (anti-aliased edges) join the nearest of them in RGB. Colours are matched to
+palette members by lightness: the lightest colour gets the smoothest texture, the darkest the
+roughest. The picture is scaled to ``width_mm`` (nearest neighbour) on ``pixel_mm`` pixels; each
+region carries its texture read periodically, every texture standing on the plate's floor (z = 0 at
+its lowest point). Outlines (optional) are smooth raised lines along the region boundaries, as in
+the paper's lion: a raised cosine of width ``outline_mm`` and height ``outline_height_mm``
+(default: the median relief of the textures).
+
+The plate's roughness map is the surrogate's V at footprint positions ``step_mm`` apart; the
+regions' values are read at positions whose whole footprint lies in one region, clear of outlines. The strain image
+(optional, FEM) tiles the plate with footprints whose central 8 mm strain windows abut and shows the
+fluctuation of the maximum compressive strain, as the paper's figure of its lion; each footprint's field
+is shown minus its mean (V, built from differences, is blind to that offset; without it the tiles'
+seams would show the footprints' different indentations rather than the texture).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy import ndimage
+
+from roughness.core.checks import non_negative, positive
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap
+
+from .evaluation import Evaluator, jnd_between
+
+MIN_COLOUR_FRACTION = 0.005
+WIDTH_MM = 60.0
+PIXEL_MM = 0.1
+STEP_MM = 1.0
+MAX_PLATE_PIXELS = 4_000_000
+
+
+@dataclass(frozen=True)
+class Region:
+    colour: tuple[int, int, int]
+    texture: str
+    pixels: int
+    fem_roughness: float | None  # of the texture alone (palette), if known
+    fem_lambda_mm: float | None
+    plate_roughness: float | None  # median surrogate V over footprints wholly in the region (None: none fit)
+    plate_lambda_mm: float | None
+    footprints: int
+
+
+@dataclass(frozen=True)
+class TactilePlate:
+    heightmap: Heightmap  # the plate's relief (mm)
+    labels: np.ndarray  # region index per plate pixel
+    regions: tuple[Region, ...]
+    map_x_mm: np.ndarray
+    map_y_mm: np.ndarray
+    roughness_map: np.ndarray  # surrogate V per footprint position (rows = y)
+    map_labels: np.ndarray  # region whose footprint it wholly lies in, -1 if mixed
+    strain: np.ndarray | None = None  # fluctuation of lambda3 mosaic (FEM), on strain_axis_mm
+    strain_extent_mm: tuple[float, float, float, float] | None = None
+    notes: tuple[str, ...] = field(default=())
+
+    def distances_jnd(self, which: str = "plate") -> np.ndarray:
+        """Signed pairwise distances of the regions (JND): on the plate's map ("plate") or of the textures (FEM)."""
+        lam = [r.plate_lambda_mm if which == "plate" else r.fem_lambda_mm for r in self.regions]
+        return np.array([[jnd_between(a, b) if a and b else np.nan for b in lam] for a in lam])
+
+    def summary(self) -> dict:
+        width, height = self.heightmap.size_mm
+        return {"width_mm": width, "height_mm": height, "pixel_mm": self.heightmap.pixel_mm,
+                "relief_mm": float(np.ptp(self.heightmap.heights)),
+                "regions": [{"colour": hex_colour(r.colour), "texture": r.texture, "pixels": r.pixels,
+                             "fem_roughness": r.fem_roughness, "fem_lambda_mm": r.fem_lambda_mm,
+                             "plate_roughness": r.plate_roughness, "plate_lambda_mm": r.plate_lambda_mm,
+                             "footprints_inside": r.footprints} for r in self.regions],
+                "plate_distances_jnd": _rounded(self.distances_jnd("plate")),
+                "texture_distances_jnd": _rounded(self.distances_jnd("fem")), "notes": list(self.notes)}
+
+
+def hex_colour(rgb) -> str:
+    """#rrggbb of an RGB triple."""
+    r, g, b = (int(c) for c in rgb)
+    return f"#{r:02x}{g:02x}{b:02x}"
+
+
+def _rounded(a: np.ndarray) -> list:
+    return [[None if np.isnan(x) else round(float(x), 3) for x in row] for row in a]
+
+
+def read_image(path: str | Path) -> np.ndarray:
+    """RGB pixels (h, w, 3) uint8 of a picture file; InputError if it cannot be read."""
+    from PIL import Image, UnidentifiedImageError
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"image not found: {path}" if not path.exists() else f"{path} is not a file",
+                         parameter="image")
+    try:
+        with Image.open(path) as image:
+            return np.asarray(image.convert("RGB"))
+    except (UnidentifiedImageError, OSError, ValueError) as err:
+        raise InputError(f"{path} is not a readable image: {err}", parameter="image") from None
+
+
+def flat_colours(rgb: np.ndarray, min_fraction: float = MIN_COLOUR_FRACTION) -> tuple[np.ndarray, np.ndarray]:
+    """The picture's main colours (n, 3), lightest first, and each pixel's region index (h, w)."""
+    flat = rgb.reshape(-1, 3)
+    colours, inverse, counts = np.unique(flat, axis=0, return_inverse=True, return_counts=True)
+    main = colours[counts >= min_fraction * len(flat)]
+    if len(main) < 2:
+        raise InputError("the picture has fewer than 2 flat colours (each covering >= "
+                         f"{100 * min_fraction:g}% of its pixels)", parameter="image")
+    lightness = main.astype(float) @ [0.299, 0.587, 0.114]
+    main = main[np.argsort(-lightness, kind="stable")]
+    nearest = np.argmin(((colours[:, None, :].astype(float) - main[None].astype(float)) ** 2).sum(-1), axis=1)
+    return main, nearest[inverse.ravel()].reshape(rgb.shape[:2])
+
+
+def plate_labels(labels: np.ndarray, width_mm: float, pixel_mm: float) -> np.ndarray:
+    """The picture's region indices scaled to a plate ``width_mm`` wide on ``pixel_mm`` pixels (nearest neighbour)."""
+    h, w = labels.shape
+    nx = round(width_mm / pixel_mm)
+    ny = max(2, round(nx * h / w))
+    if nx * ny > MAX_PLATE_PIXELS:
+        raise InputError(f"a {width_mm:g} mm plate of {pixel_mm:g} mm pixels has {nx * ny:,} pixels (at most "
+                         f"{MAX_PLATE_PIXELS:,}): use larger pixels or a smaller plate", parameter="size_mm")
+    rows = np.minimum(((np.arange(ny) + 0.5) * h / ny).astype(int), h - 1)
+    cols = np.minimum(((np.arange(nx) + 0.5) * w / nx).astype(int), w - 1)
+    return labels[np.ix_(rows, cols)]
+
+
+def outline(labels: np.ndarray, pixel_mm: float, width_mm: float, height_mm: float) -> np.ndarray:
+    """Smooth raised lines (mm) along region boundaries: height * cos^2(pi d / width) within width / 2 of them."""
+    edge = np.zeros(labels.shape, dtype=bool)
+    edge[:, 1:] |= labels[:, 1:] != labels[:, :-1]
+    edge[1:, :] |= labels[1:, :] != labels[:-1, :]
+    d = ndimage.distance_transform_edt(~edge) * pixel_mm
+    return np.where(d < width_mm / 2, height_mm * np.cos(math.pi * d / width_mm) ** 2, 0.0)
+
+
+def compose(labels: np.ndarray, textures: list[Heightmap], pixel_mm: float, outline_mm: float | None = None,
+            outline_height_mm: float | None = None) -> Heightmap:
+    """The plate's relief: texture i (periodic, lowest point at 0) in region i, outlines on top."""
+    ny, nx = labels.shape
+    x = (np.arange(nx) + 0.5) * pixel_mm
+    y = (np.arange(ny) + 0.5) * pixel_mm
+    relief = np.zeros(labels.shape)
+    for i, texture in enumerate(textures):
+        inside = labels == i
+        if inside.any():
+            h = texture.sample(x[None, :], y[:, None], periodic=True)
+            relief[inside] = (h - texture.heights.min())[inside]
+    if outline_mm:
+        height = outline_height_mm if outline_height_mm is not None else float(np.median([np.ptp(t.heights)
+                                                                                          for t in textures]))
+        relief = np.maximum(relief, outline(labels, pixel_mm, outline_mm, height))
+    return Heightmap(relief, pixel_mm)
+
+
+def footprint_labels(labels: np.ndarray, pixel_mm: float, xs: np.ndarray, ys: np.ndarray, footprint_mm: float
+                     ) -> np.ndarray:
+    """For each footprint centre (ys x xs, mm): the region it wholly lies in, or -1."""
+    half = round(footprint_mm / 2 / pixel_mm)
+    out = np.full((len(ys), len(xs)), -1)
+    for a, cy in enumerate(ys):
+        for b, cx in enumerate(xs):
+            i, j = round(cy / pixel_mm), round(cx / pixel_mm)
+            window = labels[max(i - half, 0):i + half, max(j - half, 0):j + half]
+            first = window.flat[0]
+            if first >= 0 and np.all(window == first):
+                out[a, b] = first
+    return out
+
+
+def tactile_image(rgb: np.ndarray, textures: list[tuple[str, Heightmap, float | None]], width_mm: float = WIDTH_MM,
+                  pixel_mm: float = PIXEL_MM, outline_mm: float | None = None,
+                  outline_height_mm: float | None = None, step_mm: float = STEP_MM, strain: bool = False,
+                  evaluator: Evaluator | None = None, progress=None) -> TactilePlate:
+    """A plate from a picture and textures ``(name, heightmap, FEM V or None)`` ordered smoothest first (module docstring).
+
+    ``progress(stage, done, total)``: after each batch of the roughness map (stage "roughness map") and each
+    FEM footprint of the strain image (stage "strain image").
+    """
+    width_mm, pixel_mm, step_mm = positive("size_mm", width_mm), positive("pixel_mm", pixel_mm), positive("step_mm", step_mm)
+    if outline_mm is not None:
+        positive("outline_mm", outline_mm)
+    if outline_height_mm is not None:
+        non_negative("outline_height_mm", outline_height_mm)
+    evaluator = evaluator or Evaluator()
+    colours, picture_labels = flat_colours(rgb)
+    if len(colours) > len(textures):
+        raise InputError(f"the picture has {len(colours)} flat colours but the palette only {len(textures)} textures",
+                         parameter="palette")
+    notes = []
+    if len(textures) > len(colours):  # spread the regions over the palette: first, last and evenly between
+        pick = np.round(np.linspace(0, len(textures) - 1, len(colours))).astype(int)
+        textures = [textures[i] for i in pick]
+        notes.append(f"{len(colours)} colours: palette members {', '.join(str(i + 1) for i in pick)} used")
+    labels = plate_labels(picture_labels, width_mm, pixel_mm)
+    plate = compose(labels, [t for _, t, _ in textures], pixel_mm, outline_mm, outline_height_mm)
+    footprint = evaluator.footprint_mm
+    if min(plate.size_mm) < footprint:
+        raise InputError(f"the plate ({plate.size_mm[0]:.1f} x {plate.size_mm[1]:.1f} mm) is smaller than the "
+                         f"{footprint:g} mm skin footprint: its roughness cannot be mapped", parameter="size_mm")
+    from roughness.surrogate.roughness_map import roughness_map
+
+    rmap = roughness_map(evaluator.model, plate, step_mm,
+                         progress=(lambda done, total: progress("roughness map", done, total)) if progress else None)
+    clear = labels if not outline_mm else np.where(outline(labels, pixel_mm, outline_mm, 1.0) > 0, -1, labels)
+    where = footprint_labels(clear, pixel_mm, rmap.x_mm, rmap.y_mm, footprint)
+    regions = []
+    for i, (colour, (name, _, fem_v)) in enumerate(zip(colours, textures)):
+        inside = rmap.roughness[where == i]
+        v = float(np.median(inside)) if inside.size else None
+        if v is None:
+            notes.append(f"no {footprint:g} mm footprint fits wholly inside the region of colour "
+                         f"{hex_colour(colour)}: its plate value is not measured")
+        regions.append(Region(tuple(int(c) for c in colour), name, int((labels == i).sum()), fem_v,
+                              evaluator.lambda_of(fem_v) if fem_v else None, v,
+                              evaluator.lambda_of(v) if v else None, int(inside.size)))
+    strain_progress = (lambda done, total: progress("strain image", done, total)) if progress else None
+    strain_mosaic, extent = (strain_image(plate, evaluator, strain_progress) if strain else (None, None))
+    return TactilePlate(plate, labels, tuple(regions), rmap.x_mm, rmap.y_mm, rmap.roughness, where,
+                        strain_mosaic, extent, tuple(notes))
+
+
+def strain_image(plate: Heightmap, evaluator: Evaluator, progress=None
+                 ) -> tuple[np.ndarray, tuple[float, float, float, float]]:
+    """The FEM's strain fluctuation over the plate: footprints whose central strain windows abut, stitched.
+
+    ``progress(done, total)`` is called after each footprint.
+    """
+    window = float(evaluator.fem.config.window_mm)  # the strain window: the tiles' step
+    footprint = evaluator.footprint_mm
+    width, height = plate.size_mm
+    xs = np.arange(footprint / 2, width - footprint / 2 + 1e-9, window)
+    ys = np.arange(footprint / 2, height - footprint / 2 + 1e-9, window)
+    rows = []
+    for cy in ys:
+        row = []
+        for cx in xs:
+            evaluator.fem.centre_mm = (float(cx), float(cy))
+            field = evaluator.fem.simulate(plate).fluctuation
+            row.append(field - field.mean())
+            if progress:
+                progress(len(rows) * len(xs) + len(row), len(xs) * len(ys))
+        rows.append(np.hstack(row))
+    evaluator.fem.centre_mm = None
+    mosaic = np.vstack(rows)
+    return mosaic, (xs[0] - window / 2, xs[-1] + window / 2, ys[-1] + window / 2, ys[0] - window / 2)
+
+
+def save_figures(plate: TactilePlate, folder: Path) -> None:
+    """regions.png (the plate's relief with region outlines), roughness_map.png and, if computed, strain.png."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from roughness.core.files import atomic_write
+
+    width, height = plate.heightmap.size_mm
+    extent = (0, width, height, 0)
+
+    def save(fig, name: str) -> None:
+        fig.tight_layout()
+        atomic_write(folder / name, lambda tmp: fig.savefig(tmp, dpi=90))
+        plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(6.4, 6.4 * height / width + 0.8))
+    image = ax.imshow(plate.heightmap.heights, cmap="gray", extent=extent)
+    fig.colorbar(image, ax=ax, label="height (mm)", shrink=0.8)
+    ax.set(xlabel="x (mm)", ylabel="y (mm)", title="plate relief: " + ", ".join(
+        f"{hex_colour(r.colour)}: {r.texture}" for r in plate.regions))
+    ax.title.set_fontsize(8)
+    save(fig, "relief.png")
+
+    x, y = plate.map_x_mm, plate.map_y_mm
+    half = (x[1] - x[0]) / 2 if len(x) > 1 else 0.5
+    fig, ax = plt.subplots(figsize=(6.4, 6.4 * height / width + 0.8))
+    image = ax.imshow(plate.roughness_map, extent=(x[0] - half, x[-1] + half, y[-1] + half, y[0] - half),
+                      cmap="magma")
+    ax.contour((np.arange(plate.labels.shape[1]) + 0.5) * plate.heightmap.pixel_mm,
+               (np.arange(plate.labels.shape[0]) + 0.5) * plate.heightmap.pixel_mm, plate.labels,
+               levels=np.arange(len(plate.regions)) + 0.5, colors="cyan", linewidths=0.6)
+    ax.set(xlim=(0, width), ylim=(height, 0), xlabel="x (mm)", ylabel="footprint centre y (mm)",
+           title="predicted V per footprint centre (surrogate); cyan: region edges")
+    ax.title.set_fontsize(9)
+    fig.colorbar(image, ax=ax, label="V", shrink=0.8)
+    save(fig, "roughness_map.png")
+
+    if plate.strain is not None:
+        fig, ax = plt.subplots(figsize=(6.4, 6.4 * height / width + 0.8))
+        limit = float(np.percentile(np.abs(plate.strain), 99))
+        image = ax.imshow(plate.strain, extent=plate.strain_extent_mm, cmap="RdBu_r", vmin=-limit, vmax=limit)
+        ax.set(xlim=(0, width), ylim=(height, 0), xlabel="x (mm)", ylabel="y (mm)",
+               title="strain fluctuation at the receptors (FEM, per 8 mm window)")
+        ax.title.set_fontsize(9)
+        fig.colorbar(image, ax=ax, label="strain", shrink=0.8)
+        save(fig, "strain.png")

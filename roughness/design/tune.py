@@ -1,0 +1,214 @@
+"""Scale a texture so that it reaches a target roughness: the surrogate searches, the FEM verifies.
+
+The knob is the heights (``by="height"``: H - min(H) times the factor) or the lateral size
+(``by="lateral"``: the texture stretched about the map centre by the factor, read periodically, on
+the same pixels and map size). The target is an equivalent wavelength on the standard scale, a V,
+or the FEM's V of a reference texture; errors are counted in JNDs of the equivalent wavelength.
+
+Search: the surrogate's V on a grid of factors gives the reachable range (a target outside it is
+refused with that range) and the factor that meets the target. The FEM then verifies it. While the
+FEM answer misses the target by more than ``tolerance_jnd``, the factor is corrected: the first time
+by the surrogate's bias at that factor (V_fem / V_surrogate, assumed to vary slowly with the factor),
+then by the secant through the two FEM answers closest to the target in log V over log factor. The
+result is the FEM-verified factor closest to the target.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from roughness.core.checks import integer, positive
+from roughness.core.errors import InputError
+from roughness.simulate.heightmap import Heightmap
+
+from .evaluation import Evaluator, Verified, jnd_between, roughness_of_lambda
+
+KNOBS = ("height", "lateral")
+FACTOR_RANGE = {"height": (0.1, 3.0), "lateral": (0.4, 2.5)}  # default search range of the scale factor
+GRID = 49  # surrogate evaluations over the factor range
+TOLERANCE_JND = 0.1
+MAX_FEM = 4
+
+
+@dataclass(frozen=True)
+class Target:
+    """What to reach: V (dimensionless) and its equivalent wavelength (mm) on the standard scale."""
+
+    roughness: float
+    lambda_mm: float
+    given_as: str  # "lambda", "roughness" or "like <source>"
+
+
+@dataclass(frozen=True)
+class Step:
+    """One FEM verification: the factor, the surrogate's V there, the FEM's answer, the signed JND error."""
+
+    factor: float
+    surrogate_roughness: float
+    fem: Verified
+    jnd_error: float  # FEM's equivalent lambda against the target's: positive = rougher than the target
+
+
+@dataclass(frozen=True)
+class TuneResult:
+    heightmap: Heightmap  # the scaled texture (mm)
+    by: str
+    factor: float
+    target: Target
+    achieved: Verified  # FEM
+    surrogate_roughness: float
+    in_domain: bool  # the surrogate's domain at this factor
+    jnd_error: float
+    jnd_stderr: float  # of jnd_error, from the FEM's Monte Carlo standard error
+    steps: tuple[Step, ...]
+    reachable_roughness: tuple[float, float]  # surrogate V over the factor range
+    factor_range: tuple[float, float]
+    tolerance_jnd: float
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def reached(self) -> bool:
+        return abs(self.jnd_error) <= self.tolerance_jnd
+
+    def summary(self) -> dict:
+        return {"by": self.by, "factor": self.factor, "target_roughness": self.target.roughness,
+                "target_lambda_mm": self.target.lambda_mm, "target_given_as": self.target.given_as,
+                "achieved_roughness": self.achieved.roughness, "achieved_roughness_stderr": self.achieved.roughness_stderr,
+                "achieved_lambda_mm": self.achieved.equivalent_lambda_mm, "achieved_on_scale": self.achieved.on_scale,
+                "surrogate_roughness": self.surrogate_roughness, "surrogate_in_domain": self.in_domain,
+                "jnd_error": self.jnd_error, "jnd_stderr": self.jnd_stderr, "tolerance_jnd": self.tolerance_jnd,
+                "reached": self.reached, "fem_runs": len(self.steps),
+                "steps": [{"factor": s.factor, "surrogate_roughness": s.surrogate_roughness,
+                           "fem_roughness": s.fem.roughness, "jnd_error": s.jnd_error} for s in self.steps],
+                "reachable_roughness": list(self.reachable_roughness), "factor_range": list(self.factor_range),
+                "notes": list(self.notes)}
+
+
+def scaled(heightmap: Heightmap, by: str, factor: float) -> Heightmap:
+    """The texture with its heights (above their minimum) or its lateral size multiplied by ``factor``."""
+    factor = positive("factor", factor)
+    if by == "height":
+        h = heightmap.heights
+        return Heightmap(h.min() + (h - h.min()) * factor, heightmap.pixel_mm)
+    if by == "lateral":
+        ny, nx = heightmap.shape
+        cx, cy = heightmap.centre_mm
+        x = cx + ((np.arange(nx) + 0.5) * heightmap.pixel_mm - cx) / factor
+        y = cy + ((np.arange(ny) + 0.5) * heightmap.pixel_mm - cy) / factor
+        return Heightmap(heightmap.sample(x[None, :], y[:, None], periodic=True), heightmap.pixel_mm)
+    raise InputError(f"unknown knob {by!r}; choose one of {', '.join(KNOBS)}", parameter="by")
+
+
+def target_of(evaluator: Evaluator, lambda_mm: float | None = None, roughness: float | None = None,
+              like: Heightmap | None = None, like_name: str = "reference", tile: bool = False) -> Target:
+    """The target from exactly one of an equivalent wavelength (mm), a V, or a reference texture (its FEM V)."""
+    given = [name for name, v in (("target_lambda", lambda_mm), ("target_v", roughness), ("like", like))
+             if v is not None]
+    if len(given) != 1:
+        raise InputError("give exactly one target: an equivalent wavelength, a V, or a reference texture"
+                         + (f" (got {', '.join(given)})" if given else ""), parameter="target_lambda")
+    if lambda_mm is not None:
+        lam = positive("target_lambda", lambda_mm)
+        return Target(roughness_of_lambda(evaluator.scale, lam), lam, "lambda")
+    if roughness is not None:
+        v = positive("target_v", roughness)
+        return Target(v, evaluator.lambda_of(v), "roughness")
+    fem = evaluator.verify(like, tile=tile)
+    return Target(fem.roughness, fem.equivalent_lambda_mm, f"like {like_name}")
+
+
+def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Evaluator | None = None,
+         factor_range: tuple[float, float] | None = None, tolerance_jnd: float = TOLERANCE_JND,
+         max_fem: int = MAX_FEM, tile: bool = False, progress=None) -> TuneResult:
+    """Scale ``heightmap`` (by height or lateral size) to reach ``target`` (module docstring).
+
+    ``progress(message)`` receives a line per FEM verification.
+    """
+    if by not in KNOBS:
+        raise InputError(f"unknown knob {by!r}; choose one of {', '.join(KNOBS)}", parameter="by")
+    lo, hi = factor_range or FACTOR_RANGE[by]
+    lo, hi = positive("min_factor", lo), positive("max_factor", hi)
+    if not lo < hi:
+        raise InputError(f"the factor range must rise, got {lo:g}..{hi:g}", parameter="min_factor")
+    tolerance_jnd = positive("tolerance_jnd", tolerance_jnd)
+    max_fem = integer("max_fem", max_fem, minimum=1)
+    evaluator = evaluator or Evaluator()
+    if not tile:
+        heightmap.require_footprint(evaluator.footprint_mm)
+
+    def surrogate(factors) -> tuple[np.ndarray, np.ndarray]:
+        return evaluator.surrogate([scaled(heightmap, by, f) for f in factors], tile=tile)
+
+    grid = np.geomspace(lo, hi, GRID)
+    v_grid, _ = surrogate(grid)
+    reachable = (float(v_grid.min()), float(v_grid.max()))
+    lam_lo, lam_hi = evaluator.lambda_of(reachable[0]), evaluator.lambda_of(reachable[1])
+    if not reachable[0] <= target.roughness <= reachable[1]:
+        raise InputError(
+            f"target V {target.roughness:.4f} (equivalent lambda {target.lambda_mm:.3f} mm) is out of reach by "
+            f"{by} factors {lo:g}..{hi:g}: this texture reaches V {reachable[0]:.4f}..{reachable[1]:.4f} "
+            f"(lambda {lam_lo:.3f}..{lam_hi:.3f} mm) on the surrogate", parameter="target_lambda")
+    notes = []
+    if np.any(np.diff(v_grid) <= 0):
+        notes.append(f"the surrogate's V does not rise monotonically with the {by} factor; the first crossing is used")
+
+    def factor_for(v_wanted: float, bias: float) -> float:
+        """The factor where bias * surrogate V = v_wanted: grid crossing, then bisection on the surrogate."""
+        values = v_grid * bias
+        above = np.nonzero(values >= v_wanted)[0]
+        if len(above) == 0:
+            return hi
+        k = int(above[0])
+        if k == 0:
+            return lo
+        a, b = math.log(grid[k - 1]), math.log(grid[k])
+        for _ in range(12):  # bisection in log factor: 2^-12 of one grid step
+            mid = (a + b) / 2
+            if surrogate([math.exp(mid)])[0][0] * bias >= v_wanted:
+                b = mid
+            else:
+                a = mid
+        return math.exp((a + b) / 2)
+
+    steps: list[Step] = []
+    factor = factor_for(target.roughness, 1.0)
+    for _ in range(max_fem):
+        v_sur = float(surrogate([factor])[0][0])
+        fem = evaluator.verify(scaled(heightmap, by, factor), tile=tile)
+        error = jnd_between(fem.equivalent_lambda_mm, target.lambda_mm)
+        steps.append(Step(factor, v_sur, fem, error))
+        if progress:
+            progress(f"FEM at {by} factor {factor:.4f}: V {fem.roughness:.4f} (surrogate {v_sur:.4f}), "
+                     f"{error:+.2f} JND from the target")
+        if abs(error) <= tolerance_jnd:
+            break
+        factor = _next_factor(steps, target, lo, hi, factor_for)
+        if any(math.isclose(factor, s.factor, rel_tol=1e-6) for s in steps):
+            notes.append(f"the {by} factor cannot move closer to the target within {lo:g}..{hi:g}")
+            break
+    best = min(steps, key=lambda s: abs(s.jnd_error))
+    se = best.fem.roughness_stderr / best.fem.roughness / evaluator.scale.power_law[1] / math.log(1.19)
+    if not best.fem.on_scale:
+        notes.append("the achieved V lies off the standard scale: its equivalent lambda is extrapolated")
+    in_domain = bool(surrogate([best.factor])[1][0])
+    if not in_domain:
+        notes.append("the scaled texture lies outside the surrogate's training domain (the FEM verified it)")
+    return TuneResult(scaled(heightmap, by, best.factor), by, best.factor, target, best.fem, best.surrogate_roughness,
+                      in_domain, best.jnd_error, se, tuple(steps), reachable, (lo, hi), tolerance_jnd, tuple(notes))
+
+
+def _next_factor(steps: list[Step], target: Target, lo: float, hi: float, factor_for) -> float:
+    """A corrected factor: the surrogate's bias at the last step, or the secant through the two closest FEM answers."""
+    if len(steps) == 1:
+        last = steps[0]
+        return factor_for(target.roughness, last.fem.roughness / last.surrogate_roughness)
+    a, b = sorted(steps, key=lambda s: abs(s.jnd_error))[:2]
+    if math.isclose(a.factor, b.factor) or math.isclose(a.fem.roughness, b.fem.roughness):
+        return factor_for(target.roughness, a.fem.roughness / a.surrogate_roughness)
+    slope = (math.log(a.fem.roughness) - math.log(b.fem.roughness)) / (math.log(a.factor) - math.log(b.factor))
+    if slope <= 0:  # not rising here: fall back on the surrogate's bias at the best step
+        return factor_for(target.roughness, a.fem.roughness / a.surrogate_roughness)
+    step = (math.log(target.roughness) - math.log(a.fem.roughness)) / slope
+    return float(np.clip(a.factor * math.exp(np.clip(step, -0.5, 0.5)), lo, hi))

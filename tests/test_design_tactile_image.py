@@ -1,0 +1,101 @@
+"""Tactile images: a 3-colour picture becomes a plate whose regions' roughness separates (surrogate only: seconds)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from roughness.core.errors import InputError
+from roughness.dataset.textures import standard_texture
+from roughness.design.evaluation import Evaluator
+from roughness.design.tactile_image import compose, flat_colours, outline, plate_labels, tactile_image
+
+EVALUATOR = Evaluator()
+WHITE, GREY, BLACK = (255, 255, 255), (128, 128, 128), (0, 0, 0)
+
+
+def three_stripes() -> np.ndarray:
+    """60 x 24 px: white, grey and black vertical stripes (a 60 mm plate: 20 mm stripes, wider than the footprint)."""
+    rgb = np.zeros((24, 60, 3), dtype=np.uint8)
+    rgb[:, :20], rgb[:, 20:40], rgb[:, 40:] = WHITE, GREY, BLACK
+    return rgb
+
+
+def test_flat_colours_lightest_first_and_antialiasing_joins_the_nearest():
+    rgb = three_stripes()
+    rgb[0, 19] = (250, 250, 250)  # one anti-aliased pixel
+    colours, labels = flat_colours(rgb)
+    assert [tuple(c) for c in colours] == [WHITE, GREY, BLACK]
+    assert labels[0, 19] == 0 and labels[5, 30] == 1 and labels[5, 50] == 2
+    with pytest.raises(InputError, match="fewer than 2 flat colours"):
+        flat_colours(np.zeros((10, 10, 3), dtype=np.uint8))
+
+
+def test_outlines_are_smooth_raised_lines_along_edges():
+    labels = plate_labels(flat_colours(three_stripes())[1], 60.0, 0.1)
+    line = outline(labels, 0.1, 1.0, 0.8)
+    assert line.max() == pytest.approx(0.8, rel=0.05) and line[:, :150].max() == 0  # nothing far from an edge
+    profile = line[100, 190:211]  # across the edge at x = 20 mm
+    assert np.all(np.diff(profile[:10]) >= 0) and np.all(np.diff(profile[11:]) <= 0)  # rises and falls smoothly
+
+
+@pytest.fixture(scope="module")
+def plate():
+    textures = [(f"standard-{lam}", standard_texture(lam, seed=1), None) for lam in (0.625, 1.0, 1.625)]
+    return tactile_image(three_stripes(), textures, width_mm=60.0, pixel_mm=0.1, step_mm=2.0, evaluator=EVALUATOR)
+
+
+def test_plate_regions_carry_their_textures(plate):
+    assert plate.heightmap.size_mm == pytest.approx((60.0, 24.0))
+    assert plate.heightmap.heights.min() == pytest.approx(0.0, abs=1e-9)
+    lam = [r.texture for r in plate.regions]
+    assert lam == ["standard-0.625", "standard-1.0", "standard-1.625"]  # lightest colour: smoothest texture
+
+
+def test_roughness_map_shows_the_three_regions(plate):
+    """Footprints wholly inside a stripe: their V separates (every smoother one below every rougher one)."""
+    v = [plate.roughness_map[plate.map_labels == i] for i in range(3)]
+    assert all(len(x) >= 4 for x in v)
+    assert v[0].max() < v[1].min() and v[1].max() < v[2].min()
+    d = plate.distances_jnd("plate")
+    # the textures are 2.7 JND apart on the standard scale; the surrogate on the plate reads at least 2
+    assert d[1, 0] >= 2.0 and d[2, 1] >= 2.0
+
+
+def test_plate_is_a_watertight_printable_mesh(plate, tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    from roughness.simulate.io import save_heightmap
+
+    save_heightmap(plate.heightmap, tmp_path / "plate.stl", base_mm=2.0)
+    mesh = trimesh.load(tmp_path / "plate.stl")
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
+    assert mesh.extents[0] == pytest.approx(60.0 - 0.1, abs=1e-3)  # pixel centres span the plate less one pixel
+
+
+def test_too_few_textures_and_too_small_plates_are_refused():
+    textures = [("a", standard_texture(1.0, seed=1), None), ("b", standard_texture(1.5, seed=1), None)]
+    with pytest.raises(InputError, match="3 flat colours but the palette only 2"):
+        tactile_image(three_stripes(), textures, evaluator=EVALUATOR)
+    with pytest.raises(InputError, match="smaller than the 10 mm skin footprint"):
+        tactile_image(three_stripes(), textures + textures[:1], width_mm=15.0, evaluator=EVALUATOR)
+
+
+def test_compose_puts_each_texture_on_the_floor():
+    labels = np.zeros((50, 100), dtype=int)
+    labels[:, 50:] = 1
+    a, b = standard_texture(1.0, seed=1), standard_texture(1.0, seed=2)
+    relief = compose(labels, [a, b], 0.1)
+    assert relief.heights[:, :50].min() >= 0 and relief.heights.max() <= max(np.ptp(a.heights), np.ptp(b.heights))
+
+
+def test_strain_image_tiles_fem_windows_over_the_plate():
+    """A 20 x 12 mm plate: two footprints whose 8 mm strain windows abut (coarse FEM, 2 runs)."""
+    rgb = np.zeros((24, 40, 3), dtype=np.uint8)
+    rgb[:, :20], rgb[:, 20:] = WHITE, BLACK
+    textures = [(f"standard-{lam}", standard_texture(lam, seed=1), None) for lam in (0.625, 1.625)]
+    plate = tactile_image(rgb, textures, width_mm=20.0, pixel_mm=0.1, step_mm=2.0, strain=True, evaluator=EVALUATOR)
+    ny, nx = plate.strain.shape
+    assert nx == 2 * ny and np.isfinite(plate.strain).all()
+    left, right = plate.strain[:, : nx // 2], plate.strain[:, nx // 2:]
+    assert abs(left.mean()) < 1e-9 and abs(right.mean()) < 1e-9  # each window shown minus its mean
+    x0, x1, y1, y0 = plate.strain_extent_mm
+    assert (x0, x1, y0, y1) == pytest.approx((1.0, 17.0, 1.0, 9.0))  # centres x 5, 13 mm; y 5 mm
