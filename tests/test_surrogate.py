@@ -135,6 +135,8 @@ def test_split_follows_the_base_texture():
               for p in (None, [{"kind": "blur"}], [{"kind": "noise"}])}
     assert len(splits) == 1  # perturbed siblings share their base texture's split
     assert split_of({**record, "family": "knit"}, 0.3, 0.3, "knit") == "ood"
+    assert {split_of({**record, "family": f}, 0.3, 0.3, "knit,waffle") for f in ("knit", "waffle")} == {"ood"}
+    assert split_of({**record, "family": "waffle"}, 0.3, 0.3, "knit") != "ood"
     seen = {split_of({**record, "seed": s}, 0.3, 0.3, None) for s in range(50)}
     assert seen == {"train", "val", "test"}
 
