@@ -3,8 +3,12 @@
 Times, for the same footprints of a 30 mm map: cutting the patches out one at a time
 (patch.footprint_patch) and together (patch.footprint_patches: strided windows of one averaged
 grid), the descriptors one patch at a time and batched, the network alone (batch 256), and the whole
-map end to end (surrogate.roughness_map: patches, network, descriptors, domain check). Each is the
+map end to end (surrogate.roughness_map: patches, network, descriptors, domain check, the next
+batch prepared while the network runs) and the same work done serially. Each is the
 best of ``--repeats`` runs, interleaved, so a busy machine slows them alike: compare them as ratios.
+The map's CPU time (all threads of this process) is recorded too: it is much less sensitive to other
+processes than the wall time, and bounds the rate on an idle machine with T threads between
+1/cpu (nothing runs in parallel) and T/cpu (everything does).
 
     python benchmarks/surrogate_map.py [--model models/roughness-cnn.onnx] [--threads 2]
     # writes benchmarks/results/surrogate_map.{md,json}
@@ -37,13 +41,21 @@ def parse_args() -> argparse.Namespace:
     return parser.parse_args()
 
 
-def best(fn, repeats: int) -> float:
+def best(fn, repeats: int, clock=time.perf_counter) -> float:
     times = []
     for _ in range(repeats):
-        start = time.perf_counter()
+        start = clock()
         fn()
-        times.append(time.perf_counter() - start)
+        times.append(clock() - start)
     return min(times)
+
+
+def serial_map(model, hm, grid: np.ndarray, batch: int = 256) -> None:
+    """The map's work without overlap: cut out, then evaluate, batch after batch."""
+    from roughness.surrogate.patch import footprint_patches
+
+    for i in range(0, len(grid), batch):
+        model.evaluate(footprint_patches(hm, grid[i:i + batch]))
 
 
 def main() -> None:
@@ -60,7 +72,8 @@ def main() -> None:
     sample = grid[:256]
     patches = footprint_patches(hm, sample)
     seconds: dict[str, list[float]] = {k: [] for k in ("patch_one_by_one", "patches_strided", "descriptors_one_by_one",
-                                                       "descriptors_batched", "network", "map_end_to_end")}
+                                                       "descriptors_batched", "network", "map_end_to_end", "map_serial")}
+    cpu: list[float] = []
     for _ in range(args.repeats):  # interleaved: each round times every stage once
         seconds["patch_one_by_one"].append(best(lambda: [footprint_patch(hm, tuple(c)) for c in sample], 1))
         seconds["patches_strided"].append(best(lambda: footprint_patches(hm, sample), 1))
@@ -68,20 +81,28 @@ def main() -> None:
         seconds["descriptors_batched"].append(best(lambda: batch_descriptors(patches), 1))
         seconds["network"].append(best(lambda: model.session.run(None, {INPUT: patches[:, None]}), 1))
         seconds["map_end_to_end"].append(best(lambda: roughness_map(model, hm, args.step_mm), 1))
-    per_footprint_ms = {k: 1e3 * min(v) / (len(grid) if k == "map_end_to_end" else len(sample))
+        seconds["map_serial"].append(best(lambda: serial_map(model, hm, grid), 1))
+        cpu.append(best(lambda: roughness_map(model, hm, args.step_mm), 1, time.process_time))
+    per_footprint_ms = {k: 1e3 * min(v) / (len(grid) if k.startswith("map") else len(sample))
                         for k, v in seconds.items()}
     result = {"model": Path(args.model).name, "machine": f"{platform.machine()}, {os.cpu_count()} cores",
               "threads": args.threads, "map_mm": args.size_mm, "step_mm": args.step_mm, "footprints": len(grid),
               "per_footprint_ms": per_footprint_ms,
               "map_footprints_per_s": 1e3 / per_footprint_ms["map_end_to_end"],
               "network_footprints_per_s": 1e3 / per_footprint_ms["network"],
-              "network_share_of_map_time": per_footprint_ms["network"] / per_footprint_ms["map_end_to_end"]}
+              "network_share_of_map_time": per_footprint_ms["network"] / per_footprint_ms["map_end_to_end"],
+              "map_cpu_ms_per_footprint": 1e3 * min(cpu) / len(grid)}
+    result["idle_machine_footprints_per_s_bounds"] = [1e3 / result["map_cpu_ms_per_footprint"],
+                                                      args.threads * 1e3 / result["map_cpu_ms_per_footprint"]]
     OUT.mkdir(exist_ok=True)
     (OUT / "surrogate_map.json").write_text(json.dumps(result, indent=1))
     rows = [(k.replace("_", " "), f"{v:.3f} ms") for k, v in per_footprint_ms.items()]
-    rows += [("map end to end", f"{result['map_footprints_per_s']:,.0f} footprints/s"),
+    rows += [("map end to end, rate", f"{result['map_footprints_per_s']:,.0f} footprints/s"),
              ("network alone (batch 256)", f"{result['network_footprints_per_s']:,.0f} footprints/s"),
-             ("network share of the map's time", f"{100 * result['network_share_of_map_time']:.0f}%")]
+             ("network share of the map's time", f"{100 * result['network_share_of_map_time']:.0f}%"),
+             ("map CPU time (all threads)", f"{result['map_cpu_ms_per_footprint']:.3f} ms"),
+             (f"map on an idle machine, {args.threads} threads (from the CPU time)",
+              "{:,.0f} to {:,.0f} footprints/s".format(*result["idle_machine_footprints_per_s_bounds"]))]
     table = "| per footprint | value |\n|---|---|\n" + "".join(f"| {a} | {b} |\n" for a, b in rows)
     (OUT / "surrogate_map.md").write_text(
         f"# Roughness-map throughput ({result['model']}, {result['machine']}, {args.threads} onnxruntime threads)\n\n"

@@ -71,10 +71,11 @@ class SurrogateModel:
         estimate = self.evaluate(patches)
         return estimate.roughness, estimate.reasons
 
-    def evaluate(self, patches: np.ndarray) -> Estimate:
+    def evaluate(self, patches: np.ndarray, descriptors: np.ndarray | None = None) -> Estimate:
         """V, its ensemble spread (if the model is an ensemble) and out-of-domain reasons for patches (n, P, P).
 
-        The spread of V is first order in the members' spread of log(V + offset): (V + offset) x that spread.
+        ``descriptors``: the patches' ``batch_descriptors``, if already computed. The spread of V is first
+        order in the members' spread of log(V + offset): (V + offset) x that spread.
         """
         patches = np.ascontiguousarray(patches, dtype=np.float32)
         if patches.ndim != 3 or not np.all(np.isfinite(patches)):
@@ -84,5 +85,7 @@ class SurrogateModel:
         v = roughness_from_log(log_v, self.meta.log_offset)
         relative = out[STD_OUTPUT].astype(np.float64) if self.has_std else None
         spread = None if relative is None else np.exp(log_v) * relative
-        reasons = self.domain.check(batch_descriptors(patches, self.pixel_mm), out[EMBEDDING_OUTPUT])
+        if descriptors is None:
+            descriptors = batch_descriptors(patches, self.pixel_mm)
+        reasons = self.domain.check(descriptors, out[EMBEDDING_OUTPUT])
         return Estimate(v, spread, relative, reasons)

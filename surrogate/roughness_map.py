@@ -1,14 +1,16 @@
 """Roughness maps of whole objects: the surrogate at every footprint position on a grid.
 
 The 10 mm footprint slides over the heightmap in steps of ``step_mm``; each position gets V, its
-domain flag and, for an ensemble model, the spread of V. Footprints are cut out in batches sharing
-their row and column averaging (patch.footprint_patches); the network is the cost that remains
-(benchmarks/surrogate_map.py). Positions are footprint centres from half a footprint inside one edge to half a
-footprint inside the other (the whole map, wrapping, if ``tile``).
+domain flag and, for an ensemble model, the spread of V. Positions are footprint centres from half a
+footprint inside one edge to half a footprint inside the other (the whole map, wrapping, if ``tile``).
+Footprints are cut out in batches sharing their row and column averaging (patch.footprint_patches),
+the next batch while the network runs on the current one; the network is the cost that remains
+(benchmarks/surrogate_map.py).
 """
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -20,7 +22,7 @@ from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output
 from roughness.simulate.heightmap import Heightmap
 
-from .patch import footprint_patches
+from .patch import batch_descriptors, footprint_patches
 
 if TYPE_CHECKING:
     from .predictor import SurrogateModel
@@ -71,14 +73,24 @@ def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 
     if len(grid) > 1_000_000:
         raise InputError(f"{len(grid):,} footprint positions: choose a larger step", parameter="step_mm")
     values, spreads, flags = [], [], []
-    for i in range(0, len(grid), batch_size):
-        estimate = model.evaluate(footprint_patches(heightmap, np.array(grid[i:i + batch_size]), tile,
-                                                    model.pixel_mm, model.footprint_mm))
-        values.append(estimate.roughness)
-        spreads.append(estimate.roughness_std)
-        flags += [not r for r in estimate.reasons]
-        if progress:
-            progress(len(flags), len(grid))
+
+    def prepare(start: int) -> tuple[np.ndarray, np.ndarray]:
+        patches = footprint_patches(heightmap, np.array(grid[start:start + batch_size]), tile, model.pixel_mm,
+                                    model.footprint_mm)
+        return patches, batch_descriptors(patches, model.pixel_mm)
+
+    with ThreadPoolExecutor(max_workers=1) as worker:  # the next batch is cut out while the network runs
+        upcoming = worker.submit(prepare, 0)
+        for i in range(0, len(grid), batch_size):
+            patches, descriptors = upcoming.result()
+            if i + batch_size < len(grid):
+                upcoming = worker.submit(prepare, i + batch_size)
+            estimate = model.evaluate(patches, descriptors)
+            values.append(estimate.roughness)
+            spreads.append(estimate.roughness_std)
+            flags += [not r for r in estimate.reasons]
+            if progress:
+                progress(len(flags), len(grid))
     shape = (len(ys), len(xs))
     spread = None if spreads[0] is None else np.concatenate(spreads).reshape(shape)
     return RoughnessMap(xs, ys, np.concatenate(values).reshape(shape), np.array(flags).reshape(shape), spread)
