@@ -30,7 +30,7 @@ import onnxruntime as ort
 import torch
 from torch import nn
 
-from roughness.core.errors import InputError
+from roughness.core.errors import InputError, OutputExists
 from roughness.core.files import atomic_write, check_output
 from roughness.core.hashing import file_sha256
 
@@ -194,6 +194,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         report = export_ensemble(args.checkpoints, args.out, args.data, args.overwrite)
+    except OutputExists as err:
+        print(f"roughness: error: {err.path} already exists; pass --overwrite to replace it", file=sys.stderr)
+        return 2
     except InputError as err:
         print(f"roughness: error: {err}", file=sys.stderr)
         return 2

@@ -617,7 +617,7 @@ def test_predict_cli_prints_the_spread_and_checks_max_std(ensemble, tiny, tmp_pa
     assert "--max-std" in err and "Traceback" not in err
 
 
-def test_ensemble_export_refuses_mismatched_members_and_foreign_data(ensemble, tiny, tmp_path):
+def test_ensemble_export_refuses_mismatched_members_and_foreign_data(ensemble, tiny, tmp_path, capsys):
     from roughness.surrogate.ensemble import export_ensemble
 
     with pytest.raises(InputError, match="at least 2"):
@@ -625,6 +625,10 @@ def test_ensemble_export_refuses_mismatched_members_and_foreign_data(ensemble, t
     with pytest.raises(InputError, match="not the data the members were trained on"):
         export_ensemble(ensemble.checkpoints, tmp_path / "e.onnx", data=tiny.data)
     assert not (tmp_path / "e.onnx").exists()
+    from roughness.surrogate.ensemble import main
+
+    assert main([str(c) for c in ensemble.checkpoints] + ["--out", str(ensemble.model)]) == 2  # exists: kept
+    assert "pass --overwrite" in capsys.readouterr().err
 
 
 def test_ensemble_map_has_a_spread_beside_v(ensemble, tmp_path):
