@@ -1,4 +1,5 @@
-"""Every texture the project can make, by name: standard bumps, flat tops, bump recipes, natural families."""
+"""Every texture the project can make, by name: standard bumps, flat tops, bump recipes, and the
+natural-like, engineered and composite families (families.py)."""
 from __future__ import annotations
 
 from dataclasses import fields
@@ -6,13 +7,13 @@ from dataclasses import fields
 from roughness.core.errors import InputError
 from roughness.simulate.heightmap import Heightmap, flat
 
-from . import natural, textures
+from . import families, textures
 from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side
 
 
 def names() -> list[str]:
     """Named textures and family names accepted by ``make_texture``."""
-    return textures.texture_names() + ["bumps"] + list(natural.FAMILIES)
+    return textures.texture_names() + ["bumps"] + list(families.FAMILIES)
 
 
 def parse_params(items: list[str]) -> dict[str, float | str]:
@@ -48,8 +49,8 @@ def make_texture(name: str, seed: int = 0, size_mm: float = SIZE_MM, pixel_mm: f
 
 
 def _make(name: str, seed: int, size_mm: float, pixel_mm: float, params: dict) -> Heightmap:
-    if name in natural.FAMILIES:
-        return natural.make(name, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm, **params)
+    if name in families.FAMILIES:
+        return families.make(name, seed=seed, size_mm=size_mm, pixel_mm=pixel_mm, **params)
     if name == "bumps":
         allowed = {f.name for f in fields(textures.BumpRecipe)} - {"size_mm", "pixel_mm", "seed"}
         unknown = sorted(set(params) - allowed)

@@ -55,9 +55,9 @@ KNIT_LEG_SPREAD = 0.34
 ProfileFn = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
-def _check_value(family: str, name: str, value: object) -> None:
-    """InputError unless ``value`` lies in PARAMETER_RANGES[family][name]."""
-    allowed = PARAMETER_RANGES[family][name]
+def _check_value(ranges: dict[str, dict[str, tuple]], family: str, name: str, value: object) -> None:
+    """InputError unless ``value`` lies in ranges[family][name]."""
+    allowed = ranges[family][name]
     if isinstance(allowed[0], str):
         if value not in allowed:
             raise InputError(f"{family} parameter {name}={value!r} must be one of {', '.join(allowed)}")
@@ -65,10 +65,10 @@ def _check_value(family: str, name: str, value: object) -> None:
     in_range(f"{family} parameter {name}", value, *allowed)
 
 
-def _check_scales(family: str, arguments: dict) -> None:
+def _check_scales(scales: tuple[str, ...], family: str, arguments: dict) -> None:
     """InputError unless each scale parameter spans >= MIN_PIXELS_PER_FEATURE pixels and <= half the map."""
     pixel_mm, size_mm = arguments["pixel_mm"], arguments["size_mm"]
-    for name in SCALE_PARAMETERS[family]:
+    for name in scales:
         value = arguments[name]
         if value < MIN_PIXELS_PER_FEATURE * pixel_mm:
             raise InputError(f"{family} parameter {name}={value:g} mm is below {MIN_PIXELS_PER_FEATURE} pixels "
@@ -78,23 +78,31 @@ def _check_scales(family: str, arguments: dict) -> None:
                              f"got size_mm={size_mm:g}")
 
 
-def _validated(func: Callable[..., Heightmap]) -> Callable[..., Heightmap]:
-    """Wrap a family so that its grid, seed and parameters are checked before it runs."""
-    family, signature = func.__name__, inspect.signature(func)
+def validated(ranges: dict[str, dict[str, tuple]], scales: dict[str, tuple[str, ...]]
+              ) -> Callable[[Callable[..., Heightmap]], Callable[..., Heightmap]]:
+    """Decorator for a family function (named as its family): its grid, seed, parameters (against
+    ``ranges[family]``) and lateral scales (``scales[family]``) are checked before it runs."""
+    def decorate(func: Callable[..., Heightmap]) -> Callable[..., Heightmap]:
+        family, signature = func.__name__, inspect.signature(func)
 
-    @functools.wraps(func)
-    def checked(*args, **kwargs) -> Heightmap:
-        bound = signature.bind(*args, **kwargs)
-        bound.apply_defaults()
-        arguments = bound.arguments
-        map_side(arguments["size_mm"], arguments["pixel_mm"])
-        check_seed(arguments["seed"])
-        for name in PARAMETER_RANGES[family]:
-            _check_value(family, name, arguments[name])
-        _check_scales(family, arguments)
-        return func(**arguments)
+        @functools.wraps(func)
+        def checked(*args, **kwargs) -> Heightmap:
+            bound = signature.bind(*args, **kwargs)
+            bound.apply_defaults()
+            arguments = bound.arguments
+            map_side(arguments["size_mm"], arguments["pixel_mm"])
+            check_seed(arguments["seed"])
+            for name in ranges[family]:
+                _check_value(ranges, family, name, arguments[name])
+            _check_scales(scales[family], family, arguments)
+            return func(**arguments)
 
-    return checked
+        return checked
+
+    return decorate
+
+
+_validated = validated(PARAMETER_RANGES, SCALE_PARAMETERS)
 
 
 def _finish(heights: np.ndarray, pixel_mm: float) -> Heightmap:

@@ -18,7 +18,7 @@ from roughness.core.checks import in_range, integer, positive, real
 from roughness.core.errors import InputError
 from roughness.simulate.heightmap import Heightmap
 
-from . import natural
+from . import families
 from .catalogue import make_texture
 from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side
 from .perturb import Pipeline, random_pipeline
@@ -32,9 +32,9 @@ def default_ranges(family: str) -> dict[str, tuple]:
     """Parameter ranges a family is sampled from unless the recipe narrows them."""
     if family == "bumps":
         return dict(BUMP_RANGES)
-    if family in natural.PARAMETER_RANGES:
-        return dict(natural.PARAMETER_RANGES[family])
-    raise InputError(f"unknown family {family!r} in recipe; valid: bumps, {', '.join(natural.PARAMETER_RANGES)}")
+    if family in families.PARAMETER_RANGES:
+        return dict(families.PARAMETER_RANGES[family])
+    raise InputError(f"unknown family {family!r} in recipe; valid: bumps, {', '.join(families.PARAMETER_RANGES)}")
 
 
 @dataclass(frozen=True)
@@ -95,7 +95,7 @@ def _known(field_name: str, family: object) -> dict[str, tuple]:
 
 def _check_range(family: str, key: str, spec: object, allowed: dict[str, tuple]) -> None:
     """InputError unless ``spec`` is a usable range of parameter ``key``: choices among the allowed
-    ones, or [low, high] with low <= high (within the family's limits for natural families)."""
+    ones, or [low, high] with low <= high (within the family's limits for the parametric families)."""
     name = f"ranges.{family}.{key}"
     if key not in allowed:
         raise InputError(f"{name}: {family} has no parameter {key!r}; valid: {', '.join(allowed)}", "ranges")
@@ -106,7 +106,7 @@ def _check_range(family: str, key: str, spec: object, allowed: dict[str, tuple])
         return
     if not isinstance(spec, list) or len(spec) != 2:
         raise InputError(f"{name} must be [low, high], got {spec!r}", "ranges")
-    limits = natural.PARAMETER_RANGES.get(family, {}).get(key)
+    limits = families.PARAMETER_RANGES.get(family, {}).get(key)
     low, high = ((in_range(f"{name}[{i}]", v, *limits) if limits else real(f"{name}[{i}]", v))
                  for i, v in enumerate(spec))
     if low > high:

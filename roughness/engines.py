@@ -10,7 +10,9 @@ and reported as ``setup_seconds``); the surrogate and the measures are timed end
 heightmap.
 
 ``predict`` engines: ``surrogate`` (milliseconds), ``fem`` (the reference; seconds) and ``auto``
-(the surrogate, falling back to FEM for inputs outside the model's domain). The FEM runs with the
+(the surrogate, falling back to FEM for inputs outside the model's domain and, with an ensemble model,
+for inputs whose relative spread roughness_std / (V + 0.001) exceeds ``max_std``: by default the
+threshold measured when the ensemble was exported, see surrogate/ensemble.py). The FEM runs with the
 model's simulation parameters at the fidelity of its training labels unless told otherwise, so the
 engines share one scale; equivalent wavelengths are read off the standard scale of that fidelity.
 """
@@ -174,9 +176,11 @@ class Prediction:
     placement: object  # roughness.surrogate.calibration.Placement on the standard scale
     domain_notes: list[str] = field(default_factory=list)
     roughness_stderr: float | None = None  # FEM: Monte Carlo standard error of V; surrogate: not estimated yet
+    roughness_std: float | None = None  # surrogate ensemble: spread of V over its members; None: not estimated
 
     def as_dict(self) -> dict:
         return {"input": self.source, "roughness": self.roughness, "roughness_stderr": self.roughness_stderr,
+                "roughness_std": self.roughness_std,
                 "engine": self.engine, "fidelity": self.fidelity, "in_domain": self.in_domain,
                 "seconds": self.seconds, **self.placement.as_dict(), "domain_notes": self.domain_notes}
 
@@ -185,12 +189,13 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
             model: object | str | Path | None = None, centre_mm: tuple[float, float] | None = None,
             tile: bool = False, fidelity: str | None = None, batch_size: int = 256,
             sources: Iterable[str] | None = None,
-            on_result: Callable[[Prediction], None] | None = None) -> list[Prediction]:
+            on_result: Callable[[Prediction], None] | None = None, max_std: float | None = None) -> list[Prediction]:
     """Predict V for each heightmap (mm) with ``engine`` (see the module docstring).
 
     ``model`` is a ``SurrogateModel`` or the path of an ONNX model (default: the shipped one);
     ``fidelity`` is the FEM's (default: the model's training labels'). ``sources`` names the
-    inputs in the results; ``on_result`` is called as each result is ready.
+    inputs in the results; ``on_result`` is called as each result is ready. ``max_std``: the
+    relative spread above which ``auto`` runs the FEM (ensemble models only; default: the model's).
     """
     from roughness.surrogate.calibration import load_scale
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
@@ -199,6 +204,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
         raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(PREDICT_ENGINES)}", parameter="engine")
     integer("batch_size", batch_size, minimum=1)
     model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
+    max_std = uncertainty_limit(model, max_std)
     fem = FemEngine.of(fidelity or model.fidelity, model.meta.simulation, centre_mm, tile)
     surrogate_scale, fem_scale = load_scale(model.fidelity), load_scale(fem.fidelity)
     names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
@@ -207,16 +213,21 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
 
     def flush() -> None:
         start = time.perf_counter()
-        values, reasons = model.run(np.stack([model.patch(hm, centre_mm, tile) for _, hm in batch]))
+        estimate = model.evaluate(np.stack([model.patch(hm, centre_mm, tile) for _, hm in batch]))
         share = (time.perf_counter() - start) / len(batch)
-        for (source, hm), v, why in zip(batch, values, reasons):
-            if engine == "fem" or (engine == "auto" and why):
+        spread = [None] * len(batch) if estimate.roughness_std is None else estimate.roughness_std.tolist()
+        relative = [None] * len(batch) if estimate.relative_std is None else estimate.relative_std.tolist()
+        for (source, hm), v, why, std, rel in zip(batch, estimate.roughness, estimate.reasons, spread, relative):
+            notes = list(why)
+            if max_std is not None and rel > max_std:
+                notes.append(f"uncertain: relative spread {rel:.3g} above the limit {max_std:.3g}")
+            if engine == "fem" or (engine == "auto" and notes):
                 r = fem.simulate(hm)
                 result = Prediction(source, r.roughness, "fem", fem.fidelity, not why, r.seconds,
-                                    fem_scale.place(r.roughness), why, r.roughness_stderr)
+                                    fem_scale.place(r.roughness), notes, r.roughness_stderr)
             else:
                 result = Prediction(source, float(v), "surrogate", model.fidelity, not why, share,
-                                    surrogate_scale.place(float(v)), why)
+                                    surrogate_scale.place(float(v)), notes, roughness_std=std)
             results.append(result)
             if on_result:
                 on_result(result)
@@ -229,3 +240,19 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     if batch:
         flush()
     return results
+
+
+def uncertainty_limit(model, max_std: float | None) -> float | None:
+    """The relative spread above which ``auto`` runs the FEM: ``max_std``, else the ensemble's measured default.
+
+    InputError if ``max_std`` is given for a model without an uncertainty (a single network).
+    """
+    from roughness.core.checks import positive
+
+    if max_std is None:
+        return (model.meta.ensemble or {}).get("max_std") if model.has_std else None
+    positive("max_std", max_std)
+    if not model.has_std:
+        raise InputError(f"{model.path.name} is a single network without an uncertainty; --max-std needs an "
+                         "ensemble model (surrogate/ensemble.py)", parameter="max_std")
+    return float(max_std)

@@ -113,10 +113,14 @@ def int8_section(model_path: Path, meta: ModelMetadata, latency: dict | None) ->
              if latency and latency.get("int8") else "")
     return f"""
 ### int8 variant
-`{path.name}` ({path.stat().st_size / 1e6:.2f} MB): static QDQ quantisation with per-channel int8 weights,
-activations calibrated on {report['calibration_inputs']} recipe textures (`roughness export ... --int8 FILE`). On
-{report['checked_inputs']} other textures its V differs from this model's by {100 * report['median_rel_diff_vs_fp32']:.1f}% (median),
-{100 * report['max_rel_diff_vs_fp32']:.1f}% at most.{speed} Its domain check reuses the fp32 model's limits.
+`{path.name}` ({path.stat().st_size / 1e6:.2f} MB): static QDQ quantisation, per-channel 7-bit weights, the first
+convolution and the dense head kept in fp32, activation ranges from the 0.001..99.999th percentiles over
+{report['calibration_inputs']} recipe textures (`roughness export ... --int8 FILE`; why: surrogate/quantize.py).
+Its V differs from this model's by {100 * report['standard_median_rel_diff_vs_fp32']:.1f}% (median),
+{100 * report['standard_max_rel_diff_vs_fp32']:.1f}% at most on the 13 standard textures, and by
+{100 * report['check_median_rel_diff_vs_fp32']:.1f}% (median), {100 * report['check_p95_rel_diff_vs_fp32']:.1f}% (p95),
+{100 * report['check_max_rel_diff_vs_fp32']:.1f}% at most on {report['checked_inputs']} other recipe textures
+(relative to max(V, 0.002)).{speed} Its domain check reuses the fp32 model's limits.
 """
 
 

@@ -28,8 +28,11 @@ def base_key(record: dict) -> str:
 
 
 def split_of(record: dict, test_fraction: float, val_fraction: float, holdout_family: str | None) -> str:
-    """Which split a sample belongs to: a fixed function of its base texture."""
-    if record["family"] == holdout_family:
+    """Which split a sample belongs to: a fixed function of its base texture.
+
+    ``holdout_family``: the family never trained on ("ood"), or several, comma-separated ("knit,waffle").
+    """
+    if holdout_family and record["family"] in holdout_family.split(","):
         return "ood"
     u = int(base_key(record)[:8], 16) / 2**32
     return "test" if u < test_fraction else "val" if u < test_fraction + val_fraction else "train"

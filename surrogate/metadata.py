@@ -12,6 +12,7 @@ from pathlib import Path
 from roughness.core.errors import InputError
 
 METADATA_KEY = "roughness"  # ONNX metadata_props key of the model's JSON metadata
+OPTIONAL = ("int8", "ensemble")  # keys only some models have
 
 
 @dataclass(frozen=True)
@@ -38,11 +39,12 @@ class ModelMetadata:
     parameters: int  # trainable parameters
     cost_core_seconds: dict  # {"data_fem": s, "training": s}: core-seconds spent making the model
     int8: dict | None = None  # quantisation check of an int8 model (quantize.py); None for fp32
+    ensemble: dict | None = None  # members and uncertainty checks of an ensemble graph (ensemble.py); None: one net
 
     def to_dict(self) -> dict:
-        """Plain JSON-able dict; ``int8`` only when present."""
+        """Plain JSON-able dict; ``int8`` and ``ensemble`` only when present."""
         out = asdict(self) | {"widths": list(self.widths)}
-        return out if self.int8 is not None else {k: v for k, v in out.items() if k != "int8"}
+        return {k: v for k, v in out.items() if k not in OPTIONAL or v is not None}
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict())
@@ -53,7 +55,7 @@ class ModelMetadata:
         if not isinstance(data, dict):
             raise InputError(f"{source}: metadata must be a JSON object, got {type(data).__name__}")
         names = {f.name for f in fields(cls)}
-        required = {f.name for f in fields(cls) if f.name != "int8"}
+        required = {f.name for f in fields(cls) if f.name not in OPTIONAL}
         missing, unknown = sorted(required - set(data)), sorted(set(data) - names)
         if missing or unknown:
             raise InputError(f"{source}: not roughness model metadata of this version"

@@ -1,12 +1,16 @@
 """Roughness maps of whole objects: the surrogate at every footprint position on a grid.
 
-The 10 mm footprint slides over the heightmap in steps of ``step_mm``; each position gets V and
-its domain flag. Positions are footprint centres from half a footprint inside one edge to half a
-footprint inside the other (the whole map, wrapping, if ``tile``).
+The 10 mm footprint slides over the heightmap in steps of ``step_mm``; each position gets V, its
+domain flag and, for an ensemble model, the spread of V. Positions are footprint centres from half a
+footprint inside one edge to half a footprint inside the other (the whole map, wrapping, if ``tile``).
+Footprints are cut out in batches sharing their row and column averaging (patch.footprint_patches),
+the next batch while the network runs on the current one; the network is the cost that remains
+(benchmarks/surrogate_map.py).
 """
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -18,6 +22,8 @@ from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output
 from roughness.simulate.heightmap import Heightmap
 
+from .patch import batch_descriptors, footprint_patches
+
 if TYPE_CHECKING:
     from .predictor import SurrogateModel
 
@@ -28,12 +34,14 @@ class RoughnessMap:
     y_mm: np.ndarray  # footprint centres along y (rows)
     roughness: np.ndarray  # (len(y_mm), len(x_mm)) V
     in_domain: np.ndarray  # same shape, bool
+    roughness_std: np.ndarray | None = None  # same shape, spread of V (ensemble models; None: a single network)
 
     def summary(self) -> dict:
         v = self.roughness
         return {"positions": int(v.size), "step_mm": float(self.x_mm[1] - self.x_mm[0]) if len(self.x_mm) > 1 else None,
                 "roughness_min": float(v.min()), "roughness_median": float(np.median(v)),
-                "roughness_max": float(v.max()), "in_domain_fraction": float(self.in_domain.mean())}
+                "roughness_max": float(v.max()), "in_domain_fraction": float(self.in_domain.mean()),
+                "roughness_std_median": None if self.roughness_std is None else float(np.median(self.roughness_std))}
 
 
 def centres(size_mm: float, footprint_mm: float, step_mm: float, tile: bool) -> np.ndarray:
@@ -64,16 +72,28 @@ def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 
     grid = [(x, y) for y in ys for x in xs]
     if len(grid) > 1_000_000:
         raise InputError(f"{len(grid):,} footprint positions: choose a larger step", parameter="step_mm")
-    values, flags = [], []
-    for i in range(0, len(grid), batch_size):
-        patches = np.stack([model.patch(heightmap, c, tile) for c in grid[i:i + batch_size]])
-        v, reasons = model.run(patches)
-        values.append(v)
-        flags += [not r for r in reasons]
-        if progress:
-            progress(len(flags), len(grid))
+    values, spreads, flags = [], [], []
+
+    def prepare(start: int) -> tuple[np.ndarray, np.ndarray]:
+        patches = footprint_patches(heightmap, np.array(grid[start:start + batch_size]), tile, model.pixel_mm,
+                                    model.footprint_mm)
+        return patches, batch_descriptors(patches, model.pixel_mm)
+
+    with ThreadPoolExecutor(max_workers=1) as worker:  # the next batch is cut out while the network runs
+        upcoming = worker.submit(prepare, 0)
+        for i in range(0, len(grid), batch_size):
+            patches, descriptors = upcoming.result()
+            if i + batch_size < len(grid):
+                upcoming = worker.submit(prepare, i + batch_size)
+            estimate = model.evaluate(patches, descriptors)
+            values.append(estimate.roughness)
+            spreads.append(estimate.roughness_std)
+            flags += [not r for r in estimate.reasons]
+            if progress:
+                progress(len(flags), len(grid))
     shape = (len(ys), len(xs))
-    return RoughnessMap(xs, ys, np.concatenate(values).reshape(shape), np.array(flags).reshape(shape))
+    spread = None if spreads[0] is None else np.concatenate(spreads).reshape(shape)
+    return RoughnessMap(xs, ys, np.concatenate(values).reshape(shape), np.array(flags).reshape(shape), spread)
 
 
 def save_map(result: RoughnessMap, path: str | Path) -> None:
@@ -92,12 +112,15 @@ def save_map(result: RoughnessMap, path: str | Path) -> None:
     x, y = result.x_mm, result.y_mm
     half = (x[1] - x[0]) / 2 if len(x) > 1 else 0.5
     extent = (x[0] - half, x[-1] + half, y[-1] + half, y[0] - half)
-    fig, ax = plt.subplots(figsize=(6, 5))
-    image = ax.imshow(result.roughness, extent=extent, cmap="magma")
-    if not result.in_domain.all():
-        ax.contourf(x, y, (~result.in_domain).astype(float), levels=[0.5, 1.5], hatches=["//"], colors="none")
-    ax.set(xlabel="x (mm)", ylabel="y (mm)", title="V per footprint centre (hatched: out of domain)")
-    fig.colorbar(image, ax=ax, label="V")
+    panels = [("V", result.roughness)] + ([("spread of V (ensemble std)", result.roughness_std)]
+                                         if result.roughness_std is not None else [])
+    fig, axes = plt.subplots(1, len(panels), figsize=(6 * len(panels), 5), squeeze=False)
+    for ax, (label, values) in zip(axes[0], panels):
+        image = ax.imshow(values, extent=extent, cmap="magma")
+        if not result.in_domain.all():
+            ax.contourf(x, y, (~result.in_domain).astype(float), levels=[0.5, 1.5], hatches=["//"], colors="none")
+        ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"{label} per footprint centre (hatched: out of domain)")
+        fig.colorbar(image, ax=ax, label=label)
     fig.tight_layout()
     atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110))
     plt.close(fig)

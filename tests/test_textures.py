@@ -1,11 +1,19 @@
-"""Parametric bump textures: determinism, bump spacing, bump geometry, names and validation."""
+"""Parametric bump textures (determinism, bump spacing, bump geometry, names, validation) and the engineered
+and composite families (registration, determinism, units, height range, geometry, the training-v2 recipe)."""
 from __future__ import annotations
+
+import inspect
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy import ndimage
 
 from roughness.core.errors import InputError
+from roughness.dataset import engineered
+from roughness.dataset.catalogue import make_texture, names
+from roughness.dataset.families import FAMILIES, PARAMETER_RANGES, make
+from roughness.dataset.recipe import default_ranges, load_recipe, realise, sample_record
 from roughness.dataset.textures import (
     FLAT_TOP_DIAMETERS_MM,
     STANDARD_LAMBDAS_MM,
@@ -134,3 +142,123 @@ def test_bad_names_and_lambdas_raise_input_error():
         standard_texture(0.7)
     with pytest.raises(InputError, match="at least two"):
         nearest_neighbour_spacing(np.zeros((1, 2)))
+
+
+# Engineered and composite families (dataset/engineered.py), registered in dataset/families.py.
+
+ENGINEERED = sorted(engineered.FAMILIES)
+SMALL = {"size_mm": 8.0, "pixel_mm": 0.05}
+
+
+def peak_mm(family: str, params: dict) -> float:
+    """The documented peak height (mm) of a family's map."""
+    if family == "multiscale":
+        return params["wave_height_mm"] + 10 * params["rms_mm"]  # waviness plus the fBm's excursions
+    return params["relief_mm"] if family == "shallow" else params["height_mm"]
+
+
+def corner(family: str, k: int) -> dict:
+    """Numeric parameters at their low (even k) or high (odd k) bound; choices cycled."""
+    return {name: allowed[k % len(allowed)] if isinstance(allowed[0], str) else allowed[k % 2]
+            for name, allowed in engineered.PARAMETER_RANGES[family].items()}
+
+
+def test_engineered_families_are_registered_everywhere():
+    assert set(ENGINEERED) == {"knurl", "milled", "waffle", "sparse", "multiscale", "shallow", "mixture"}
+    for family in ENGINEERED:
+        assert FAMILIES[family] is engineered.FAMILIES[family] and family in names()
+        assert default_ranges(family) == PARAMETER_RANGES[family]
+        hm, record = make_texture(family, seed=1, **SMALL)
+        assert record["name"] == family and hm.shape == (160, 160)
+    with pytest.raises(InputError, match="unknown knurl parameter"):
+        make("knurl", pitch=1.0)
+
+
+@pytest.mark.parametrize("family", ENGINEERED)
+def test_engineered_family_is_deterministic_per_seed(family):
+    a, b = make(family, seed=3, **SMALL), make(family, seed=3, **SMALL)
+    np.testing.assert_array_equal(a.heights, b.heights)
+    assert not np.allclose(a.heights, make(family, seed=4, **SMALL).heights)
+
+
+@pytest.mark.parametrize("family", ENGINEERED)
+@pytest.mark.parametrize("k", [0, 1, 2, 3])
+def test_engineered_family_units_and_height_range_over_its_parameter_range(family, k):
+    params = corner(family, k)
+    hm = make(family, seed=k, size_mm=12.0, pixel_mm=0.04, **params)  # the largest scales need 12 mm
+    assert hm.shape == (300, 300) and hm.pixel_mm == 0.04 and hm.heights.dtype == np.float64
+    h = hm.heights
+    assert np.all(np.isfinite(h)) and h.min() == 0.0 and 0 < h.max() <= peak_mm(family, params) + 1e-12
+
+
+@pytest.mark.parametrize("family", ENGINEERED)
+def test_engineered_defaults_lie_in_their_documented_ranges(family):
+    signature = inspect.signature(engineered.FAMILIES[family]).parameters
+    assert list(signature)[3:] == list(engineered.PARAMETER_RANGES[family])
+    for name, allowed in engineered.PARAMETER_RANGES[family].items():
+        default = signature[name].default
+        assert default in allowed if isinstance(allowed[0], str) else allowed[0] <= default <= allowed[1]
+
+
+@pytest.mark.parametrize("family, params, message", [
+    ("knurl", {"pitch_mm": 0.1}, "knurl parameter pitch_mm must be between 0.4 and 2.5"),
+    ("milled", {"pattern": "spiral"}, "must be one of parallel, crossed"),
+    ("waffle", {"pitch_mm": 4.0, "size_mm": 6.0}, "needs a map of at least 8 mm"),
+    ("sparse", {"diameter_mm": 0.3, "pixel_mm": 0.1}, "below 4 pixels"),
+    ("shallow", {"base": "knurl"}, "must be one of cellular"),
+    ("mixture", {"overlay_share": 1.0}, "overlay_share must be between 0.1 and 0.9"),
+])
+def test_engineered_bad_parameters_name_the_parameter(family, params, message):
+    with pytest.raises(InputError, match=message):
+        make(family, **params)
+
+
+def test_milled_cusps_reach_their_height_at_the_step():
+    hm = make("milled", step_mm=1.0, height_mm=0.2, angle_deg=0.0, size_mm=8.0, pixel_mm=0.01)
+    assert hm.heights.max() == pytest.approx(0.2, abs=2e-3)  # cusp tip sampled within half a pixel
+    profile = hm.heights[0]
+    cusps = np.flatnonzero((profile > np.roll(profile, 1)) & (profile >= np.roll(profile, -1)))
+    assert np.median(np.diff(cusps)) * 0.01 == pytest.approx(1.0, abs=0.011)
+
+
+@pytest.mark.parametrize("lattice", ["square", "hex"])
+def test_waffle_rib_area_follows_the_rib_width(lattice):
+    # cells shrink by (1 - rib) in each direction, so ribs cover 1 - (1 - rib)^2 of the map for both lattices
+    for rib in (0.1, 0.3):
+        hm = make("waffle", pitch_mm=1.0, rib=rib, lattice=lattice, height_mm=0.5, size_mm=12.0, pixel_mm=0.02)
+        covered = hm.heights.mean() / 0.5
+        assert covered == pytest.approx(1 - (1 - rib) ** 2, rel=0.04)
+
+
+@pytest.mark.parametrize("shape", ["dome", "cone", "flat", "pit"])
+def test_sparse_features_stand_alone_and_one_is_under_the_footprint(shape):
+    for seed in range(5):
+        hm = make("sparse", seed=seed, density_per_cm2=1.0, diameter_mm=1.0, shape=shape, height_mm=0.3)
+        ground = hm.heights.max() if shape == "pit" else 0.0
+        raised = np.abs(hm.heights - ground) > 1e-9
+        assert raised.mean() < 0.1  # mostly flat ground
+        n = hm.shape[0]
+        c = round(engineered.SPARSE_CENTRE_MM / hm.pixel_mm) + 10  # the centred feature plus its radius
+        assert raised[n // 2 - c:n // 2 + c, n // 2 - c:n // 2 + c].any()
+        assert ndimage.label(raised)[1] <= 2  # round(1 per cm^2 x 1.44 cm^2) = 1 feature, 2 if cut by an edge
+
+
+def test_shallow_and_mixture_scale_to_their_peak():
+    assert make("shallow", seed=2, base="fbm", relief_mm=0.01).heights.max() == pytest.approx(0.01)
+    mixed = make("mixture", seed=2, base="waffle", overlay="fbm", combine="max", height_mm=0.4)
+    assert mixed.heights.max() == pytest.approx(0.4)
+    assert not np.allclose(mixed.heights, make("mixture", seed=2, base="waffle", overlay="fbm", combine="add",
+                                               height_mm=0.4).heights)
+
+
+def test_training_v2_recipe_draws_every_family_and_never_the_held_out_one_inside_composites():
+    recipe = load_recipe(Path(__file__).parents[1] / "datasets" / "training-v2.json")
+    assert recipe.name == "training-v2" and recipe.holdout_family == "knit"
+    records = [sample_record(recipe, i) for i in range(400)]
+    assert {r["family"] for r in records} == set(recipe.families) == {"bumps", *FAMILIES}
+    for r in records:
+        if r["family"] in ("shallow", "mixture"):  # knit and waffle can be held out whole (--holdout-family knit,waffle)
+            assert not {"knit", "waffle"} & {r["params"].get("base"), r["params"].get("overlay")}
+    for r in records[:12]:
+        hm = realise(r)
+        assert hm.shape == (240, 240) and np.all(np.isfinite(hm.heights))

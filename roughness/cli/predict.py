@@ -24,6 +24,10 @@ def add_parser(sub) -> None:
     pr.add_argument("--engine", choices=PREDICT_ENGINES, default=given["engine"],
                     help=f"surrogate, fem, or auto: the surrogate, FEM for inputs outside its domain "
                          f"(default: {given['engine']})")
+    pr.add_argument("--max-std", type=POSITIVE,
+                    help="ensemble models: --engine auto also runs the FEM where the relative spread "
+                         "roughness_std / (V + 0.001) exceeds this (default: the threshold measured when the "
+                         "ensemble was exported; single-network models give no spread)")
     pr.add_argument("--fidelity", choices=("coarse", "default"),
                     help="FEM fidelity (default: that of the model's training labels; the standard scale "
                          "is tabulated for these two)")
@@ -68,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
 
     predict(reader.heightmaps(), engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
             fidelity=args.fidelity, batch_size=args.batch_size,
-            sources=reader.sources(), on_result=show)
+            sources=reader.sources(), on_result=show, max_std=args.max_std)
     for source, error in reader.errors:
         print(f"roughness: error: {error}", file=sys.stderr)
         if args.json:
@@ -115,4 +119,5 @@ def _prediction_line(p) -> str:
              f"law, {where.jnd_from_nearest:+.1f} JND from {where.nearest_standard}")
     domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
     sure = f" ± {p.roughness_stderr:.4f}" if p.roughness_stderr is not None else ""  # FEM: Monte Carlo error
+    sure += f" ± {p.roughness_std:.4f}" if p.roughness_std is not None else ""  # surrogate ensemble: member spread
     return f"{p.source}: V = {p.roughness:.4f}{sure} ({p.engine}, {domain}, {1e3 * p.seconds:.1f} ms), {scale}"

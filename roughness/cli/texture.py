@@ -64,7 +64,7 @@ def run_make(args: argparse.Namespace) -> int:
 
 
 def run_list(args: argparse.Namespace) -> int:
-    from roughness.dataset.natural import PARAMETER_RANGES
+    from roughness.dataset.families import PARAMETER_RANGES
     from roughness.dataset.textures import texture_names
 
     lines = ["named: " + ", ".join(texture_names()),

@@ -1,0 +1,208 @@
+"""A deep ensemble of trained surrogates as one ONNX graph that returns its mean and spread.
+
+    for k in 0 1 2 3 4; do roughness train DATA.h5 --out runs/m$k --seed $k; done
+    python -m roughness.surrogate.ensemble runs/m*/checkpoint.pt --out models/roughness-ensemble.onnx --data DATA.h5
+
+The graph takes ``heights`` like a single model and returns ``log_roughness`` (the members' mean of
+log(V + offset)), ``log_roughness_std`` (their standard deviation times ``std_scale``: the relative
+spread of V + offset) and ``embedding`` (member 0's; the input domain is member 0's). The predictor
+turns the spread into ``roughness_std`` (predictor.Estimate).
+
+With ``--data`` (the members' training data, checked by its inputs checksum) the export measures the
+uncertainty on the members' own validation split, never trained on: ``std_scale`` is chosen so that
+95% of validation samples lie within 2 sigma of the mean (an ensemble of a few members is usually
+over-confident), and ``max_std`` -- the default of ``predict --engine auto --max-std`` -- so that 10%
+of validation inputs go to the FEM. Their effect is then reported on the test split: the 2-sigma
+coverage, the share sent to the FEM, and the share of predictions off by more than 15% that it catches.
+Without ``--data`` neither is measured: ``std_scale`` is 1 and there is no default threshold.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import onnx
+import onnxruntime as ort
+import torch
+from torch import nn
+
+from roughness.core.errors import InputError, OutputExists
+from roughness.core.files import atomic_write, check_output
+from roughness.core.hashing import file_sha256
+
+from .export import RTOL, ExportError, check_patches, load_checkpoint
+from .metadata import METADATA_KEY, ModelMetadata
+from .metrics import scores
+from .network import RoughnessNet
+from .predictor import EMBEDDING_OUTPUT, INPUT, LOG_OUTPUT, STD_OUTPUT
+from .target import roughness_from_log
+
+MIN_MEMBERS = 2
+COVERAGE = 0.95  # share of validation samples within 2 sigma after scaling
+SENT_TO_FEM = 0.10  # share of validation inputs above the default threshold
+LARGE_ERROR = 0.15  # "off by more than 15%": the predictions the threshold should catch
+SHARED = ("patch_pixel_mm", "footprint_mm", "log_offset", "label_fidelity", "simulation")  # members must agree
+
+
+class Ensemble(nn.Module):
+    """Members' mean and (scaled) sample standard deviation of log(V + offset), and member 0's embedding."""
+
+    def __init__(self, members: list[RoughnessNet], std_scale: float = 1.0) -> None:
+        super().__init__()
+        self.members = nn.ModuleList(members)
+        self.register_buffer("std_scale", torch.tensor(float(std_scale)))
+
+    def forward(self, heights: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        outputs = [member(heights) for member in self.members]
+        logs = torch.stack([log_v for log_v, _ in outputs], dim=1)
+        return logs.mean(dim=1), logs.std(dim=1) * self.std_scale, outputs[0][1]
+
+
+def load_members(checkpoints: list[str | Path]) -> tuple[list[RoughnessNet], list[ModelMetadata]]:
+    """The member networks and their metadata; InputError unless they predict the same quantity alike."""
+    if len(checkpoints) < MIN_MEMBERS:
+        raise InputError(f"an ensemble needs at least {MIN_MEMBERS} member checkpoints, got {len(checkpoints)}",
+                         parameter="checkpoints")
+    members, metas = zip(*(load_checkpoint(path) for path in checkpoints))
+    for path, meta in zip(checkpoints[1:], metas[1:]):
+        differ = [key for key in SHARED if getattr(meta, key) != getattr(metas[0], key)]
+        if differ:
+            raise InputError(f"{path} differs from {checkpoints[0]} in {', '.join(differ)}: the members must "
+                             "imitate the same labels on the same input grid", parameter="checkpoints")
+    return list(members), list(metas)
+
+
+@torch.no_grad()
+def member_logs(members: list[RoughnessNet], patches: np.ndarray, batch: int = 256) -> np.ndarray:
+    """(n, members) predicted log(V + offset) for patches (n, P, P)."""
+    out = []
+    for i in range(0, len(patches), batch):
+        x = torch.from_numpy(np.ascontiguousarray(patches[i:i + batch, None], dtype=np.float32))
+        out.append(torch.stack([m.eval()(x)[0] for m in members], dim=1).numpy())
+    return np.concatenate(out).astype(np.float64)
+
+
+def calibrate(logs: np.ndarray, roughness: np.ndarray, split: np.ndarray, log_offset: float) -> dict:
+    """``std_scale`` and ``max_std`` from the validation split and what they achieve on the test split."""
+    mean, std = logs.mean(axis=1), logs.std(axis=1, ddof=1)
+    z = np.abs(np.log(roughness + log_offset) - mean) / np.maximum(std, 1e-12)
+    val, test = split == "val", split == "test"
+    if val.sum() < 10:
+        raise InputError(f"{val.sum()} validation samples are too few to calibrate the uncertainty on",
+                         parameter="data")
+    std_scale = float(np.quantile(z[val], COVERAGE) / 2)
+    max_std = float(np.quantile(std[val] * std_scale, 1 - SENT_TO_FEM))
+    out = {"std_scale": std_scale, "max_std": max_std, "validation_inputs": int(val.sum()),
+           "raw_coverage_2sigma_val": float(np.mean(z[val] <= 2))}
+    if test.any():
+        predicted = roughness_from_log(mean[test], log_offset)
+        rel = np.abs(predicted - roughness[test]) / np.maximum(roughness[test], 1e-12)
+        sent = std[test] * std_scale > max_std
+        large = rel > LARGE_ERROR
+        out |= {"test_inputs": int(test.sum()), "coverage_2sigma_test": float(np.mean(z[test] <= 2 * std_scale)),
+                "sent_to_fem_test": float(sent.mean()), "large_errors_test": int(large.sum()),
+                "large_errors_caught_test": float(sent[large].mean()) if large.any() else None}
+    return out
+
+
+def export_ensemble(checkpoints: list[str | Path], out: str | Path, data: str | Path | None = None,
+                    overwrite: bool = False) -> dict:
+    """Write the ensemble graph (checked against PyTorch) and return what was measured; see the module docstring."""
+    out = check_output(out, overwrite, "out")
+    members, metas = load_members(checkpoints)
+    first = metas[0]
+    info: dict = {"members": len(members), "member_sha256": [file_sha256(p)[:16] for p in checkpoints],
+                  "member_val": [m.metrics.get("val") for m in metas], "std_scale": 1.0, "max_std": None}
+    metrics, by_family = first.metrics, first.test_by_family
+    if data is not None:
+        samples = _samples(data, first)
+        logs = member_logs(members, samples.patches)
+        info |= calibrate(logs, samples.roughness, samples.split, first.log_offset)
+        predicted = roughness_from_log(logs.mean(axis=1), first.log_offset)
+        metrics = {s: scores(samples.roughness[samples.split == s], predicted[samples.split == s])
+                   for s in ("train", "val", "test", "ood") if (samples.split == s).any()}
+        test = samples.split == "test"
+        by_family = {f: scores(samples.roughness[test & (samples.family == f)], predicted[test & (samples.family == f)])
+                     for f in np.unique(samples.family[test])}
+    info["metrics_of"] = "ensemble" if data is not None else "member 0 (no --data given)"
+    meta = replace(first, metrics=metrics, test_by_family=by_family, ensemble=info,
+                   parameters=sum(m.parameters for m in metas), minutes=sum(m.minutes for m in metas),
+                   cost_core_seconds={"data_fem": first.cost_core_seconds.get("data_fem", 0.0),
+                                      "training": sum(m.cost_core_seconds.get("training", 0.0) for m in metas)})
+    model = Ensemble(members, info["std_scale"]).eval()
+    patches = check_patches(8)
+    report: dict = {}
+
+    def write(tmp: str) -> None:
+        batch = torch.export.Dim("batch", min=1)
+        torch.onnx.export(model, (torch.from_numpy(patches[:2]),), tmp, input_names=[INPUT],
+                          output_names=[LOG_OUTPUT, STD_OUTPUT, EMBEDDING_OUTPUT], dynamic_shapes=({0: batch},),
+                          external_data=False, dynamo=True)
+        graph = onnx.load(tmp)
+        graph.metadata_props.add(key=METADATA_KEY, value=meta.to_json())
+        onnx.save(graph, tmp)
+        report.update(_verify(model, tmp, patches))
+
+    atomic_write(out, write)
+    return {"path": str(out), "bytes": out.stat().st_size, "check": report, **info}
+
+
+def _samples(data: str | Path, meta: ModelMetadata):
+    """The members' training data with their splits; InputError if it is another dataset."""
+    from roughness.dataset.digest import inputs_sha256
+    from roughness.dataset.store import open_dataset
+
+    from .data import load_samples
+
+    if inputs_sha256(data) != meta.data.get("inputs_sha256"):
+        raise InputError(f"{data} is not the data the members were trained on (inputs checksum differs): "
+                         "its validation split would not be held out", parameter="data")
+    with open_dataset(data) as dataset:
+        return load_samples(dataset, meta.test_fraction, meta.train_config["val_fraction"], meta.holdout_family,
+                            progress=False)
+
+
+def _verify(model: Ensemble, path: str, patches: np.ndarray) -> dict:
+    """onnxruntime matches PyTorch (mean, spread, embedding) at batch 1 and the full batch."""
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = 1
+    session = ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
+    with torch.no_grad():
+        reference = [t.numpy() for t in model(torch.from_numpy(patches))]
+    single = [np.concatenate(parts) for parts in zip(*(session.run(None, {INPUT: patches[i:i + 1]})
+                                                       for i in range(len(patches))))]
+    worst = 0.0
+    for got in (single, session.run(None, {INPUT: patches})):
+        for g, r in zip(got, reference):
+            worst = max(worst, float(np.max(np.abs(g - r)) / max(float(np.max(np.abs(r))), 1e-12)))
+    if not worst < RTOL:
+        raise ExportError(f"onnxruntime differs from PyTorch by {worst:.2e} (relative; limit {RTOL:.0e})")
+    return {"max_rel_diff": worst, "checked_inputs": len(patches)}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("checkpoints", nargs="+", help="member training checkpoints (checkpoint.pt), at least 2")
+    parser.add_argument("--out", required=True, help="ONNX file to write (refused if it exists unless --overwrite)")
+    parser.add_argument("--data", help="the members' training dataset (.h5): calibrate the spread on its "
+                                       "validation split and report it on the test split (default: not calibrated)")
+    parser.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
+    args = parser.parse_args(argv)
+    try:
+        report = export_ensemble(args.checkpoints, args.out, args.data, args.overwrite)
+    except OutputExists as err:
+        print(f"roughness: error: {err.path} already exists; pass --overwrite to replace it", file=sys.stderr)
+        return 2
+    except InputError as err:
+        print(f"roughness: error: {err}", file=sys.stderr)
+        return 2
+    print(json.dumps({k: v for k, v in report.items() if k != "member_val"}))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
