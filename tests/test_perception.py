@@ -340,7 +340,7 @@ def test_cli_without_cvxpy_exits_2_with_the_install_hint(tmp_path, capsys, monke
     assert "pip install 'roughness[perception]'" in capsys.readouterr().err
 
 
-def test_cli_design_simulate_embed_fit(tmp_path, capsys):
+def test_cli_design_simulate_embed_fit(tmp_path, capsys, monkeypatch):
     """The experiment kit end to end on the surrogate: a design, a simulated experiment, embed, fit."""
     names = ["standard-0.625", "standard-1.0", "standard-1.625", "flattop-0.1", "flattop-0.5"]
     table = _write(tmp_path / "stimuli.csv", "stimulus,texture,seed\n" + "".join(f"{n},{n},0\n" for n in names))
@@ -373,6 +373,26 @@ def test_cli_design_simulate_embed_fit(tmp_path, capsys):
     assert main(["perception", "fit", str(emb / "embedding.csv"), "--stimuli", str(table), "--out",
                  str(tmp_path / "f2"), "--engine", "surrogate", "--exclude", "nope"]) == 2
     assert "excluded stimuli not in the embedding: nope" in capsys.readouterr().err
+    # the paper's homogeneity exclusion, from the table's spreads (JND): the two largest go, with --exclude's
+    spread = {"standard-0.625": 0.1, "standard-1.0": 0.9, "standard-1.625": 0.2, "flattop-0.1": 0.5, "flattop-0.5": 0.9}
+    rated = _write(tmp_path / "rated.csv", "stimulus,texture,seed,homogeneity\n" + "".join(
+        f"{n},{n},0,{spread[n]}\n" for n in names))
+    assert main(["perception", "fit", str(emb / "embedding.csv"), "--stimuli", str(rated), "--out",
+                 str(tmp_path / "f3"), "--engine", "surrogate", "--exclude", "flattop-0.5",
+                 "--exclude-least-homogeneous", "2", "--quiet"]) == 0
+    assert "without 2 excluded" in capsys.readouterr().out
+    summary = json.loads((tmp_path / "f3" / "fit.json").read_text())
+    assert summary["least_homogeneous"] == ["standard-1.0", "flattop-0.5"]  # tie at 0.9: table order
+    assert summary["excluded"] == ["flattop-0.5", "standard-1.0"] and summary["homogeneity_spread_jnd"] == spread
+    assert summary["correlations"]["V"]["included"]["n"] == 3
+    assert main(["perception", "fit", str(emb / "embedding.csv"), "--stimuli", str(rated), "--out",
+                 str(tmp_path / "f4"), "--engine", "surrogate", "--exclude", "standard-0.625",
+                 "--exclude-least-homogeneous", "2"]) == 2  # 3 of 5 excluded
+    assert "the fit needs at least 3" in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "roughness.design.homogeneity", None)  # the design tools absent
+    assert main(["perception", "fit", str(emb / "embedding.csv"), "--stimuli", str(table), "--out",
+                 str(tmp_path / "f5"), "--engine", "surrogate", "--exclude-least-homogeneous", "1"]) == 2
+    assert "needs a 'homogeneity' column in the stimuli table" in capsys.readouterr().err
 
 
 def test_stimuli_table_files_textures_and_errors(tmp_path):
@@ -394,6 +414,17 @@ def test_stimuli_table_files_textures_and_errors(tmp_path):
         bad = _write(tmp_path / "bad.csv", "stimulus,file,pixel_mm,texture,seed,params,note\n" + rows
                      + "y,,,flat,,,\nz,,,flat,,,\n")
         with pytest.raises(InputError, match=message):
+            read_stimuli(bad)
+
+
+def test_stimuli_table_homogeneity_column(tmp_path):
+    from roughness.perception.stimuli import read_stimuli
+
+    good = _write(tmp_path / "h.csv", "stimulus,texture,homogeneity\na,flat,0.4\nb,flat,\nc,flat,0\n")
+    assert [s.homogeneity for s in read_stimuli(good)] == [0.4, None, 0.0]
+    for value in ("-1", "nan", "inf", "x"):
+        bad = _write(tmp_path / "hb.csv", f"stimulus,texture,homogeneity\na,flat,{value}\nb,flat,\nc,flat,\n")
+        with pytest.raises(InputError, match="homogeneity|must be a number"):
             read_stimuli(bad)
 
 

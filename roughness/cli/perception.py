@@ -65,6 +65,10 @@ def add_parser(sub) -> None:
                                                     "configuration, shareable between runs")
     fit.add_argument("--exclude", type=id_list, default=[], metavar="ID,ID",
                      help="stimuli left out of the 'included' fit (e.g. the least homogeneous ones)")
+    fit.add_argument("--exclude-least-homogeneous", type=Number(int, low=0), default=0, metavar="N",
+                     help="also leave out the N least homogeneous stimuli, as the paper did (N = 5): largest spread "
+                          "in JNDs from the stimuli table's 'homogeneity' column, else computed with the "
+                          "surrogate (roughness homogeneity); default 0")
     fit.add_argument("--distances", type=positive_list, default=[0.4, 0.6, 0.8, 1.0, 1.2, 1.6], metavar="MM,MM",
                      help="pair distances d of the re-fit (mm)")
     fit.add_argument("--radii", type=positive_list, default=[0.2, 0.4, 0.6, 0.8, 1.0, 1.2], metavar="MM,MM",
@@ -176,7 +180,7 @@ def run_fit(args: argparse.Namespace) -> int:
 
     from roughness.core.errors import InputError
     from roughness.perception.analysis import read_embedding_csv, write_json
-    from roughness.perception.fit import Fit, classical_measures, sampling_fit
+    from roughness.perception.fit import Fit, classical_measures, homogeneity_spreads, least_homogeneous, sampling_fit
     from roughness.perception.plots import plot_fit, plot_sampling
     from roughness.perception.stimuli import read_stimuli
     from roughness.perception.trials import listed
@@ -187,6 +191,9 @@ def run_fit(args: argparse.Namespace) -> int:
     unknown = [i for i in args.exclude if i not in embedding.stimuli]
     if unknown:
         raise InputError(listed("excluded stimuli not in the embedding", unknown), parameter="exclude")
+    if args.exclude_least_homogeneous > len(stimuli) - 3:
+        raise InputError(f"cannot leave out {args.exclude_least_homogeneous} of {len(stimuli)} stimuli: the fit "
+                         "needs at least 3", parameter="exclude_least_homogeneous")
     fem = args.engine.startswith("fem:")
     if args.forces and not fem:
         raise InputError("--forces re-runs the FEM: use a FEM --engine", parameter="forces")
@@ -194,9 +201,18 @@ def run_fit(args: argparse.Namespace) -> int:
     files = _outputs(args.out, names, args.overwrite)
     cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
     heightmaps = [s.heightmap() for s in stimuli]
+    spreads, inhomogeneous = None, []
+    if args.exclude_least_homogeneous:
+        log(args, "homogeneity of the stimuli ...")
+        spreads = homogeneity_spreads(stimuli, heightmaps)
+        inhomogeneous = least_homogeneous(embedding.stimuli, spreads, args.exclude_least_homogeneous)
+    excluded = list(dict.fromkeys([*args.exclude, *inhomogeneous]))
+    if len(embedding.stimuli) - len(excluded) < 3:
+        raise InputError(f"{len(excluded)} of {len(embedding.stimuli)} stimuli excluded: the fit needs at least 3",
+                         parameter="exclude")
     log(args, f"V of {len(stimuli)} stimuli with {args.engine} ...")
     values = stimulus_values(embedding.stimuli, heightmaps, args.engine, cache, lambda m: log(args, m))
-    included = np.array([s not in args.exclude for s in embedding.stimuli])
+    included = np.array([s not in excluded for s in embedding.stimuli])
     fit = Fit(embedding.stimuli, embedding.coordinate, embedding.low, embedding.high, values, included,
               classical_measures(heightmaps))
     if fem:
@@ -212,7 +228,9 @@ def run_fit(args: argparse.Namespace) -> int:
                                    force_n=force)
             fit.forces[force] = np.array([v.roughness for v in runs])
     summary = {"embedding_file": str(args.embedding), "stimuli_table": str(args.stimuli), "engine": args.engine,
-               "excluded": list(args.exclude), "correlations": fit.correlations(),
+               "excluded": excluded, "least_homogeneous": inhomogeneous,
+               "homogeneity_spread_jnd": None if spreads is None else dict(zip(embedding.stimuli, spreads.tolist())),
+               "correlations": fit.correlations(),
                "sampling": fit.sampling.as_dict() if fit.sampling else None,
                "forces": fit.force_correlations() if fit.forces else None,
                "fem_configuration": values[0].config if fem else None, "fem_cache": str(cache) if fem else None}
@@ -224,8 +242,8 @@ def run_fit(args: argparse.Namespace) -> int:
         plot_sampling(fit, files["sampling.png"])
     c = summary["correlations"]["V"]
     line = f"V ({args.engine}) vs embedding: Pearson R {_fmt(c['all']['pearson'])}, Spearman {_fmt(c['all']['spearman'])}"
-    if args.exclude:
-        line += (f"; without {len(args.exclude)} excluded: R {_fmt(c['included']['pearson'])}, "
+    if excluded:
+        line += (f"; without {len(excluded)} excluded: R {_fmt(c['included']['pearson'])}, "
                  f"Spearman {_fmt(c['included']['spearman'])}")
     print(line)
     log(args, f"wrote {', '.join(str(p) for p in files.values())}")
