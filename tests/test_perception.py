@@ -14,12 +14,13 @@ from scipy.stats import norm, spearmanr
 from roughness.cli import main
 from roughness.core.errors import InputError
 from roughness.perception import values as values_module
-from roughness.perception.bootstrap import bootstrap
+from roughness.perception.bootstrap import bootstrap, thurstone_bootstrap
 from roughness.perception.crossval import cross_validate
 from roughness.perception.design import balanced_design
 from roughness.perception.embed import SOLVER_EPS, TripletSDP, lambda_max, margin_matrix, triplet_error, triplet_margins
 from roughness.perception.fit import correlate, sampling_fit
 from roughness.perception.observer import DEFAULT_SIGMA, Observer, noiseless_answer
+from roughness.perception.thurstone import PRIOR_SD, answer_probability, negative_log_likelihood, thurstone_scale
 from roughness.perception.trials import parse_trials
 from roughness.perception.values import StimulusValue, stimulus_values
 
@@ -111,6 +112,55 @@ def test_noisy_recovery_small():
     assert abs(spearmanr(result.coordinates(1)[:, 0], p[order])[0]) > 0.9
 
 
+# --- the Thurstone scale ------------------------------------------------------------------------------
+
+def test_thurstone_gradient_matches_finite_differences():
+    rng = np.random.default_rng(3)
+    triplets = np.array([rng.permutation(6)[:3] for _ in range(40)])
+    weights = rng.integers(1, 4, 40).astype(float)
+    p = rng.normal(0, 1.5, 6)
+    value, grad = negative_log_likelihood(p, triplets, weights, lapse=0.02)
+    h = 1e-6
+    numeric = [(negative_log_likelihood(p + h * e, triplets, weights, 0.02)[0]
+                - negative_log_likelihood(p - h * e, triplets, weights, 0.02)[0]) / (2 * h) for e in np.eye(6)]
+    assert np.allclose(grad, numeric, rtol=1e-6, atol=1e-6 * abs(value))
+
+
+def test_thurstone_probability_matches_the_simulated_observer():
+    """The closed form P(c closer) against 200,000 answers of the observer (noise SD 1)."""
+    p = np.array([0.0, 0.7, -0.4, 1.5])
+    triplets = np.array([[0, 1, 2], [0, 2, 3], [1, 0, 3], [3, 1, 2]])
+    prob = answer_probability(p, triplets, lapse=0.0)[0]
+    draws = 200_000
+    said = np.array([Observer(sigma=1.0).answer(p, np.repeat(t[None], draws, 0), np.random.default_rng(i)).mean()
+                     for i, t in enumerate(triplets)])
+    assert np.all(np.abs(said - prob) < 5 * np.sqrt(prob * (1 - prob) / draws))  # Monte Carlo, 5 SE
+
+
+def test_thurstone_recovers_the_scale_in_noise_units():
+    """10 stimuli 4 noise SDs apart end to end, 3,000 answers: the metric scale comes back in its units."""
+    p = np.linspace(-2.0, 2.0, 10)
+    trials = parse_trials(simulated_text(p, 3000, 4, Observer(sigma=1.0)), repeats="keep")
+    unique, inverse = trials.unique()
+    w = np.bincount(inverse).astype(float)
+    order = [int(s[1:]) for s in trials.stimuli]
+    start = TripletSDP(len(p), unique).solve(w, 0.1 * lambda_max(len(p), unique, w)).coordinates(1)[:, 0]
+    fit = thurstone_scale(unique, w, start, lapse=0.0)
+    assert fit.success and abs(np.sum(fit.coordinate)) < 1e-6
+    slope = np.polyfit(p[order], fit.coordinate, 1)[0]
+    assert 0.9 < abs(slope) < 1.1  # the unit is the noise SD (Monte Carlo: slope SE about 0.02 here)
+    assert np.corrcoef(p[order], fit.coordinate)[0, 1] ** 2 > 0.99
+
+
+def test_thurstone_scale_is_finite_on_noise_free_answers():
+    p = np.array([0.0, 1.0, 3.0, 4.5, 7.0])
+    trials = parse_trials(consistent_trials(p, list("abcde")))
+    unique, inverse = trials.unique()
+    fit = thurstone_scale(unique, np.bincount(inverse).astype(float), p - 3, lapse=0.0)
+    assert np.all(np.isfinite(fit.coordinate)) and np.all(np.abs(fit.coordinate) < 5 * PRIOR_SD)
+    assert np.all(np.diff(fit.coordinate) > 0)
+
+
 # --- cross-validation and bootstrap ------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
@@ -148,6 +198,10 @@ def test_bootstrap_is_deterministic_for_a_seed_and_across_workers(noisy_trials):
     assert not np.array_equal(one.samples, other.samples)
     assert np.all(one.samples @ coordinate > 0)  # sign-aligned to the full-data embedding
     assert np.all(one.low <= one.high)
+    scale = thurstone_scale(unique, w, coordinate).coordinate
+    first = thurstone_bootstrap(noisy_trials, scale, resamples=20, seed=9)
+    assert np.array_equal(first.samples, thurstone_bootstrap(noisy_trials, scale, resamples=20, seed=9).samples)
+    assert first.failed_solves == 0 and np.all(first.samples @ scale > 0) and np.all(first.low < first.high)
 
 
 # --- trials files ----------------------------------------------------------------------------------
@@ -311,7 +365,12 @@ def test_cli_embed_writes_embedding_and_refuses_to_overwrite(tmp_path, capsys):
     capsys.readouterr()
     assert main(args) == 2
     assert "--overwrite" in capsys.readouterr().err
-    assert main(args + ["--overwrite"]) == 0
+    assert main(args + ["--overwrite", "--scale", "thurstone"]) == 0
+    summary = json.loads((out / "embedding.json").read_text())
+    assert summary["scale"] == "thurstone" and summary["thurstone"]["success"]
+    with open(out / "embedding.csv") as f:
+        x = np.array([float(r["coordinate"]) for r in csv.DictReader(f)])
+    assert np.all(np.diff(x) > 0)
 
 
 @pytest.mark.parametrize("text, message", [

@@ -48,6 +48,12 @@ def add_parser(sub) -> None:
                      help="processes for cross-validation and bootstrap (default: all cores)")
     emb.add_argument("--repeats", choices=("error", "keep"), default="error",
                      help="contradictory answers of one subject to the same trial: error (default) or keep both")
+    emb.add_argument("--scale", choices=("sdp", "thurstone"), default="sdp",
+                     help="the 1-D coordinate: sdp (the SDP's principal coordinate, the paper's; default) or thurstone "
+                          "(maximum likelihood under the Thurstone observer, started from the SDP: metric, in noise "
+                          "SDs, its bootstrap intervals contain a simulated truth about 90%% of the time)")
+    emb.add_argument("--lapse", type=Number(float, low=0, high=0.5), default=0.01,
+                     help="lapse rate (random answers) of the Thurstone model (--scale thurstone; default 0.01)")
     emb.add_argument("--seed", type=SEED, default=0, help="seed of the folds and resamples")
     add_overwrite(emb)
     add_quiet(emb)
@@ -148,7 +154,7 @@ def run_embed(args: argparse.Namespace) -> int:
               f"{len(set(trials.subjects))} subject(s); {args.workers} worker(s)")
     analysis = analyse(trials, lam=args.lam, folds=args.folds, resamples=args.resamples, seed=args.seed,
                        workers=args.workers, roughest=args.roughest,
-                       progress=lambda what: stderr_progress(what, args.quiet))
+                       progress=lambda what: stderr_progress(what, args.quiet), scale=args.scale, lapse=args.lapse)
     summary = {"trials_file": str(args.trials), **analysis.summary(trials), "seed": args.seed}
     _made(files)
     write_embedding_csv(files["embedding.csv"], analysis)
