@@ -37,6 +37,8 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("perception", "fit"): ["embedding.csv", "--stimuli", "stimuli.csv", "--out", "fit", "--engine", "fem:coarse"],
     ("perception", "design"): ["--stimuli", "stimuli.csv", "--trials", "10", "--out", "design.csv"],
     ("perception", "simulate"): ["--stimuli", "stimuli.csv", "--truth", "truth.csv", "--trials", "10", "--out", "sim"],
+    ("perception", "plan"): ["--stimuli", "stimuli.csv", "--truth", "truth.csv", "--trials", "10", "--experiments", "2",
+                             "--out", "plan"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -53,6 +55,7 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("perception", "fit"): [(0, ".csv", []), ("--stimuli", ".csv", [])],
     ("perception", "design"): [("--stimuli", ".csv", [])],
     ("perception", "simulate"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
+    ("perception", "plan"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {

@@ -454,6 +454,47 @@ def test_cli_design_simulate_embed_fit(tmp_path, capsys, monkeypatch):
     assert "needs a 'homogeneity' column in the stimuli table" in capsys.readouterr().err
 
 
+def test_plan_finds_the_trials_needed_and_is_deterministic():
+    from roughness.perception.plan import Plan, PlanStep, plan_trials
+
+    v = 0.05 * np.linspace(0.625, 1.625, 6) ** 2
+    ids = [f"x{i}" for i in range(6)]
+    plan = plan_trials(ids, v, [15, 1500], experiments=3, seed=2)
+    again = plan_trials(ids, v, [1500, 15], experiments=3, seed=2)
+    assert [s.trials for s in plan.steps] == [15, 1500]
+    assert all(np.array_equal(a.pearson, b.pearson) for a, b in zip(plan.steps, again.steps))
+    assert np.isclose(plan.limit, np.corrcoef(v, np.log(v))[0, 1])
+    few, many = (np.abs(s.pearson - plan.limit) for s in plan.steps)
+    assert many.max() < few.mean()  # 1,500 answers about 6 stimuli pin the scale down; 15 do not
+    assert np.all(plan.steps[1].spearman_truth > 0.9)
+    fake = Plan(tuple(ids), v, 0.9, 0.05, 0.5, [PlanStep(10, np.array([0.5, 0.88]), np.ones(2)),
+                                                 PlanStep(20, np.array([0.86, 0.8]), np.ones(2)),
+                                                 PlanStep(40, np.array([0.9, 0.9]), np.ones(2))])
+    assert fake.needed == 10 and [fake.within(s) for s in fake.steps] == [0.5, 0.5, 1.0]
+    assert Plan(tuple(ids), v, 0.9, 0.05, 0.9, fake.steps).needed == 40
+    assert Plan(tuple(ids), v, 0.2, 0.05, 0.9, fake.steps).needed is None
+    with pytest.raises(InputError, match="same V"):
+        plan_trials(ids, np.full(6, 0.1), [10], experiments=2)
+
+
+def test_cli_plan(tmp_path, capsys):
+    names = ["a", "b", "c", "d", "e"]
+    table = _write(tmp_path / "s.csv", "stimulus,texture\n" + "".join(f"{n},flat\n" for n in names))
+    truth = _write(tmp_path / "t.csv", "stimulus,roughness\n" + "".join(
+        f"{n},{v}\n" for n, v in zip(names, [0.03, 0.05, 0.07, 0.1, 0.14])))
+    out = tmp_path / "plan"
+    args = ["perception", "plan", "--stimuli", str(table), "--truth", str(truth), "--trials", "400,20",
+            "--experiments", "2", "--out", str(out), "--quiet"]
+    assert main(args) == 0
+    assert "R with unlimited trials" in capsys.readouterr().out
+    with open(out / "plan.csv") as f:
+        assert [r["trials"] for r in csv.DictReader(f)] == ["20", "400"]
+    summary = json.loads((out / "plan.json").read_text())
+    assert summary["steps"][0]["experiments"] == 2 and summary["tolerance"] == 0.05
+    assert main(args) == 2 and "--overwrite" in capsys.readouterr().err
+    assert main(args[:7] + ["0,10"] + args[8:]) == 2
+
+
 def test_stimuli_table_files_textures_and_errors(tmp_path):
     from roughness.perception.stimuli import read_stimuli
 

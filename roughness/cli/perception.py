@@ -22,6 +22,15 @@ def positive_list(text: str) -> list[float]:
     return sorted(set(values))
 
 
+def count_list(text: str) -> list[int]:
+    """``500,1000,2000``: whole numbers >= 1, for argparse."""
+    try:
+        values = [COUNT(v) for v in text.split(",")]
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated whole numbers >= 1, got {text!r}") from None
+    return sorted(set(values))
+
+
 def id_list(text: str) -> list[str]:
     return [v.strip() for v in text.split(",") if v.strip()]
 
@@ -118,6 +127,31 @@ def add_parser(sub) -> None:
     add_overwrite(sim)
     add_quiet(sim)
     finish(sim, run_simulate)
+
+    pla = ps.add_parser("plan", help="how many trials for R within a tolerance? simulated experiments at several "
+                                     "numbers of trials")
+    pla.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (ids -> heightmaps)")
+    pla.add_argument("--truth", metavar="CSV", help="known V per stimulus (columns stimulus,roughness) instead of "
+                                                    "computing it with --engine")
+    pla.add_argument("--engine", choices=("fem:coarse", "fem:default", "fem:fine", "surrogate", "auto"),
+                     default="surrogate", help="engine for the true V (default surrogate)")
+    pla.add_argument("--cache", metavar="DIR", help="FEM result cache (default: DIR/fem-cache)")
+    pla.add_argument("--trials", required=True, type=count_list, metavar="N,N",
+                     help="numbers of trials to try, e.g. 500,1000,2000,4000")
+    pla.add_argument("--experiments", type=Number(int, low=2), default=20,
+                     help="simulated experiments per number of trials (default 20)")
+    pla.add_argument("--tolerance", type=POSITIVE, default=0.05,
+                     help="|R - R_inf| wanted (default 0.05; R_inf = R with unlimited trials)")
+    pla.add_argument("--share", type=PROBABILITY, default=0.9,
+                     help="share of experiments that must reach the tolerance (default 0.9)")
+    pla.add_argument("--sigma", type=NON_NEGATIVE, default=None,
+                     help="the observer's noise SD on ln(V)/2 (default 0.18, from the Weber fraction 0.19)")
+    pla.add_argument("--lapse", type=PROBABILITY, default=0.0, help="the observer's lapse rate (default 0)")
+    pla.add_argument("--seed", type=SEED, default=0, help="seed of the simulated experiments (default: %(default)s)")
+    pla.add_argument("--out", required=True, metavar="DIR", help="output folder: plan.csv, plan.json")
+    add_overwrite(pla)
+    add_quiet(pla)
+    finish(pla, run_plan)
 
 
 def _outputs(folder: str, names: tuple[str, ...], overwrite: bool) -> dict[str, Path]:
@@ -349,6 +383,49 @@ def run_simulate(args: argparse.Namespace) -> int:
                       "lapse": observer.lapse, "noise_floor": disagree, "roughest": roughest}))
     log(args, f"the observer's answers disagree with the noise-free ones in {disagree:.1%} of trials (the best "
               f"achievable triplet error); embed with --roughest {roughest}")
+    return 0
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from roughness.core.files import write_csv
+    from roughness.perception.analysis import write_json
+    from roughness.perception.embed import require_cvxpy
+    from roughness.perception.observer import DEFAULT_SIGMA, Observer
+    from roughness.perception.parallel import stderr_progress
+    from roughness.perception.plan import plan_trials
+    from roughness.perception.stimuli import read_stimuli
+    from roughness.perception.values import stimulus_values
+
+    require_cvxpy()
+    stimuli = read_stimuli(args.stimuli)
+    ids = [s.stimulus for s in stimuli]
+    observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
+    v = _read_truth(args.truth, ids) if args.truth else None
+    files = _outputs(args.out, ("plan.csv", "plan.json"), args.overwrite)
+    if v is None:
+        cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
+        log(args, f"true V of {len(ids)} stimuli with {args.engine} ...")
+        values = stimulus_values(ids, [s.heightmap() for s in stimuli], args.engine, cache, lambda m: log(args, m))
+        v = np.array([x.roughness for x in values])
+    plan = plan_trials(ids, v, args.trials, args.experiments, observer, args.tolerance, args.share, args.seed,
+                       stderr_progress("simulated experiments", args.quiet))
+    summary = {"stimuli_table": str(args.stimuli), "truth": args.truth or args.engine, "sigma": observer.sigma,
+               "lapse": observer.lapse, "seed": args.seed, **plan.summary()}
+    _made(files)
+    write_csv(files["plan.csv"], ("trials", "experiments", "pearson_mean", "pearson_5", "pearson_95",
+                                  "within_tolerance", "spearman_truth_mean"),
+              ([s["trials"], s["experiments"], *(f"{s[k]:.4f}" for k in ("pearson_mean", "pearson_5", "pearson_95",
+                                                                         "within_tolerance", "spearman_truth_mean"))]
+               for s in summary["steps"]))
+    write_json(files["plan.json"], summary)
+    needed = plan.needed
+    print(f"R with unlimited trials {plan.limit:.3f}; " + (
+        f"{needed} trials bring R within {args.tolerance:g} of it in {args.share:.0%} of simulated experiments"
+        if needed else f"none of {','.join(map(str, args.trials))} trials brings R within {args.tolerance:g} of it "
+                       f"in {args.share:.0%} of simulated experiments: try more"))
+    log(args, f"wrote {files['plan.csv']}, {files['plan.json']}")
     return 0
 
 
