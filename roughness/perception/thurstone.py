@@ -2,8 +2,8 @@
 
 The SDP's coordinate (embed.py) is non-metric: it orders the stimuli, but its spacing is a nonlinear
 function of the perceptual scale (measured in benchmarks/perception_recovery.py: the SDP's large-sample
-limit compresses the ends and follows the stimuli's local spacing, by 5-8% of the range at every
-lambda from 0.5 to 52, about the half-width of a 5-95% interval). This module fits the scale itself.
+limit compresses the ends and follows the stimuli's local spacing, by up to 8-12% of the range, about
+the half-width of a 5-95% interval). This module fits the scale itself.
 
 Model (the simulated observer's, observer.py): stimulus i has coordinate p_i; on every trial the
 observer perceives p + e, e ~ N(0, 1) independently for the three stimuli (the unit of p is the
