@@ -41,6 +41,8 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("tune",): ["map.npy", "--pixel-mm", "0.05", "--target-lambda", "1.0", "--out", "new.npz"],
     ("palette",): ["--k", "3", "--out", "pal"],
     ("tactile-image",): ["picture.png", "--out", "plate"],
+    ("perception", "plan"): ["--stimuli", "stimuli.csv", "--truth", "truth.csv", "--trials", "10", "--experiments", "2",
+                             "--out", "plan"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -60,6 +62,7 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("homogeneity",): [(0, ".npy", [])],
     ("tune",): [(0, ".npy", [])],
     ("tactile-image",): [(0, ".png", [])],
+    ("perception", "plan"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {

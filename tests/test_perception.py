@@ -14,12 +14,13 @@ from scipy.stats import norm, spearmanr
 from roughness.cli import main
 from roughness.core.errors import InputError
 from roughness.perception import values as values_module
-from roughness.perception.bootstrap import bootstrap
+from roughness.perception.bootstrap import bootstrap, thurstone_bootstrap
 from roughness.perception.crossval import cross_validate
 from roughness.perception.design import balanced_design
 from roughness.perception.embed import SOLVER_EPS, TripletSDP, lambda_max, margin_matrix, triplet_error, triplet_margins
 from roughness.perception.fit import correlate, sampling_fit
 from roughness.perception.observer import DEFAULT_SIGMA, Observer, noiseless_answer
+from roughness.perception.thurstone import PRIOR_SD, answer_probability, negative_log_likelihood, thurstone_scale
 from roughness.perception.trials import parse_trials
 from roughness.perception.values import StimulusValue, stimulus_values
 
@@ -111,6 +112,55 @@ def test_noisy_recovery_small():
     assert abs(spearmanr(result.coordinates(1)[:, 0], p[order])[0]) > 0.9
 
 
+# --- the Thurstone scale ------------------------------------------------------------------------------
+
+def test_thurstone_gradient_matches_finite_differences():
+    rng = np.random.default_rng(3)
+    triplets = np.array([rng.permutation(6)[:3] for _ in range(40)])
+    weights = rng.integers(1, 4, 40).astype(float)
+    p = rng.normal(0, 1.5, 6)
+    value, grad = negative_log_likelihood(p, triplets, weights, lapse=0.02)
+    h = 1e-6
+    numeric = [(negative_log_likelihood(p + h * e, triplets, weights, 0.02)[0]
+                - negative_log_likelihood(p - h * e, triplets, weights, 0.02)[0]) / (2 * h) for e in np.eye(6)]
+    assert np.allclose(grad, numeric, rtol=1e-6, atol=1e-6 * abs(value))
+
+
+def test_thurstone_probability_matches_the_simulated_observer():
+    """The closed form P(c closer) against 200,000 answers of the observer (noise SD 1)."""
+    p = np.array([0.0, 0.7, -0.4, 1.5])
+    triplets = np.array([[0, 1, 2], [0, 2, 3], [1, 0, 3], [3, 1, 2]])
+    prob = answer_probability(p, triplets, lapse=0.0)[0]
+    draws = 200_000
+    said = np.array([Observer(sigma=1.0).answer(p, np.repeat(t[None], draws, 0), np.random.default_rng(i)).mean()
+                     for i, t in enumerate(triplets)])
+    assert np.all(np.abs(said - prob) < 5 * np.sqrt(prob * (1 - prob) / draws))  # Monte Carlo, 5 SE
+
+
+def test_thurstone_recovers_the_scale_in_noise_units():
+    """10 stimuli 4 noise SDs apart end to end, 3,000 answers: the metric scale comes back in its units."""
+    p = np.linspace(-2.0, 2.0, 10)
+    trials = parse_trials(simulated_text(p, 3000, 4, Observer(sigma=1.0)), repeats="keep")
+    unique, inverse = trials.unique()
+    w = np.bincount(inverse).astype(float)
+    order = [int(s[1:]) for s in trials.stimuli]
+    start = TripletSDP(len(p), unique).solve(w, 0.1 * lambda_max(len(p), unique, w)).coordinates(1)[:, 0]
+    fit = thurstone_scale(unique, w, start, lapse=0.0)
+    assert fit.success and abs(np.sum(fit.coordinate)) < 1e-6
+    slope = np.polyfit(p[order], fit.coordinate, 1)[0]
+    assert 0.9 < abs(slope) < 1.1  # the unit is the noise SD (Monte Carlo: slope SE about 0.02 here)
+    assert np.corrcoef(p[order], fit.coordinate)[0, 1] ** 2 > 0.99
+
+
+def test_thurstone_scale_is_finite_on_noise_free_answers():
+    p = np.array([0.0, 1.0, 3.0, 4.5, 7.0])
+    trials = parse_trials(consistent_trials(p, list("abcde")))
+    unique, inverse = trials.unique()
+    fit = thurstone_scale(unique, np.bincount(inverse).astype(float), p - 3, lapse=0.0)
+    assert np.all(np.isfinite(fit.coordinate)) and np.all(np.abs(fit.coordinate) < 5 * PRIOR_SD)
+    assert np.all(np.diff(fit.coordinate) > 0)
+
+
 # --- cross-validation and bootstrap ------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
@@ -148,6 +198,10 @@ def test_bootstrap_is_deterministic_for_a_seed_and_across_workers(noisy_trials):
     assert not np.array_equal(one.samples, other.samples)
     assert np.all(one.samples @ coordinate > 0)  # sign-aligned to the full-data embedding
     assert np.all(one.low <= one.high)
+    scale = thurstone_scale(unique, w, coordinate).coordinate
+    first = thurstone_bootstrap(noisy_trials, scale, resamples=20, seed=9)
+    assert np.array_equal(first.samples, thurstone_bootstrap(noisy_trials, scale, resamples=20, seed=9).samples)
+    assert first.failed_solves == 0 and np.all(first.samples @ scale > 0) and np.all(first.low < first.high)
 
 
 # --- trials files ----------------------------------------------------------------------------------
@@ -311,7 +365,12 @@ def test_cli_embed_writes_embedding_and_refuses_to_overwrite(tmp_path, capsys):
     capsys.readouterr()
     assert main(args) == 2
     assert "--overwrite" in capsys.readouterr().err
-    assert main(args + ["--overwrite"]) == 0
+    assert main(args + ["--overwrite", "--scale", "thurstone"]) == 0
+    summary = json.loads((out / "embedding.json").read_text())
+    assert summary["scale"] == "thurstone" and summary["thurstone"]["success"]
+    with open(out / "embedding.csv") as f:
+        x = np.array([float(r["coordinate"]) for r in csv.DictReader(f)])
+    assert np.all(np.diff(x) > 0)
 
 
 @pytest.mark.parametrize("text, message", [
@@ -340,7 +399,7 @@ def test_cli_without_cvxpy_exits_2_with_the_install_hint(tmp_path, capsys, monke
     assert "pip install 'roughness[perception]'" in capsys.readouterr().err
 
 
-def test_cli_design_simulate_embed_fit(tmp_path, capsys):
+def test_cli_design_simulate_embed_fit(tmp_path, capsys, monkeypatch):
     """The experiment kit end to end on the surrogate: a design, a simulated experiment, embed, fit."""
     names = ["standard-0.625", "standard-1.0", "standard-1.625", "flattop-0.1", "flattop-0.5"]
     table = _write(tmp_path / "stimuli.csv", "stimulus,texture,seed\n" + "".join(f"{n},{n},0\n" for n in names))
@@ -373,6 +432,67 @@ def test_cli_design_simulate_embed_fit(tmp_path, capsys):
     assert main(["perception", "fit", str(emb / "embedding.csv"), "--stimuli", str(table), "--out",
                  str(tmp_path / "f2"), "--engine", "surrogate", "--exclude", "nope"]) == 2
     assert "excluded stimuli not in the embedding: nope" in capsys.readouterr().err
+    # the paper's homogeneity exclusion, from the table's spreads (JND): the two largest go, with --exclude's
+    spread = {"standard-0.625": 0.1, "standard-1.0": 0.9, "standard-1.625": 0.2, "flattop-0.1": 0.5, "flattop-0.5": 0.9}
+    rated = _write(tmp_path / "rated.csv", "stimulus,texture,seed,homogeneity\n" + "".join(
+        f"{n},{n},0,{spread[n]}\n" for n in names))
+    assert main(["perception", "fit", str(emb / "embedding.csv"), "--stimuli", str(rated), "--out",
+                 str(tmp_path / "f3"), "--engine", "surrogate", "--exclude", "flattop-0.5",
+                 "--exclude-least-homogeneous", "2", "--quiet"]) == 0
+    assert "without 2 excluded" in capsys.readouterr().out
+    summary = json.loads((tmp_path / "f3" / "fit.json").read_text())
+    assert summary["least_homogeneous"] == ["standard-1.0", "flattop-0.5"]  # tie at 0.9: table order
+    assert summary["excluded"] == ["flattop-0.5", "standard-1.0"] and summary["homogeneity_spread_jnd"] == spread
+    assert summary["correlations"]["V"]["included"]["n"] == 3
+    assert main(["perception", "fit", str(emb / "embedding.csv"), "--stimuli", str(rated), "--out",
+                 str(tmp_path / "f4"), "--engine", "surrogate", "--exclude", "standard-0.625",
+                 "--exclude-least-homogeneous", "2"]) == 2  # 3 of 5 excluded
+    assert "the fit needs at least 3" in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "roughness.design.homogeneity", None)  # the design tools absent
+    assert main(["perception", "fit", str(emb / "embedding.csv"), "--stimuli", str(table), "--out",
+                 str(tmp_path / "f5"), "--engine", "surrogate", "--exclude-least-homogeneous", "1"]) == 2
+    assert "needs a 'homogeneity' column in the stimuli table" in capsys.readouterr().err
+
+
+def test_plan_finds_the_trials_needed_and_is_deterministic():
+    from roughness.perception.plan import Plan, PlanStep, plan_trials
+
+    v = 0.05 * np.linspace(0.625, 1.625, 6) ** 2
+    ids = [f"x{i}" for i in range(6)]
+    plan = plan_trials(ids, v, [15, 1500], experiments=3, seed=2)
+    again = plan_trials(ids, v, [1500, 15], experiments=3, seed=2)
+    assert [s.trials for s in plan.steps] == [15, 1500]
+    assert all(np.array_equal(a.pearson, b.pearson) for a, b in zip(plan.steps, again.steps))
+    assert np.isclose(plan.limit, np.corrcoef(v, np.log(v))[0, 1])
+    few, many = (np.abs(s.pearson - plan.limit) for s in plan.steps)
+    assert many.max() < few.mean()  # 1,500 answers about 6 stimuli pin the scale down; 15 do not
+    assert np.all(plan.steps[1].spearman_truth > 0.9)
+    fake = Plan(tuple(ids), v, 0.9, 0.05, 0.5, [PlanStep(10, np.array([0.5, 0.88]), np.ones(2)),
+                                                 PlanStep(20, np.array([0.86, 0.8]), np.ones(2)),
+                                                 PlanStep(40, np.array([0.9, 0.9]), np.ones(2))])
+    assert fake.needed == 10 and [fake.within(s) for s in fake.steps] == [0.5, 0.5, 1.0]
+    assert Plan(tuple(ids), v, 0.9, 0.05, 0.9, fake.steps).needed == 40
+    assert Plan(tuple(ids), v, 0.2, 0.05, 0.9, fake.steps).needed is None
+    with pytest.raises(InputError, match="same V"):
+        plan_trials(ids, np.full(6, 0.1), [10], experiments=2)
+
+
+def test_cli_plan(tmp_path, capsys):
+    names = ["a", "b", "c", "d", "e"]
+    table = _write(tmp_path / "s.csv", "stimulus,texture\n" + "".join(f"{n},flat\n" for n in names))
+    truth = _write(tmp_path / "t.csv", "stimulus,roughness\n" + "".join(
+        f"{n},{v}\n" for n, v in zip(names, [0.03, 0.05, 0.07, 0.1, 0.14])))
+    out = tmp_path / "plan"
+    args = ["perception", "plan", "--stimuli", str(table), "--truth", str(truth), "--trials", "400,20",
+            "--experiments", "2", "--out", str(out), "--quiet"]
+    assert main(args) == 0
+    assert "R with unlimited trials" in capsys.readouterr().out
+    with open(out / "plan.csv") as f:
+        assert [r["trials"] for r in csv.DictReader(f)] == ["20", "400"]
+    summary = json.loads((out / "plan.json").read_text())
+    assert summary["steps"][0]["experiments"] == 2 and summary["tolerance"] == 0.05
+    assert main(args) == 2 and "--overwrite" in capsys.readouterr().err
+    assert main(args[:7] + ["0,10"] + args[8:]) == 2
 
 
 def test_stimuli_table_files_textures_and_errors(tmp_path):
@@ -394,6 +514,17 @@ def test_stimuli_table_files_textures_and_errors(tmp_path):
         bad = _write(tmp_path / "bad.csv", "stimulus,file,pixel_mm,texture,seed,params,note\n" + rows
                      + "y,,,flat,,,\nz,,,flat,,,\n")
         with pytest.raises(InputError, match=message):
+            read_stimuli(bad)
+
+
+def test_stimuli_table_homogeneity_column(tmp_path):
+    from roughness.perception.stimuli import read_stimuli
+
+    good = _write(tmp_path / "h.csv", "stimulus,texture,homogeneity\na,flat,0.4\nb,flat,\nc,flat,0\n")
+    assert [s.homogeneity for s in read_stimuli(good)] == [0.4, None, 0.0]
+    for value in ("-1", "nan", "inf", "x"):
+        bad = _write(tmp_path / "hb.csv", f"stimulus,texture,homogeneity\na,flat,{value}\nb,flat,\nc,flat,\n")
+        with pytest.raises(InputError, match="homogeneity|must be a number"):
             read_stimuli(bad)
 
 

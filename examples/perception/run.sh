@@ -11,3 +11,5 @@ $R perception embed simulated/trials.csv --stimuli stimuli.csv --roughest standa
     --out embedding --overwrite
 $R perception fit embedding/embedding.csv --stimuli stimuli.csv --engine fem:coarse --forces 5,20 --cache /tmp/roughness-fem-cache \
     --out fit --overwrite
+$R perception plan --stimuli stimuli.csv --truth simulated/truth.csv --trials 250,500,1000,1500,3000 --experiments 20 \
+    --out plan --overwrite

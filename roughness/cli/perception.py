@@ -22,6 +22,15 @@ def positive_list(text: str) -> list[float]:
     return sorted(set(values))
 
 
+def count_list(text: str) -> list[int]:
+    """``500,1000,2000``: whole numbers >= 1, for argparse."""
+    try:
+        values = [COUNT(v) for v in text.split(",")]
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated whole numbers >= 1, got {text!r}") from None
+    return sorted(set(values))
+
+
 def id_list(text: str) -> list[str]:
     return [v.strip() for v in text.split(",") if v.strip()]
 
@@ -48,6 +57,12 @@ def add_parser(sub) -> None:
                      help="processes for cross-validation and bootstrap (default: all cores)")
     emb.add_argument("--repeats", choices=("error", "keep"), default="error",
                      help="contradictory answers of one subject to the same trial: error (default) or keep both")
+    emb.add_argument("--scale", choices=("sdp", "thurstone"), default="sdp",
+                     help="the 1-D coordinate: sdp (the SDP's principal coordinate, the paper's; default) or thurstone "
+                          "(maximum likelihood under the Thurstone observer, started from the SDP: metric, in noise "
+                          "SDs, its bootstrap intervals contain a simulated truth about 90%% of the time)")
+    emb.add_argument("--lapse", type=Number(float, low=0, high=0.5), default=0.01,
+                     help="lapse rate (random answers) of the Thurstone model (--scale thurstone; default 0.01)")
     emb.add_argument("--seed", type=SEED, default=0, help="seed of the folds and resamples")
     add_overwrite(emb)
     add_quiet(emb)
@@ -65,6 +80,10 @@ def add_parser(sub) -> None:
                                                     "configuration, shareable between runs")
     fit.add_argument("--exclude", type=id_list, default=[], metavar="ID,ID",
                      help="stimuli left out of the 'included' fit (e.g. the least homogeneous ones)")
+    fit.add_argument("--exclude-least-homogeneous", type=Number(int, low=0), default=0, metavar="N",
+                     help="also leave out the N least homogeneous stimuli, as the paper did (N = 5): largest spread "
+                          "in JNDs from the stimuli table's 'homogeneity' column, else computed with the "
+                          "surrogate (roughness homogeneity); default 0")
     fit.add_argument("--distances", type=positive_list, default=[0.4, 0.6, 0.8, 1.0, 1.2, 1.6], metavar="MM,MM",
                      help="pair distances d of the re-fit (mm)")
     fit.add_argument("--radii", type=positive_list, default=[0.2, 0.4, 0.6, 0.8, 1.0, 1.2], metavar="MM,MM",
@@ -109,6 +128,31 @@ def add_parser(sub) -> None:
     add_quiet(sim)
     finish(sim, run_simulate)
 
+    pla = ps.add_parser("plan", help="how many trials for R within a tolerance? simulated experiments at several "
+                                     "numbers of trials")
+    pla.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (ids -> heightmaps)")
+    pla.add_argument("--truth", metavar="CSV", help="known V per stimulus (columns stimulus,roughness) instead of "
+                                                    "computing it with --engine")
+    pla.add_argument("--engine", choices=("fem:coarse", "fem:default", "fem:fine", "surrogate", "auto"),
+                     default="surrogate", help="engine for the true V (default surrogate)")
+    pla.add_argument("--cache", metavar="DIR", help="FEM result cache (default: DIR/fem-cache)")
+    pla.add_argument("--trials", required=True, type=count_list, metavar="N,N",
+                     help="numbers of trials to try, e.g. 500,1000,2000,4000")
+    pla.add_argument("--experiments", type=Number(int, low=2), default=20,
+                     help="simulated experiments per number of trials (default 20)")
+    pla.add_argument("--tolerance", type=POSITIVE, default=0.05,
+                     help="|R - R_inf| wanted (default 0.05; R_inf = R with unlimited trials)")
+    pla.add_argument("--share", type=PROBABILITY, default=0.9,
+                     help="share of experiments that must reach the tolerance (default 0.9)")
+    pla.add_argument("--sigma", type=NON_NEGATIVE, default=None,
+                     help="the observer's noise SD on ln(V)/2 (default 0.18, from the Weber fraction 0.19)")
+    pla.add_argument("--lapse", type=PROBABILITY, default=0.0, help="the observer's lapse rate (default 0)")
+    pla.add_argument("--seed", type=SEED, default=0, help="seed of the simulated experiments (default: %(default)s)")
+    pla.add_argument("--out", required=True, metavar="DIR", help="output folder: plan.csv, plan.json")
+    add_overwrite(pla)
+    add_quiet(pla)
+    finish(pla, run_plan)
+
 
 def _outputs(folder: str, names: tuple[str, ...], overwrite: bool) -> dict[str, Path]:
     """The output files in ``folder``, checked before any computation (the folder is made by ``_made``)."""
@@ -144,7 +188,7 @@ def run_embed(args: argparse.Namespace) -> int:
               f"{len(set(trials.subjects))} subject(s); {args.workers} worker(s)")
     analysis = analyse(trials, lam=args.lam, folds=args.folds, resamples=args.resamples, seed=args.seed,
                        workers=args.workers, roughest=args.roughest,
-                       progress=lambda what: stderr_progress(what, args.quiet))
+                       progress=lambda what: stderr_progress(what, args.quiet), scale=args.scale, lapse=args.lapse)
     summary = {"trials_file": str(args.trials), **analysis.summary(trials), "seed": args.seed}
     _made(files)
     write_embedding_csv(files["embedding.csv"], analysis)
@@ -176,7 +220,7 @@ def run_fit(args: argparse.Namespace) -> int:
 
     from roughness.core.errors import InputError
     from roughness.perception.analysis import read_embedding_csv, write_json
-    from roughness.perception.fit import Fit, classical_measures, sampling_fit
+    from roughness.perception.fit import Fit, classical_measures, homogeneity_spreads, least_homogeneous, sampling_fit
     from roughness.perception.plots import plot_fit, plot_sampling
     from roughness.perception.stimuli import read_stimuli
     from roughness.perception.trials import listed
@@ -187,6 +231,9 @@ def run_fit(args: argparse.Namespace) -> int:
     unknown = [i for i in args.exclude if i not in embedding.stimuli]
     if unknown:
         raise InputError(listed("excluded stimuli not in the embedding", unknown), parameter="exclude")
+    if args.exclude_least_homogeneous > len(stimuli) - 3:
+        raise InputError(f"cannot leave out {args.exclude_least_homogeneous} of {len(stimuli)} stimuli: the fit "
+                         "needs at least 3", parameter="exclude_least_homogeneous")
     fem = args.engine.startswith("fem:")
     if args.forces and not fem:
         raise InputError("--forces re-runs the FEM: use a FEM --engine", parameter="forces")
@@ -194,9 +241,18 @@ def run_fit(args: argparse.Namespace) -> int:
     files = _outputs(args.out, names, args.overwrite)
     cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
     heightmaps = [s.heightmap() for s in stimuli]
+    spreads, inhomogeneous = None, []
+    if args.exclude_least_homogeneous:
+        log(args, "homogeneity of the stimuli ...")
+        spreads = homogeneity_spreads(stimuli, heightmaps)
+        inhomogeneous = least_homogeneous(embedding.stimuli, spreads, args.exclude_least_homogeneous)
+    excluded = list(dict.fromkeys([*args.exclude, *inhomogeneous]))
+    if len(embedding.stimuli) - len(excluded) < 3:
+        raise InputError(f"{len(excluded)} of {len(embedding.stimuli)} stimuli excluded: the fit needs at least 3",
+                         parameter="exclude")
     log(args, f"V of {len(stimuli)} stimuli with {args.engine} ...")
     values = stimulus_values(embedding.stimuli, heightmaps, args.engine, cache, lambda m: log(args, m))
-    included = np.array([s not in args.exclude for s in embedding.stimuli])
+    included = np.array([s not in excluded for s in embedding.stimuli])
     fit = Fit(embedding.stimuli, embedding.coordinate, embedding.low, embedding.high, values, included,
               classical_measures(heightmaps))
     if fem:
@@ -212,7 +268,9 @@ def run_fit(args: argparse.Namespace) -> int:
                                    force_n=force)
             fit.forces[force] = np.array([v.roughness for v in runs])
     summary = {"embedding_file": str(args.embedding), "stimuli_table": str(args.stimuli), "engine": args.engine,
-               "excluded": list(args.exclude), "correlations": fit.correlations(),
+               "excluded": excluded, "least_homogeneous": inhomogeneous,
+               "homogeneity_spread_jnd": None if spreads is None else dict(zip(embedding.stimuli, spreads.tolist())),
+               "correlations": fit.correlations(),
                "sampling": fit.sampling.as_dict() if fit.sampling else None,
                "forces": fit.force_correlations() if fit.forces else None,
                "fem_configuration": values[0].config if fem else None, "fem_cache": str(cache) if fem else None}
@@ -224,8 +282,8 @@ def run_fit(args: argparse.Namespace) -> int:
         plot_sampling(fit, files["sampling.png"])
     c = summary["correlations"]["V"]
     line = f"V ({args.engine}) vs embedding: Pearson R {_fmt(c['all']['pearson'])}, Spearman {_fmt(c['all']['spearman'])}"
-    if args.exclude:
-        line += (f"; without {len(args.exclude)} excluded: R {_fmt(c['included']['pearson'])}, "
+    if excluded:
+        line += (f"; without {len(excluded)} excluded: R {_fmt(c['included']['pearson'])}, "
                  f"Spearman {_fmt(c['included']['spearman'])}")
     print(line)
     log(args, f"wrote {', '.join(str(p) for p in files.values())}")
@@ -325,6 +383,49 @@ def run_simulate(args: argparse.Namespace) -> int:
                       "lapse": observer.lapse, "noise_floor": disagree, "roughest": roughest}))
     log(args, f"the observer's answers disagree with the noise-free ones in {disagree:.1%} of trials (the best "
               f"achievable triplet error); embed with --roughest {roughest}")
+    return 0
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from roughness.core.files import write_csv
+    from roughness.perception.analysis import write_json
+    from roughness.perception.embed import require_cvxpy
+    from roughness.perception.observer import DEFAULT_SIGMA, Observer
+    from roughness.perception.parallel import stderr_progress
+    from roughness.perception.plan import plan_trials
+    from roughness.perception.stimuli import read_stimuli
+    from roughness.perception.values import stimulus_values
+
+    require_cvxpy()
+    stimuli = read_stimuli(args.stimuli)
+    ids = [s.stimulus for s in stimuli]
+    observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
+    v = _read_truth(args.truth, ids) if args.truth else None
+    files = _outputs(args.out, ("plan.csv", "plan.json"), args.overwrite)
+    if v is None:
+        cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
+        log(args, f"true V of {len(ids)} stimuli with {args.engine} ...")
+        values = stimulus_values(ids, [s.heightmap() for s in stimuli], args.engine, cache, lambda m: log(args, m))
+        v = np.array([x.roughness for x in values])
+    plan = plan_trials(ids, v, args.trials, args.experiments, observer, args.tolerance, args.share, args.seed,
+                       stderr_progress("simulated experiments", args.quiet))
+    summary = {"stimuli_table": str(args.stimuli), "truth": args.truth or args.engine, "sigma": observer.sigma,
+               "lapse": observer.lapse, "seed": args.seed, **plan.summary()}
+    _made(files)
+    write_csv(files["plan.csv"], ("trials", "experiments", "pearson_mean", "pearson_5", "pearson_95",
+                                  "within_tolerance", "spearman_truth_mean"),
+              ([s["trials"], s["experiments"], *(f"{s[k]:.4f}" for k in ("pearson_mean", "pearson_5", "pearson_95",
+                                                                         "within_tolerance", "spearman_truth_mean"))]
+               for s in summary["steps"]))
+    write_json(files["plan.json"], summary)
+    needed = plan.needed
+    print(f"R with unlimited trials {plan.limit:.3f}; " + (
+        f"{needed} trials bring R within {args.tolerance:g} of it in {args.share:.0%} of simulated experiments"
+        if needed else f"none of {','.join(map(str, args.trials))} trials brings R within {args.tolerance:g} of it "
+                       f"in {args.share:.0%} of simulated experiments: try more"))
+    log(args, f"wrote {files['plan.csv']}, {files['plan.json']}")
     return 0
 
 

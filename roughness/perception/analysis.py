@@ -1,5 +1,9 @@
 """The embedding pipeline: cross-validate lam, embed all trials, bootstrap intervals, write the results.
 
+The 1-D coordinate is the SDP's (``scale="sdp"``, the paper's) or the Thurstone maximum-likelihood
+scale started from it (``scale="thurstone"``: metric, in units of the observer's noise SD; its
+intervals contain the truth about 90% of the time where the SDP's do 63-77%, see thurstone.py).
+
 Outputs (in the output folder): ``embedding.csv`` (stimulus, coordinate, low, high; rows ordered as
 the stimuli), ``embedding.json`` (summary: lam, CV curves, spectrum, solver statistics, provenance)
 and the figures (see plots.py).
@@ -18,11 +22,13 @@ import numpy as np
 from roughness.core.errors import InputError, SimulationError
 from roughness.core.files import atomic_write, write_csv
 
-from .bootstrap import PERCENTILES, Bootstrap, bootstrap
+from .bootstrap import PERCENTILES, Bootstrap, bootstrap, thurstone_bootstrap
 from .crossval import CrossValidation, cross_validate
 from .embed import EmbedResult, TripletSDP, oriented, triplet_error
+from .thurstone import DEFAULT_LAPSE, ThurstoneFit, thurstone_scale
 from .trials import Trials
 
+SCALES = ("sdp", "thurstone")
 EMBEDDING_COLUMNS = ("stimulus", "coordinate", "low", "high")
 
 
@@ -37,6 +43,9 @@ class EmbeddingAnalysis:
     boot: Bootstrap | None
     orientation: str
     seconds: dict[str, float]
+    scale: str = "sdp"
+    thurstone: ThurstoneFit | None = None
+    lapse: float | None = None
 
     def summary(self, trials: Trials) -> dict:
         spectrum = self.fit.eigenvalues
@@ -52,6 +61,11 @@ class EmbeddingAnalysis:
             "training_error": triplet_error(self.fit.gram, unique, weights),
             "training_error_1d": triplet_error(_gram_1d(self.coordinate), unique, weights),
             "orientation": self.orientation,
+            "scale": self.scale,
+            "thurstone": None if self.thurstone is None else {
+                "units": "noise SD of the observer model", "lapse": self.lapse,
+                "log_likelihood": self.thurstone.log_likelihood, "iterations": self.thurstone.iterations,
+                "success": self.thurstone.success, "message": self.thurstone.message},
             "bootstrap": None if self.boot is None else {
                 "resamples": len(self.boot.samples), "failed_solves": self.boot.failed_solves,
                 "percentiles": list(PERCENTILES)},
@@ -67,13 +81,19 @@ def _gram_1d(coordinate: np.ndarray) -> np.ndarray:
 
 def analyse(trials: Trials, lam: float | None = None, lambdas: Sequence[float] | None = None, folds: int = 10,
             resamples: int = 500, seed: int = 0, workers: int = 1, roughest: str | None = None,
-            progress: Callable[[str], Callable[[int, int], None] | None] = lambda what: None) -> EmbeddingAnalysis:
+            progress: Callable[[str], Callable[[int, int], None] | None] = lambda what: None,
+            scale: str = "sdp", lapse: float = DEFAULT_LAPSE) -> EmbeddingAnalysis:
     """Cross-validate lam (unless given), embed all trials at it, bootstrap (unless resamples == 0).
+
+    ``scale``: "sdp" (the SDP's first principal coordinate) or "thurstone" (the maximum-likelihood
+    scale of thurstone.py with lapse rate ``lapse``, started from the SDP coordinate).
 
     ``roughest`` is a stimulus id that must come out on the positive (rough) side; without it the
     sign is fixed by the stimulus farthest from the centre. ``progress(what)`` gives a callback for
     each stage.
     """
+    if scale not in SCALES:
+        raise InputError(f"scale must be one of {', '.join(SCALES)}, got {scale!r}", parameter="scale")
     if roughest is not None and roughest not in trials.stimuli:
         raise InputError(f"roughest stimulus {roughest!r} is not among the trials' stimuli", parameter="roughest")
     seconds: dict[str, float] = {}
@@ -91,17 +111,27 @@ def analyse(trials: Trials, lam: float | None = None, lambdas: Sequence[float] |
         raise SimulationError(f"the embedding SDP failed: {fit.message}")
     pivot = trials.stimuli.index(roughest) if roughest is not None else None
     coordinate = oriented(fit.coordinates(1)[:, 0], pivot)
+    metric = None
+    if scale == "thurstone":
+        start = time.perf_counter()
+        metric = thurstone_scale(unique, np.bincount(inverse, minlength=len(unique)), coordinate, lapse)
+        seconds["thurstone"] = time.perf_counter() - start
+        if not metric.success:
+            raise SimulationError(f"the Thurstone scale did not converge: {metric.message}")
+        coordinate = oriented(metric.coordinate, pivot)
     orientation = (f"{roughest} on the positive side" if roughest is not None
                    else "arbitrary sign (pass the roughest stimulus to orient rough-positive)")
     boot = None
     if resamples:
         start = time.perf_counter()
-        boot = bootstrap(trials, lam, coordinate, resamples, seed + 1, workers, progress("bootstrap"))
+        boot = (bootstrap(trials, lam, coordinate, resamples, seed + 1, workers, progress("bootstrap"))
+                if metric is None else
+                thurstone_bootstrap(trials, coordinate, resamples, seed + 1, lapse, progress("bootstrap")))
         seconds["bootstrap"] = time.perf_counter() - start
         if len(boot.samples) < 2:
             raise SimulationError(f"the bootstrap failed: {boot.failed_solves} of {resamples} solves failed")
     return EmbeddingAnalysis(trials.stimuli, coordinate, boot.low if boot else None, boot.high if boot else None,
-                             fit, cv, boot, orientation, seconds)
+                             fit, cv, boot, orientation, seconds, scale, metric, lapse if metric else None)
 
 
 def write_embedding_csv(path: str | Path, analysis: EmbeddingAnalysis) -> Path:

@@ -1,8 +1,15 @@
 """Bootstrap intervals of the 1-D embedding (the paper's Fig. 9): resample trials, re-embed.
 
-Each resample draws as many rows as the trials file has, with replacement, and solves the SDP at the
-chosen lam; its first principal coordinate is given the sign that agrees with the full-data
-embedding. The 5th and 95th percentiles over resamples are each stimulus's interval.
+Each resample draws as many rows as the trials file has, with replacement (rows are independent
+judgements), and either solves the SDP at the chosen lam (its first principal coordinate given the
+sign that agrees with the full-data embedding) or re-fits the Thurstone scale from the full-data
+scale. The 5th and 95th percentiles over resamples are each stimulus's interval.
+
+Measured in benchmarks/perception_recovery.py (30 stimuli, 2,000 trials, 3 seeds): the SDP's
+percentile intervals contain the truth 71% of the time; basic (59%), bias-corrected (64%) and normal
+(68%) intervals do worse and aligning each resample's scale to the full one changes nothing (71%):
+the shortfall is the SDP's own bias, which no interval built from resamples can see. The Thurstone
+scale's percentile intervals contain the truth 90.0% of the time (20 seeds).
 """
 from __future__ import annotations
 
@@ -15,6 +22,7 @@ from roughness.core.checks import integer
 
 from .embed import aligned
 from .parallel import SolveTask, solve_tasks
+from .thurstone import DEFAULT_LAPSE, thurstone_scale
 from .trials import Trials
 
 PERCENTILES = (5.0, 95.0)
@@ -53,3 +61,21 @@ def bootstrap(trials: Trials, lam: float, coordinate: np.ndarray, resamples: int
     ok = [r for r in results if r.success]
     samples = np.array([aligned(r.coordinates(1)[:, 0], coordinate) for r in ok])
     return Bootstrap(samples, len(results) - len(ok))
+
+
+def thurstone_bootstrap(trials: Trials, coordinate: np.ndarray, resamples: int = 500, seed: int = 0,
+                        lapse: float = DEFAULT_LAPSE,
+                        progress: Callable[[int, int], None] | None = None) -> Bootstrap:
+    """Resampled Thurstone scales, each fitted from ``coordinate`` (the full-data scale); serial (fast)."""
+    integer("resamples", resamples, minimum=2)
+    unique, _ = trials.unique()
+    samples, failed = [], 0
+    for i, weights in enumerate(resample_weights(trials, resamples, seed)):
+        fit = thurstone_scale(unique, weights, coordinate, lapse)
+        if fit.success:
+            samples.append(fit.coordinate)
+        else:
+            failed += 1
+        if progress:
+            progress(i + 1, resamples)
+    return Bootstrap(np.array(samples), failed)

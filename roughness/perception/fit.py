@@ -117,6 +117,29 @@ class Fit:
                 for force, v in sorted(self.forces.items())}
 
 
+def homogeneity_spreads(stimuli: Sequence, heightmaps: Sequence, engine: str = "surrogate") -> np.ndarray:
+    """Spread in JNDs of every stimulus (larger = less homogeneous): the stimuli table's
+    ``homogeneity`` column where given, else ``roughness.design.homogeneity`` (V over windows of the
+    map with ``engine``)."""
+    missing = [i for i, s in enumerate(stimuli) if s.homogeneity is None]
+    spreads = np.array([np.nan if s.homogeneity is None else s.homogeneity for s in stimuli], dtype=float)
+    if missing:
+        try:
+            from roughness.design.homogeneity import homogeneity
+        except ImportError:
+            raise InputError("excluding the least homogeneous stimuli needs a 'homogeneity' column in the stimuli "
+                             "table (spread in JNDs) or the design tools (roughness.design.homogeneity)",
+                             parameter="exclude_least_homogeneous") from None
+        for i in missing:
+            spreads[i] = float(homogeneity(heightmaps[i], engine=engine).spread_jnd)
+    return spreads
+
+
+def least_homogeneous(ids: Sequence[str], spreads: np.ndarray, count: int) -> list[str]:
+    """The ``count`` ids with the largest spread (ties: table order)."""
+    return [ids[i] for i in np.argsort(-np.asarray(spreads, dtype=float), kind="stable")[:count]]
+
+
 def classical_measures(heightmaps: Sequence) -> dict[str, np.ndarray]:
     """The classical roughness measures of roughness.classical on every stimulus's footprint."""
     from roughness.classical import MEASURES, footprint

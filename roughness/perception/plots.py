@@ -39,9 +39,11 @@ def plot_embedding(analysis: EmbeddingAnalysis, path: str | Path) -> Path:
     ax.plot(x, y, "o", ms=3, color="k", label="embedding of all trials")
     ax.legend(loc="lower right", fontsize=8)
     ax.set_yticks(y, [analysis.stimuli[i] for i in order], fontsize=7)
-    ax.set_xlabel("perceptual coordinate (embedding units; rough to the right)")
+    units = "noise SDs" if analysis.scale == "thurstone" else "embedding units"
+    ax.set_xlabel(f"perceptual coordinate ({units}; rough to the right)")
     ax.set_ylabel("stimulus")
-    ax.set_title(f"1-D embedding, lambda = {analysis.fit.lam:.3g}")
+    ax.set_title(f"1-D Thurstone scale (start: SDP at lambda = {analysis.fit.lam:.3g})" if analysis.scale == "thurstone"
+                 else f"1-D embedding, lambda = {analysis.fit.lam:.3g}")
     return _save(plt, fig, path)
 
 

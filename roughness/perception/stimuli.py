@@ -14,11 +14,15 @@ A CSV with a header and one row per stimulus::
   ``bumps``, or a natural family such as ``knit``) with ``seed`` (default 0) and ``params``
   (``key=value`` pairs separated by ``;``, e.g. ``wale_mm=1.2;height_mm=0.5``).
 
-Other columns are ignored (e.g. a description). Empty cells are absent values.
+An optional ``homogeneity`` column gives the stimulus's spread in just-noticeable differences (the
+``spread_jnd`` of ``roughness homogeneity``: larger = less homogeneous, >= 0); ``perception fit
+--exclude-least-homogeneous`` uses it where given instead of computing it. Other columns are ignored
+(e.g. a description). Empty cells are absent values.
 """
 from __future__ import annotations
 
 import csv
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -37,6 +41,7 @@ class Stimulus:
     texture: str | None = None
     seed: int = 0
     params: dict = field(default_factory=dict)
+    homogeneity: float | None = None  # spread in JNDs (larger = less homogeneous), if the table gives it
 
     def heightmap(self):
         """The stimulus's Heightmap (mm)."""
@@ -111,6 +116,10 @@ def _stimulus(row: dict, folder: Path) -> Stimulus:
     ident = cell.get("stimulus")
     if not ident:
         raise InputError("empty stimulus id")
+    spread = _number(cell, "homogeneity")
+    if spread is not None and not (math.isfinite(spread) and spread >= 0):
+        raise InputError(f"stimulus {ident!r}: homogeneity (spread in JNDs) must be a finite number >= 0, "
+                         f"got {cell['homogeneity']!r}")
     if ("file" in cell) == ("texture" in cell):
         raise InputError(f"stimulus {ident!r} needs exactly one of file or texture")
     if "file" in cell:
@@ -119,11 +128,12 @@ def _stimulus(row: dict, folder: Path) -> Stimulus:
         if not file.is_file():
             raise InputError(f"stimulus {ident!r}: heightmap file not found: {file}")
         return Stimulus(ident, file=file, pixel_mm=_number(cell, "pixel_mm"), height_mm=_number(cell, "height_mm"),
-                        dataset=cell.get("dataset"))
+                        dataset=cell.get("dataset"), homogeneity=spread)
     seed = cell.get("seed", "0")
     if not seed.isdigit():
         raise InputError(f"stimulus {ident!r}: seed must be a whole number >= 0, got {seed!r}")
-    return Stimulus(ident, texture=cell["texture"], seed=int(seed), params=_params(ident, cell.get("params", "")))
+    return Stimulus(ident, texture=cell["texture"], seed=int(seed), params=_params(ident, cell.get("params", "")),
+                    homogeneity=spread)
 
 
 def _number(cell: dict, name: str) -> float | None:
