@@ -137,8 +137,8 @@ def main() -> None:
                                                      "exponents": exponents}, indent=1))
     header = " | ".join(f"{name} (s / MB)" for name in STAGES)
     lines = ([args.note, ""] if args.note else []) + [
-        f"OMP_NUM_THREADS={args.threads}; each spacing in a fresh process with an empty mesh cache. Time and peak "
-        "traced memory (tracemalloc) per stage; contact and strain for one standard texture (lambda 1 mm).", "",
+        (f"OMP_NUM_THREADS={args.threads}; each spacing in a fresh process with an empty mesh cache. Time and peak "
+        "traced memory (tracemalloc) per stage; contact and strain for one standard texture (lambda 1 mm)."), "",
         f"| h (mm) | nodes | DOFs | {header} | contact rounds | RSS high-water (MB) |",
         "|" + "---|" * (len(STAGES) + 5)]
     for r in rows:

@@ -26,7 +26,7 @@ from pathlib import Path
 
 OUT = Path(__file__).parent / "results"
 FIDELITIES = ("coarse", "default", "fine")
-REPEATS = 3
+REPEATS = 5
 WARM_TEXTURES = [(0.75, 1), (1.0, 2), (1.25, 3), (1.5, 4), (0.625, 5)]
 
 
@@ -59,11 +59,11 @@ def one_fidelity(fidelity: str) -> dict:
     }
 
 
-def solver_comparison(direct: bool) -> list[dict]:
-    """One solve of the default block with every bottom node held (the textures' regime).
+def solver_comparison(direct: bool, fidelity: str = "default") -> list[dict]:
+    """One solve of the ``fidelity`` block with every bottom node held (the textures' regime).
 
     Each time is the best of ``REPEATS`` (the machine may be shared); ``direct`` adds SuperLU
-    and MKL Pardiso (if pypardiso is installed).
+    and MKL Pardiso (if pypardiso is installed), whose factorizations are timed once.
     """
     import numpy as np
     import pyamg
@@ -74,7 +74,7 @@ def solver_comparison(direct: bool) -> list[dict]:
     from roughness.simulate.linsolve import AMGCache, constrain
     from roughness.simulate.model import Block
 
-    block = Block(SimConfig().resolved().block_spec())
+    block = Block(SimConfig(fidelity=fidelity).resolved().block_spec())
     p = block.problem
     fixed = p.constraints(np.ones(len(p.bottom), dtype=bool), frictionless=False)
     values = np.zeros(p.n_dofs)
@@ -83,29 +83,33 @@ def solver_comparison(direct: bool) -> list[dict]:
     free = ~fixed
     rng = np.random.default_rng(0)
 
-    def best(fn) -> tuple[float, object]:
+    def best(fn, repeats: int = REPEATS) -> tuple[float, object]:
         times, out = [], None
-        for _ in range(REPEATS):
+        for _ in range(repeats):
             t = time.perf_counter()
             out = fn()
             times.append(time.perf_counter() - t)
         return min(times), out
 
-    rows = []
-    for name, precision in (("float32 V-cycle (now)", np.float32), ("float64 V-cycle", np.float64)):
+    def ours(name: str, precision: type) -> tuple[dict, np.ndarray, np.ndarray]:
         setup, system = best(lambda: constrain(k, fixed, AMGCache(p.amg.near_null, precision=precision)))
         solve, sol = best(lambda: system.solve(values))
-        u = sol.u
-        x0 = u + 1e-3 * rng.standard_normal(len(u))
+        x0 = sol.u + 1e-3 * rng.standard_normal(len(sol.u))
         warm, warm_sol = best(lambda: system.solve(values, x0=x0))
-        rows.append({"solver": f"pyamg SA + CG, {name}", "setup_s": setup, "solve_s": solve, "warm_solve_s": warm,
-                     "iterations": sol.iterations, "warm_iterations": warm_sol.iterations})
+        row = {"solver": f"pyamg SA + CG, {name}", "setup_s": setup, "solve_s": solve, "warm_solve_s": warm,
+               "iterations": sol.iterations, "warm_iterations": warm_sol.iterations}
+        return row, sol.u, x0
+
+    rows = [ours("float32 V-cycle (now)", np.float32)[0]]
+    row, u, x0 = ours("float64 V-cycle", np.float64)
+    rows.append(row)
+    system = constrain(k, fixed, p.amg)
     reference = u
     # Before: pyamg's own preconditioner, which also evaluates two residuals per application.
     matrix, b = system.matrix, np.where(fixed, system.diag * values, -(k @ np.where(fixed, values, 0.0)))
     setup, ml = best(lambda: pyamg.smoothed_aggregation_solver(matrix, B=p.amg.near_null, symmetry="symmetric"))
     m = ml.aspreconditioner(cycle="V")
-    tol = dict(rtol=0.0, atol=1e-6 * np.linalg.norm(b))
+    tol = {"rtol": 0.0, "atol": 1e-6 * np.linalg.norm(b)}
     solve, (x, _) = best(lambda: sla.cg(matrix, b, M=m, **tol))
     warm, _ = best(lambda: sla.cg(matrix, b, x0=x0, M=m, **tol))
     rows.insert(0, {"solver": "pyamg SA + CG, pyamg aspreconditioner (before)", "setup_s": setup, "solve_s": solve,
@@ -113,7 +117,7 @@ def solver_comparison(direct: bool) -> list[dict]:
     if direct:
         a = k[free][:, free].tocsc()
         rhs = b[free]
-        setup, lu = best(lambda: sla.splu(a))
+        setup, lu = best(lambda: sla.splu(a), 1)  # tens of seconds
         solve, _ = best(lambda: lu.solve(rhs))
         rows.append({"solver": "scipy splu (SuperLU)", "setup_s": setup, "solve_s": solve})
         try:
@@ -124,7 +128,7 @@ def solver_comparison(direct: bool) -> list[dict]:
             upper = sp.triu(a).tocsr()
             solver = pypardiso.PyPardisoSolver()
             solver.set_matrix_type(2)
-            setup, _ = best(lambda: solver.factorize(upper))
+            setup, _ = best(lambda: solver.factorize(upper), 1)
             solve, _ = best(lambda: solver.solve(upper, rhs))
             rows.append({"solver": "MKL Pardiso (pypardiso)", "setup_s": setup, "solve_s": solve})
     for r in rows:
@@ -167,9 +171,9 @@ def measure(fidelity: str, threads: int, source: Path | None = None) -> dict:
 
 
 def stage_table(rows: list[dict]) -> list[str]:
-    lines = ["| fidelity | h (mm) | nodes | mesh (s) | assembly (s) | sampler (s) | base field + AMG (s) | "
+    lines = [("| fidelity | h (mm) | nodes | mesh (s) | assembly (s) | sampler (s) | base field + AMG (s) | "
              "cold total (s) | contact (s/texture) | strain (s) | variation (s) | warm total (s/texture, mean / max) "
-             "| contact rounds | peak RSS (MB) |", "|" + "---|" * 14]
+             "| contact rounds | peak RSS (MB) |"), "|" + "---|" * 14]
     for r in rows:
         c, w = r["cold_stages"], r["warm_stages"]
         lines.append(f"| {r['fidelity']} | {r['h_contact_mm']} | {r['nodes']} | {c['mesh']:.2f} | {c['assembly']:.2f} "
@@ -181,8 +185,8 @@ def stage_table(rows: list[dict]) -> list[str]:
 
 def ratio_table(pairs: list[tuple[dict, dict]]) -> list[str]:
     """New/old time ratios per stage and the largest relative change of V, per fidelity."""
-    lines = ["| fidelity | assembly | base field + AMG | cold total | contact (warm) | warm total (mean) "
-             "| max relative change of V | CG iterations per texture, old -> new |", "|" + "---|" * 8]
+    lines = [("| fidelity | assembly | base field + AMG | cold total | contact (warm) | warm total (mean) "
+             "| max relative change of V | CG iterations per texture, old -> new |"), "|" + "---|" * 8]
     for old, new in pairs:
         change = max(abs(a - b) / abs(b) for a, b in zip(new["roughness"], old["roughness"]))
         cg = f"{[sum(x) for x in old['warm_cg_iterations']]} -> {[sum(x) for x in new['warm_cg_iterations']]}"
@@ -205,13 +209,15 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=2, help="OMP_NUM_THREADS of the measured processes (default 2)")
     parser.add_argument("--direct", action="store_true",
                         help="also time direct solvers (SuperLU, and MKL Pardiso if pypardiso is installed)")
+    parser.add_argument("--solver-fidelity", choices=FIDELITIES, default="default",
+                        help="block of the solver comparison (default: default)")
     parser.add_argument("--note", default="", help="a sentence on the machine's state, written above the tables")
     args = parser.parse_args()
     if args.one:
         print(json.dumps(one_fidelity(args.one)))
         return
     if args.solvers:
-        print(json.dumps(solver_comparison(args.direct)))
+        print(json.dumps(solver_comparison(args.direct, args.solver_fidelity)))
         return
     OUT.mkdir(exist_ok=True)
     rows, pairs = [], []
@@ -224,18 +230,19 @@ def main() -> None:
         if args.baseline is not None:
             pairs.append((old, rows[-1]))
     env = {**os.environ, "OMP_NUM_THREADS": str(args.threads)}
-    command = [sys.executable, __file__, "--solvers"] + (["--direct"] if args.direct else [])
+    command = [sys.executable, __file__, "--solvers", "--solver-fidelity", args.solver_fidelity]
+    command += ["--direct"] if args.direct else []
     solvers = json.loads(subprocess.run(command, env=env, check=True, capture_output=True,
                                         text=True).stdout.strip().splitlines()[-1])
     (OUT / "fem_stages.json").write_text(json.dumps(
-        {"threads": args.threads, "note": args.note, "fidelities": rows, "solvers": solvers,
+        {"threads": args.threads, "note": args.note, "solver_fidelity": args.solver_fidelity, "fidelities": rows, "solvers": solvers,
          "baseline": [old for old, _ in pairs]}, indent=1))
     lines = ([args.note, ""] if args.note else []) + [f"OMP_NUM_THREADS={args.threads}.", ""] + stage_table(rows)
     if pairs:
-        lines += ["", f"New / old, measured alternately in the same session against the source tree "
-                      f"`{args.baseline.name}` (below 1: faster now):", ""] + ratio_table(pairs)
-    lines += ["", f"Linear solvers, one solve of the default block ({solvers[0]['dofs']} free DOFs, all contact nodes "
-                  f"held; best of {REPEATS}):", "", "| solver | set-up (s) | solve (s) | warm-started solve (s) |",
+        lines += ["", (f"New / old, measured alternately in the same session against the source tree "
+                      f"`{args.baseline.name}` (below 1: faster now):"), ""] + ratio_table(pairs)
+    lines += ["", (f"Linear solvers, one solve of the {args.solver_fidelity} block ({solvers[0]['dofs']} free DOFs, all contact nodes "
+                  f"held; best of {REPEATS}):"), "", "| solver | set-up (s) | solve (s) | warm-started solve (s) |",
               "|---|---|---|---|"]
     lines += [f"| {s['solver']} | {s['setup_s']:.2f} | {s['solve_s']:.2f} | "
               f"{s['warm_solve_s']:.2f} |" if "warm_solve_s" in s else
