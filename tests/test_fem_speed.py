@@ -56,10 +56,11 @@ def test_block_assembly_equals_the_textbook_sum(mesh):
     rng = np.random.default_rng(0)
     young = rng.uniform(0.01, 0.1, len(mesh.tets))
     poisson = rng.uniform(0.2, 0.45, len(mesh.tets))
-    k = stiffness(mesh, young, poisson)
     reference = _voigt_stiffness(mesh, young, poisson)
-    assert k.shape == reference.shape and k.nnz == reference.nnz  # the same pattern, one entry per node-pair DOF
-    assert abs(k - reference).max() < 1e-12 * abs(reference).max()  # round-off of summing ~30 terms
+    for chunk in (10**9, 4000):  # in one piece, and in chunks of a few hundred elements
+        k = stiffness(mesh, young, poisson, chunk=chunk)
+        assert k.shape == reference.shape and k.nnz == reference.nnz  # the same pattern: every node pair's 3x3 block
+        assert abs(k - reference).max() < 1e-12 * abs(reference).max()  # round-off of summing ~30 terms
 
 
 @pytest.fixture(scope="module")
