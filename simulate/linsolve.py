@@ -46,9 +46,9 @@ class VCycle:
         self.dtype = dtype
         levels = hierarchy.levels
         for level in levels:
-            level.A = level.A.astype(dtype)
+            level.A = _cast(level.A, dtype)
             if hasattr(level, "P"):
-                level.P, level.R = level.P.astype(dtype), level.R.astype(dtype)
+                level.P, level.R = _cast(level.P, dtype), _cast(level.R, dtype)
         change_smoothers(hierarchy, smoother, smoother)
         self.levels = levels[:-1]
         self.coarse = np.linalg.pinv(levels[-1].A.toarray().astype(float)).astype(dtype)
@@ -65,6 +65,12 @@ class VCycle:
         x += level.P @ coarse_x
         level.postsmoother(level.A, x, b)
         return x
+
+
+def _cast(matrix: sp.csr_matrix | sp.bsr_matrix, dtype: type) -> sp.csr_matrix | sp.bsr_matrix:
+    """``matrix`` with its values in ``dtype``, sharing its index arrays (scipy's ``astype`` first
+    re-sums duplicate entries, which pyamg's products do not have, at the cost of a sort)."""
+    return type(matrix)((matrix.data.astype(dtype), matrix.indices, matrix.indptr), shape=matrix.shape)
 
 
 @dataclass
