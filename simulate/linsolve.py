@@ -54,7 +54,8 @@ class VCycle:
         self.coarse = np.linalg.pinv(levels[-1].A.toarray().astype(float)).astype(dtype)
 
     def __call__(self, b: np.ndarray) -> np.ndarray:
-        return self._cycle(0, b.astype(self.dtype)).astype(float)
+        b = b.astype(self.dtype)
+        return (self._cycle(0, b) if self.levels else self.coarse @ b).astype(float)  # one level: solved directly
 
     def _cycle(self, i: int, b: np.ndarray) -> np.ndarray:
         level = self.levels[i]
