@@ -13,6 +13,9 @@ from .mesh import Mesh
 # Four-point rule on the reference tetrahedron, exact for quadratics (barycentric).
 _A, _B = 0.5854101966249685, 0.1381966011250105
 QUAD4 = np.array([[_A, _B, _B, _B], [_B, _A, _B, _B], [_B, _B, _A, _B], [_B, _B, _B, _A]])
+# Node-pair blocks per assembly chunk (16 per P1 element, 100 per P2): bounds each element-matrix
+# array to about 230 MB however fine the mesh.
+CHUNK_BLOCKS = 3_200_000
 _EDGES = np.array([[0, 1], [1, 2], [0, 2], [0, 3], [1, 3], [2, 3]])
 
 
@@ -49,25 +52,60 @@ def quadrature(order: int) -> tuple[np.ndarray, np.ndarray]:
     return QUAD4, np.full(4, 0.25)
 
 
-def stiffness(mesh: Mesh, young_mpa: np.ndarray, poisson: np.ndarray) -> sp.csr_matrix:
-    """Global stiffness matrix (N/mm) for per-element moduli."""
+def stiffness(mesh: Mesh, young_mpa: np.ndarray, poisson: np.ndarray,
+              chunk: int = CHUNK_BLOCKS) -> sp.csr_matrix:
+    """Global stiffness matrix (N/mm) for per-element moduli, assembled about ``chunk`` node-pair blocks at a time."""
     grad_bary, vol = barycentric_gradients(mesh.points, mesh.tets)
     lam, mu = lame(np.asarray(young_mpa, float), np.asarray(poisson, float))
-    nn = mesh.tets.shape[1]
-    ke = np.zeros((len(vol), nn, 3, nn, 3))
-    points, weights = quadrature(mesh.order)
+    lam, mu = np.broadcast_to(lam, vol.shape), np.broadcast_to(mu, vol.shape)
+    total = None
+    step = max(1, chunk // mesh.tets.shape[1] ** 2)
+    for start in range(0, len(vol), step):
+        part = slice(start, start + step)
+        blocks = element_blocks(grad_bary[part], vol[part], lam[part], mu[part], mesh.order)
+        matrix = assemble_blocks(blocks, mesh.tets[part], len(mesh.points))
+        total = matrix if total is None else total + matrix
+    return total.tocsr()
+
+
+def element_blocks(grad_bary: np.ndarray, vol: np.ndarray, lam: np.ndarray, mu: np.ndarray,
+                   order: int) -> np.ndarray:
+    """Element stiffness matrices as 3x3 blocks (m, n, n, 3, 3): block (a, b) couples nodes i and j."""
+    nn = 4 if order == 1 else 10
+    blocks = np.zeros((len(vol), nn, nn, 3, 3))
+    diagonal = np.arange(3)
+    points, weights = quadrature(order)
     for bary, w in zip(points, weights):
-        g = shape_gradients(grad_bary, bary, mesh.order)
+        g = shape_gradients(grad_bary, bary, order)
         wv = w * vol
-        ke += np.einsum("e,eia,ejb->eiajb", wv * lam, g, g)
-        ke += np.einsum("e,eib,eja->eiajb", wv * mu, g, g)
-        gg = np.einsum("e,eic,ejc->eij", wv * mu, g, g)
-        ke += gg[:, :, None, :, None] * np.eye(3)[None, None, :, None, :]
-    dofs = (3 * mesh.tets[:, :, None] + np.arange(3)).reshape(len(vol), -1)
-    rows = np.repeat(dofs, 3 * nn, axis=1).ravel()
-    cols = np.tile(dofs, (1, 3 * nn)).ravel()
-    n = 3 * len(mesh.points)
-    return sp.csr_matrix((ke.ravel(), (rows, cols)), shape=(n, n))
+        outer = g[:, :, None, :, None] * g[:, None, :, None, :]  # g_ia g_jb
+        blocks += (wv * lam)[:, None, None, None, None] * outer
+        outer *= (wv * mu)[:, None, None, None, None]
+        blocks += outer.swapaxes(3, 4)  # mu g_ib g_ja
+        blocks[:, :, :, diagonal, diagonal] += ((wv * mu)[:, None, None] * (g @ g.transpose(0, 2, 1)))[..., None]
+    return blocks
+
+
+def assemble_blocks(blocks: np.ndarray, cells: np.ndarray, n_nodes: int) -> sp.bsr_matrix:
+    """Sum element matrices given as 3x3 node blocks (m, n, n, 3, 3) into a global 3x3-block matrix.
+
+    Entries are summed per node pair (nine times fewer than per DOF) after one sort of the
+    pair keys, packed with their position into one int64 when it fits (a plain sort is
+    faster than an argsort).
+    """
+    keys = (cells[:, :, None].astype(np.int64) * n_nodes + cells[:, None, :]).ravel()
+    shift = max(1, int(len(keys) - 1).bit_length())
+    if int(keys.max()).bit_length() + shift <= 63:
+        packed = np.sort((keys << shift) | np.arange(len(keys)))
+        order, keys = packed & ((1 << shift) - 1), packed >> shift
+    else:
+        order = np.argsort(keys)
+        keys = keys[order]
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
+    summed = np.add.reduceat(blocks.reshape(-1, 9)[order], starts, axis=0)
+    rows, cols = np.divmod(keys[starts], n_nodes)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n_nodes))])
+    return sp.bsr_matrix((summed.reshape(-1, 3, 3), cols, indptr), shape=(3 * n_nodes, 3 * n_nodes))
 
 
 def vertex_strain_operator(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
