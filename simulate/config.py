@@ -135,5 +135,10 @@ class SimConfig:
                          depth_mm=self.depth_mm, window_mm=self.window_mm, grid_mm=self.grid_mm)
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        """The fields as a dict; ``tolerance`` only for ``converged``, the one fidelity whose results
+        depend on it (so records of the other fidelities keep their identity)."""
+        out = asdict(self)
+        if self.fidelity != "converged":
+            del out["tolerance"]
+        return out
 

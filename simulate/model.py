@@ -40,7 +40,8 @@ class Note:
     model; unusual beyond ``DEEP_INDENTATION_TISSUES``), ``not_converged``, ``cycled``,
     ``unresolved`` (nodes held in contact under tension; unusual when they pull more than
     ``HELD_TENSION_FRACTION`` of the force), ``locking`` (P1 near incompressibility),
-    ``unresolved_texture`` (features finer than the contact mesh).
+    ``unresolved_texture`` (features finer than the contact mesh), ``tolerance_not_met``
+    (``converged`` stopped at its finest level above the tolerance).
     """
 
     code: str
