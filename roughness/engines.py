@@ -2,7 +2,7 @@
 
 Used by ``roughness predict``, ``roughness compare`` and the Python API (``roughness.predict``).
 
-Spec strings (compare): ``fem:coarse``, ``fem:default``, ``fem:fine``, ``surrogate`` (or
+Spec strings (compare): ``fem:coarse``, ``fem:default``, ``fem:fine``, ``fem:converged``, ``surrogate`` (or
 ``surrogate:PATH.onnx``), and the classical measures ``ra``, ``p90``, ``glcm_sum_of_squares``,
 ``glcm_sum_variance``. Each engine returns a value and the seconds it took for one texture: FEM
 reports the solve with its block prepared (mesh, assembly and base field are paid once per process
@@ -34,7 +34,7 @@ from roughness.simulate.heightmap import Heightmap
 
 from .classical import MEASURES, footprint
 
-FEM_FIDELITIES = ("coarse", "default", "fine")
+FEM_FIDELITIES = ("coarse", "default", "fine", "converged")
 PREDICT_ENGINES = ("surrogate", "fem", "auto")
 
 
@@ -177,25 +177,27 @@ class Prediction:
     domain_notes: list[str] = field(default_factory=list)
     roughness_stderr: float | None = None  # FEM: Monte Carlo standard error of V; surrogate: not estimated yet
     roughness_std: float | None = None  # surrogate ensemble: spread of V over its members; None: not estimated
+    discretization_error: float | None = None  # FEM: estimated relative error of V from the mesh
 
     def as_dict(self) -> dict:
         return {"input": self.source, "roughness": self.roughness, "roughness_stderr": self.roughness_stderr,
-                "roughness_std": self.roughness_std,
+                "roughness_std": self.roughness_std, "discretization_error": self.discretization_error,
                 "engine": self.engine, "fidelity": self.fidelity, "in_domain": self.in_domain,
                 "seconds": self.seconds, **self.placement.as_dict(), "domain_notes": self.domain_notes}
 
 
 def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
             model: object | str | Path | None = None, centre_mm: tuple[float, float] | None = None,
-            tile: bool = False, fidelity: str | None = None, batch_size: int = 256,
+            tile: bool = False, fidelity: str | None = None, tolerance: float | None = None, batch_size: int = 256,
             sources: Iterable[str] | None = None,
             on_result: Callable[[Prediction], None] | None = None, max_std: float | None = None) -> list[Prediction]:
     """Predict V for each heightmap (mm) with ``engine`` (see the module docstring).
 
     ``model`` is a ``SurrogateModel`` or the path of an ONNX model (default: the shipped one);
-    ``fidelity`` is the FEM's (default: the model's training labels'). ``sources`` names the
-    inputs in the results; ``on_result`` is called as each result is ready. ``max_std``: the
-    relative spread above which ``auto`` runs the FEM (ensemble models only; default: the model's).
+    ``fidelity`` is the FEM's (default: the model's training labels'; ``converged`` refines to
+    ``tolerance``, see ``SimConfig``). ``sources`` names the inputs in the results; ``on_result`` is
+    called as each result is ready. ``max_std``: the relative spread above which ``auto`` runs the FEM
+    (ensemble models only; default: the model's).
     """
     from roughness.surrogate.calibration import load_scale
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
@@ -205,8 +207,11 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     integer("batch_size", batch_size, minimum=1)
     model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
     max_std = uncertainty_limit(model, max_std)
-    fem = FemEngine.of(fidelity or model.fidelity, model.meta.simulation, centre_mm, tile)
-    surrogate_scale, fem_scale = load_scale(model.fidelity), load_scale(fem.fidelity)
+    simulation = {**model.meta.simulation, **({} if tolerance is None else {"tolerance": tolerance})}
+    fem = FemEngine.of(fidelity or model.fidelity, simulation, centre_mm, tile)
+    # converged FEM answers are placed on the most accurate tabulated scale, ``default``'s
+    surrogate_scale = load_scale(model.fidelity)
+    fem_scale = load_scale("default" if fem.fidelity == "converged" else fem.fidelity)
     names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
     results: list[Prediction] = []
     batch: list[tuple[str, Heightmap]] = []
@@ -224,7 +229,8 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
             if engine == "fem" or (engine == "auto" and notes):
                 r = fem.simulate(hm)
                 result = Prediction(source, r.roughness, "fem", fem.fidelity, not why, r.seconds,
-                                    fem_scale.place(r.roughness), notes, r.roughness_stderr)
+                                    fem_scale.place(r.roughness), notes, r.roughness_stderr,
+                                    discretization_error=r.discretization_error)
             else:
                 result = Prediction(source, float(v), "surrogate", model.fidelity, not why, share,
                                     surrogate_scale.place(float(v)), notes, roughness_std=std)

@@ -4,15 +4,17 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-from roughness.core.checks import integer, positive
+from roughness.core.checks import in_range, integer, positive
 from roughness.core.errors import InputError
 
+from .discretization import LADDER_MM
 from .heightmap import Heightmap
 from .mesh import MeshSpec
 
-# Contact-face spacing (mm) per fidelity; ``auto`` picks from this ladder.
+# Contact-face spacing (mm) per fidelity; ``auto`` picks from this ladder; ``converged`` refines
+# (simulate/converged.py) until V's estimated discretization error is below ``tolerance``.
 FIDELITY_SPACING_MM = {"coarse": 0.3, "default": 0.2, "fine": 0.14}
-FIDELITIES = ("coarse", "default", "fine", "auto")
+FIDELITIES = ("coarse", "default", "fine", "auto", "converged")
 CONTACT_MODES = ("stick", "frictionless")
 BONE_MODELS = ("rigid", "elastic")
 ELEMENTS = ("p1", "p2")
@@ -22,7 +24,8 @@ CHOICES = {"fidelity": FIDELITIES, "contact": CONTACT_MODES, "bone": BONE_MODELS
 # for all of them: the load and contact law (force_n, contact, max_rounds: the contact solve per
 # texture) and the disk-pair sampling of V (pairs, pair_distance_mm, disk_radius_mm, seed).
 # Every other field enters BlockSpec (fidelity through the h_contact_mm it resolves to).
-RUN_FIELDS = frozenset({"force_n", "contact", "max_rounds", "pairs", "pair_distance_mm", "disk_radius_mm", "seed"})
+RUN_FIELDS = frozenset({"force_n", "contact", "max_rounds", "pairs", "pair_distance_mm", "disk_radius_mm", "seed",
+                        "tolerance"})
 
 
 @dataclass(frozen=True)
@@ -54,6 +57,7 @@ class SimConfig:
     force_n: float = 10.0
     contact: str = "stick"
     fidelity: str = "default"
+    tolerance: float = 0.03  # converged: target relative discretization error of V
     element: str = "p1"
     h_contact_mm: float | None = None
     depth_mm: float = 0.75
@@ -79,6 +83,8 @@ class SimConfig:
                 raise InputError(f"{name} must lie in (-1, 0.5), got {value}", parameter=name)
         if self.h_contact_mm is not None:
             positive("h_contact_mm", self.h_contact_mm)
+        positive("tolerance", self.tolerance)
+        in_range("tolerance", self.tolerance, 0.0, 1.0)
         if self.depth_mm >= self.tissue_mm:
             raise InputError(f"receptor depth {self.depth_mm} mm must be inside the {self.tissue_mm} mm tissue",
                              parameter="depth_mm")
@@ -92,9 +98,12 @@ class SimConfig:
         integer("seed", self.seed, minimum=0)
 
     def spacing_mm(self, heightmap: Heightmap | None = None) -> float:
-        """Contact-face spacing for this fidelity (``auto`` needs the heightmap)."""
+        """Contact-face spacing for this fidelity (``auto`` needs the heightmap; ``converged``
+        starts at the coarsest rung of its ladder)."""
         if self.h_contact_mm is not None:
             return self.h_contact_mm
+        if self.fidelity == "converged":
+            return LADDER_MM[0]
         if self.fidelity != "auto":
             return FIDELITY_SPACING_MM[self.fidelity]
         feature = heightmap.feature_size_mm() if heightmap is not None else math.inf
@@ -126,5 +135,10 @@ class SimConfig:
                          depth_mm=self.depth_mm, window_mm=self.window_mm, grid_mm=self.grid_mm)
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        """The fields as a dict; ``tolerance`` only for ``converged``, the one fidelity whose results
+        depend on it (so records of the other fidelities keep their identity)."""
+        out = asdict(self)
+        if self.fidelity != "converged":
+            del out["tolerance"]
+        return out
 

@@ -40,7 +40,8 @@ class Note:
     model; unusual beyond ``DEEP_INDENTATION_TISSUES``), ``not_converged``, ``cycled``,
     ``unresolved`` (nodes held in contact under tension; unusual when they pull more than
     ``HELD_TENSION_FRACTION`` of the force), ``locking`` (P1 near incompressibility),
-    ``unresolved_texture`` (features finer than the contact mesh).
+    ``unresolved_texture`` (features finer than the contact mesh), ``tolerance_not_met``
+    (``converged`` stopped at its finest level above the tolerance).
     """
 
     code: str
@@ -53,7 +54,9 @@ class Result:
     """Roughness of one texture and how it was obtained (mm, N, s).
 
     ``iterations``: contact rounds; ``cg_iterations``, ``amg_setups``: linear-solver work of
-    this texture's contact solve; ``notes``: see ``Note``.
+    this texture's contact solve; ``notes``: see ``Note``; ``discretization_error``: estimated
+    relative error of V from the mesh (``simulate.discretization``), with ``ladder`` the levels
+    solved for it (``simulate.converged.Level``, the last one this result's).
     """
 
     roughness: float
@@ -77,18 +80,21 @@ class Result:
     notes: list[Note]
     config: SimConfig
     state: ContactResult | None = field(default=None, repr=False)
+    discretization_error: float | None = None
+    ladder: list = field(default_factory=list)
 
     def summary(self) -> dict:
         """The scalars, contact history, notes and main settings, as plain Python types (JSON-ready)."""
         keys = ("roughness", "roughness_stderr", "contact_fraction", "indentation_mm", "converged",
                 "iterations", "cg_iterations", "amg_setups", "unresolved_nodes", "cycled", "nodes", "dofs",
-                "seconds")
+                "seconds", "discretization_error")
         out = {k: getattr(self, k) for k in keys}
         out.update(stage_seconds={k: round(v, 4) for k, v in self.stage_seconds.items()},
                    contact_history=self.contact_history, notes=[asdict(n) for n in self.notes],
                    fidelity=self.config.fidelity, h_contact_mm=self.config.h_contact_mm,
                    force_n=self.config.force_n, poisson=self.config.poisson, contact=self.config.contact,
-                   element=self.config.element, bone=self.config.bone)
+                   element=self.config.element, bone=self.config.bone, tolerance=self.config.tolerance,
+                   ladder=[asdict(level) for level in self.ladder])
         return json.loads(canonical_json(out))  # numpy scalars and arrays become Python numbers and lists
 
     @property
@@ -176,11 +182,25 @@ class Simulator:
         return self._blocks[key]
 
     def run(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False,
-            callback: Callable[[ContactRound], None] | None = None, **overrides) -> Result:
+            callback: Callable[[ContactRound], None] | None = None, estimate_error: bool = True,
+            **overrides) -> Result:
         """Roughness V of ``heightmap`` under the skin footprint centred at ``centre_mm``.
 
         ``overrides`` replace ``SimConfig`` fields; ``callback`` receives each contact round's statistics.
+        With ``estimate_error`` (and always for fidelity ``converged``) a coarser level is solved too, for
+        the discretization-error estimate (``simulate.converged``); without it, ``solve``: one level.
         """
+        if estimate_error or replace(self.config, **overrides).fidelity == "converged":
+            from .converged import estimated
+
+            return estimated(self, heightmap, centre_mm, tile, callback, **overrides)
+        return self.solve(heightmap, centre_mm, tile, callback, **overrides)
+
+    def solve(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False,
+              callback: Callable[[ContactRound], None] | None = None,
+              initial: Callable[[np.ndarray], np.ndarray] | None = None, **overrides) -> Result:
+        """V at one level (no discretization-error estimate); ``initial`` maps contact-face points
+        (n, 2) in mm to the starting contact set (default: what the flat block's indentation touches)."""
         t_start = time.perf_counter()
         config = replace(self.config, **overrides).resolved(heightmap)
         centre = centre_mm or heightmap.centre_mm
@@ -194,8 +214,9 @@ class Simulator:
         stages["base_field"] = time.perf_counter() - t
         z0 = heightmap.max_in_footprint(config.width_mm, centre, periodic=tile)
         surface = texture_surface(heightmap, centre, z0, tile)
-        # Initial contact set: what the flat block's indentation at this force would touch.
-        initial = surface(*block.problem.bottom_xy.T) >= -flat_indentation
+        # Initial contact set: given, or what the flat block's indentation at this force would touch.
+        initial = (initial(block.problem.bottom_xy) if initial is not None
+                   else surface(*block.problem.bottom_xy.T) >= -flat_indentation)
         t = time.perf_counter()
         try:
             state = solve_contact(block.problem, surface, config.force_n, config.contact == "frictionless",

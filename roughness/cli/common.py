@@ -68,6 +68,7 @@ POSITIVE = Number(float, low=0, low_open=True)
 COUNT = Number(int, low=1)
 SEED = Number(int, low=0, high=2**32 - 1)
 POISSON = Number(float, low=-1, high=0.5, low_open=True, high_open=True)
+FRACTION = Number(float, low=0, high=1, low_open=True, high_open=True)
 
 
 def add_heightmap_args(p: argparse.ArgumentParser) -> None:

@@ -5,7 +5,7 @@ import argparse
 import json
 import sys
 
-from .common import COUNT, SEED, finish, write_stdout
+from .common import COUNT, FRACTION, SEED, finish, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -20,7 +20,11 @@ def add_parser(sub) -> None:
     b.add_argument("--n", type=COUNT, required=True, help="number of samples (the first n of the recipe)")
     b.add_argument("--recipe", metavar="JSON", help="recipe file (default: the built-in recipe, bump textures only)")
     b.add_argument("--fidelity", choices=FIDELITIES, default=BUILD_CONFIG.fidelity,
-                   help=f"FEM mesh resolution of every sample (default {BUILD_CONFIG.fidelity})")
+                   help=f"FEM mesh resolution of every sample; converged: refined until the estimated "
+                        f"discretization error of V is below --tolerance (default {BUILD_CONFIG.fidelity})")
+    b.add_argument("--tolerance", type=FRACTION, default=BUILD_CONFIG.tolerance,
+                   help=f"--fidelity converged: target relative discretization error of V "
+                        f"(default {BUILD_CONFIG.tolerance})")
     b.add_argument("--workers", type=COUNT, default=WORKERS,
                    help=f"local Dask worker processes, one thread each (default {WORKERS}; ignored with --scheduler)")
     b.add_argument("--scheduler", metavar="ADDRESS",
@@ -46,7 +50,7 @@ def build(args: argparse.Namespace) -> int:
     recipe = load_recipe(args.recipe) if args.recipe else Recipe()
     if args.seed is not None:
         recipe = replace(recipe, seed=args.seed)
-    config = replace(BUILD_CONFIG, fidelity=args.fidelity)
+    config = replace(BUILD_CONFIG, fidelity=args.fidelity, tolerance=args.tolerance)
     try:
         counts = build(args.out, args.n, recipe, config, workers=args.workers, scheduler=args.scheduler,
                        quiet=args.quiet)

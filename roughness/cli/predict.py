@@ -7,7 +7,7 @@ import os
 import sys
 import time
 
-from .common import COUNT, POSITIVE, add_overwrite, add_quiet, add_reading_args, defaults, finish, float_pair, log
+from .common import COUNT, FRACTION, POSITIVE, add_overwrite, add_quiet, add_reading_args, defaults, finish, float_pair, log
 
 MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
 
@@ -28,9 +28,11 @@ def add_parser(sub) -> None:
                     help="ensemble models: --engine auto also runs the FEM where the relative spread "
                          "roughness_std / (V + 0.001) exceeds this (default: the threshold measured when the "
                          "ensemble was exported; single-network models give no spread)")
-    pr.add_argument("--fidelity", choices=("coarse", "default"),
+    pr.add_argument("--fidelity", choices=("coarse", "default", "converged"),
                     help="FEM fidelity (default: that of the model's training labels; the standard scale "
-                         "is tabulated for these two)")
+                         "is tabulated for coarse and default; converged answers are placed on default's)")
+    pr.add_argument("--tolerance", type=FRACTION,
+                    help="--fidelity converged: target relative discretization error of V (default: 0.03)")
     add_reading_args(pr)
     pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures (default: off)")
     pr.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
@@ -71,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 
     predict(reader.heightmaps(), engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
-            fidelity=args.fidelity, batch_size=args.batch_size,
+            fidelity=args.fidelity, tolerance=args.tolerance, batch_size=args.batch_size,
             sources=reader.sources(), on_result=show, max_std=args.max_std)
     for source, error in reader.errors:
         print(f"roughness: error: {error}", file=sys.stderr)
@@ -118,6 +120,8 @@ def _prediction_line(p) -> str:
              f"off the standard scale: ~ lambda {where.equivalent_lambda_mm:.3f} mm extrapolated by the scale's power "
              f"law, {where.jnd_from_nearest:+.1f} JND from {where.nearest_standard}")
     domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
-    sure = f" ± {p.roughness_stderr:.4f}" if p.roughness_stderr is not None else ""  # FEM: Monte Carlo error
-    sure += f" ± {p.roughness_std:.4f}" if p.roughness_std is not None else ""  # surrogate ensemble: member spread
+    sure = f" ± {p.roughness_stderr:.4f} (Monte Carlo)" if p.roughness_stderr is not None else ""  # FEM only
+    sure += f" ± {p.roughness_std:.4f} (ensemble spread)" if p.roughness_std is not None else ""
+    if p.discretization_error is not None:
+        sure += f" ± {p.discretization_error * abs(p.roughness):.4f} (discretization)"
     return f"{p.source}: V = {p.roughness:.4f}{sure} ({p.engine}, {domain}, {1e3 * p.seconds:.1f} ms), {scale}"

@@ -5,7 +5,7 @@ import argparse
 import json
 
 from . import common
-from .common import POISSON, POSITIVE, SEED, add_heightmap_args, log
+from .common import FRACTION, POISSON, POSITIVE, SEED, add_heightmap_args, log
 
 
 def add_parser(sub) -> None:
@@ -16,7 +16,10 @@ def add_parser(sub) -> None:
     sim = sub.add_parser("simulate", help="FEM roughness of a heightmap (reference engine)")
     add_heightmap_args(sim)
     sim.add_argument("--fidelity", choices=CHOICES["fidelity"], default=d.fidelity,
-                     help=f"contact-mesh spacing: {spacing}, auto from the feature size (default: %(default)s)")
+                     help=f"contact-mesh spacing: {spacing}, auto from the feature size, converged: refined until "
+                          "the estimated discretization error of V is below --tolerance (default: %(default)s)")
+    sim.add_argument("--tolerance", type=FRACTION, default=d.tolerance,
+                     help="--fidelity converged: target relative discretization error of V (default: %(default)s)")
     sim.add_argument("--force", type=POSITIVE, default=d.force_n, help="normal force in N (default: %(default)s)")
     sim.add_argument("--poisson", type=POISSON, default=d.poisson, help="tissue Poisson ratio (default: %(default)s)")
     sim.add_argument("--contact", choices=CHOICES["contact"], default=d.contact,
@@ -46,9 +49,10 @@ def run(args: argparse.Namespace) -> int:
             check_output(getattr(args, name), args.overwrite, name)
     hm = load_heightmap(args.heightmap, pixel_mm=args.pixel_mm, height_mm=args.height_mm)
     config = SimConfig(fidelity=args.fidelity, force_n=args.force, poisson=args.poisson, contact=args.contact,
-                       element=args.element, bone=args.bone, seed=args.seed)
+                       element=args.element, bone=args.bone, seed=args.seed,
+                       tolerance=args.tolerance)
     log(args, f"{args.heightmap}: {hm.shape[1]} x {hm.shape[0]} px of {hm.pixel_mm} mm; "
-              f"{config.fidelity} fidelity, contact spacing {config.spacing_mm(hm)} mm; "
+              f"{config.fidelity} fidelity, contact spacing {_spacing(config, hm)}; "
               "preparing the skin block (cached after the first run) ...")
     sim = Simulator(config)
     result = sim.run(hm, centre_mm=args.centre, tile=args.tile)
@@ -71,9 +75,16 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _spacing(config, hm) -> str:
+    if config.fidelity == "converged":
+        return f"refined from {config.spacing_mm(hm)} mm until the error estimate is below {config.tolerance:g}"
+    return f"{config.spacing_mm(hm)} mm"
+
+
 def _print_result(r) -> None:
-    print(f"roughness V        {r.roughness:.5f} ± {r.roughness_stderr:.5f} (strain variation at "
-          f"{r.config.depth_mm} mm depth, d = r = {r.config.pair_distance_mm} mm)")
+    print(f"roughness V        {r.roughness:.5f} ± {r.roughness_stderr:.5f} (Monte Carlo) ± "
+          f"{r.discretization_error * abs(r.roughness):.5f} (discretization, {100 * r.discretization_error:.1f}%)")
+    print(f"                   strain variation at {r.config.depth_mm} mm depth, d = r = {r.config.pair_distance_mm} mm")
     print(f"contact fraction   {100 * r.contact_fraction:.1f}%")
     print(f"indentation        {r.indentation_mm:.3f} mm at {r.config.force_n} N")
     if r.converged:
@@ -82,5 +93,12 @@ def _print_result(r) -> None:
     else:
         status = f"NOT converged; {r.unresolved_nodes} nodes unresolved"
     print(f"contact rounds     {r.iterations} ({status})")
-    print(f"mesh               {r.nodes} nodes, {r.config.element.upper()}, h = {r.config.h_contact_mm} mm")
+    print(f"mesh               {r.nodes} nodes, {r.config.element.upper()}, h = {r.config.h_contact_mm} mm ({_level(r)})")
     print(f"time               {r.seconds:.2f} s")
+
+
+def _level(r) -> str:
+    """The fidelity, and the levels solved for the error estimate."""
+    solved = ", ".join(f"{level.h_contact_mm:g}" for level in r.ladder)
+    reached = "level reached by converged" if r.config.fidelity == "converged" else f"fidelity {r.config.fidelity}"
+    return f"{reached}; error estimated from h = {solved} mm"
