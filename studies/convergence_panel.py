@@ -163,10 +163,9 @@ def run_levels(textures: dict, names: list[str], levels: list[tuple[str, float]]
 def run_converged(textures: dict, names: list[str], tolerance: float, out: Path) -> None:
     """Per texture, timed in one warm process: a plain ``default`` solve and a ``converged`` run."""
     from roughness import SimConfig, Simulator
-    from roughness.simulate.discretization import LADDER_MM
-
     from roughness.core.hashing import digest
     from roughness.simulate import discretization
+    from roughness.simulate.discretization import LADDER_MM
 
     config = SimConfig(fidelity="converged", tolerance=tolerance)
     # the estimator's constants decide where the ladder stops: they are part of the key

@@ -7,7 +7,18 @@ import os
 import sys
 import time
 
-from .common import COUNT, FRACTION, POSITIVE, add_overwrite, add_quiet, add_reading_args, defaults, finish, float_pair, log
+from .common import (
+    COUNT,
+    FRACTION,
+    POSITIVE,
+    add_overwrite,
+    add_quiet,
+    add_reading_args,
+    defaults,
+    finish,
+    float_pair,
+    log,
+)
 
 MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
 
