@@ -585,7 +585,7 @@ def test_auto_sends_uncertain_inputs_to_fem(ensemble, tiny, monkeypatch):
     from roughness.engines import FemEngine
 
     monkeypatch.setattr(FemEngine, "simulate", lambda self, hm: SimpleNamespace(
-        roughness=0.123, seconds=0.0, roughness_stderr=1e-3))
+        roughness=0.123, seconds=0.0, roughness_stderr=1e-3, discretization_error=0.01))
     maps = [realise(sample_record(Recipe(name="tiny", seed=9, families={"bumps": 1, "fbm": 1}), i)) for i in range(4)]
     model = SurrogateModel(ensemble.model)
     strict = predict(maps, engine="auto", model=model, max_std=1e-9)
