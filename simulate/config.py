@@ -27,8 +27,9 @@ CHOICES = {"fidelity": FIDELITIES, "contact": CONTACT_MODES, "bone": BONE_MODELS
 # base shape under the texture (curvature_mm, base, curvature_axis, texture_along: the block keeps
 # one untextured base field per shape). Every other field enters BlockSpec (fidelity through the
 # h_contact_mm it resolves to).
+CURVED_FIELDS = ("curvature_mm", "base", "curvature_axis", "texture_along")
 RUN_FIELDS = frozenset({"force_n", "contact", "max_rounds", "pairs", "pair_distance_mm", "disk_radius_mm", "seed",
-                        "curvature_mm", "base", "curvature_axis", "texture_along"})
+                        *CURVED_FIELDS})
 
 
 @dataclass(frozen=True)
@@ -152,5 +153,11 @@ class SimConfig:
                          depth_mm=self.depth_mm, window_mm=self.window_mm, grid_mm=self.grid_mm)
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        """The fields; a flat base's leave out the curved-base ones (``CURVED_FIELDS``: meaningless there), so
+        records of flat configurations (datasets, caches, model metadata) read as they did before curved bases."""
+        out = asdict(self)
+        if self.curvature_mm is None:
+            for name in CURVED_FIELDS:
+                del out[name]
+        return out
 

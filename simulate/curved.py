@@ -3,8 +3,8 @@
 R > 0 is convex toward the finger (crest at the block centre), R < 0 concave (trough at
 the centre). Block coordinates (mm): x, y from the footprint centre, z up; the base height
 is 0 at the centre. A cylinder's ``axis`` is the direction it is straight along (``x``: it
-curves in y). Beyond a convex base's silhouette (|distance| >= R) there is no surface: the
-height there is ``FAR_BELOW_MM``, where the skin never reaches.
+curves in y). Beyond a convex base's silhouette (|distance| >= R) the base falls away as a
+steep wall (``WALL_SLOPE``), untextured.
 
 The texture rides on the base in one of two ways (``texture_along``):
 
@@ -31,6 +31,7 @@ SHAPES = ("flat", "cylinder", "sphere")
 AXES = ("x", "y")
 TEXTURE_ALONG = ("normal", "z")
 FAR_BELOW_MM = 1.0e3  # height (mm, below the crest) standing for "no surface here"
+WALL_SLOPE = 10.0  # slope of the wall standing for a base's side beyond its silhouette (84 degrees)
 SAMPLES_PER_PIXEL = 4  # arc-length samples per texture pixel when tracing the normal-offset surface
 SLIDE_MARGIN_MM = 1.0  # the relief is tabulated this far beyond the footprint (for sliding contact nodes)
 QUERY_CHUNK = 4096  # relief points traced at once (bounds memory)
@@ -71,7 +72,7 @@ class BaseShape:
         return x, np.ones_like(x), np.zeros_like(x)
 
     def height(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Base height (mm) at block (x, y), 0 at the centre; ``FAR_BELOW_MM`` off a convex base."""
+        """Base height (mm) at block (x, y), 0 at the centre; a steep wall beyond the silhouette (``profile``)."""
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
         if self.flat:
             return np.zeros_like(x)
@@ -102,11 +103,16 @@ FLAT = BaseShape()
 
 
 def profile(radius_mm: float, rho: np.ndarray) -> np.ndarray:
-    """Height (mm) of a circle of signed radius through 0 at distance ``rho``; ``FAR_BELOW_MM`` beyond it."""
+    """Height (mm) of a circle of signed radius through 0 at distance ``rho``; beyond it a wall of ``WALL_SLOPE``.
+
+    The wall stands for the circle's vertical side (down on a convex base, up on a concave one):
+    steep enough that the skin does not reach down it, and finite, so that a contact node taken
+    in at its deformed position is never held at a height it could not reach.
+    """
     r = abs(radius_mm)
-    inside = np.abs(rho) < r
-    sag = r - np.sqrt(np.maximum(r * r - rho * rho, 0.0))
-    return np.where(inside, -sag if radius_mm > 0 else sag, -FAR_BELOW_MM)
+    beyond = np.maximum(np.abs(rho) - r, 0.0)
+    sag = r - np.sqrt(np.maximum(r * r - rho * rho, 0.0)) + WALL_SLOPE * beyond
+    return np.maximum(-sag if radius_mm > 0 else sag, -FAR_BELOW_MM)
 
 
 def require_restable(shape: BaseShape, width_mm: float) -> None:
@@ -159,7 +165,7 @@ def textured_surface(heightmap: Heightmap, centre_mm: tuple[float, float], shape
     else:
         relief = heightmap.sample(cx + x, cy + y, periodic=periodic)
         relief = relief - relief.min()
-    relief = np.where(base > -FAR_BELOW_MM, relief, 0.0)
+    relief = np.where(np.abs(shape.distance(x, y)[0]) < abs(shape.radius_mm), relief, 0.0)  # none on the wall
     inside = (np.abs(x) <= width_mm / 2 + 1e-9) & (np.abs(y) <= width_mm / 2 + 1e-9)
     z0 = float((base + relief)[inside].max())
     table = Heightmap(relief, p)
@@ -189,19 +195,22 @@ def normal_relief(heightmap: Heightmap, centre_mm: tuple[float, float], shape: B
     step = heightmap.pixel_mm / SAMPLES_PER_PIXEL
     t_max = abs(r) * math.pi / 2
     t0 = r * np.arcsin(np.clip(rho / r, -1.0, 1.0))  # arc length of the base point below (x, y)
-    heights = heightmap.heights
-    relief_mm = float(heights.max() - heights.min())
-    k = np.arange(-math.ceil((relief_mm + 2 * heightmap.pixel_mm) / step), math.ceil(
-        (relief_mm + 2 * heightmap.pixel_mm) / step) + 1)
     # The texture's lowest point under the footprint lies on the base.
     below = heightmap.sample(cx + ox + t0 * ex, cy + oy + t0 * ey, periodic)
     floor = float(below.min())
     # Where the traced section has no crossing (a convex base's silhouette), the height along z.
     fallback = profile(r, rho) + below - floor
+    # Arc lengths whose texture can land on each point: a height h lands at (r + h) sin(t / r) = rho.
+    lands = [r * np.arcsin(np.clip(rho / (r + h), -1.0, 1.0))
+             for h in (float(heightmap.heights.min()) - floor, float(heightmap.heights.max()) - floor)]
+    first = np.floor((np.minimum.reduce([t0, *lands]) - t0) / step).astype(int) - 2
+    count = np.ceil((np.maximum.reduce([t0, *lands]) - t0) / step).astype(int) + 3 - first
+    order = np.argsort(count, kind="stable")
     out = np.empty(rho.shape)
     for lo in range(0, len(rho), QUERY_CHUNK):
-        sl = slice(lo, lo + QUERY_CHUNK)
-        t = np.clip(t0[sl, None] + step * k[None, :], -t_max, t_max)
+        sl = order[lo:lo + QUERY_CHUNK]
+        k = first[sl, None] + np.arange(count[sl].max())[None, :]
+        t = np.clip(t0[sl, None] + step * k, -t_max, t_max)
         h = heightmap.sample(cx + ox[sl, None] + t * ex[sl, None], cy + oy[sl, None] + t * ey[sl, None], periodic)
         radial = r + (h - floor)
         pr = radial * np.sin(t / r)

@@ -16,7 +16,7 @@ from roughness.core.hashing import canonical_json
 from . import mesh as meshing
 from .config import BlockSpec, SimConfig
 from .contact import MAX_FLIPS, ContactError, ContactProblem, ContactResult, ContactRound, solve_contact
-from .curved import FAR_BELOW_MM, FLAT, BaseShape, base_surface, textured_surface
+from .curved import FLAT, BaseShape, base_surface, textured_surface
 from .elasticity import rigid_body_modes, stiffness
 from .face import ContactFace
 from .heightmap import Heightmap
@@ -139,8 +139,8 @@ class Block:
         key = (shape, force_n, contact, max_rounds)
         if key not in self._base:
             surface = base_surface(shape, self.spec.mesh.width_mm)
-            # Start from the nodes above the base (off a convex base there is nothing to touch).
-            initial = None if shape.flat else surface(*self.problem.bottom_xy.T) > -FAR_BELOW_MM / 2
+            # Start from the nodes within two tissue thicknesses of the base's top (not down a convex base's side).
+            initial = None if shape.flat else surface(*self.problem.bottom_xy.T) > -2 * self.spec.mesh.tissue_mm
             solved = solve_contact(self.problem, surface, force_n, contact == "frictionless", max_rounds=max_rounds,
                                    initial=initial)
             self._base[key] = (self.sampler.max_compression(solved.u), solved.indentation_mm, solved.warm)

@@ -1,8 +1,8 @@
 """Roughness of textures on curved bases against the flat texture, as in the paper's Figure 20.
 
 Standard bump textures (lambda 0.75, 1.0, 1.25 mm; several realisations each, tiled as the
-periodic textures they are) on cylinders of radius 3, 5, 10, 20 and 40 mm, convex and concave,
-and flat. Per texture, the percent difference of V on the curved base from V on the flat one,
+periodic textures they are) on cylinders (or spheres) of radius 3, 5, 10, 20 and 40 mm, convex
+and concave (plus concave 6 and 7.5 mm), and flat. Per texture, the percent difference of V on the curved base from V on the flat one,
 against the 19% line, and the same difference in JND on the standard scale of the fidelity.
 Heights are laid off along the base normal (the product's default) and, for the record of
 that choice, along z. Concave bases narrower than the 10 mm skin footprint are refused by the
@@ -11,7 +11,9 @@ content and the configuration, so an interrupted run resumes where it stopped. F
 results it writes the range of curvatures where curved and flat V agree within the tolerance
 for every texture (``models/curvature_range.json``, read by ``roughness predict``).
 
-    nice -n 10 python studies/curvature.py --fidelity coarse   # about 15 min on a busy 2-core machine
+    nice -n 10 python studies/curvature.py --fidelity coarse   # about 20 min on a busy 2-core machine
+    nice -n 10 python studies/curvature.py --fidelity coarse --base sphere --normal-only
+    nice -n 10 python studies/curvature.py --fidelity default --seeds 1 --normal-only --no-range
 """
 from __future__ import annotations
 
@@ -20,6 +22,7 @@ import json
 import os
 import subprocess
 import sys
+from dataclasses import asdict
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -32,7 +35,9 @@ OUT = ROOT / "studies" / "results"
 RANGE_PATH = ROOT / "models" / "curvature_range.json"
 LAMBDAS_MM = (0.75, 1.0, 1.25)
 RADII_MM = (3.0, 5.0, 10.0, 20.0, 40.0)
-CURVATURES_MM = tuple(sorted([r for r in RADII_MM] + [-r for r in RADII_MM], key=lambda r: 1 / r))
+# Concave radii between the 10 mm footprint's limit (5 mm) and 10 mm probe the paper's concave claim.
+EXTRA_CONCAVE_MM = (-6.0, -7.5)
+CURVATURES_MM = tuple(sorted([*RADII_MM, *(-r for r in RADII_MM), *EXTRA_CONCAVE_MM], key=lambda r: 1 / r))
 TOLERANCE = 0.19  # the paper's threshold on the relative difference of V (the Weber fraction)
 ALONG = ("normal", "z")
 
@@ -71,11 +76,11 @@ def run(fidelity: str, seeds: int, path: Path, base: str = "cylinder", along: tu
             overrides = {"curvature_mm": case["curvature_mm"], "texture_along": case["texture_along"],
                          "base": case.get("base", "cylinder")}
             try:
-                config = SimConfig(**{**sim.config.as_dict(), **overrides}).resolved(hm)
+                config = SimConfig(**{**asdict(sim.config), **overrides}).resolved(hm)
             except InputError as err:
                 config, refused = None, str(err)
             key = digest({"texture": array_digest(hm.heights), "pixel_mm": hm.pixel_mm, "tile": True,
-                          "config": config.as_dict() if config else {**sim.config.as_dict(), **overrides}})
+                          "config": asdict(config) if config else {**asdict(sim.config), **overrides}})
             if key in done:
                 rows.append(done[key])
                 continue
@@ -152,8 +157,9 @@ def agreement_range(diffs: list[dict], tolerance: float) -> dict:
 
 
 def _table(diffs: list[dict], limits: dict, command: str, fidelity: str, seeds: int, base: str) -> str:
+    shapes = "cylinders straight along x" if base == "cylinder" else "spherical caps"
     lines = [f"# V on curved bases against flat ({fidelity} fidelity, {seeds} realisations per lambda)", "",
-             f"`{command}`; {base}s (cylinders straight along x), 10 N, stick, tiled standard textures.", "",
+             f"`{command}`; {shapes}, 10 N, stick, tiled standard textures.", "",
              ("Percent difference of V from the flat texture's (mean over realisations, [min, max]) and the same "
               "difference in JND on the standard scale. `refused`: the model refuses the base (reasons below)."), ""]
     for along in ALONG:

@@ -196,3 +196,26 @@ def test_predict_routes_curved_bases_by_the_range(tmp_path, monkeypatch):
         assert any(n.startswith("curved base") for n in outside.domain_notes), (radius, base)
     with pytest.raises(InputError, match="narrower"):
         engines.predict(hm, engine="surrogate", curvature_mm=-4.0)
+    [fem] = engines.predict(hm, engine="auto", curvature_mm=5.0, tile=True)  # outside: auto runs the curved FEM
+    assert fem.engine == "fem" and not fem.in_domain and fem.roughness > 0
+    assert any(n.startswith("curved base") for n in fem.domain_notes)
+
+
+def test_simulate_cli_on_a_curved_base(tmp_path, capsys):
+    path = tmp_path / "scan.npy"
+    np.save(path, _on_cylinder(standard_texture(1.0, seed=0), -15.0).heights)
+    code = main(["simulate", str(path), "--pixel-mm", "0.05", "--fidelity", "coarse", "--json",
+                 "--detrend", "lowpass", "--curvature-mm", "20", "--base", "sphere", "--texture-along", "z"])
+    assert code == 0
+    captured = capsys.readouterr()
+    out = json.loads(captured.out)
+    assert out["converged"] and 0 < out["roughness"] < 1 and 0 < out["contact_fraction"] <= 1
+    assert "convex sphere of radius 20 mm" in captured.err and "removed the shape" in captured.err
+
+
+def test_flat_records_are_unchanged_and_curved_ones_round_trip():
+    flat_config = SimConfig(fidelity="coarse")
+    assert not set(flat_config.as_dict()) & {"curvature_mm", "base", "curvature_axis", "texture_along"}
+    assert SimConfig(**flat_config.as_dict()) == flat_config
+    curved = SimConfig(fidelity="coarse", curvature_mm=-12.0, base="sphere", texture_along="z")
+    assert curved.as_dict()["curvature_mm"] == -12.0 and SimConfig(**curved.as_dict()) == curved
