@@ -30,12 +30,14 @@ import numpy as np
 from roughness.core.checks import integer
 from roughness.core.errors import InputError
 from roughness.core.hashing import digest, file_sha256
+from roughness.models import MODELS_DIR
 from roughness.simulate.heightmap import Heightmap
 
 from .classical import MEASURES, footprint
 
 FEM_FIDELITIES = ("coarse", "default", "fine", "converged")
 PREDICT_ENGINES = ("surrogate", "fem", "auto")
+CURVATURE_RANGE_PATH = MODELS_DIR / "curvature_range.json"
 
 
 class Engine(Protocol):
@@ -163,6 +165,45 @@ def make_engine(spec: str) -> Engine:
     raise InputError(f"unknown engine {spec!r}; valid: {', '.join(valid)}", parameter="engines")
 
 
+@dataclass(frozen=True)
+class CurvatureRange:
+    """Curved bases on which the flat-trained surrogate may answer, as measured by studies/curvature.py.
+
+    Per base shape (cylinder, sphere): convex radii (mm) from ``min_convex_radius_mm`` and concave
+    ones from ``min_concave_radius_mm`` (None: no studied radius qualified); there flat and curved V
+    agreed within ``tolerance`` (relative) for every studied texture. Shapes not studied: none.
+    """
+
+    limits: dict[str, tuple[float | None, float | None]]
+    tolerance: float
+    source: str
+
+    @classmethod
+    def load(cls, path: str | Path | None = None) -> CurvatureRange:
+        """The range in ``path`` (default: the shipped ``models/curvature_range.json``)."""
+        import json
+
+        path = Path(path or CURVATURE_RANGE_PATH)
+        data = json.loads(path.read_text())
+        limits = {base: (entry["min_convex_radius_mm"], entry["min_concave_radius_mm"])
+                  for base, entry in data["bases"].items()}
+        return cls(limits, data["tolerance"], f"measured by studies/curvature.py, {path.name}")
+
+    def outside(self, radius_mm: float, base: str) -> str:
+        """Why the flat-trained surrogate may not answer for this base (empty if it may)."""
+        if base not in self.limits:
+            return (f"curved base: the flat-trained surrogate's range of curvatures was not measured on a {base} "
+                    f"({self.source})")
+        side = "convex" if radius_mm > 0 else "concave"
+        limit = self.limits[base][0 if radius_mm > 0 else 1]
+        if limit is not None and abs(radius_mm) >= limit:
+            return ""
+        where = f"below {limit:g} mm" if limit is not None else "at every studied radius"
+        return (f"curved base: a {side} {base} of radius {abs(radius_mm):g} mm is outside the range where the "
+                f"flat-trained surrogate agrees with the curved FEM within {100 * self.tolerance:.0f}% ({side} radii "
+                f"{where} differ more; {self.source})")
+
+
 @dataclass
 class Prediction:
     """Roughness V (dimensionless strain variation) of one input and how it was obtained."""
@@ -190,14 +231,18 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
             model: object | str | Path | None = None, centre_mm: tuple[float, float] | None = None,
             tile: bool = False, fidelity: str | None = None, tolerance: float | None = None, batch_size: int = 256,
             sources: Iterable[str] | None = None,
-            on_result: Callable[[Prediction], None] | None = None, max_std: float | None = None) -> list[Prediction]:
+            on_result: Callable[[Prediction], None] | None = None, max_std: float | None = None,
+            curvature_mm: float | None = None, base: str = "cylinder", curvature_axis: str = "x",
+            texture_along: str = "normal") -> list[Prediction]:
     """Predict V for each heightmap (mm) with ``engine`` (see the module docstring).
 
     ``model`` is a ``SurrogateModel`` or the path of an ONNX model (default: the shipped one);
     ``fidelity`` is the FEM's (default: the model's training labels'; ``converged`` refines to
     ``tolerance``, see ``SimConfig``). ``sources`` names the inputs in the results; ``on_result`` is
     called as each result is ready. ``max_std``: the relative spread above which ``auto`` runs the FEM
-    (ensemble models only; default: the model's).
+    (ensemble models only; default: the model's). ``curvature_mm`` and the rest place the texture on a
+    curved base (``SimConfig``'s fields): inside the ``CurvatureRange`` the flat-trained surrogate
+    answers; outside it ``auto`` runs the curved FEM and ``surrogate`` answers with a note.
     """
     from roughness.surrogate.calibration import load_scale
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
@@ -207,8 +252,12 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     integer("batch_size", batch_size, minimum=1)
     model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
     max_std = uncertainty_limit(model, max_std)
-    simulation = {**model.meta.simulation, **({} if tolerance is None else {"tolerance": tolerance})}
+    curved = {"curvature_mm": curvature_mm, "base": base, "curvature_axis": curvature_axis,
+              "texture_along": texture_along} if curvature_mm is not None else {}
+    simulation = {**model.meta.simulation, **({} if tolerance is None else {"tolerance": tolerance}), **curved}
     fem = FemEngine.of(fidelity or model.fidelity, simulation, centre_mm, tile)
+    off_base = [CurvatureRange.load().outside(curvature_mm, base)] if curved else []
+    off_base = [why for why in off_base if why]
     # converged FEM answers are placed on the most accurate tabulated scale, ``default``'s
     surrogate_scale = load_scale(model.fidelity)
     fem_scale = load_scale("default" if fem.fidelity == "converged" else fem.fidelity)
@@ -223,6 +272,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
         spread = [None] * len(batch) if estimate.roughness_std is None else estimate.roughness_std.tolist()
         relative = [None] * len(batch) if estimate.relative_std is None else estimate.relative_std.tolist()
         for (source, hm), v, why, std, rel in zip(batch, estimate.roughness, estimate.reasons, spread, relative):
+            why = list(why) + off_base
             notes = list(why)
             if max_std is not None and rel > max_std:
                 notes.append(f"uncertain: relative spread {rel:.3g} above the limit {max_std:.3g}")

@@ -4,9 +4,10 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, replace
 
-from roughness.core.checks import in_range, integer, positive
+from roughness.core.checks import in_range, integer, positive, real
 from roughness.core.errors import InputError
 
+from .curved import AXES, TEXTURE_ALONG, BaseShape, require_restable
 from .discretization import LADDER_MM
 from .heightmap import Heightmap
 from .mesh import MeshSpec
@@ -18,14 +19,19 @@ FIDELITIES = ("coarse", "default", "fine", "auto", "converged")
 CONTACT_MODES = ("stick", "frictionless")
 BONE_MODELS = ("rigid", "elastic")
 ELEMENTS = ("p1", "p2")
-CHOICES = {"fidelity": FIDELITIES, "contact": CONTACT_MODES, "bone": BONE_MODELS, "element": ELEMENTS}
+CURVED_BASES = ("cylinder", "sphere")
+CHOICES = {"fidelity": FIDELITIES, "contact": CONTACT_MODES, "bone": BONE_MODELS, "element": ELEMENTS,
+           "base": CURVED_BASES, "curvature_axis": AXES, "texture_along": TEXTURE_ALONG}
 
 # SimConfig fields that do not shape the prepared skin block, so a Simulator reuses one block
 # for all of them: the load and contact law (force_n, contact, max_rounds: the contact solve per
-# texture) and the disk-pair sampling of V (pairs, pair_distance_mm, disk_radius_mm, seed).
-# Every other field enters BlockSpec (fidelity through the h_contact_mm it resolves to).
+# texture) and the disk-pair sampling of V (pairs, pair_distance_mm, disk_radius_mm, seed), and the
+# base shape under the texture (curvature_mm, base, curvature_axis, texture_along: the block keeps
+# one untextured base field per shape). Every other field enters BlockSpec (fidelity through the
+# h_contact_mm it resolves to).
+CURVED_FIELDS = ("curvature_mm", "base", "curvature_axis", "texture_along")
 RUN_FIELDS = frozenset({"force_n", "contact", "max_rounds", "pairs", "pair_distance_mm", "disk_radius_mm", "seed",
-                        "tolerance"})
+                        "tolerance", *CURVED_FIELDS})
 
 
 @dataclass(frozen=True)
@@ -44,7 +50,12 @@ class BlockSpec:
 
 @dataclass(frozen=True)
 class SimConfig:
-    """Everything that defines one FEM roughness evaluation except the texture."""
+    """Everything that defines one FEM roughness evaluation except the texture.
+
+    Curved base (``roughness.simulate.curved``): ``curvature_mm`` is the signed radius (mm; > 0
+    convex toward the finger, < 0 concave; None: flat) of a ``base`` cylinder (straight along
+    ``curvature_axis``) or sphere; ``texture_along`` lays the heights off along the base normal or z.
+    """
 
     young_mpa: float = 0.042
     poisson: float = 0.45
@@ -68,6 +79,10 @@ class SimConfig:
     disk_radius_mm: float = 0.8
     seed: int = 0
     max_rounds: int = 30
+    curvature_mm: float | None = None
+    base: str = "cylinder"
+    curvature_axis: str = "x"
+    texture_along: str = "normal"
 
     def __post_init__(self) -> None:
         for name, options in CHOICES.items():
@@ -96,6 +111,17 @@ class SimConfig:
         integer("pairs", self.pairs, minimum=2)
         integer("max_rounds", self.max_rounds, minimum=1)
         integer("seed", self.seed, minimum=0)
+        if self.curvature_mm is not None:
+            if real("curvature_mm", self.curvature_mm) == 0:
+                raise InputError("curvature_mm is a signed radius (> 0 convex, < 0 concave); 0 is not a radius "
+                                 "(leave it unset for a flat base)", parameter="curvature_mm")
+            require_restable(self.base_shape(), self.width_mm)
+
+    def base_shape(self) -> BaseShape:
+        """The untextured base under the texture (flat unless ``curvature_mm`` is set)."""
+        if self.curvature_mm is None:
+            return BaseShape()
+        return BaseShape(self.base, float(self.curvature_mm), self.curvature_axis)
 
     def spacing_mm(self, heightmap: Heightmap | None = None) -> float:
         """Contact-face spacing for this fidelity (``auto`` needs the heightmap; ``converged``
@@ -135,10 +161,15 @@ class SimConfig:
                          depth_mm=self.depth_mm, window_mm=self.window_mm, grid_mm=self.grid_mm)
 
     def as_dict(self) -> dict:
-        """The fields as a dict; ``tolerance`` only for ``converged``, the one fidelity whose results
-        depend on it (so records of the other fidelities keep their identity)."""
+        """The fields as a dict, leaving out what does not apply (so records of configurations that existed
+        before those fields read as they did: datasets, caches, model metadata): ``tolerance`` unless the
+        fidelity is ``converged``, the one whose results depend on it; the curved-base fields
+        (``CURVED_FIELDS``) for a flat base."""
         out = asdict(self)
         if self.fidelity != "converged":
             del out["tolerance"]
+        if self.curvature_mm is None:
+            for name in CURVED_FIELDS:
+                del out[name]
         return out
 

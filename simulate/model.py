@@ -16,6 +16,7 @@ from roughness.core.hashing import canonical_json
 from . import mesh as meshing
 from .config import BlockSpec, SimConfig
 from .contact import MAX_FLIPS, ContactError, ContactProblem, ContactResult, ContactRound, solve_contact
+from .curved import FLAT, BaseShape, base_surface, textured_surface
 from .elasticity import rigid_body_modes, stiffness
 from .face import ContactFace
 from .heightmap import Heightmap
@@ -95,6 +96,9 @@ class Result:
                    force_n=self.config.force_n, poisson=self.config.poisson, contact=self.config.contact,
                    element=self.config.element, bone=self.config.bone, tolerance=self.config.tolerance,
                    ladder=[asdict(level) for level in self.ladder])
+        if self.config.curvature_mm is not None:  # the curved base under the texture
+            out.update(curvature_mm=self.config.curvature_mm, base=self.config.base,
+                       curvature_axis=self.config.curvature_axis, texture_along=self.config.texture_along)
         return json.loads(canonical_json(out))  # numpy scalars and arrays become Python numbers and lists
 
     @property
@@ -135,21 +139,21 @@ class Block:
         t = time.perf_counter()
         self.sampler = StrainSampler(self.mesh, spec.depth_mm, spec.window_mm, spec.grid_mm)
         self.seconds["sampler"] = time.perf_counter() - t
-        self._base: dict[tuple[float, str, int], tuple[np.ndarray, float, tuple]] = {}
+        self._base: dict[tuple[BaseShape, float, str, int], tuple[np.ndarray, float, tuple]] = {}
         self.runs = 0
 
-    def base(self, force_n: float, contact: str, max_rounds: int = SimConfig.max_rounds
-             ) -> tuple[np.ndarray, float, tuple[np.ndarray, np.ndarray]]:
-        """lambda3 of the untextured block, its indentation (mm) and warm-start solutions."""
-        key = (force_n, contact, max_rounds)
+    def base(self, force_n: float, contact: str, max_rounds: int = SimConfig.max_rounds,
+             shape: BaseShape = FLAT) -> tuple[np.ndarray, float, tuple[np.ndarray, np.ndarray]]:
+        """lambda3 of the untextured base ``shape`` under the block, its indentation (mm) and warm-start solutions."""
+        key = (shape, force_n, contact, max_rounds)
         if key not in self._base:
-            flat = solve_contact(self.problem, _flat, force_n, contact == "frictionless", max_rounds=max_rounds)
-            self._base[key] = (self.sampler.max_compression(flat.u), flat.indentation_mm, flat.warm)
+            surface = base_surface(shape, self.spec.mesh.width_mm)
+            # Start from the nodes within two tissue thicknesses of the base's top (not down a convex base's side).
+            initial = None if shape.flat else surface(*self.problem.bottom_xy.T) > -2 * self.spec.mesh.tissue_mm
+            solved = solve_contact(self.problem, surface, force_n, contact == "frictionless", max_rounds=max_rounds,
+                                   initial=initial)
+            self._base[key] = (self.sampler.max_compression(solved.u), solved.indentation_mm, solved.warm)
         return self._base[key]
-
-
-def _flat(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    return np.zeros_like(x)
 
 
 def texture_surface(heightmap: Heightmap, centre_mm: tuple[float, float], z0: float, periodic: bool):
@@ -210,13 +214,17 @@ class Simulator:
         stages = dict(block.seconds) if block.runs == 0 else {}
         block.runs += 1
         t = time.perf_counter()
-        base, flat_indentation, warm = block.base(config.force_n, config.contact, config.max_rounds)
+        shape = config.base_shape()
+        base, base_indentation, warm = block.base(config.force_n, config.contact, config.max_rounds, shape)
         stages["base_field"] = time.perf_counter() - t
-        z0 = heightmap.max_in_footprint(config.width_mm, centre, periodic=tile)
-        surface = texture_surface(heightmap, centre, z0, tile)
-        # Initial contact set: given, or what the flat block's indentation at this force would touch.
+        if shape.flat:
+            z0 = heightmap.max_in_footprint(config.width_mm, centre, periodic=tile)
+            surface = texture_surface(heightmap, centre, z0, tile)
+        else:
+            surface, _ = textured_surface(heightmap, centre, shape, config.texture_along, config.width_mm, tile)
+        # Initial contact set: given, or what the untextured base's indentation at this force would touch.
         initial = (initial(block.problem.bottom_xy) if initial is not None
-                   else surface(*block.problem.bottom_xy.T) >= -flat_indentation)
+                   else surface(*block.problem.bottom_xy.T) >= -base_indentation)
         t = time.perf_counter()
         try:
             state = solve_contact(block.problem, surface, config.force_n, config.contact == "frictionless",

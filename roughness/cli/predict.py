@@ -19,6 +19,7 @@ from .common import (
     float_pair,
     log,
 )
+from .simulate import add_curvature_args, curvature_fields
 
 MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
 
@@ -47,6 +48,7 @@ def add_parser(sub) -> None:
     add_reading_args(pr)
     pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures (default: off)")
     pr.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
+    add_curvature_args(pr)
     pr.add_argument("--batch-size", type=COUNT, default=given["batch_size"],
                     help=f"heightmaps per surrogate batch (default: {given['batch_size']})")
     pr.add_argument("--threads", type=COUNT, default=threads, help=f"onnxruntime threads (default: {threads})")
@@ -67,8 +69,11 @@ def run(args: argparse.Namespace) -> int:
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
     if args.map:
+        from roughness.core.errors import InputError
         from roughness.surrogate.roughness_map import check_map_path
 
+        if args.curvature_mm is not None:
+            raise InputError("--map slides the footprint over a flat object; it does not take --curvature-mm")
         check_map_path(args.map, args.overwrite)
     model = SurrogateModel(args.model or DEFAULT_MODEL, threads=args.threads)
     if args.map:
@@ -85,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
 
     predict(reader.heightmaps(), engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
             fidelity=args.fidelity, tolerance=args.tolerance, batch_size=args.batch_size,
-            sources=reader.sources(), on_result=show, max_std=args.max_std)
+            sources=reader.sources(), on_result=show, max_std=args.max_std, **curvature_fields(args))
     for source, error in reader.errors:
         print(f"roughness: error: {error}", file=sys.stderr)
         if args.json:

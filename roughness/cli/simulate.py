@@ -5,7 +5,9 @@ import argparse
 import json
 
 from . import common
-from .common import FRACTION, POISSON, POSITIVE, SEED, add_heightmap_args, log
+from .common import FRACTION, POISSON, POSITIVE, SEED, Number, add_heightmap_args, log
+
+SIGNED_RADIUS = Number(float)  # a signed radius in mm; 0 is refused by SimConfig (not a radius)
 
 
 def add_parser(sub) -> None:
@@ -28,6 +30,11 @@ def add_parser(sub) -> None:
                      help="tetrahedra: p1 linear, p2 quadratic (for Poisson ratio close to 0.5) (default: %(default)s)")
     sim.add_argument("--bone", choices=CHOICES["bone"], default=d.bone,
                      help=f"bone under the tissue: rigid, or elastic {d.bone_mm} mm layer (default: %(default)s)")
+    add_curvature_args(sim)
+    sim.add_argument("--detrend", type=_detrend_spec, metavar="lowpass[:CUTOFF_MM]",
+                     help="separate the texture from the object's shape in a scan of a curved object: a spectral "
+                          "low-pass of the map (wavelengths above CUTOFF_MM; default: chosen from the map's texture) "
+                          "is removed before simulating (default: off)")
     sim.add_argument("--seed", type=SEED, default=d.seed, help="seed of the disk-pair sampling of V (default: %(default)s)")
     sim.add_argument("--json", action="store_true",
                      help="print one JSON object: V, contact, solver counts and `notes` (default: a table)")
@@ -36,6 +43,40 @@ def add_parser(sub) -> None:
     common.add_overwrite(sim)
     common.add_quiet(sim)
     common.finish(sim, run, force_n="--force")
+
+
+def add_curvature_args(p: argparse.ArgumentParser) -> None:
+    """The curved base under the texture (``SimConfig.curvature_mm`` and its companions)."""
+    from roughness.simulate.config import CHOICES, SimConfig
+
+    d = SimConfig()
+    p.add_argument("--curvature-mm", type=SIGNED_RADIUS, metavar="R",
+                   help="the texture lies on a curved base of radius R mm: R > 0 convex toward the finger, "
+                        "R < 0 concave (default: flat)")
+    p.add_argument("--base", choices=CHOICES["base"], default=d.base,
+                   help="--curvature-mm: the base's shape, a cylinder or a spherical cap (default: %(default)s)")
+    p.add_argument("--curvature-axis", choices=CHOICES["curvature_axis"], default=d.curvature_axis,
+                   help="--curvature-mm with a cylinder: the direction the cylinder is straight along; it curves "
+                        "across it (default: %(default)s)")
+    p.add_argument("--texture-along", choices=CHOICES["texture_along"], default=d.texture_along,
+                   help="--curvature-mm: lay the heights off along the base normal (a textured object) or along z "
+                        "(a height map draped vertically) (default: %(default)s)")
+
+
+def curvature_fields(args: argparse.Namespace) -> dict:
+    """The SimConfig fields of the curvature options."""
+    return {"curvature_mm": args.curvature_mm, "base": args.base, "curvature_axis": args.curvature_axis,
+            "texture_along": args.texture_along}
+
+
+def _detrend_spec(text: str):
+    from roughness.core.errors import InputError
+    from roughness.simulate.detrend import parse_detrend
+
+    try:
+        return parse_detrend(text)
+    except InputError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -50,9 +91,15 @@ def run(args: argparse.Namespace) -> int:
     hm = load_heightmap(args.heightmap, pixel_mm=args.pixel_mm, height_mm=args.height_mm)
     config = SimConfig(fidelity=args.fidelity, force_n=args.force, poisson=args.poisson, contact=args.contact,
                        element=args.element, bone=args.bone, seed=args.seed,
-                       tolerance=args.tolerance)
+                       tolerance=args.tolerance, **curvature_fields(args))
+    if args.detrend:
+        from roughness.simulate.detrend import detrend
+
+        hm, removed = detrend(hm, args.detrend)
+        log(args, f"detrended: {removed.describe()}")
     log(args, f"{args.heightmap}: {hm.shape[1]} x {hm.shape[0]} px of {hm.pixel_mm} mm; "
-              f"{config.fidelity} fidelity, contact spacing {_spacing(config, hm)}; "
+              f"{config.fidelity} fidelity, contact spacing {config.spacing_mm(hm)} mm, "
+              f"{config.base_shape().describe()}; "
               "preparing the skin block (cached after the first run) ...")
     sim = Simulator(config)
     result = sim.run(hm, centre_mm=args.centre, tile=args.tile)
