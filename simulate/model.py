@@ -37,9 +37,9 @@ class Note:
 
     Codes: ``indentation`` (deeper than the tissue: outside small strain, as in the paper's
     model; unusual beyond ``DEEP_INDENTATION_TISSUES``), ``not_converged`` (the contact
-    conditions do not hold within tolerance: what is left), ``cycled``, ``locking`` (P1 near
-    incompressibility),
-    ``unresolved_texture`` (features finer than the contact mesh).
+    conditions do not hold within tolerance: what is left), ``cycled`` (a contact set recurred,
+    so the contact steps were damped; unusual if it did not converge), ``locking`` (P1 near
+    incompressibility), ``unresolved_texture`` (features finer than the contact mesh).
     """
 
     code: str
@@ -277,7 +277,8 @@ def _notes(config: SimConfig, state: ContactResult, heightmap: Heightmap) -> lis
         out.append(Note("not_converged", f"{state.message}; {state.unresolved} nodes still violate contact",
                         unusual=True))
     if state.cycled:
-        out.append(Note("cycled", "the contact set revisited an earlier state (cycling)", unusual=True))
+        out.append(Note("cycled", "the contact set revisited an earlier state (cycling); damped steps followed",
+                        unusual=not state.success))
     if config.element == "p1" and config.poisson > LOCKING_POISSON:
         out.append(Note("locking", f"P1 elements lock at Poisson ratio {config.poisson} > {LOCKING_POISSON}: strain "
                         "is underestimated; use element p2", unusual=True))

@@ -4,7 +4,7 @@ BEFORE is the active-set loop of commit a653923 (a node may change state at most
 it is held in contact), loaded from git under another module name; AFTER is the current
 simulate/contact.py (primal-dual active set with a damped step against cycling). Both run in
 the same process, each on its own Simulator (own block, AMG hierarchy and base field), on
-the same textures, alternating per case; every state is measured by the same
+the same textures, interleaved (before, then after, per case); every state is measured by the same
 ``check_contact`` (tolerances GAP_TOL_MM and TENSION_TOL of simulate/contact.py). Seconds are
 the contact stage only (``stage_seconds["contact"]``), measured on a shared, contended machine:
 compare them as ratios within one run.
@@ -29,7 +29,7 @@ from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 ROOT = Path(__file__).parents[1]
 OUT = ROOT / "studies" / "results"
@@ -64,7 +64,7 @@ def load_before():
     module = importlib.util.module_from_spec(spec)
     module.__package__ = "roughness.simulate"
     sys.modules[name] = module  # dataclasses look their module up while the source runs
-    exec(compile(source, f"{BEFORE_COMMIT}:simulate/contact.py", "exec"), module.__dict__)
+    exec(compile(source, f"{BEFORE_COMMIT}:simulate/contact.py", "exec"), module.__dict__)  # noqa: S102 (our own code, from git)
     return module
 
 
@@ -132,18 +132,19 @@ def compare(cases, fidelity: str, solvers: dict, rows: list, part: str) -> None:
 def markdown(rows: list) -> str:
     from roughness.simulate.contact import GAP_TOL_MM, TENSION_TOL
 
-    lines = [f"Both algorithms' final states are measured by `check_contact`: *satisfied* means no contact node "
-             f"under tension beyond {TENSION_TOL:g} x the mean pressure (force / face area), no node deeper than "
-             f"{GAP_TOL_MM:g} mm into the texture, no pressure off contact. *reported converged* is what the "
-             "algorithm itself said. *tension nodes*: contact nodes under tension beyond the tolerance; "
-             "*largest tension / mean p*: the largest tension at a contact node over F / face area; "
-             "*tensile force / F*: the force all contact nodes under tension pull with, over F.", ""]
+    legend = (f"Both algorithms' final states are measured by `check_contact`: *satisfied* means no contact node "
+              f"under tension beyond {TENSION_TOL:g} x the mean pressure (force / face area), no node deeper than "
+              f"{GAP_TOL_MM:g} mm into the texture, no pressure off contact. *reported converged* is what the "
+              "algorithm itself said. *tension nodes*: contact nodes under tension beyond the tolerance; "
+              "*largest tension / mean p*: the largest tension at a contact node over F / face area; "
+              "*tensile force / F*: the force all contact nodes under tension pull with, over F.")
+    lines = [legend, ""]
     partial = [r for r in rows if r["part"] == "partial"]
     if partial:
-        lines += ["## Partial contact (0.1-2 N)", "",
-                  "| texture | fidelity | force (N) | contact | algorithm | rounds | reported converged | satisfied | "
+        header = ("| texture | fidelity | force (N) | contact | algorithm | rounds | reported converged | satisfied | "
                   "tension nodes | largest tension / mean p | tensile force / F | largest penetration (mm) | "
-                  "contact fraction | seconds |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+                  "contact fraction | seconds |")
+        lines += ["## Partial contact (0.1-2 N)", "", header, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
         for r in partial:
             lines.append(
                 f"| {r['texture']} | {r['fidelity']} | {r['force_n']:g} | {r['contact']} | {r['algorithm']} | "
@@ -153,9 +154,9 @@ def markdown(rows: list) -> str:
         lines += ["", summary_lines(partial), ""]
     standard = [r for r in rows if r["part"] == "standard"]
     if standard:
-        lines += ["## Standard scale at 10 N (stick)", "",
-                  "| lambda (mm) | fidelity | V before | V after | V change | rounds before/after | "
-                  "satisfied before/after | seconds before/after | time ratio |", "|---|---|---|---|---|---|---|---|---|"]
+        header = ("| lambda (mm) | fidelity | V before | V after | V change | rounds before/after | "
+                  "satisfied before/after | seconds before/after | time ratio |")
+        lines += ["## Standard scale at 10 N (stick)", "", header, "|---|---|---|---|---|---|---|---|---|"]
         for before, after in pairs(standard):
             lines.append(
                 f"| {before['texture']} | {before['fidelity']} | {before['V']:.5f} | {after['V']:.5f} | "

@@ -14,7 +14,6 @@ from roughness.simulate import contact
 from roughness.simulate.config import SimConfig
 from roughness.simulate.model import Simulator, texture_surface
 
-
 FORCE_N = 0.04  # on the 6 mm block: the mean pressure of 0.1 N on the standard 10 mm one
 
 
