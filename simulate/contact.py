@@ -22,10 +22,11 @@ combine the two so that the total contact reaction equals the force; then releas
 nodes under tension beyond the tolerance and add free nodes that penetrate beyond it.
 Safeguard against cycling: once a contact set recurs (or a node has changed state
 ``DAMP_AFTER_FLIPS`` times) the step is damped: only the nodes whose violation is at least
-``DAMPING`` times the largest change state, so the iteration cannot repeat a cycle exactly.
-The loop ends when every condition holds (``success``) or after ``max_rounds`` (``success``
-false, and the result says what is left: nodes, largest penetration, largest tension and
-the tensile force as a fraction of the applied force).
+``DAMPING`` times the largest change state, which leaves a cycle's path (no case measured in
+studies/results/contact_partial.md needed it). Termination is guaranteed by ``max_rounds``:
+the loop ends when every condition holds (``success``) or after ``max_rounds`` rounds
+(``success`` false, and the result says what is left: nodes, largest penetration, largest
+tension and the tensile force as a fraction of the applied force).
 
 ``solve_contact`` returns a ``ContactResult`` (like scipy.optimize's OptimizeResult: success,
 message, iteration counts) and calls an optional ``callback`` with a ``ContactRound`` after
