@@ -448,10 +448,6 @@ def test_cli_design_simulate_embed_fit(tmp_path, capsys, monkeypatch):
                  str(tmp_path / "f4"), "--engine", "surrogate", "--exclude", "standard-0.625",
                  "--exclude-least-homogeneous", "2"]) == 2  # 3 of 5 excluded
     assert "the fit needs at least 3" in capsys.readouterr().err
-    monkeypatch.setitem(sys.modules, "roughness.design.homogeneity", None)  # the design tools absent
-    assert main(["perception", "fit", str(emb / "embedding.csv"), "--stimuli", str(table), "--out",
-                 str(tmp_path / "f5"), "--engine", "surrogate", "--exclude-least-homogeneous", "1"]) == 2
-    assert "needs a 'homogeneity' column in the stimuli table" in capsys.readouterr().err
 
 
 def test_plan_finds_the_trials_needed_and_is_deterministic():

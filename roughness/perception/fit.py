@@ -124,12 +124,7 @@ def homogeneity_spreads(stimuli: Sequence, heightmaps: Sequence, engine: str = "
     missing = [i for i, s in enumerate(stimuli) if s.homogeneity is None]
     spreads = np.array([np.nan if s.homogeneity is None else s.homogeneity for s in stimuli], dtype=float)
     if missing:
-        try:
-            from roughness.design.homogeneity import homogeneity
-        except ImportError:
-            raise InputError("excluding the least homogeneous stimuli needs a 'homogeneity' column in the stimuli "
-                             "table (spread in JNDs) or the design tools (roughness.design.homogeneity)",
-                             parameter="exclude_least_homogeneous") from None
+        from roughness.design.homogeneity import homogeneity  # lazy: the design tools load the engines
         for i in missing:
             spreads[i] = float(homogeneity(heightmaps[i], engine=engine).spread_jnd)
     return spreads
