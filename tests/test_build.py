@@ -53,10 +53,15 @@ def test_failed_samples_are_recorded_and_do_not_stop_the_run(tmp_path):
     assert any("footprint" in r for r in reasons)  # texture made, simulation refused
 
 
+# Samples of the kill test: enough that a kill after the first two are stored lands mid-run even when coarse
+# samples take well under a second and a SIGINT lets the samples in flight finish.
+KILL_N = 16
+
+
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT], ids=["SIGKILL", "SIGINT"])
 def test_killed_build_resumes_to_exactly_n_distinct_samples(tmp_path, sig):
     out = tmp_path / "k.h5"
-    cmd = [sys.executable, "-m", "roughness.cli", "dataset", "build", "--out", str(out), "--n", "8",
+    cmd = [sys.executable, "-m", "roughness.cli", "dataset", "build", "--out", str(out), "--n", str(KILL_N),
            "--fidelity", "coarse", "--workers", "2", "--seed", "3", "--quiet"]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     deadline = time.time() + 240
@@ -65,13 +70,13 @@ def test_killed_build_resumes_to_exactly_n_distinct_samples(tmp_path, sig):
     os.killpg(proc.pid, sig)
     proc.wait(timeout=60)
     first = _count(out)
-    assert 2 <= first < 8, "the kill should land mid-run"
+    assert 2 <= first < KILL_N, "the kill should land mid-run"
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     counts = json.loads(done.stdout)
-    assert counts["already_done"] == first and counts["written"] + counts["failed"] == 8 - first
+    assert counts["already_done"] == first and counts["written"] + counts["failed"] == KILL_N - first
     with dataset.open(out) as ds:
-        assert len(ds) == 8 and len(set(ds.ids)) == 8
+        assert len(ds) == KILL_N and len(set(ds.ids)) == KILL_N
     assert verify(out) == []
 
 
