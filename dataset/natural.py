@@ -346,14 +346,3 @@ def fbm(size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, seed: int = 0, hur
 FAMILIES: dict[str, Callable[..., Heightmap]] = {
     func.__name__: func for func in (cellular, woven, knit, grating, grains, dots, fbm)
 }
-
-
-def make(family: str, seed: int = 0, size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, **params) -> Heightmap:
-    """Heightmap of a texture family by name; InputError names a bad family or parameter."""
-    if family not in FAMILIES:
-        raise InputError(f"unknown texture family {family!r}; valid families: {', '.join(FAMILIES)}")
-    unknown = sorted(set(params) - set(PARAMETER_RANGES[family]))
-    if unknown:
-        raise InputError(f"unknown {family} parameter(s) {', '.join(unknown)}; "
-                         f"valid parameters: {', '.join(PARAMETER_RANGES[family])}")
-    return FAMILIES[family](size_mm=size_mm, pixel_mm=pixel_mm, seed=seed, **params)

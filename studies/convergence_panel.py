@@ -57,7 +57,7 @@ def _dome(x, y, cx, cy, radius, height):
 def panel() -> dict[str, Callable[[], object]]:
     """Name -> maker of the heightmap (mm); deterministic."""
     from roughness import Heightmap, named_texture
-    from roughness.dataset.natural import make
+    from roughness.dataset.families import make
 
     def fam(family, seed=1, **p):
         return lambda: make(family, seed=seed, **p)

@@ -10,7 +10,8 @@ from scipy import ndimage
 from scipy.spatial import cKDTree
 
 from roughness.core.errors import InputError
-from roughness.dataset.natural import FAMILIES, PARAMETER_RANGES, grains, grating, make
+from roughness.dataset.families import make
+from roughness.dataset.natural import FAMILIES, PARAMETER_RANGES, grains, grating
 
 SMALL = {"size_mm": 6.0, "pixel_mm": 0.05}
 GRID_ARGS = ("size_mm", "pixel_mm", "seed")
