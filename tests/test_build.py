@@ -55,7 +55,7 @@ def test_failed_samples_are_recorded_and_do_not_stop_the_run(tmp_path):
 
 # Samples of the kill test: enough that a kill after the first two are stored lands mid-run even when coarse
 # samples take well under a second and a SIGINT lets the samples in flight finish.
-KILL_N = 16
+KILL_N = 40
 
 
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT], ids=["SIGKILL", "SIGINT"])
