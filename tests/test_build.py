@@ -62,7 +62,9 @@ def test_killed_build_resumes_to_exactly_n_distinct_samples(tmp_path, sig):
     out = tmp_path / "k.h5"
     cmd = [sys.executable, "-m", "roughness.cli", "dataset", "build", "--out", str(out), "--n", str(KILL_N),
            "--fidelity", "coarse", "--workers", "2", "--seed", "3", "--quiet"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    # the build must see SIGINT as Ctrl-C even if something earlier in this pytest process ignored it (inherited)
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 240
     while time.time() < deadline and _count(out) < 2:
         time.sleep(0.5)
