@@ -5,7 +5,8 @@ Layout ("roughness.dataset", version 2)
 ``/``                    attrs ``schema``, ``schema_version``, ``config`` (JSON of ``DatasetConfig``),
                          ``roughness_version`` (package that created the file), ``created`` (ISO 8601, UTC)
 ``/index/<field>``       one 1-D column per ``Entry`` field, one row per sample, sorted by id: opening
-                         a dataset reads these columns, never the sample groups
+                         a dataset reads these columns, never the sample groups (columns added later,
+                         ``ADDED_FIELDS``, may be absent from older files: read as their defaults)
 ``/samples/<id>``        ``<id> = sample_id(recipe)``, 16 hex digits
   ``heightmap``          float32 (ny, nx) heights in mm, one gzip chunk; shapes may differ between samples;
                          absent for a failed sample whose texture could not be made
@@ -42,8 +43,14 @@ RESULT_ATTRS = {
     "unresolved_nodes": ("unresolved_nodes", int),
     "cycled": ("cycled", bool),
     "seconds": ("seconds", float),
+    "discretization_error": ("discretization_error", float),
 }
-RESULT_ARRAYS = ("contact_history", "grid_axis_mm")
+# Result floats that may be missing (nan): the discretization-error estimate of a single-level run,
+# and files written before it was stored.
+OPTIONAL_FLOATS = ("discretization_error",)
+RESULT_ARRAYS = ("contact_history", "grid_axis_mm", "ladder")
+# Variable-length index columns (Entry tuple fields) and their element types.
+TUPLE_FIELDS = {"contact_history": int, "ladder_h_mm": float, "ladder_V": float}
 
 
 def sample_id(recipe: dict) -> str:
@@ -153,15 +160,20 @@ class Entry:
     cycled: bool = False
     seconds: float = math.nan
     contact_history: tuple[int, ...] = field(default=())  # contact node count per round
+    discretization_error: float = math.nan  # estimated relative error of V from the mesh (nan: none)
+    ladder_h_mm: tuple[float, ...] = field(default=())  # contact spacing of each solved level, coarsest first
+    ladder_V: tuple[float, ...] = field(default=())  # V at each of those levels (the last is V)
 
     def values(self) -> dict:
         """Scalar values of the sample (Sample.values): results if ok, the error if failed."""
-        results = (*(name for name, _ in RESULT_ATTRS.values()), "contact_history")
+        results = (*(name for name, _ in RESULT_ATTRS.values()), *TUPLE_FIELDS)
         keep = ("pixel_mm", "written", "roughness_version", *(results if self.status == "ok" else ("error",)))
-        return {k: list(self.contact_history) if k == "contact_history" else getattr(self, k) for k in keep}
+        return {k: list(getattr(self, k)) if k in TUPLE_FIELDS else getattr(self, k) for k in keep}
 
 
 ENTRY_FIELDS = tuple(f.name for f in fields(Entry))
+# Entry fields added to version 2 after it first shipped: absent from older files' index (defaults).
+ADDED_FIELDS = ("discretization_error", "ladder_h_mm", "ladder_V")
 TEXT_FIELDS = ("id", "recipe", "family", "status", "written", "roughness_version", "error")
 
 
@@ -170,9 +182,20 @@ def entry_from_attrs(sid: str, attrs: Mapping) -> Entry:
     values = {k: _plain(attrs[k]) for k in ENTRY_FIELDS if k in attrs and k not in ("id", "family")}
     try:
         family = json.loads(values["recipe"])["family"]
-        return Entry(id=sid, family=family, **{**values, "contact_history": tuple(values.get("contact_history", ()))})
+        return Entry(id=sid, family=family, **as_tuples(values))
     except (KeyError, TypeError, ValueError):
         raise InputError(f"sample {sid} has no readable recipe, status or pixel size; run verify") from None
+
+
+def as_tuples(values: dict) -> dict:
+    """``values`` with the tuple fields (lists, arrays or absent) as tuples of their element type."""
+    return {**values, **{k: tuple(kind(v) for v in values.get(k, ())) for k, kind in TUPLE_FIELDS.items()}}
+
+
+def ladder_columns(ladder: list) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Spacings (mm) and V of a result's solved levels (``simulate.converged.Level`` or their dicts)."""
+    rows = [level if isinstance(level, Mapping) else asdict(level) for level in ladder]
+    return tuple(float(r["h_contact_mm"]) for r in rows), tuple(float(r["roughness"]) for r in rows)
 
 
 def _plain(value: object) -> object:

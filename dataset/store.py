@@ -40,18 +40,23 @@ from roughness.core.hashing import canonical_json
 from roughness.simulate.heightmap import Heightmap
 
 from .schema import (
+    ADDED_FIELDS,
     ENTRY_FIELDS,
+    OPTIONAL_FLOATS,
     RESULT_ARRAYS,
     RESULT_ATTRS,
     SCHEMA,
     SCHEMA_VERSION,
     STATUSES,
     TEXT_FIELDS,
+    TUPLE_FIELDS,
     DatasetConfig,
     Entry,
     Header,
+    as_tuples,
     entry_from_attrs,
     header_problems,
+    ladder_columns,
     read_header,
     result_fields,
     sample_id,
@@ -252,10 +257,12 @@ def _result_values(fields: dict) -> dict:
                          f"{sorted(expected - set(fields))}, unknown {sorted(set(fields) - expected)}")
     values: dict = {}
     for key, (name, kind) in RESULT_ATTRS.items():
-        values[name] = kind(fields[key])
-        if kind is float and not math.isfinite(values[name]):
+        value = fields[key]
+        values[name] = math.nan if value is None and key in OPTIONAL_FLOATS else kind(value)
+        if kind is float and key not in OPTIONAL_FLOATS and not math.isfinite(values[name]):
             raise ValueError(f"{key} is {values[name]} in a successful result")
     values["contact_history"] = tuple(int(c) for c in fields["contact_history"])
+    values["ladder_h_mm"], values["ladder_V"] = ladder_columns(fields["ladder"])
     return values
 
 
@@ -276,10 +283,11 @@ def _write_index(h5: h5py.File, entries: dict[str, Entry]) -> None:
         values = [getattr(e, f.name) for e in rows]
         if f.name in TEXT_FIELDS:
             group.create_dataset(f.name, data=np.array(values, dtype=object), dtype=h5py.string_dtype())
-        elif f.name == "contact_history":
+        elif f.name in TUPLE_FIELDS:
+            kind = np.int64 if TUPLE_FIELDS[f.name] is int else np.float64
             column = np.empty(len(rows), dtype=object)
-            column[:] = [np.asarray(v, dtype=np.int64) for v in values]
-            group.create_dataset(f.name, data=column, dtype=h5py.vlen_dtype(np.int64))
+            column[:] = [np.asarray(v, dtype=kind) for v in values]
+            group.create_dataset(f.name, data=column, dtype=h5py.vlen_dtype(kind))
         else:
             group.create_dataset(f.name, data=np.array(values, dtype=_COLUMN_TYPES[f.type]))
 
@@ -315,12 +323,14 @@ def _read_index(h5: h5py.File, path: Path, context: str = "is") -> tuple[Header,
             return header, {n: entry_from_attrs(n, g.attrs) for n, g in sorted(h5["samples"].items())
                             if not n.startswith(".tmp-")}
         index = h5["index"]
-        columns = [index[n].asstr()[()] if n in TEXT_FIELDS else index[n][()] for n in ENTRY_FIELDS]
+        # Columns added after version 2 first shipped (ADDED_FIELDS) may be absent: their defaults.
+        names = [n for n in ENTRY_FIELDS if n in index or n not in ADDED_FIELDS]
+        columns = [index[n].asstr()[()] if n in TEXT_FIELDS else index[n][()] for n in names]
     except KeyError as err:
         raise InputError(f"{path} {context} is not a roughness dataset: {err}") from None
-    columns = [[tuple(h.tolist()) for h in c] if n == "contact_history" else c.tolist()
-               for n, c in zip(ENTRY_FIELDS, columns)]
-    return header, {row[0]: Entry(*row) for row in zip(*columns)}  # columns in Entry's field order
+    columns = [[tuple(h.tolist()) for h in c] if n in TUPLE_FIELDS else c.tolist()
+               for n, c in zip(names, columns)]
+    return header, {row[0]: Entry(**dict(zip(names, row))) for row in zip(*columns)}
 
 
 def _read_part(file: Path) -> tuple[Entry, dict[str, np.ndarray]]:
@@ -328,7 +338,7 @@ def _read_part(file: Path) -> tuple[Entry, dict[str, np.ndarray]]:
     with np.load(file) as npz:
         data = {name: npz[name] for name in npz.files}
     values = json.loads(str(data.pop("entry")))
-    return Entry(**{**values, "contact_history": tuple(values["contact_history"])}), data
+    return Entry(**as_tuples(values)), data
 
 
 def _part_ids(folder: Path) -> list[str]:
@@ -546,7 +556,8 @@ def _entry_problems(entry: Entry, maps: dict[str, np.ndarray]) -> list[str]:
     if recipe.get("family") != entry.family:
         problems.append(f"family {entry.family!r} is not the recipe's {recipe.get('family')!r}")
     if entry.status == "ok":
-        for name in ["pixel_mm"] + [n for n, kind in RESULT_ATTRS.values() if kind is float]:
+        for name in ["pixel_mm"] + [n for k, (n, kind) in RESULT_ATTRS.items()
+                                    if kind is float and k not in OPTIONAL_FLOATS]:
             if not math.isfinite(getattr(entry, name)):
                 problems.append(f"{name} is {getattr(entry, name)}")
         for name in MAPS:

@@ -37,6 +37,10 @@ def test_local_dask_run_with_two_workers(tmp_path):
     with open_dataset(out) as ds:
         assert sorted(ds.ids) == sorted(sample_id(r) for r in expand(RECIPE, 6))
         assert np.all(np.isfinite(ds.table()["V"]))
+        # every label carries its discretization-error estimate and the levels it came from
+        assert np.all(np.isfinite(ds.table()["discretization_error"]))
+        for s in ds.iter_samples():
+            assert s.values["ladder_h_mm"] == [0.75, 0.5] and s.values["ladder_V"][-1] == s.values["V"]
     assert verify(out) == []
     again = build(str(out), 8, RECIPE, SMALL, workers=2, quiet=True)
     assert again["already_done"] == 6 and again["written"] == 2

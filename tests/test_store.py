@@ -41,7 +41,9 @@ def recipe(i: int) -> dict:
 def fields(i: int) -> dict:
     return {"roughness": 0.1 + i / 100, "roughness_stderr": 0.002, "contact_fraction": 0.5 + i / 100,
             "indentation_mm": 0.6, "converged": i % 2 == 0, "iterations": 3 + i, "unresolved_nodes": i % 2,
-            "cycled": False, "seconds": 1.5, "contact_history": [10, 12, 12], "grid_axis_mm": np.linspace(-1, 1, 40)}
+            "cycled": False, "seconds": 1.5, "contact_history": [10, 12, 12], "grid_axis_mm": np.linspace(-1, 1, 40),
+            "discretization_error": None if i % 3 == 0 else 0.012,
+            "ladder": [{"h_contact_mm": 0.3, "roughness": 0.09}, {"h_contact_mm": 0.2, "roughness": 0.1 + i / 100}]}
 
 
 def sample(i: int) -> tuple:
@@ -90,6 +92,10 @@ def test_round_trip_of_results_and_failures(tmp_path):
         one = next(s for s in ok if s.id == sid)
         assert one.values["contact_history"] == [10, 12, 12] and one.values["V_stderr"] == 0.002
         assert np.allclose(one.grid_axis_mm, np.linspace(-1, 1, 40))
+        assert one.values["ladder_h_mm"] == [0.3, 0.2] and one.values["ladder_V"] == [0.09, values["roughness"]]
+        assert one.values["discretization_error"] == 0.012
+        estimates = {s.id: s.values["discretization_error"] for s in ok}
+        assert np.isnan(estimates[sample_id(sample(0)[0])])  # not estimated: stored as nan, still ok
         assert {s.heightmap is None for s in ds.iter_samples("failed")} == {True, False}
         with pytest.raises(KeyError, match="no fluctuation"):
             ds.fluctuation(sample_id(bad))
@@ -453,3 +459,17 @@ def test_writer_killed_at_every_file_operation(tmp_path):
         assert stored_indices(path) == list(range(6))
         assert os.listdir(path.parent) == ["d.h5"]  # no temporary files or parts left
     assert code == 0 and k > 12  # the last run finished: every step before it was a crash point
+
+
+def test_index_written_before_the_discretization_columns_reads_with_their_defaults(tmp_path):
+    """Version-2 files from before discretization_error and the ladder were stored stay readable."""
+    path = tmp_path / "older.h5"
+    fill(path, range(2))
+    with h5py.File(path, "a") as f:
+        for name in ("discretization_error", "ladder_h_mm", "ladder_V"):
+            del f["index"][name]
+    with open_dataset(path) as ds:
+        assert len(ds) == 2 and np.isfinite(ds.table()["V"]).all()
+        assert np.isnan(ds.table()["discretization_error"]).all()
+        assert all(s.values["ladder_V"] == [] for s in ds.iter_samples())
+    assert verify(path) == []

@@ -44,7 +44,8 @@ CONFIG = {"recipe": {"name": "tiny", "holdout_family": "knit", "test_fraction": 
 def fake_fields(v: float) -> dict:
     return {"roughness": v, "roughness_stderr": 1e-4, "contact_fraction": 0.9, "indentation_mm": 3.4,
             "converged": True, "iterations": 3, "unresolved_nodes": 0, "cycled": False, "seconds": 1.0,
-            "contact_history": [10, 12], "grid_axis_mm": np.linspace(-4, 4, 5)}
+            "contact_history": [10, 12], "grid_axis_mm": np.linspace(-4, 4, 5),
+            "discretization_error": None, "ladder": []}
 
 
 @pytest.fixture(scope="module")
