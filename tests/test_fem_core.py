@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import SMALL_MESH as SMALL
 
 from roughness.simulate.elasticity import (
     rigid_body_modes,
@@ -10,16 +11,9 @@ from roughness.simulate.elasticity import (
     strain_tensors,
     vertex_strain_operator,
 )
-from roughness.simulate.mesh import MeshSpec, build, surface
+from roughness.simulate.mesh import build, surface
 from roughness.simulate.strain import StrainSampler
 from roughness.simulate.variation import PairSampling, variation
-
-SMALL = MeshSpec(width_mm=4.0, tissue_mm=2.0, h_contact_mm=0.4, fine_depth_mm=1.0, h_max_mm=0.8)
-
-
-@pytest.fixture(scope="module", params=[1, 2], ids=["P1", "P2"])
-def mesh(request):
-    return build(MeshSpec(**{**SMALL.__dict__, "order": request.param}))
 
 
 def test_mesh_is_graded_with_structured_contact_face():

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
+from conftest import SMALL_MESH as SMALL
 
 from roughness.simulate.elasticity import (
     barycentric_gradients,
@@ -15,14 +16,7 @@ from roughness.simulate.elasticity import (
     stiffness,
 )
 from roughness.simulate.linsolve import AMGCache, constrain
-from roughness.simulate.mesh import MeshSpec, build
-
-SMALL = MeshSpec(width_mm=4.0, tissue_mm=2.0, h_contact_mm=0.4, fine_depth_mm=1.0, h_max_mm=0.8)
-
-
-@pytest.fixture(scope="module", params=[1, 2], ids=["P1", "P2"])
-def mesh(request):
-    return build(MeshSpec(**{**SMALL.__dict__, "order": request.param}))
+from roughness.simulate.mesh import build
 
 
 def _voigt_stiffness(mesh, young: np.ndarray, poisson: np.ndarray) -> sp.csr_matrix:

@@ -109,6 +109,14 @@ def add_overwrite(p: argparse.ArgumentParser) -> None:
     p.add_argument("--overwrite", action="store_true", help="replace existing output files (default: refuse)")
 
 
+def add_model_tail(p: argparse.ArgumentParser, json_help: str) -> None:
+    """The closing options of the surrogate-backed design commands: --model, --json, --quiet, --overwrite."""
+    p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
+    p.add_argument("--json", action="store_true", help=json_help)
+    add_quiet(p)
+    add_overwrite(p)
+
+
 def finish(p: argparse.ArgumentParser, run, **aliases: str) -> None:
     """Set the subcommand's function and its map from Python parameter names to flags.
 

@@ -8,8 +8,7 @@ from .common import (
     COUNT,
     POSITIVE,
     SEED,
-    add_overwrite,
-    add_quiet,
+    add_model_tail,
     add_reading_args,
     defaults,
     finish,
@@ -36,11 +35,8 @@ def add_parser(sub) -> None:
                    help="surrogate (milliseconds) or fem (seconds per window; the reference) "
                         f"(default: {given['engine']})")
     p.add_argument("--tile", action="store_true", help="the map is a periodic tile: windows anywhere, wrapping")
-    p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
     p.add_argument("--map", metavar="FILE.png", help="picture of the windows coloured by their V")
-    p.add_argument("--json", action="store_true", help="one JSON object (default: text)")
-    add_quiet(p)
-    add_overwrite(p)
+    add_model_tail(p, "one JSON object (default: text)")
     finish(p, run)
 
 

@@ -8,8 +8,7 @@ from .common import (
     COUNT,
     POSITIVE,
     SEED,
-    add_overwrite,
-    add_quiet,
+    add_model_tail,
     add_reading_args,
     defaults,
     finish,
@@ -46,10 +45,7 @@ def add_parser(sub) -> None:
     p.add_argument("--stl", action="store_true", help="also write each texture as a printable plate texture-N.stl")
     p.add_argument("--base-mm", type=POSITIVE,
                    help=f"--stl: plate thickness below the texture's lowest point in mm (default {DEFAULT_BASE_MM:g})")
-    p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
-    p.add_argument("--json", action="store_true", help="print palette.json's content (default: text)")
-    add_quiet(p)
-    add_overwrite(p)
+    add_model_tail(p, "print palette.json's content (default: text)")
     finish(p, run)
 
 

@@ -13,22 +13,18 @@ NON_NEGATIVE = Number(float, low=0)
 PROBABILITY = Number(float, low=0, high=1)
 
 
-def positive_list(text: str) -> list[float]:
-    """``0.4,0.8,1.2``: positive finite numbers (mm or N), for argparse."""
-    try:
-        values = [POSITIVE(v) for v in text.split(",")]
-    except argparse.ArgumentTypeError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated positive numbers, got {text!r}") from None
-    return sorted(set(values))
+def number_list(kind, what: str):
+    """An argparse type for ``a,b,c``: each parsed by ``kind`` (a common.Number), sorted, duplicates dropped."""
+    def parse(text: str) -> list:
+        try:
+            return sorted({kind(v) for v in text.split(",")})
+        except argparse.ArgumentTypeError:
+            raise argparse.ArgumentTypeError(f"expected comma-separated {what}, got {text!r}") from None
+    return parse
 
 
-def count_list(text: str) -> list[int]:
-    """``500,1000,2000``: whole numbers >= 1, for argparse."""
-    try:
-        values = [COUNT(v) for v in text.split(",")]
-    except argparse.ArgumentTypeError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated whole numbers >= 1, got {text!r}") from None
-    return sorted(set(values))
+positive_list = number_list(POSITIVE, "positive numbers")  # 0.4,0.8,1.2 (mm or N)
+count_list = number_list(COUNT, "whole numbers >= 1")  # 500,1000,2000
 
 
 def id_list(text: str) -> list[str]:
@@ -111,12 +107,7 @@ def add_parser(sub) -> None:
 
     sim = ps.add_parser("simulate", help="answer a balanced trial list with a simulated observer (Thurstone, "
                                          "Weber noise on ln V / 2), for testing and planning")
-    sim.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (ids -> heightmaps)")
-    sim.add_argument("--truth", metavar="CSV", help="known V per stimulus (columns stimulus,roughness) instead of "
-                                                    "computing it with --engine")
-    sim.add_argument("--engine", choices=("fem:coarse", "fem:default", "fem:fine", "surrogate", "auto"),
-                     default="surrogate", help="engine for the true V (default surrogate)")
-    sim.add_argument("--cache", metavar="DIR", help="FEM result cache (default: DIR/fem-cache)")
+    _add_truth_args(sim)
     sim.add_argument("--trials", required=True, type=COUNT, help="trials per subject")
     sim.add_argument("--subjects", type=COUNT, default=1, help="number of simulated subjects (default 1)")
     sim.add_argument("--sigma", type=NON_NEGATIVE, default=None,
@@ -130,12 +121,7 @@ def add_parser(sub) -> None:
 
     pla = ps.add_parser("plan", help="how many trials for R within a tolerance? simulated experiments at several "
                                      "numbers of trials")
-    pla.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (ids -> heightmaps)")
-    pla.add_argument("--truth", metavar="CSV", help="known V per stimulus (columns stimulus,roughness) instead of "
-                                                    "computing it with --engine")
-    pla.add_argument("--engine", choices=("fem:coarse", "fem:default", "fem:fine", "surrogate", "auto"),
-                     default="surrogate", help="engine for the true V (default surrogate)")
-    pla.add_argument("--cache", metavar="DIR", help="FEM result cache (default: DIR/fem-cache)")
+    _add_truth_args(pla)
     pla.add_argument("--trials", required=True, type=count_list, metavar="N,N",
                      help="numbers of trials to try, e.g. 500,1000,2000,4000")
     pla.add_argument("--experiments", type=Number(int, low=2), default=20,
@@ -153,6 +139,16 @@ def add_parser(sub) -> None:
     add_quiet(pla)
     finish(pla, run_plan)
 
+
+
+def _add_truth_args(p: argparse.ArgumentParser) -> None:
+    """The stimuli and where their true V comes from (simulate and plan)."""
+    p.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (ids -> heightmaps)")
+    p.add_argument("--truth", metavar="CSV", help="known V per stimulus (columns stimulus,roughness) instead of "
+                                                  "computing it with --engine")
+    p.add_argument("--engine", choices=("fem:coarse", "fem:default", "fem:fine", "surrogate", "auto"),
+                   default="surrogate", help="engine for the true V (default surrogate)")
+    p.add_argument("--cache", metavar="DIR", help="FEM result cache (default: DIR/fem-cache)")
 
 def _outputs(folder: str, names: tuple[str, ...], overwrite: bool) -> dict[str, Path]:
     """The output files in ``folder``, checked before any computation (the folder is made by ``_made``)."""

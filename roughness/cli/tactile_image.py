@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from .common import COUNT, POSITIVE, add_overwrite, add_quiet, defaults, finish, log, write_stdout
+from .common import COUNT, POSITIVE, add_model_tail, defaults, finish, log, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -39,10 +39,7 @@ def add_parser(sub) -> None:
                    help="also the FEM strain image (one FEM run per 8 mm of plate squared: minutes)")
     p.add_argument("--base-mm", type=POSITIVE,
                    help=f"plate thickness below the relief's lowest point in mm (default {DEFAULT_BASE_MM:g})")
-    p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
-    p.add_argument("--json", action="store_true", help="print plate.json's content (default: text)")
-    add_quiet(p)
-    add_overwrite(p)
+    add_model_tail(p, "print plate.json's content (default: text)")
     finish(p, run, width_mm="--size-mm")
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from .common import COUNT, POSITIVE, add_overwrite, add_quiet, add_reading_args, defaults, finish, log, write_stdout
+from .common import COUNT, POSITIVE, add_model_tail, add_reading_args, defaults, finish, log, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -35,10 +35,7 @@ def add_parser(sub) -> None:
                    help=f"most FEM verifications (default {given['max_fem']})")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="the texture is a periodic tile (for maps under 10 mm)")
-    p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
-    p.add_argument("--json", action="store_true", help="one JSON object (default: text)")
-    add_quiet(p)
-    add_overwrite(p)
+    add_model_tail(p, "one JSON object (default: text)")
     finish(p, run)
 
 
