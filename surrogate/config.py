@@ -21,6 +21,9 @@ class TrainConfig:
     patience: int = 60  # epochs without a better validation loss before stopping (the cosine schedule runs to 0)
     max_minutes: float = 25.0  # wall-clock budget; the best checkpoint so far is kept
     threads: int = 2  # torch threads
+    extra_data: tuple[str, ...] = ()  # more files of the same recipe's textures at other fidelities ("all" levels)
+    levels: str = "last"  # "last": each sample's V; "all": every solved mesh level, spacing as an input
+    query_h_mm: float | None = None  # "all": the contact spacing (mm) the model answers for (default: finest)
 
     def minimum_samples(self, test_fraction: float = 0.1) -> int:
         """About how many ok samples a dataset needs: ``batch_size`` training samples after the splits."""

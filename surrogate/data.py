@@ -1,20 +1,27 @@
-"""Training data for the surrogate: footprint patches, targets and splits from a dataset file (torch-free).
+"""Training data for the surrogate: footprint patches, targets and splits from dataset files (torch-free).
 
 Splits are drawn per *base texture* (family, parameters, texture seed; perturbation ignored),
 so no perturbed sibling of a test texture is trained on; the held-out family goes to "ood".
+
+Labels: one row per sample (its V, at the dataset's contact spacing), or with ``levels="all"``
+one row per (sample, mesh level) over every level the FEM solved for it (``ladder_h_mm`` and
+``ladder_V``: a ``default`` label comes with its ``coarse`` one) and over several files of the
+same textures at other fidelities: the multi-fidelity rows a spacing-conditioned network
+learns from (``h_mm`` is each row's contact spacing).
 """
 from __future__ import annotations
 
 import hashlib
 import json
+import math
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from roughness.core.errors import InputError
-from roughness.dataset.store import Dataset
+from roughness.dataset.store import Dataset, Sample
 
 from .patch import descriptors, footprint_patch
 
@@ -48,32 +55,77 @@ class Samples:
     family: np.ndarray
     split: np.ndarray
     descriptors: np.ndarray  # (n, len(DESCRIPTOR_NAMES))
+    h_mm: np.ndarray  # contact spacing (mm) of each row's label (nan: not recorded)
 
     def subset(self, split: str) -> Samples:
-        keep = self.split == split
-        return Samples(*(getattr(self, f)[keep] for f in ("ids", "patches", "roughness", "family", "split",
-                                                          "descriptors")))
+        return self.where(self.split == split)
+
+    def where(self, keep: np.ndarray) -> Samples:
+        """The rows where ``keep`` is true."""
+        return Samples(*(getattr(self, f.name)[keep] for f in fields(self)))
+
+    def at_level(self, h_mm: float) -> Samples:
+        """The rows labelled at contact spacing ``h_mm``."""
+        return self.where(np.isclose(self.h_mm, h_mm))
 
     def __len__(self) -> int:
         return len(self.ids)
 
 
-def load_samples(data: Dataset, test_fraction: float = 0.1, val_fraction: float = 0.1,
-                 holdout_family: str | None = "knit", progress: bool = True) -> Samples:
-    """Every ok sample of an open dataset as a footprint patch, with its split."""
-    rows: dict[str, list] = {k: [] for k in ("ids", "patches", "roughness", "family", "split", "descriptors")}
-    total, start = len(data), time.monotonic()
-    for i, sample in enumerate(data.iter_samples("ok")):
-        patch = footprint_patch(sample.heightmap)
-        for key, value in (("ids", sample.id), ("patches", patch), ("roughness", sample.values["V"]),
-                           ("family", sample.recipe["family"]), ("descriptors", descriptors(patch)),
-                           ("split", split_of(sample.recipe, test_fraction, val_fraction, holdout_family))):
-            rows[key].append(value)
-        if progress and (i + 1) % 250 == 0:
-            print(f"\rreading {data.path}: {i + 1}/{total} samples ({time.monotonic() - start:.0f} s)",
-                  end="", file=sys.stderr, flush=True)
-    if progress:
-        print(file=sys.stderr)
+def labels(sample: Sample, spacing_mm: float, levels: str) -> list[tuple[float, float]]:
+    """(contact spacing in mm, V) of a sample: its V, or with ``levels="all"`` every level solved for it."""
+    ladder = list(zip(sample.values.get("ladder_h_mm", []), sample.values.get("ladder_V", [])))
+    if levels == "all" and ladder:
+        return ladder
+    return [(ladder[-1][0] if ladder else spacing_mm, sample.values["V"])]
+
+
+def load_samples(data: Dataset | list[Dataset], test_fraction: float = 0.1, val_fraction: float = 0.1,
+                 holdout_family: str | None = "knit", progress: bool = True, levels: str = "last") -> Samples:
+    """Every ok sample of open datasets as a footprint patch with its split and label rows.
+
+    ``levels``: "last" (one row per sample: its V) or "all" (a row per solved mesh level; a
+    level found in several files counts once, from the first).
+    """
+    if levels not in LEVELS:
+        raise InputError(f"levels must be one of {', '.join(LEVELS)}, got {levels!r}", parameter="levels")
+    datasets = data if isinstance(data, list) else [data]
+    rows: dict[str, list] = {f.name: [] for f in fields(Samples)}
+    seen: set[tuple[str, float]] = set()
+    made: dict[str, tuple[np.ndarray, np.ndarray]] = {}  # sample id -> (patch, descriptors), made once
+    start = time.monotonic()
+    for ds in datasets:
+        spacing = _spacing_mm(ds.config.simulation)
+        for i, sample in enumerate(ds.iter_samples("ok")):
+            if sample.id not in made:
+                patch = footprint_patch(sample.heightmap)
+                made[sample.id] = patch, descriptors(patch)
+            patch, descr = made[sample.id]
+            split = split_of(sample.recipe, test_fraction, val_fraction, holdout_family)
+            for h_mm, v in labels(sample, spacing, levels):
+                if (sample.id, round(h_mm, 6)) in seen:
+                    continue
+                seen.add((sample.id, round(h_mm, 6)))
+                for key, value in (("ids", sample.id), ("patches", patch), ("roughness", v), ("split", split),
+                                   ("family", sample.recipe["family"]), ("descriptors", descr), ("h_mm", h_mm)):
+                    rows[key].append(value)
+            if progress and (i + 1) % 250 == 0:
+                print(f"\rreading {ds.path}: {i + 1}/{len(ds)} samples ({time.monotonic() - start:.0f} s)",
+                      end="", file=sys.stderr, flush=True)
+        if progress:
+            print(file=sys.stderr)
     if not rows["ids"]:
-        raise InputError(f"{data.path} holds no ok samples to train on")
-    return Samples(*(np.asarray(rows[k]) for k in ("ids", "patches", "roughness", "family", "split", "descriptors")))
+        raise InputError(f"{', '.join(str(ds.path) for ds in datasets)} holds no ok samples to train on")
+    return Samples(*(np.asarray(rows[f.name], dtype=float if f.name == "h_mm" else None) for f in fields(Samples)))
+
+
+LEVELS = ("last", "all")
+
+
+def _spacing_mm(simulation: dict) -> float:
+    """Contact spacing (mm) of a dataset's labels from its simulation configuration (nan if not fixed)."""
+    from roughness.simulate.config import FIDELITY_SPACING_MM
+
+    if simulation.get("h_contact_mm") is not None:
+        return float(simulation["h_contact_mm"])
+    return FIDELITY_SPACING_MM.get(simulation.get("fidelity", "default"), math.nan)

@@ -109,8 +109,8 @@ def calibrate(logs: np.ndarray, roughness: np.ndarray, split: np.ndarray, log_of
     return out
 
 
-def export_ensemble(checkpoints: list[str | Path], out: str | Path, data: str | Path | None = None,
-                    overwrite: bool = False) -> dict:
+def export_ensemble(checkpoints: list[str | Path], out: str | Path,
+                    data: str | Path | list[str | Path] | None = None, overwrite: bool = False) -> dict:
     """Write the ensemble graph (checked against PyTorch) and return what was measured; see the module docstring."""
     out = check_output(out, overwrite, "out")
     members, metas = load_members(checkpoints)
@@ -151,19 +151,28 @@ def export_ensemble(checkpoints: list[str | Path], out: str | Path, data: str | 
     return {"path": str(out), "bytes": out.stat().st_size, "check": report, **info}
 
 
-def _samples(data: str | Path, meta: ModelMetadata):
-    """The members' training data with their splits; InputError if it is another dataset."""
+def _samples(data: str | Path | list[str | Path], meta: ModelMetadata):
+    """The members' training data (a multi-fidelity model's files, primary first) with their splits,
+    labels at the spacing the model answers for; InputError if it is other data."""
+    from contextlib import ExitStack
+
     from roughness.dataset.digest import inputs_sha256
     from roughness.dataset.store import open_dataset
 
     from .data import load_samples
 
-    if inputs_sha256(data) != meta.data.get("inputs_sha256"):
-        raise InputError(f"{data} is not the data the members were trained on (inputs checksum differs): "
-                         "its validation split would not be held out", parameter="data")
-    with open_dataset(data) as dataset:
-        return load_samples(dataset, meta.test_fraction, meta.train_config["val_fraction"], meta.holdout_family,
-                            progress=False)
+    paths = [data] if isinstance(data, (str, Path)) else list(data)
+    expected = [meta.data.get("inputs_sha256")] + [e["inputs_sha256"] for e in (meta.multi_fidelity or {}).get(
+        "extra_data", [])]
+    if len(paths) != len(expected) or any(inputs_sha256(p) != e for p, e in zip(paths, expected)):
+        raise InputError(f"{', '.join(map(str, paths))} is not the data the members were trained on ({len(expected)} "
+                         "file(s) with the inputs checksums of their metadata): its validation split would not be "
+                         "held out", parameter="data")
+    with ExitStack() as stack:
+        datasets = [stack.enter_context(open_dataset(p)) for p in paths]
+        samples = load_samples(datasets, meta.test_fraction, meta.train_config["val_fraction"], meta.holdout_family,
+                               progress=False, levels=meta.train_config.get("levels", "last"))
+    return samples if meta.query_h_mm is None else samples.at_level(meta.query_h_mm)
 
 
 def _verify(model: Ensemble, path: str, patches: np.ndarray) -> dict:
@@ -188,8 +197,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("checkpoints", nargs="+", help="member training checkpoints (checkpoint.pt), at least 2")
     parser.add_argument("--out", required=True, help="ONNX file to write (refused if it exists unless --overwrite)")
-    parser.add_argument("--data", help="the members' training dataset (.h5): calibrate the spread on its "
-                                       "validation split and report it on the test split (default: not calibrated)")
+    parser.add_argument("--data", nargs="+", help="the members' training dataset (.h5; a multi-fidelity model's "
+                                                  "files in training order): calibrate the spread on its validation "
+                                                  "split and report it on the test split (default: not calibrated)")
     parser.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
     args = parser.parse_args(argv)
     try:

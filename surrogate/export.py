@@ -46,7 +46,7 @@ def load_checkpoint(path: str | Path) -> tuple[RoughnessNet, ModelMetadata]:
     if not isinstance(checkpoint, dict) or "state_dict" not in checkpoint:
         raise InputError(f"{path} is not a roughness training checkpoint (no state_dict)", parameter="checkpoint")
     meta = ModelMetadata.from_dict({k: v for k, v in checkpoint.items() if k != "state_dict"}, str(path))
-    model = RoughnessNet(meta.widths, meta.hidden)
+    model = RoughnessNet(meta.widths, meta.hidden, meta.query_h_mm)
     model.load_state_dict(checkpoint["state_dict"])
     return model.eval(), meta
 

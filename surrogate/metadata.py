@@ -12,7 +12,7 @@ from pathlib import Path
 from roughness.core.errors import InputError
 
 METADATA_KEY = "roughness"  # ONNX metadata_props key of the model's JSON metadata
-OPTIONAL = ("int8", "ensemble")  # keys only some models have
+OPTIONAL = ("int8", "ensemble", "multi_fidelity")  # keys only some models have
 
 
 @dataclass(frozen=True)
@@ -40,9 +40,17 @@ class ModelMetadata:
     cost_core_seconds: dict  # {"data_fem": s, "training": s}: core-seconds spent making the model
     int8: dict | None = None  # quantisation check of an int8 model (quantize.py); None for fp32
     ensemble: dict | None = None  # members and uncertainty checks of an ensemble graph (ensemble.py); None: one net
+    # A network trained on labels of several mesh levels with the spacing as an input (train.py):
+    # {"query_h_mm": spacing it answers for, "rows_by_h_mm": labels per spacing, "extra_data": [files]}
+    multi_fidelity: dict | None = None
+
+    @property
+    def query_h_mm(self) -> float | None:
+        """The contact spacing (mm) a multi-fidelity network answers for (None: a one-level network)."""
+        return None if self.multi_fidelity is None else float(self.multi_fidelity["query_h_mm"])
 
     def to_dict(self) -> dict:
-        """Plain JSON-able dict; ``int8`` and ``ensemble`` only when present."""
+        """Plain JSON-able dict; the OPTIONAL keys only when present."""
         out = asdict(self) | {"widths": list(self.widths)}
         return {k: v for k, v in out.items() if k not in OPTIONAL or v is not None}
 

@@ -8,6 +8,14 @@ skin block is square and the tissue isotropic, so V changes under them only by m
 validation loss, stops early when it stops improving, and writes ``checkpoint.pt``,
 ``metrics.json`` (scores per split and per family), ``history.csv`` (losses per epoch) and
 ``predictions.csv`` (FEM and predicted V of every sample) to the output folder.
+
+Multi-fidelity (``levels="all"``): every mesh level the FEM solved for a sample is a label row
+(a ``default`` dataset holds each texture's ``coarse`` V too; ``extra_data`` adds files of the
+same textures at finer fidelities, e.g. a ``fine`` build of the recipe's first N samples), the
+network takes the row's contact spacing as an input, and the exported model answers at the
+query spacing (default: the finest labelled). Scores are against the labels at that spacing.
+
+    roughness train training-default.h5 --extra-data training-fine.h5 --levels all --out runs/mf
 """
 from __future__ import annotations
 
@@ -15,6 +23,7 @@ import json
 import math
 import sys
 import time
+from contextlib import ExitStack
 from dataclasses import asdict
 from pathlib import Path
 
@@ -25,7 +34,7 @@ import torch.nn.functional as F
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output_folder
 from roughness.dataset.digest import inputs_sha256
-from roughness.dataset.store import open_dataset
+from roughness.dataset.store import Dataset, open_dataset
 
 from .config import TrainConfig
 from .data import load_samples
@@ -84,14 +93,23 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
     torch.set_num_threads(cfg.threads)
     start = time.monotonic()
 
-    # data: patches in mm (max 0) and log-V targets, split by base texture
-    with open_dataset(cfg.data) as data:
+    # data: patches in mm (max 0) and log-V targets (one row per label level), split by base texture
+    with ExitStack() as stack:
+        data = stack.enter_context(open_dataset(cfg.data))
+        extras = [stack.enter_context(open_dataset(path)) for path in cfg.extra_data]
         recipe, simulation = data.config.recipe, data.config.simulation
-        data_fem_seconds = float(np.nansum(data.table()["seconds"]))  # FEM solve time of every sample (one core each)
+        for extra in extras:
+            _require_same_textures(data, extra)
+        data_fem_seconds = float(sum(np.nansum(ds.table()["seconds"]) for ds in [data, *extras]))  # one core each
         holdout = recipe.get("holdout_family") if cfg.holdout_family is None else cfg.holdout_family
         holdout = None if holdout == "none" else holdout
         test_fraction = recipe.get("test_fraction", 0.1) if cfg.test_fraction is None else cfg.test_fraction
-        samples = load_samples(data, test_fraction, cfg.val_fraction, holdout)
+        samples = load_samples([data, *extras], test_fraction, cfg.val_fraction, holdout, levels=cfg.levels)
+    multi = cfg.levels == "all"
+    query = (cfg.query_h_mm or float(np.nanmin(samples.h_mm))) if multi else None
+    if multi and not np.isclose(samples.h_mm, query).any():
+        raise InputError(f"no label at the query spacing {query} mm (labels at "
+                         f"{', '.join(f'{h:g}' for h in np.unique(samples.h_mm))} mm)", parameter="query_h_mm")
     tr, va = samples.subset("train"), samples.subset("val")
     if len(tr) < cfg.batch_size or len(va) == 0:
         raise InputError(f"{cfg.data}: {len(tr)} training and {len(va)} validation samples are too few to train on: "
@@ -101,10 +119,13 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     x_train, y_train = torch.from_numpy(tr.patches[:, None]), torch.from_numpy(target(tr.roughness))
     x_val, y_val = torch.from_numpy(va.patches[:, None]), torch.from_numpy(target(va.roughness))
+    h_train, h_val = (torch.from_numpy(part.h_mm.astype(np.float32)) if multi else None for part in (tr, va))
     log(f"samples: {', '.join(f'{s} {int((samples.split == s).sum())}' for s in ('train', 'val', 'test', 'ood'))}")
+    if multi:
+        log(f"labels per contact spacing: {_rows_by_level(samples)}; the model answers at h = {query:g} mm")
 
     # model and optimiser: AdamW, linear warm-up then cosine decay over max_epochs
-    model = RoughnessNet(cfg.widths, cfg.hidden)
+    model = RoughnessNet(cfg.widths, cfg.hidden, query)
     log(f"model: {parameter_count(model):,} parameters")
     optimizer = torch.optim.AdamW(model.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
     steps_per_epoch = math.ceil(len(tr) / cfg.batch_size)
@@ -119,7 +140,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         order, train_loss = torch.randperm(len(tr), generator=generator), 0.0
         for i in range(0, len(tr), cfg.batch_size):
             idx = order[i:i + cfg.batch_size]
-            pred, _ = model(augment(x_train[idx], generator))
+            pred, _ = model(augment(x_train[idx], generator), None if h_train is None else h_train[idx])
             loss = F.mse_loss(pred, y_train[idx])
             optimizer.zero_grad(set_to_none=True)
             loss.backward()
@@ -129,7 +150,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
 
         model.eval()
         with torch.no_grad():
-            val_loss = F.mse_loss(model(x_val)[0], y_val).item()
+            val_loss = F.mse_loss(model(x_val, h_val)[0], y_val).item()
         minutes = (time.monotonic() - start) / 60
         history.append((epoch, train_loss, val_loss, schedule.get_last_lr()[0], minutes))
         improved = val_loss < best_val
@@ -145,39 +166,72 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
             log(f"time budget of {cfg.max_minutes} min reached")
             break
 
-    # evaluate the best model on every split; fit its input domain on the training inputs
+    # evaluate the best model on every split (multi-fidelity: its answers against the labels at the
+    # query spacing); fit its input domain on the training inputs (each texture once)
     model.load_state_dict(torch.load(out / "best.pt"))
-    predicted, embeddings = infer(model, samples.patches)
-    domain = Domain.fit(samples.descriptors[samples.split == "train"], embeddings[samples.split == "train"])
-    flagged = np.array([bool(r) for r in domain.check(samples.descriptors, embeddings)])
+    scored = samples.at_level(query) if multi else samples
+    predicted, embeddings = infer(model, scored.patches)
+    _, first = np.unique(samples.ids, return_index=True)
+    train_rows = first[samples.split[first] == "train"]
+    domain = Domain.fit(samples.descriptors[train_rows], infer(model, samples.patches[train_rows])[1])
+    flagged = np.array([bool(r) for r in domain.check(scored.descriptors, embeddings)])
     metrics = {}
     for split in ("train", "val", "test", "ood"):
-        part = samples.split == split
+        part = scored.split == split
         if part.any():
-            metrics[split] = scores(samples.roughness[part], predicted[part]) | {"out_of_domain": float(flagged[part].mean())}
+            metrics[split] = scores(scored.roughness[part], predicted[part]) | {"out_of_domain": float(flagged[part].mean())}
             log(f"{split:5s} {format_scores(metrics[split])}")
-    test = samples.split == "test"
-    by_family = {f: scores(samples.roughness[test & (samples.family == f)], predicted[test & (samples.family == f)])
-                 for f in np.unique(samples.family[test])}
+    test = scored.split == "test"
+    by_family = {f: scores(scored.roughness[test & (scored.family == f)], predicted[test & (scored.family == f)])
+                 for f in np.unique(scored.family[test])}
     meta = ModelMetadata(
         widths=tuple(cfg.widths), hidden=cfg.hidden, patch_pixel_mm=PATCH_PIXEL_MM, footprint_mm=FOOTPRINT_MM,
-        log_offset=LOG_OFFSET, label_fidelity=simulation.get("fidelity", "default"), simulation=simulation,
+        log_offset=LOG_OFFSET, simulation=simulation,
+        label_fidelity=_fidelity_name(query) if multi else simulation.get("fidelity", "default"),
         domain=domain.to_dict(), metrics=metrics, test_by_family=by_family, holdout_family=holdout,
         test_fraction=test_fraction,
         data={"file": Path(cfg.data).name, "recipe": recipe.get("name"), "inputs_sha256": inputs_sha256(cfg.data)},
-        train_config=asdict(cfg) | {"widths": list(cfg.widths)}, best_epoch=best_epoch, epochs=len(history),
+        train_config=asdict(cfg) | {"widths": list(cfg.widths), "extra_data": list(cfg.extra_data)},
+        best_epoch=best_epoch, epochs=len(history),
         minutes=(time.monotonic() - start) / 60, parameters=parameter_count(model),
-        cost_core_seconds={"data_fem": data_fem_seconds, "training": (time.monotonic() - start) * cfg.threads})
+        cost_core_seconds={"data_fem": data_fem_seconds, "training": (time.monotonic() - start) * cfg.threads},
+        multi_fidelity={"query_h_mm": query, "rows_by_h_mm": _rows_by_level(samples),
+                        "extra_data": [{"file": Path(p).name, "inputs_sha256": inputs_sha256(p)} for p in cfg.extra_data]}
+        if multi else None)
     atomic_write(out / "checkpoint.pt", lambda path: torch.save({"state_dict": model.state_dict(), **meta.to_dict()},
                                                                path))
     write_text(out / "metrics.json", json.dumps({k: v for k, v in meta.to_dict().items() if k != "domain"}, indent=1))
     write_text(out / "history.csv", "epoch,train_loss,val_loss,lr,minutes\n" + "".join(
         ",".join(f"{v:.6g}" for v in row) + "\n" for row in history))
-    write_text(out / "predictions.csv", "id,family,split,V_fem,V_predicted,out_of_domain\n" + "".join(
-        f"{i},{f},{s},{v:.6g},{p:.6g},{int(o)}\n" for i, f, s, v, p, o in zip(
-            samples.ids, samples.family, samples.split, samples.roughness, predicted, flagged)))
+    write_text(out / "predictions.csv", "id,family,split,V_fem,V_predicted,out_of_domain,h_mm\n" + "".join(
+        f"{i},{f},{s},{v:.6g},{p:.6g},{int(o)},{h:g}\n" for i, f, s, v, p, o, h in zip(
+            scored.ids, scored.family, scored.split, scored.roughness, predicted, flagged, scored.h_mm)))
     log(f"wrote {out / 'checkpoint.pt'} (best epoch {best_epoch}, {meta.minutes:.1f} min)")
     return out / "checkpoint.pt"
+
+
+def _require_same_textures(data: Dataset, extra: Dataset) -> None:
+    """``extra`` labels the same recipe's textures under the same physics, at another mesh fidelity."""
+    mesh_only = ("fidelity", "h_contact_mm", "tolerance")
+    a, b = data.config, extra.config
+    differences = [d for d in a.differences(b).split("; ") if d and not d.startswith(
+        tuple(f"simulation.{k}:" for k in mesh_only))]
+    if differences:
+        raise InputError(f"{extra.path} does not label the textures of {data.path} under the same physics: "
+                         f"{'; '.join(differences)}", parameter="extra_data")
+
+
+def _rows_by_level(samples) -> dict[str, int]:
+    """Number of label rows per contact spacing (mm, as text)."""
+    values, counts = np.unique(samples.h_mm, return_counts=True)
+    return {f"{h:g}": int(c) for h, c in zip(values, counts)}
+
+
+def _fidelity_name(h_mm: float) -> str:
+    """The fidelity whose contact spacing is ``h_mm``, else ``h=<h> mm``."""
+    from roughness.simulate.config import FIDELITY_SPACING_MM
+
+    return next((name for name, h in FIDELITY_SPACING_MM.items() if np.isclose(h, h_mm)), f"h={h_mm:g} mm")
 
 
 def write_text(path: Path, text: str) -> None:

@@ -17,7 +17,7 @@ import torch
 from roughness.core.errors import InputError
 from roughness.dataset.digest import inputs_sha256
 from roughness.dataset.recipe import Recipe, realise, sample_record
-from roughness.dataset.store import DatasetWriter
+from roughness.dataset.store import DatasetWriter, open_dataset
 from roughness.dataset.textures import standard_texture
 from roughness.engines import predict
 from roughness.simulate.heightmap import Heightmap
@@ -644,3 +644,83 @@ def test_ensemble_map_has_a_spread_beside_v(ensemble, tmp_path):
     assert result.summary()["roughness_std_median"] > 0
     save_map(result, tmp_path / "m.png")
     assert (tmp_path / "m.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def write_levels(path: Path, simulation: dict, n: int, ladder) -> None:
+    """A dataset of ``n`` recipe textures whose labels come with coarser levels: ``ladder(v)`` gives
+    (spacing mm, V) of every level solved, the last being the sample's V (v = 0.05 rms slope)."""
+    recipe = Recipe(name="tiny", seed=5, families={"bumps": 1, "fbm": 1, "grating": 1, "knit": 1},
+                    holdout_family="knit")
+    config = {"recipe": CONFIG["recipe"], "simulation": simulation}
+    with DatasetWriter(path, config, "test") as writer:
+        for i in range(n):
+            record = sample_record(recipe, i)
+            hm = realise(record)
+            levels = ladder(0.05 * descriptors(footprint_patch(hm))[2])
+            fields = fake_fields(levels[-1][1]) | {"ladder": [{"h_contact_mm": h, "roughness": v} for h, v in levels],
+                                                   "discretization_error": 0.01}
+            writer.write_result(record, hm.heights, hm.pixel_mm, fields, np.zeros((5, 5)))
+
+
+def test_multi_fidelity_training_uses_every_level_and_answers_at_the_finest(tmp_path):
+    """A default-fidelity file (each label with its coarse twin) plus a fine file of its first 12 textures
+    (each with its default twin): one row per (texture, spacing), the shared default level counted once,
+    splits per texture, scores and predictions at the query spacing, and a one-input ONNX graph."""
+    from roughness.surrogate.data import load_samples
+    from roughness.surrogate.metadata import onnx_metadata
+    from roughness.surrogate.target import roughness_from_log
+
+    default, fine = tmp_path / "default.h5", tmp_path / "fine.h5"
+    write_levels(default, {"fidelity": "default", "force_n": 10.0}, 40, lambda v: [(0.3, 1.2 * v), (0.2, v)])
+    write_levels(fine, {"fidelity": "fine", "force_n": 10.0}, 12, lambda v: [(0.2, v), (0.14, 0.9 * v)])
+    with open_dataset(default) as a, open_dataset(fine) as b:
+        rows = load_samples([a, b], 0.2, 0.2, "knit", progress=False, levels="all")
+    assert {h: int((rows.h_mm == h).sum()) for h in (0.3, 0.2, 0.14)} == {0.3: 40, 0.2: 40, 0.14: 12}
+    assert all(len(set(rows.split[rows.ids == sid])) == 1 for sid in set(rows.ids))
+    np.testing.assert_allclose(rows.at_level(0.14).roughness, 0.9 * rows.at_level(0.2).where(
+        np.isin(rows.at_level(0.2).ids, rows.at_level(0.14).ids)).roughness)
+
+    checkpoint = train(TrainConfig(data=str(default), out=str(tmp_path / "run"), max_epochs=2, batch_size=8,
+                                   val_fraction=0.2, extra_data=(str(fine),), levels="all"))
+    model, meta = load_checkpoint(checkpoint)
+    assert meta.query_h_mm == 0.14 and meta.label_fidelity == "fine"
+    assert meta.multi_fidelity["rows_by_h_mm"] == {"0.14": 12, "0.2": 40, "0.3": 40}
+    predictions = (tmp_path / "run" / "predictions.csv").read_text().splitlines()
+    assert len(predictions) == 1 + 12 and all(line.endswith(",0.14") for line in predictions[1:])
+    x = torch.from_numpy(check_patches(2))
+    with torch.no_grad():
+        at_query, coarse = model(x)[0], model(x, torch.full((2,), 0.3))[0]
+        assert torch.equal(at_query, model(x, torch.full((2,), 0.14))[0]) and not torch.equal(at_query, coarse)
+    onnx_path = tmp_path / "mf.onnx"
+    export(checkpoint, onnx_path, patches=check_patches(2))
+    assert onnx_metadata(onnx_path).query_h_mm == 0.14
+    graph = SurrogateModel(onnx_path)
+    np.testing.assert_allclose(graph.run(x.numpy()[:, 0])[0], roughness_from_log(at_query.numpy()), rtol=1e-4, atol=1e-7)
+
+    # an ensemble of multi-fidelity members calibrates its spread on the query-level labels of both files
+    from roughness.surrogate.ensemble import export_ensemble
+
+    fine_all = tmp_path / "fine-all.h5"
+    write_levels(fine_all, {"fidelity": "fine", "force_n": 10.0}, 40, lambda v: [(0.2, v), (0.14, 0.9 * v)])
+    members = [train(TrainConfig(data=str(default), out=str(tmp_path / f"m{seed}"), seed=seed, max_epochs=2,
+                                 batch_size=8, val_fraction=0.4, extra_data=(str(fine_all),), levels="all"))
+               for seed in (0, 1)]
+    with pytest.raises(InputError, match="not the data the members were trained on"):
+        export_ensemble(members, tmp_path / "e.onnx", data=[default])
+    report = export_ensemble(members, tmp_path / "e.onnx", data=[default, fine_all])
+    assert report["members"] == 2 and report["metrics_of"] == "ensemble"
+    assert onnx_metadata(tmp_path / "e.onnx").query_h_mm == 0.14
+
+
+def test_multi_fidelity_refuses_other_physics_and_a_missing_query_level(tmp_path):
+    default, other = tmp_path / "default.h5", tmp_path / "other.h5"
+    write_levels(default, {"fidelity": "default", "force_n": 10.0}, 24, lambda v: [(0.3, 1.2 * v), (0.2, v)])
+    write_levels(other, {"fidelity": "fine", "force_n": 5.0}, 4, lambda v: [(0.2, v), (0.14, v)])
+    with pytest.raises(InputError, match="force_n") as err:
+        train(TrainConfig(data=str(default), out=str(tmp_path / "a"), max_epochs=1, batch_size=8,
+                          extra_data=(str(other),), levels="all"))
+    assert err.value.parameter == "extra_data"
+    with pytest.raises(InputError, match="no label at the query spacing 0.1 mm"):
+        train(TrainConfig(data=str(default), out=str(tmp_path / "b"), max_epochs=1, batch_size=8, levels="all",
+                          query_h_mm=0.1))
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()

@@ -30,6 +30,16 @@ def add_parser(sub) -> None:
     tr.add_argument("--max-minutes", type=POSITIVE, default=d["max_minutes"],
                     help=f"wall-clock budget for the epochs in minutes (default: {d['max_minutes']:g})")
     tr.add_argument("--threads", type=COUNT, default=d["threads"], help=f"torch threads (default: {d['threads']})")
+    tr.add_argument("--levels", choices=("last", "all"), default=d["levels"],
+                    help="labels: 'last', each sample's V; 'all', every mesh level the FEM solved for it (a default "
+                         "build holds each texture's coarse V too), the contact spacing an input of the network "
+                         f"(multi-fidelity) (default: {d['levels']})")
+    tr.add_argument("--extra-data", nargs="+", default=[], metavar="DATASET",
+                    help="--levels all: more datasets of the same recipe's textures at other fidelities, e.g. a fine "
+                         "build of its first N samples (default: none)")
+    tr.add_argument("--query-h-mm", type=POSITIVE, default=d["query_h_mm"],
+                    help="--levels all: the contact spacing in mm the model answers for (default: the finest "
+                         "labelled)")
     add_overwrite(tr)
     finish(tr, train, data="DATASET")
     ex = sub.add_parser("export", help="export a training checkpoint to ONNX, checked against PyTorch")
@@ -51,11 +61,15 @@ def train(args: argparse.Namespace) -> int:
     from roughness.surrogate.train import TrainConfig, train
 
     check_output_folder(args.out, args.overwrite)
-    if not os.path.isfile(args.data):
-        raise InputError(f"dataset file not found: {args.data}")
+    for path, flag in [(args.data, "DATASET"), *((p, "--extra-data") for p in args.extra_data)]:
+        if not os.path.isfile(path):
+            raise InputError(f"{flag}: dataset file not found: {path}")
+    if args.levels == "last" and (args.extra_data or args.query_h_mm is not None):
+        raise InputError("--extra-data and --query-h-mm need --levels all (labels of several mesh levels)")
     train(TrainConfig(data=args.data, out=args.out, seed=args.seed, holdout_family=args.holdout_family,
                       batch_size=args.batch_size, max_epochs=args.max_epochs, max_minutes=args.max_minutes,
-                      threads=args.threads), overwrite=args.overwrite)
+                      threads=args.threads, extra_data=tuple(args.extra_data), levels=args.levels,
+                      query_h_mm=args.query_h_mm), overwrite=args.overwrite)
     return 0
 
 
