@@ -16,8 +16,6 @@ from __future__ import annotations
 from importlib import import_module
 from pathlib import Path
 
-from .core.version import package_version
-
 _SOURCE_ROOT = Path(__file__).resolve().parents[1]
 if (_SOURCE_ROOT / "pyproject.toml").is_file() and (_SOURCE_ROOT / "simulate" / "__init__.py").is_file():
     # Running from a checkout: the top-level folders simulate/, dataset/, surrogate/ and models/
@@ -48,10 +46,12 @@ __all__ = sorted(_HOMES) + ["__version__"]
 
 
 def __getattr__(name: str) -> object:
+    if name == "__version__":  # read on first use: importlib.metadata costs ~30 ms at start-up
+        from .core.version import package_version
+
+        return package_version()
     if name not in _HOMES:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     module, _, attr = _HOMES[name].partition(":")
     return getattr(import_module(module), attr or name)
 
-
-__version__ = package_version()

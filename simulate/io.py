@@ -18,9 +18,7 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-import h5py
 import numpy as np
-import tifffile
 from PIL import Image, PngImagePlugin
 
 from roughness.core.checks import positive
@@ -132,6 +130,8 @@ def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = No
         data = stl_bytes(plate(hm, DEFAULT_BASE_MM if base_mm is None else base_mm))
         atomic_write(path, lambda tmp: Path(tmp).write_bytes(data))
     elif suffix in (".tif", ".tiff"):
+        import tifffile
+
         per_cm = 10.0 / hm.pixel_mm
         atomic_write(path, lambda tmp: tifffile.imwrite(
             tmp, hm.heights.astype(np.float32), description=json.dumps({UNITS_KEY: units}),
@@ -141,6 +141,8 @@ def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = No
 
 
 def _write_h5(path: str, hm: Heightmap) -> None:
+    import h5py
+
     with h5py.File(path, "w") as f:
         f.create_dataset(DEFAULT_DATASET, data=hm.heights).attrs["pixel_mm"] = hm.pixel_mm
 
@@ -260,6 +262,8 @@ def _read_png(path: Path) -> _Raw:
 
 
 def _read_tiff(path: Path) -> _Raw:
+    import tifffile  # loaded only for TIFF files (as h5py for HDF5): predict on a PNG stays quick to start
+
     try:
         with tifffile.TiffFile(path) as tif:
             values = tif.asarray() if tif.pages else None
@@ -281,6 +285,8 @@ def _read_tiff(path: Path) -> _Raw:
 
 
 def _read_h5(path: Path, name: str) -> _Raw:
+    import h5py
+
     try:
         with h5py.File(path, "r") as f:
             node = f.get(name)
@@ -295,7 +301,10 @@ def _read_h5(path: Path, name: str) -> _Raw:
         raise _unreadable(path, "HDF5", err) from None
 
 
-def _dataset_names(f: h5py.File) -> list[str]:
+def _dataset_names(f) -> list[str]:
+    """Paths of the datasets in an open h5py file."""
+    import h5py
+
     names: list[str] = []
     f.visititems(lambda name, node: names.append(name) if isinstance(node, h5py.Dataset) else None)
     return names

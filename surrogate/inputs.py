@@ -10,10 +10,7 @@ from collections import deque
 from collections.abc import Iterator
 from pathlib import Path
 
-import h5py
-
 from roughness.core.errors import InputError
-from roughness.dataset.store import SCHEMA, open_dataset
 from roughness.simulate.heightmap import Heightmap
 from roughness.simulate.io import heightmap_files, load_heightmap
 
@@ -36,6 +33,8 @@ class InputReader:
         if path.is_dir():
             return [item for f in heightmap_files(path) for item in self._expand(f)]
         if path.suffix.lower() in (".h5", ".hdf5") and _is_dataset(path):
+            from roughness.dataset.store import open_dataset
+
             with open_dataset(path) as data:
                 ids = [sid for sid, status in zip(data.ids, data.table()["status"]) if status == "ok"]
             return [(f"{path}:{sid}", path, sid) for sid in ids]
@@ -67,11 +66,17 @@ class InputReader:
         if sid is None:
             return load_heightmap(path, self.pixel_mm, self.height_mm)
         if path not in datasets:
+            from roughness.dataset.store import open_dataset
+
             datasets[path] = open_dataset(path)
         return datasets[path].heightmap(sid)
 
 
 def _is_dataset(path: Path) -> bool:
+    import h5py  # only for .h5 inputs: a PNG prediction starts without it
+
+    from roughness.dataset.schema import SCHEMA
+
     try:
         with h5py.File(path, "r") as h5:
             return h5.attrs.get("schema") == SCHEMA

@@ -24,30 +24,32 @@ def footprint_patch(heightmap: Heightmap, centre_mm: tuple[float, float] | None 
     """Heights (mm, max 0) of the footprint square centred at ``centre_mm`` on ``pixel_mm`` pixels.
 
     Each patch pixel is the mean of sub x sub bilinear samples of the map (sub = ceil(pixel_mm /
-    map pixel)); bilinear sampling is separable, so the patch is Wy @ H @ Wx.T with sparse-banded
-    averaging matrices. Raises InputError (from the heightmap) if the footprint leaves a non-tiled map.
+    map pixel)); bilinear sampling is separable, so rows are averaged first, then columns
+    (``_average``: gathers and weighted sums, no matrix product, so no BLAS threads start for a
+    small patch). Raises InputError (from the heightmap) if the footprint leaves a non-tiled map.
     """
     heightmap.require_footprint(width_mm, centre_mm, tile)
     cx, cy = centre_mm or heightmap.centre_mm
     n = round(width_mm / pixel_mm)
     sub = max(1, math.ceil(pixel_mm / heightmap.pixel_mm - 1e-9))
-    ny, nx = heightmap.shape
-    rows, wy = _averaging(cy - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, ny, tile)
-    cols, wx = _averaging(cx - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, nx, tile)
-    patch = wy @ heightmap.heights[np.ix_(rows, cols)] @ wx.T
+    band = _average(heightmap.heights, 0, cy - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, tile)
+    patch = _average(band, 1, cx - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, tile)
     return (patch - patch.max()).astype(np.float32)
 
 
-def _averaging(start_mm: float, n: int, pixel_mm: float, sub: int, map_pixel_mm: float, size: int,
-               periodic: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Map indices used along one axis and the (n, len(indices)) weights averaging their bilinear samples."""
+def _average(values: np.ndarray, axis: int, start_mm: float, n: int, pixel_mm: float, sub: int,
+             map_pixel_mm: float, periodic: bool) -> np.ndarray:
+    """``values`` (2-D) averaged along ``axis`` into ``n`` pixels of ``pixel_mm`` from ``start_mm``:
+    each the mean of ``sub`` bilinear samples."""
     offsets = (np.arange(sub) + 0.5) / sub * pixel_mm
     u = ((start_mm + np.arange(n)[:, None] * pixel_mm + offsets) / map_pixel_mm - 0.5).ravel()
-    lower, upper, frac = bracket(u, size, periodic)
-    used, index = np.unique(np.concatenate([lower, upper]), return_inverse=True)
-    row = np.tile(np.arange(n * sub) // sub, 2)  # patch pixel of each sub-sample
-    weights = np.bincount(row * len(used) + index, np.concatenate([1 - frac, frac]) / sub, n * len(used))
-    return used, weights.reshape(n, len(used))
+    lower, upper, frac = bracket(u, values.shape[axis], periodic)
+    low = np.take(values, lower, axis)
+    frac = frac[:, None] if axis == 0 else frac[None, :]
+    samples = low + (np.take(values, upper, axis) - low) * frac
+    if axis == 0:
+        return samples.reshape(n, sub, -1).mean(axis=1)
+    return samples.reshape(-1, n, sub).mean(axis=2)
 
 
 def footprint_patches(heightmap: Heightmap, centres_mm: np.ndarray, tile: bool = False,
@@ -56,36 +58,30 @@ def footprint_patches(heightmap: Heightmap, centres_mm: np.ndarray, tile: bool =
 
     The same arithmetic, shared between footprints. When the centres lie on a grid of pitch
     ``pixel_mm`` (a map whose step is a multiple of the patch pixel), every footprint is a window of
-    one box-averaged grid over their bounding box (strided patches); otherwise the row averaging
-    Wy @ H is done once per distinct y and the column weights once per distinct x.
+    one box-averaged grid over their bounding box (strided patches); otherwise the rows are
+    averaged once per distinct y.
     """
     centres_mm = np.asarray(centres_mm, dtype=float).reshape(-1, 2)
     for centre in np.unique(centres_mm, axis=0):
         heightmap.require_footprint(width_mm, tuple(centre), tile)
     n = round(width_mm / pixel_mm)
     sub = max(1, math.ceil(pixel_mm / heightmap.pixel_mm - 1e-9))
-    ny, nx = heightmap.shape
     origin = centres_mm.min(axis=0)
     steps = (centres_mm - origin) / pixel_mm
+    out = np.empty((len(centres_mm), n, n), dtype=np.float32)
     if np.allclose(steps, np.rint(steps), rtol=0, atol=1e-9):
         ix, iy = np.rint(steps).astype(int).T
-        rows, wy = _averaging(origin[1] - width_mm / 2, n + iy.max(), pixel_mm, sub, heightmap.pixel_mm, ny, tile)
-        cols, wx = _averaging(origin[0] - width_mm / 2, n + ix.max(), pixel_mm, sub, heightmap.pixel_mm, nx, tile)
-        grid = wy @ heightmap.heights[np.ix_(rows, cols)] @ wx.T
-        out = np.empty((len(centres_mm), n, n), dtype=np.float32)
+        band = _average(heightmap.heights, 0, origin[1] - width_mm / 2, n + iy.max(), pixel_mm, sub,
+                        heightmap.pixel_mm, tile)
+        grid = _average(band, 1, origin[0] - width_mm / 2, n + ix.max(), pixel_mm, sub, heightmap.pixel_mm, tile)
         for i, (x, y) in enumerate(zip(ix, iy)):
             window = grid[y:y + n, x:x + n]
             out[i] = window - window.max()
         return out
-    columns = {x: _averaging(x - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, nx, tile)
-               for x in np.unique(centres_mm[:, 0])}
-    out = np.empty((len(centres_mm), n, n), dtype=np.float32)
     for y in np.unique(centres_mm[:, 1]):
-        rows, wy = _averaging(y - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, ny, tile)
-        band = wy @ heightmap.heights[rows]
+        band = _average(heightmap.heights, 0, y - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, tile)
         for i in np.flatnonzero(centres_mm[:, 1] == y):
-            cols, wx = columns[centres_mm[i, 0]]
-            patch = band[:, cols] @ wx.T
+            patch = _average(band, 1, centres_mm[i, 0] - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, tile)
             out[i] = patch - patch.max()
     return out
 
