@@ -2,8 +2,10 @@
 
 Model-only latency at batch 1 on one thread (the graph alone), end-to-end time per heightmap
 (footprint patch, descriptors, domain check and the graph, via roughness.predict), batched
-throughput on 1 and 2 threads, and FEM `default` and `coarse` per texture (warm block: the
-mesh, assembly and base field are excluded, as they are paid once per process).
+throughput on 1 and 2 threads, FEM `default` and `coarse` per texture (warm block: the
+mesh, assembly and base field are excluded, as they are paid once per process), and a fresh
+Python process that imports roughness, loads the README's example and predicts it (wall time
+of the whole process, and of the first predict call in it).
 
     python benchmarks/surrogate_latency.py [--model models/roughness-cnn.onnx]
     # writes benchmarks/results/surrogate_latency.{md,json}
@@ -15,6 +17,8 @@ import json
 import os
 import platform
 import statistics
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -23,6 +27,27 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 OUT = Path(__file__).parent / "results"
+ROOT = Path(__file__).resolve().parents[1]
+FRESH = """
+import time
+import roughness
+hm = roughness.load_heightmap({example!r}, pixel_mm=0.05, height_mm=1.0)
+t = time.perf_counter()
+roughness.predict(hm, model={model!r})
+print(time.perf_counter() - t)
+"""
+
+
+def fresh_process(model: str, repeats: int = 5) -> tuple[float, float]:
+    """Median wall time (s) of a whole fresh process predicting the README example, and of its predict call."""
+    code = FRESH.format(example=str(ROOT / "examples" / "standard-1.0mm.png"), model=model)
+    walls, calls = [], []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+        walls.append(time.perf_counter() - t)
+        calls.append(float(out.stdout.split()[-1]))
+    return statistics.median(walls), statistics.median(calls)
 
 
 def timed(fn, repeats: int) -> list[float]:
@@ -82,6 +107,7 @@ def main() -> None:
                         None, {INPUT: p[None, None]}), 1)]),
                 "batched_2threads_per_s": len(batch) / min(timed(lambda: q2.session.run(None, {INPUT: batch}), 5))}
 
+    fresh_wall, fresh_call = fresh_process(args.model)
     fem = {}
     for fidelity in ("coarse", "default"):
         sim = Simulator(SimConfig(fidelity=fidelity))
@@ -101,6 +127,7 @@ def main() -> None:
         "speedup_vs_fem_default_end_to_end": fem["default"] / e2e,
         "speedup_vs_fem_coarse_end_to_end": fem["coarse"] / e2e,
         "int8": int8,
+        "fresh_process_wall_s": fresh_wall, "fresh_process_first_predict_s": fresh_call,
     }
     OUT.mkdir(exist_ok=True)
     (OUT / "surrogate_latency.json").write_text(json.dumps(result, indent=1))
@@ -111,6 +138,8 @@ def main() -> None:
         ("graph only, batch 256, 1 thread", f"{batched[1]:,.0f} patches/s"),
         ("graph only, batch 256, 2 threads", f"{batched[2]:,.0f} patches/s"),
         ("end to end, batch 64, 2 threads", f"{e2e_batched:,.0f} heightmaps/s"),
+        ("fresh process: import, load the README example, predict (wall, median of 5)", f"{fresh_wall:.2f} s"),
+        ("fresh process: its first predict call (model loading included)", f"{1e3 * fresh_call:.0f} ms"),
         ("FEM coarse, warm, per texture", f"{fem['coarse']:.2f} s"),
         ("FEM default, warm, per texture", f"{fem['default']:.2f} s"),
         ("speed-up over FEM default (end to end, batch 1)", f"{result['speedup_vs_fem_default_end_to_end']:,.0f}x"),
