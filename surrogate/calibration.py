@@ -11,6 +11,10 @@ ln(lambda_A / lambda_B) / ln(1.19). (A 19% step in V is only about half a JND.)
 Regenerate the shipped table (``models/standard_scale.json``, a few minutes on 2 cores)::
 
     python -m roughness.surrogate.calibration --fidelities coarse default          # 5 seeds each
+    python -m roughness.surrogate.calibration --fidelities fine                    # adds fine (~15 min)
+
+Each table also records the mean estimated discretization error of V per lambda (from the
+next coarser mesh level, ``simulate.discretization``).
 """
 from __future__ import annotations
 
@@ -134,16 +138,19 @@ def measure(fidelity: str, seeds: range) -> dict:
     from roughness.simulate import SimConfig, Simulator
 
     sim = Simulator(SimConfig(fidelity=fidelity))
-    values = np.array([[sim.run(standard_texture(lam, seed=s)).roughness for s in seeds]
-                       for lam in STANDARD_LAMBDAS_MM])
+    results = [[sim.run(standard_texture(lam, seed=s)) for s in seeds] for lam in STANDARD_LAMBDAS_MM]
+    values = np.array([[r.roughness for r in row] for row in results])
+    errors = np.array([[r.discretization_error for r in row] for row in results], dtype=float)
     return {"lambda_mm": list(STANDARD_LAMBDAS_MM), "seeds": list(seeds), "V_mean": values.mean(1).round(6).tolist(),
-            "V_std": values.std(1, ddof=1).round(6).tolist(), "V": values.round(6).tolist()}
+            "V_std": values.std(1, ddof=1).round(6).tolist(), "V": values.round(6).tolist(),
+            "discretization_error_mean": errors.mean(1).round(4).tolist()}
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(SCALE_PATH))
-    parser.add_argument("--fidelities", nargs="+", default=["coarse", "default"])
+    parser.add_argument("--fidelities", nargs="+", default=["coarse", "default"],
+                        help="FEM fidelities to tabulate; tables of others in --out are kept (default: coarse default)")
     parser.add_argument("--seeds", type=int, default=5, help="realisations per lambda (seeds 100, 101, ...)")
     args = parser.parse_args(argv)
     out = Path(args.out)
