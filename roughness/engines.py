@@ -258,9 +258,9 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     fem = FemEngine.of(fidelity or model.fidelity, simulation, centre_mm, tile)
     off_base = [CurvatureRange.load().outside(curvature_mm, base)] if curved else []
     off_base = [why for why in off_base if why]
-    # converged FEM answers are placed on the most accurate tabulated scale, ``default``'s
+    # converged FEM answers are placed on the most accurate tabulated scale, ``fine``'s
     surrogate_scale = load_scale(model.fidelity)
-    fem_scale = load_scale("default" if fem.fidelity == "converged" else fem.fidelity)
+    fem_scale = load_scale("fine" if fem.fidelity == "converged" else fem.fidelity)
     names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
     results: list[Prediction] = []
     batch: list[tuple[str, Heightmap]] = []

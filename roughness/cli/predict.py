@@ -40,9 +40,9 @@ def add_parser(sub) -> None:
                     help="ensemble models: --engine auto also runs the FEM where the relative spread "
                          "roughness_std / (V + 0.001) exceeds this (default: the threshold measured when the "
                          "ensemble was exported; single-network models give no spread)")
-    pr.add_argument("--fidelity", choices=("coarse", "default", "converged"),
+    pr.add_argument("--fidelity", choices=("coarse", "default", "fine", "converged"),
                     help="FEM fidelity (default: that of the model's training labels; the standard scale "
-                         "is tabulated for coarse and default; converged answers are placed on default's)")
+                         "is tabulated for coarse, default and fine; converged answers are placed on fine's)")
     pr.add_argument("--tolerance", type=FRACTION,
                     help="--fidelity converged: target relative discretization error of V (default: 0.03)")
     add_reading_args(pr)
