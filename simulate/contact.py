@@ -1,7 +1,8 @@
 """Force-controlled contact of the skin block on a rigid texture: a primal-dual active-set solve.
 
-The contact conditions on every contact-face node, with gap g = u_z - H (mm) and contact
-pressure p (MPa, compressive positive):
+The contact conditions on every contact-face node, with gap g = u_z - H (mm) and nodal contact
+pressure p = r / area (MPa, compressive positive; r the node's z reaction, area its lumped nodal
+area, simulate/face.py):
 
     no penetration  g >= -GAP_TOL_MM
     no tension      p >= -tension_tol, tension_tol = TENSION_TOL x (force / face area)
@@ -15,6 +16,13 @@ texture. Such a node (released under tension ``RESTICK_AFTER_RELEASES`` times) s
 it touches when it is added again: u_x, u_y are held at its free lateral displacement and
 u_z at the texture height there. ``ContactCheck.restuck_nodes`` counts them.
 
+The conditions are imposed node by node, so r is the exact multiplier of a node's constraint:
+judging its sign makes the active set's fixed point the solution of the discrete problem (a
+bound-constrained minimum of the elastic energy). With P2 elements this matters: a pressure
+recovered as M^-1 r with the face mass matrix (as before) oscillates in sign at the edge of
+contact, so a node with a compressive reaction looked under tension and the set cycled between
+two states neither of which satisfied both conditions (studies/results/contact_partial.md).
+
 Each round is one semismooth Newton step on these conditions (a primal-dual active-set
 step; the problem is linear for a fixed contact set): solve the linear problem for the
 current set twice (texture gaps with the bone held, and a unit bone displacement) and
@@ -22,8 +30,9 @@ combine the two so that the total contact reaction equals the force; then releas
 nodes under tension beyond the tolerance and add free nodes that penetrate beyond it.
 Safeguard against cycling: once a contact set recurs (or a node has changed state
 ``DAMP_AFTER_FLIPS`` times) the step is damped: only the nodes whose violation is at least
-``DAMPING`` times the largest change state, which leaves a cycle's path (no case measured in
-studies/results/contact_partial.md needed it). Termination is guaranteed by ``max_rounds``:
+``DAMPING`` times the largest (tension and penetration in units of their tolerances, over both)
+change state, which leaves a cycle's path (no case measured in studies/results/contact_partial.md
+needed it). Termination is guaranteed by ``max_rounds``:
 the loop ends when every condition holds (``success``) or after ``max_rounds`` rounds
 (``success`` false, and the result says what is left: nodes, largest penetration, largest
 tension and the tensile force as a fraction of the applied force).
@@ -281,7 +290,8 @@ def solve_contact(
         if damping:
             # Violations in units of their tolerances, so tension and penetration compare.
             scaled = np.where(contact, -pressure / tol_p, penetration / GAP_TOL_MM)
-            release, add = _damped(scaled, release), _damped(scaled, add)
+            keep = _damped(scaled, release | add)
+            release, add = release & keep, add & keep
             damped_rounds += 1
         if callback is not None:
             callback(ContactRound(rounds, int(contact.sum()), int(release.sum()), int(add.sum()), round_cg,

@@ -2,7 +2,9 @@
 
 Same sphere-on-block set-up as tests/test_hertz.py. With nu = 0.499 the P1 block is far
 too stiff: its contact radius comes out about 37% below Hertz. Quadratic tetrahedra
-(``element="p2"``) on a mesh with fewer degrees of freedom stay within 5%.
+(``element="p2"``) on a mesh with fewer degrees of freedom stay within 5%. At h = 0.9 mm the P2
+contact nodes' radius moves in steps of 6-15% (0.94 or 1.08 of Hertz), too coarse for 5%: it
+passed there before issue 16 only with four nodes held in contact under tension (33% of the force).
 """
 from __future__ import annotations
 
@@ -27,5 +29,5 @@ def contact_radius(element: str, h_mm: float) -> float:
 
 def test_p2_is_locking_free_where_p1_locks():
     a_hertz = (3 * FORCE * R / (4 * 0.042 / (1 - NU**2))) ** (1 / 3)
-    assert contact_radius("p2", 0.9) == pytest.approx(a_hertz, rel=0.05)
+    assert contact_radius("p2", 0.6) == pytest.approx(a_hertz, rel=0.05)
     assert contact_radius("p1", 0.3) < 0.8 * a_hertz
