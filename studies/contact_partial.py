@@ -1,7 +1,8 @@
 """Contact solve before and after issue 16: partial contact (0.1-2 N) and the standard scale at 10 N.
 
-BEFORE is the active-set loop of commit a653923 (a node may change state at most twice, then
-it is held in contact), loaded from git under another module name; AFTER is the current
+BEFORE is the active-set loop of commit cfb2493 (``--before``; its simulate/contact.py is that of
+a653923: a node may change state at most twice, then it is held in contact), loaded from git
+under another module name; AFTER is the current
 simulate/contact.py (primal-dual active set with a damped step against cycling). Both run in
 the same process, each on its own Simulator (own block, AMG hierarchy and base field), on
 the same textures, interleaved (before, then after, per case); every state is measured by the same
@@ -11,9 +12,14 @@ compare them as ratios within one run.
 
 Part 1, partial contact: a periodic egg-crate texture and random rough fBm surfaces at
 0.1, 0.5 and 2 N, stick and frictionless. Part 2: the 13 standard textures at 10 N, stick.
+Part 3 (``--p2-criteria``): the P2 contact pressure that decides tension, on small P2 blocks
+(4 mm, h 0.6 mm, fBm at 0.02 and 0.1 N): today's modified quadratic basis (simulate/face.py)
+against the face-mass recovery M^-1 r of BEFORE's simulate/face.py and the lumped r / area,
+all with today's active-set loop.
 
     python studies/contact_partial.py                        # coarse; writes studies/results/contact_partial.{md,json}
     python studies/contact_partial.py --fidelity coarse default --standard-fidelity coarse default
+    python studies/contact_partial.py --fidelity --standard-fidelity coarse --p2-criteria --out /tmp/rerun
 """
 from __future__ import annotations
 
@@ -33,7 +39,8 @@ import numpy as np
 
 ROOT = Path(__file__).parents[1]
 OUT = ROOT / "studies" / "results"
-BEFORE_COMMIT = "a653923"
+BEFORE_COMMIT = "cfb2493"
+P2_CRITERIA = ("modified basis", "mass matrix", "lumped")
 FORCES_N = (0.1, 0.5, 2.0)
 CONTACTS = ("stick", "frictionless")
 
@@ -55,17 +62,17 @@ def partial_textures() -> dict:
             "fBm H=0.8 rms 0.15 mm seed 1": fbm_surface(seed=1)}
 
 
-def load_before():
-    """simulate/contact.py as of BEFORE_COMMIT, imported as roughness.simulate._contact_before."""
-    source = subprocess.run(["git", "-C", str(ROOT), "show", f"{BEFORE_COMMIT}:simulate/contact.py"],
+def load_before(commit: str = BEFORE_COMMIT, module: str = "contact"):
+    """simulate/<module>.py as of ``commit``, imported as roughness.simulate._<module>_before."""
+    source = subprocess.run(["git", "-C", str(ROOT), "show", f"{commit}:simulate/{module}.py"],
                             check=True, capture_output=True, text=True).stdout
-    name = "roughness.simulate._contact_before"
+    name = f"roughness.simulate._{module}_before"
     spec = importlib.util.spec_from_loader(name, loader=None)
-    module = importlib.util.module_from_spec(spec)
-    module.__package__ = "roughness.simulate"
-    sys.modules[name] = module  # dataclasses look their module up while the source runs
-    exec(compile(source, f"{BEFORE_COMMIT}:simulate/contact.py", "exec"), module.__dict__)  # noqa: S102 (our own code, from git)
-    return module
+    loaded = importlib.util.module_from_spec(spec)
+    loaded.__package__ = "roughness.simulate"
+    sys.modules[name] = loaded  # dataclasses look their module up while the source runs
+    exec(compile(source, f"{commit}:simulate/{module}.py", "exec"), loaded.__dict__)  # noqa: S102 (our own code, from git)
+    return loaded
 
 
 def before_solver(old):
@@ -129,6 +136,33 @@ def compare(cases, fidelity: str, solvers: dict, rows: list, part: str) -> None:
             print(json.dumps(rows[-1]), flush=True)
 
 
+def p2_criteria(commit: str, rows: list) -> None:
+    """Part 3: one P2 block per criterion of the contact pressure, today's loop, the same small fBm cases."""
+    from roughness.dataset.fractal import fbm_surface
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.model import Simulator
+
+    old_face = load_before(commit, "face")
+    config = SimConfig(h_contact_mm=0.6, width_mm=4.0, window_mm=3.0, pair_distance_mm=0.4, disk_radius_mm=0.4,
+                       element="p2", pairs=2000)
+    sims = {}
+    for criterion in P2_CRITERIA:
+        sims[criterion] = sim = Simulator(config)
+        block = sim.block(config.resolved())
+        if criterion != "modified basis":  # the block's own face is today's
+            face = old_face.ContactFace(block.mesh, block.mesh.bottom)
+            block.problem.face.pressure = (face.pressure if criterion == "mass matrix"
+                                           else lambda r, area=face.area: r / area)
+    for seed in (0, 1):
+        for force in (0.02, 0.1):
+            for mode in CONTACTS:
+                for criterion, sim in sims.items():
+                    r = sim.run(fbm_surface(seed=seed), force_n=force, contact=mode, estimate_error=False)
+                    rows.append({"part": "p2", "texture": f"fBm H=0.8 rms 0.15 mm seed {seed}", "fidelity": "h 0.6 P2",
+                                 "force_n": force, "contact": mode, **row(criterion, r)})
+                    print(json.dumps(rows[-1]), flush=True)
+
+
 def markdown(rows: list) -> str:
     from roughness.simulate.contact import GAP_TOL_MM, TENSION_TOL
 
@@ -164,6 +198,25 @@ def markdown(rows: list) -> str:
                 f"{before['satisfied']}/{after['satisfied']} | {before['seconds']:.2f}/{after['seconds']:.2f} | "
                 f"{after['seconds'] / before['seconds']:.2f} |")
         lines += ["", standard_summary(standard), ""]
+    p2 = [r for r in rows if r["part"] == "p2"]
+    if p2:
+        header = ("| texture | force (N) | contact | P2 pressure | rounds | satisfied | violating nodes | "
+                  "largest tension / mean p | largest penetration (mm) | damped rounds | V | seconds |")
+        lines += ["## P2 contact pressure criterion (4 mm block, h 0.6 mm, today's loop)", "", header,
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for r in p2:
+            lines.append(
+                f"| {r['texture']} | {r['force_n']:g} | {r['contact']} | {r['algorithm']} | {r['rounds']} | "
+                f"{r['satisfied']} | {r['tension_nodes'] + r['penetrating_nodes'] + r['mismatched_nodes']} | "
+                f"{r['max_tension_rel']:.3g} | {r['max_penetration_mm']:.1e} | {r['damped_rounds']} | "
+                f"{r['V']:.5f} | {r['seconds']:.2f} |")
+        lines.append("")
+        for criterion in P2_CRITERIA:
+            sel = [r for r in p2 if r["algorithm"] == criterion]
+            lines.append(f"- {criterion}: {sum(r['satisfied'] for r in sel)}/{len(sel)} satisfied; rounds "
+                         f"{min(r['rounds'] for r in sel)}-{max(r['rounds'] for r in sel)}; contact seconds in all "
+                         f"{sum(r['seconds'] for r in sel):.1f}")
+        lines.append("")
     return "\n".join(lines)
 
 
@@ -204,15 +257,18 @@ def standard_summary(rows: list) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--fidelity", nargs="+", default=["coarse"], help="fidelities of the partial-contact part")
+    parser.add_argument("--fidelity", nargs="*", default=["coarse"],
+                        help="fidelities of the partial-contact part (none: skip it)")
     parser.add_argument("--standard-fidelity", nargs="*", default=["coarse"],
                         help="fidelities of the 10 N standard-scale part (none: skip it)")
+    parser.add_argument("--before", default=BEFORE_COMMIT, help="git commit whose contact solve is BEFORE")
+    parser.add_argument("--p2-criteria", action="store_true", help="run part 3, the P2 contact-pressure criteria")
     parser.add_argument("--out", default=str(OUT / "contact_partial"),
                         help="output path without suffix (.md and .json are written)")
     args = parser.parse_args()
     from roughness.dataset.textures import STANDARD_LAMBDAS_MM, standard_texture
 
-    solvers = {"before": before_solver(load_before()), "after": None}
+    solvers = {"before": before_solver(load_before(args.before)), "after": None}
     rows: list = []
     t = time.perf_counter()
     textures = partial_textures()
@@ -224,11 +280,13 @@ def main() -> None:
         cases = [(f"{lam:g}", standard_texture(lam, seed=0), {"force_n": 10.0, "contact": "stick"})
                  for lam in STANDARD_LAMBDAS_MM]
         compare(cases, fidelity, solvers, rows, "standard")
+    if args.p2_criteria:
+        p2_criteria(args.before, rows)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.with_suffix(".json").write_text(json.dumps(rows, indent=1))
     text = markdown(rows)
-    out.with_suffix(".md").write_text(f"# Contact solve before ({BEFORE_COMMIT}) and after issue 16\n\n"
+    out.with_suffix(".md").write_text(f"# Contact solve before ({args.before}) and after issue 16\n\n"
                                       f"Generated by studies/contact_partial.py in {time.perf_counter() - t:.0f} s "
                                       f"(contended 2-core machine; compare seconds as ratios).\n\n{text}")
     print(text)

@@ -64,6 +64,41 @@ def test_no_contact_node_carries_tension_at_partial_contact(sim, rough, mode):
     assert r.summary()["contact_check"]["tension_nodes"] == 0
 
 
+@pytest.fixture(scope="module")
+def sim_p2():
+    """A small P2 block (4 mm footprint, h 0.6 mm: about 3,000 nodes)."""
+    return Simulator(SimConfig(element="p2", h_contact_mm=0.6, width_mm=4.0, window_mm=3.0, pair_distance_mm=0.4,
+                               disk_radius_mm=0.4, pairs=2000))
+
+
+@pytest.mark.parametrize("mode", ["frictionless", "stick"])
+def test_p2_contact_converges_with_every_condition_met(sim_p2, rough, mode):
+    # With the pressure recovered as M^-1 r (face mass matrix) this case cycled to max_rounds (30) with
+    # 20 (frictionless) / 10 (stick) nodes violating contact (studies/results/contact_partial.md, part 3).
+    r = sim_p2.run(rough, force_n=0.02, contact=mode, estimate_error=False)
+    assert r.converged and r.unresolved_nodes == 0 and r.iterations <= 15
+    assert 0.05 < r.contact_fraction < 0.9
+    tension, penetration, mismatch, fraction = conditions(sim_p2, rough, r)
+    tol = contact.tension_tolerance(sim_p2.block(r.config).problem, 0.02)
+    assert tension <= tol and penetration <= contact.GAP_TOL_MM and mismatch <= contact.GAP_TOL_MM
+    assert fraction <= contact.TENSION_TOL
+
+
+def test_p2_pressure_is_exact_for_a_uniform_load(sim_p2):
+    """Consistent nodal forces of a uniform pressure (zero at triangle corners) give that pressure at every node."""
+    from roughness.simulate.face import triangles
+
+    block = sim_p2.block(sim_p2.config.resolved())
+    local = np.full(len(block.mesh.points), -1)
+    local[block.problem.bottom] = np.arange(len(block.problem.bottom))
+    tri = local[triangles(block.mesh)]
+    p = block.mesh.points[block.problem.bottom]
+    area = 0.5 * np.abs(np.cross(p[tri[:, 1]] - p[tri[:, 0]], p[tri[:, 2]] - p[tri[:, 0]])[:, 2])
+    reaction = np.bincount(tri[:, 3:].ravel(), np.repeat(0.7 * area / 3, 3), minlength=len(p))  # int of 0.7 N_mid
+    assert block.problem.face.pressure(reaction) == pytest.approx(0.7, rel=1e-12)
+    assert block.area.min() > 0 and block.area.sum() == pytest.approx(area.sum(), rel=1e-12)
+
+
 @pytest.mark.parametrize("max_rounds", [1, 2, 3])
 def test_an_unsatisfied_state_is_never_reported_converged(sim, rough, max_rounds):
     r = sim.run(rough, force_n=FORCE_N, contact="frictionless", max_rounds=max_rounds)

@@ -3,8 +3,9 @@
 Same sphere-on-block set-up as tests/test_hertz.py. With nu = 0.499 the P1 block is far
 too stiff: its contact radius comes out about 37% below Hertz. Quadratic tetrahedra
 (``element="p2"``) on a mesh with fewer degrees of freedom stay within 5%. At h = 0.9 mm the P2
-contact nodes' radius moves in steps of 6-15% (0.94 or 1.08 of Hertz), too coarse for 5%: it
-passed there before issue 16 only with four nodes held in contact under tension (33% of the force).
+contact nodes' radius moves in steps too coarse for 5% (the solved contact set gives 1.08 x Hertz,
+one ring fewer 0.94): it passed there before issue 16 only with four nodes held in contact under
+tension (33% of the force).
 """
 from __future__ import annotations
 
