@@ -122,17 +122,24 @@ def row(label: str, r) -> dict:
             "seconds": r.stage_seconds["contact"]}
 
 
-def compare(cases, fidelity: str, solvers: dict, rows: list, part: str) -> None:
-    """Run every (name, heightmap, overrides) case with every solver on its own Simulator."""
+def compare(cases, fidelity: str, solvers: dict, rows: list, part: str, old_face=None) -> None:
+    """Run every (name, heightmap, overrides) case with every solver on its own Simulator. With
+    ``old_face`` (P2 only) BEFORE also recovers the contact pressure as it did (its simulate/face.py),
+    and each case solves one mesh level (no discretization-error estimate)."""
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator
 
-    sims = {label: Simulator(SimConfig(fidelity=fidelity)) for label in solvers}
+    element = "p1" if old_face is None else "p2"
+    sims = {label: Simulator(SimConfig(fidelity=fidelity, element=element)) for label in solvers}
+    if old_face is not None:
+        block = sims["before"].block(sims["before"].config.resolved())
+        block.problem.face.pressure = old_face.ContactFace(block.mesh, block.mesh.bottom).pressure
     for name, hm, overrides in cases:
         for label, solver in solvers.items():
             with algorithm(solver):
-                r = sims[label].run(hm, **overrides)
-            rows.append({"part": part, "texture": name, "fidelity": fidelity, **overrides, **row(label, r)})
+                r = sims[label].run(hm, estimate_error=old_face is None, **overrides)
+            rows.append({"part": part, "texture": name, "fidelity": fidelity, "element": element, **overrides,
+                         **row(label, r)})
             print(json.dumps(rows[-1]), flush=True)
 
 
@@ -192,8 +199,9 @@ def markdown(rows: list) -> str:
                   "satisfied before/after | seconds before/after | time ratio |")
         lines += ["## Standard scale at 10 N (stick)", "", header, "|---|---|---|---|---|---|---|---|---|"]
         for before, after in pairs(standard):
+            level = before["fidelity"] + (", P2" if before.get("element") == "p2" else "")
             lines.append(
-                f"| {before['texture']} | {before['fidelity']} | {before['V']:.5f} | {after['V']:.5f} | "
+                f"| {before['texture']} | {level} | {before['V']:.5f} | {after['V']:.5f} | "
                 f"{100 * (after['V'] / before['V'] - 1):+.3f}% | {before['rounds']}/{after['rounds']} | "
                 f"{before['satisfied']}/{after['satisfied']} | {before['seconds']:.2f}/{after['seconds']:.2f} | "
                 f"{after['seconds'] / before['seconds']:.2f} |")
@@ -245,11 +253,11 @@ def summary_lines(rows: list) -> str:
 
 def standard_summary(rows: list) -> str:
     out = []
-    for fidelity in dict.fromkeys(r["fidelity"] for r in rows):
-        p = pairs([r for r in rows if r["fidelity"] == fidelity])
+    for fidelity, element in dict.fromkeys((r["fidelity"], r.get("element", "p1")) for r in rows):
+        p = pairs([r for r in rows if r["fidelity"] == fidelity and r.get("element", "p1") == element])
         change = [abs(a["V"] / b["V"] - 1) for b, a in p]
         ratio = sum(a["seconds"] for _, a in p) / sum(b["seconds"] for b, _ in p)
-        out.append(f"- {fidelity}: largest |V change| {100 * max(change):.3f}%; contact time after/before "
+        out.append(f"- {fidelity}{', P2 (one level)' if element == 'p2' else ''}: largest |V change| {100 * max(change):.3f}%; contact time after/before "
                    f"(sum over textures) {ratio:.2f}; satisfied before {sum(b['satisfied'] for b, _ in p)}/{len(p)}, "
                    f"after {sum(a['satisfied'] for _, a in p)}/{len(p)}")
     return "\n".join(out)
@@ -262,6 +270,8 @@ def main() -> None:
     parser.add_argument("--standard-fidelity", nargs="*", default=["coarse"],
                         help="fidelities of the 10 N standard-scale part (none: skip it)")
     parser.add_argument("--before", default=BEFORE_COMMIT, help="git commit whose contact solve is BEFORE")
+    parser.add_argument("--p2-standard", type=int, default=0,
+                        help="also run this many standard textures (spread over the 13) with P2 at coarse, one level")
     parser.add_argument("--p2-criteria", action="store_true", help="run part 3, the P2 contact-pressure criteria")
     parser.add_argument("--out", default=str(OUT / "contact_partial"),
                         help="output path without suffix (.md and .json are written)")
@@ -280,6 +290,11 @@ def main() -> None:
         cases = [(f"{lam:g}", standard_texture(lam, seed=0), {"force_n": 10.0, "contact": "stick"})
                  for lam in STANDARD_LAMBDAS_MM]
         compare(cases, fidelity, solvers, rows, "standard")
+    if args.p2_standard > 0:
+        picked = np.linspace(0, len(STANDARD_LAMBDAS_MM) - 1, args.p2_standard).round().astype(int)
+        cases = [(f"{STANDARD_LAMBDAS_MM[i]:g}", standard_texture(STANDARD_LAMBDAS_MM[i], seed=0),
+                  {"force_n": 10.0, "contact": "stick"}) for i in dict.fromkeys(picked)]
+        compare(cases, "coarse", solvers, rows, "standard", old_face=load_before(args.before, "face"))
     if args.p2_criteria:
         p2_criteria(args.before, rows)
     out = Path(args.out)
