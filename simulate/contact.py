@@ -1,8 +1,8 @@
 """Force-controlled contact of the skin block on a rigid texture: a primal-dual active-set solve.
 
 The contact conditions on every contact-face node, with gap g = u_z - H (mm) and nodal contact
-pressure p = r / area (MPa, compressive positive; r the node's z reaction, area its lumped nodal
-area, simulate/face.py):
+pressure p (MPa, compressive positive) from the nodal z reactions r (``ContactFace.pressure``:
+r / area with P1; with P2 the pressure in a modified quadratic basis, simulate/face.py):
 
     no penetration  g >= -GAP_TOL_MM
     no tension      p >= -tension_tol, tension_tol = TENSION_TOL x (force / face area)
@@ -16,12 +16,12 @@ texture. Such a node (released under tension ``RESTICK_AFTER_RELEASES`` times) s
 it touches when it is added again: u_x, u_y are held at its free lateral displacement and
 u_z at the texture height there. ``ContactCheck.restuck_nodes`` counts them.
 
-The conditions are imposed node by node, so r is the exact multiplier of a node's constraint:
-judging its sign makes the active set's fixed point the solution of the discrete problem (a
-bound-constrained minimum of the elastic energy). With P2 elements this matters: a pressure
-recovered as M^-1 r with the face mass matrix (as before) oscillates in sign at the edge of
-contact, so a node with a compressive reaction looked under tension and the set cycled between
-two states neither of which satisfied both conditions (studies/results/contact_partial.md).
+With P2 elements the pressure that decides tension matters: recovered as M^-1 r with the face
+mass matrix (as in the first version of this solve) it oscillates in sign at the edge of contact,
+so a mid-side node with a compressive reaction looked under tension, and the set cycled between
+two states neither of which satisfied both conditions (Hertz sphere, nu 0.499, h 0.9 mm: two
+mid-side nodes swapped for 24 rounds). studies/results/contact_partial.md (part 3) has the
+measured choice.
 
 Each round is one semismooth Newton step on these conditions (a primal-dual active-set
 step; the problem is linear for a fixed contact set): solve the linear problem for the
