@@ -1,25 +1,50 @@
-"""Force-controlled active-set contact of the skin block on a rigid texture.
+"""Force-controlled contact of the skin block on a rigid texture: a primal-dual active-set solve.
 
-Each round solves the linear problem for a fixed contact set, twice (texture gaps
-with the bone held, and a unit bone displacement), and combines the two so that the
-total contact reaction equals the force. Contact nodes stick (u_x = u_y = 0) or slide
-(frictionless, in the small-slope model of rough-surface contact: the texture pushes
-along z only, u_z = H(x + u_x, y + u_y) - z0, iterated as the nodes slide). Nodes whose
-contact pressure pulls the skin toward the texture are released; free nodes that penetrate
-the texture are added.
-A node may change state at most ``MAX_FLIPS`` times; after that it is held in contact
-(the state that cannot penetrate), so the loop terminates. It is also capped at
-``max_rounds``. Nodes held with a tensile reaction, repeated contact sets (cycling)
-and the largest remaining violations are reported, never hidden.
+The contact conditions on every contact-face node, with gap g = u_z - H (mm) and nodal contact
+pressure p (MPa, compressive positive) from the nodal z reactions r (``ContactFace.pressure``:
+r / area with P1; with P2 the pressure in a modified quadratic basis, simulate/face.py):
+
+    no penetration  g >= -GAP_TOL_MM
+    no tension      p >= -tension_tol, tension_tol = TENSION_TOL x (force / face area)
+    complementarity p = 0 off contact (free nodes), g = 0 on contact (to GAP_TOL_MM)
+
+Contact nodes stick (u_x = u_y = 0) or slide (frictionless, in the small-slope model of
+rough-surface contact: the texture pushes along z only, u_z = H(x + u_x, y + u_y) - z0,
+iterated as the nodes slide). With stick, a node can have no consistent state at the edge of
+contact on a slope: held at its undeformed x, y it pulls; released, it moves sideways into the
+texture. Such a node (released under tension ``RESTICK_AFTER_RELEASES`` times) sticks where
+it touches when it is added again: u_x, u_y are held at its free lateral displacement and
+u_z at the texture height there. ``ContactCheck.restuck_nodes`` counts them.
+
+With P2 elements the pressure that decides tension matters: recovered as M^-1 r with the face
+mass matrix (as in the first version of this solve) it oscillates in sign at the edge of contact,
+so a mid-side node with a compressive reaction looked under tension, and the set cycled between
+two states neither of which satisfied both conditions (Hertz sphere, nu 0.499, h 0.9 mm: two
+mid-side nodes swapped for 24 rounds). studies/results/contact_partial.md (part 3) has the
+measured choice.
+
+Each round is one semismooth Newton step on these conditions (a primal-dual active-set
+step; the problem is linear for a fixed contact set): solve the linear problem for the
+current set twice (texture gaps with the bone held, and a unit bone displacement) and
+combine the two so that the total contact reaction equals the force; then release contact
+nodes under tension beyond the tolerance and add free nodes that penetrate beyond it.
+Safeguard against cycling: once a contact set recurs (or a node has changed state
+``DAMP_AFTER_FLIPS`` times) the step is damped: only the nodes whose violation is at least
+``DAMPING`` times the largest (tension and penetration in units of their tolerances, over both)
+change state, which leaves a cycle's path (no case measured in studies/results/contact_partial.md
+needed it). Termination is guaranteed by ``max_rounds``:
+the loop ends when every condition holds (``success``) or after ``max_rounds`` rounds
+(``success`` false, and the result says what is left: nodes, largest penetration, largest
+tension and the tensile force as a fraction of the applied force).
 
 ``solve_contact`` returns a ``ContactResult`` (like scipy.optimize's OptimizeResult: success,
 message, iteration counts) and calls an optional ``callback`` with a ``ContactRound`` after
-every round.
+every round. ``check_contact`` measures the conditions on any state.
 """
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -30,21 +55,61 @@ from .linsolve import CG_RTOL, AMGCache, constrain
 # height(x, y) -> texture height (mm) relative to the undeformed contact face, block coordinates (mm)
 Surface = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
-
-MAX_FLIPS = 2
-SLIDE_TOL_MM = 1e-4  # frictionless: largest height mismatch of a sliding contact node
+# Tolerances of the contact conditions. The displacements of a CG solve at CG_RTOL = 1e-6 are
+# good to about 1e-5 mm and the recovered pressures to about 1e-6 MPa (measured on coarse
+# blocks at 0.1-2 N), so the tolerances sit an order of magnitude above that noise.
+GAP_TOL_MM = 1e-4  # largest penetration of any node, and height mismatch of a (sliding) contact node
+TENSION_TOL = 1e-2  # largest tension at a contact node, as a fraction of the mean pressure force / face area
+RESTICK_AFTER_RELEASES = 1  # stick: a node released this often sticks where it touches when added again
+DAMP_AFTER_FLIPS = 8  # a node changing state this often (or a recurring contact set) switches damping on
+DAMPING = 0.5  # damped step: only nodes whose violation is at least this share of the largest change
 
 
 class ContactError(RuntimeError):
     """The contact problem has no answer (e.g. nothing touches the skin)."""
 
 
+@dataclass(frozen=True)
+class ContactCheck:
+    """How far a contact state is from satisfying the contact conditions (mm, MPa, N).
+
+    ``tension_nodes``: contact nodes with pressure below -``tension_tol_mpa``;
+    ``penetrating_nodes``: free nodes deeper than ``gap_tol_mm`` into the texture;
+    ``mismatched_nodes``: contact nodes off the texture height by more than ``gap_tol_mm``
+    (frictionless nodes that have slid); ``tension_n``: the total tensile force of all
+    contact nodes (pressure x nodal area), ``tension_fraction`` that force over the applied force;
+    ``restuck_nodes``: stick contact nodes held where they touched, not at their undeformed x, y
+    (module docstring).
+    """
+
+    tension_nodes: int
+    penetrating_nodes: int
+    mismatched_nodes: int
+    max_penetration_mm: float
+    max_tension_mpa: float
+    tension_n: float
+    tension_fraction: float
+    gap_tol_mm: float
+    tension_tol_mpa: float
+    restuck_nodes: int = 0
+
+    @property
+    def violations(self) -> int:
+        """Nodes that violate a condition beyond its tolerance."""
+        return self.tension_nodes + self.penetrating_nodes + self.mismatched_nodes
+
+    @property
+    def satisfied(self) -> bool:
+        return self.violations == 0
+
+
 @dataclass
 class ContactResult:
     """The converged (or last) state of the contact loop and what it cost.
 
-    ``success``: no node left to release or add (``message`` says why not); ``unresolved``:
-    nodes that still violate contact (held in contact under tension, or penetrating);
+    ``success``: every contact condition holds within tolerance (``check`` says what is left
+    otherwise, ``message`` says why); ``unresolved``: nodes that still violate a condition;
+    ``cycled``: a contact set recurred; ``damped_rounds``: rounds taken with the damped step;
     ``warm``: the texture and unit-bone solutions, to warm-start a related problem.
     """
 
@@ -64,6 +129,8 @@ class ContactResult:
     max_penetration_mm: float
     max_tension_mpa: float
     warm: tuple[np.ndarray, np.ndarray] = field(repr=False)
+    check: ContactCheck | None = None
+    damped_rounds: int = 0
 
 
 @dataclass(frozen=True)
@@ -93,14 +160,61 @@ class ContactProblem:
     face: ContactFace
     rtol: float = CG_RTOL
 
-    def constraints(self, contact: np.ndarray, frictionless: bool) -> np.ndarray:
-        """Prescribed DOFs: the bone face, and z (frictionless) or x, y, z (stick) of contact nodes."""
+    def constraints(self, contact: np.ndarray, frictionless: bool | np.ndarray) -> np.ndarray:
+        """Prescribed DOFs: the bone face, and z (sliding nodes: ``frictionless``, for all or per node)
+        or x, y, z (sticking nodes) of contact nodes."""
         fixed = np.zeros(self.n_dofs, dtype=bool)
         for a in range(3):
             fixed[3 * self.top + a] = True
-        for a in (2,) if frictionless else (0, 1, 2):
-            fixed[3 * self.bottom[contact] + a] = True
+        fixed[3 * self.bottom[contact] + 2] = True
+        stick = self.bottom[contact & ~np.asarray(frictionless, dtype=bool)]
+        for a in (0, 1):
+            fixed[3 * stick + a] = True
         return fixed
+
+
+def tension_tolerance(problem: ContactProblem, force_n: float) -> float:
+    """The largest admissible tension (MPa) at a contact node: TENSION_TOL x the mean pressure."""
+    return TENSION_TOL * force_n / float(problem.face.area.sum())
+
+
+def _penetration(problem: ContactProblem, surface: Surface, u: np.ndarray) -> np.ndarray:
+    """Depth (mm) of each contact-face node below the texture at its deformed x, y (negative: a gap)."""
+    disp = u.reshape(-1, 3)[problem.bottom]
+    moved = problem.bottom_xy + disp[:, :2]
+    return surface(moved[:, 0], moved[:, 1]) - disp[:, 2]
+
+
+def check_contact(problem: ContactProblem, surface: Surface, force_n: float, u: np.ndarray,
+                  in_contact: np.ndarray, normal_reaction: np.ndarray) -> ContactCheck:
+    """The contact conditions measured on a state: displacements ``u`` (mm), contact set, z reactions (N)."""
+    return _check(problem, force_n, in_contact, problem.face.pressure(normal_reaction),
+                  _penetration(problem, surface, u))
+
+
+def _check(problem: ContactProblem, force_n: float, contact: np.ndarray, pressure: np.ndarray,
+           penetration: np.ndarray) -> ContactCheck:
+    tol_p = tension_tolerance(problem, force_n)
+    pulled = np.where(contact, np.maximum(-pressure, 0.0), 0.0)
+    tension_n = float((pulled * problem.face.area).sum())
+    return ContactCheck(
+        tension_nodes=int(np.count_nonzero(pulled > tol_p)),
+        penetrating_nodes=int(np.count_nonzero(~contact & (penetration > GAP_TOL_MM))),
+        mismatched_nodes=int(np.count_nonzero(contact & (np.abs(penetration) > GAP_TOL_MM))),
+        max_penetration_mm=float(max(0.0, penetration.max(initial=0.0))),
+        max_tension_mpa=float(pulled.max(initial=0.0)),
+        tension_n=tension_n,
+        tension_fraction=tension_n / force_n,
+        gap_tol_mm=GAP_TOL_MM,
+        tension_tol_mpa=tol_p,
+    )
+
+
+def _damped(violation: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+    """The candidates whose (positive, scaled) violation is at least DAMPING x the largest."""
+    if not candidates.any():
+        return candidates
+    return candidates & (violation >= DAMPING * violation[candidates].max())
 
 
 def solve_contact(
@@ -113,7 +227,7 @@ def solve_contact(
     warm: tuple[np.ndarray, np.ndarray] | None = None,
     callback: Callable[[ContactRound], None] | None = None,
 ) -> ContactResult:
-    """Active-set loop with force control; see the module docstring.
+    """Primal-dual active-set solve with force control; see the module docstring.
 
     ``initial``: starting contact set (default: every node); ``warm``: a related result's
     ``warm`` solutions; ``callback``: called with each round's ``ContactRound``.
@@ -124,23 +238,31 @@ def solve_contact(
         contact[np.argmax(surface(*problem.bottom_xy.T))] = True
     lateral = np.zeros((nb, 2))
     flips = np.zeros(nb, dtype=int)
-    tol_gap = 1e-6
-    tol_pressure = 1e-4 * force_n / problem.face.area.sum()
+    slides = np.full(nb, frictionless)
+    releases = np.zeros(nb, dtype=int)
+    restuck = np.zeros(nb, dtype=bool)
+    system = None
+    tol_p = tension_tolerance(problem, force_n)
     seen: set[bytes] = set()
     history: list[int] = []
-    cycled = False
-    solves = cg_iterations = 0
+    cycled = damping = False
+    damped_rounds = solves = cg_iterations = 0
     setups_before = problem.amg.setups
     u_tex, u_unit = warm if warm is not None else (None, None)
     unit = np.zeros(problem.n_dofs)
     unit[3 * problem.top + 2] = -1.0
     for rounds in range(1, max_rounds + 1):
         round_setups = problem.amg.setups
-        system = constrain(problem.stiffness, problem.constraints(contact, frictionless), problem.amg, problem.rtol)
+        fixed = problem.constraints(contact, slides)
+        if system is None or not np.array_equal(fixed, system.fixed):  # sliding rounds reuse the system
+            system = constrain(problem.stiffness, fixed, problem.amg, problem.rtol)
         idx = problem.bottom[contact]
         moved = problem.bottom_xy + lateral
         values = np.zeros(problem.n_dofs)
         values[3 * idx + 2] = surface(moved[contact, 0], moved[contact, 1])
+        stuck = problem.bottom[contact & ~slides]
+        values[3 * stuck] = lateral[contact & ~slides, 0]
+        values[3 * stuck + 1] = lateral[contact & ~slides, 1]
         tex = system.solve(values, x0=u_tex)
         unit_bone = system.solve(unit, x0=u_unit)
         u_tex, u_unit = tex.u, unit_bone.u
@@ -154,33 +276,45 @@ def solve_contact(
         u = u_tex + delta * u_unit
         normal_reaction = np.where(contact, (tex.reaction + delta * unit_bone.reaction)[3 * problem.bottom + 2], 0.0)
         pressure = problem.face.pressure(normal_reaction)
-        disp = u.reshape(-1, 3)[problem.bottom]
-        moved = problem.bottom_xy + disp[:, :2]
-        penetration = surface(moved[:, 0], moved[:, 1]) - disp[:, 2]
-        settled = flips >= MAX_FLIPS
-        release = contact & ~settled & (pressure < -tol_pressure)
-        add = ~contact & (penetration > tol_gap)
-        # Frictionless nodes slide: their prescribed height follows their new position.
-        drift = frictionless and bool(np.any(np.abs(penetration[contact]) > SLIDE_TOL_MM))
+        penetration = _penetration(problem, surface, u)
+        release = contact & (pressure < -tol_p)
+        add = ~contact & (penetration > GAP_TOL_MM)
+        # Sliding nodes: their prescribed height follows their new position.
+        drift = bool(np.any(np.abs(penetration[contact & slides]) > GAP_TOL_MM))
         history.append(int(contact.sum()))
         key = np.packbits(contact).tobytes()
-        cycled |= key in seen and bool(release.any() or add.any())
+        recurred = key in seen and bool(release.any() or add.any())
+        cycled |= recurred
         seen.add(key)
+        damping |= recurred or bool(flips.max(initial=0) >= DAMP_AFTER_FLIPS)
+        if damping:
+            # Violations in units of their tolerances, so tension and penetration compare.
+            scaled = np.where(contact, -pressure / tol_p, penetration / GAP_TOL_MM)
+            keep = _damped(scaled, release | add)
+            release, add = release & keep, add & keep
+            damped_rounds += 1
         if callback is not None:
             callback(ContactRound(rounds, int(contact.sum()), int(release.sum()), int(add.sum()), round_cg,
                                   problem.amg.setups - round_setups))
         if not (release.any() or add.any() or drift) or rounds == max_rounds:
             break
-        lateral = disp[:, :2] if frictionless else lateral
         flips += release | add
+        restick = add & ~slides & (releases >= RESTICK_AFTER_RELEASES)  # see the module docstring
+        restuck |= restick
+        releases += release
+        lateral = np.where((slides | restick)[:, None], u.reshape(-1, 3)[problem.bottom, :2], lateral)
         contact = (contact & ~release) | add
-    success = not (release.any() or add.any() or drift)
-    violated = (contact & (pressure < -tol_pressure)) | (~contact & (penetration > tol_gap))
+    check = replace(_check(problem, force_n, contact, pressure, penetration),
+                    restuck_nodes=int(np.count_nonzero(contact & restuck)))
+    success = check.satisfied
     if success:
         message = "contact set settled"
     else:
-        message = (f"contact set still changing after {rounds} rounds (max_rounds): {int(release.sum())} nodes "
-                   f"to release, {int(add.sum())} to add" + ("; frictionless nodes still sliding" if drift else ""))
+        message = (f"contact conditions not satisfied after {rounds} rounds (max_rounds): {check.tension_nodes} "
+                   f"nodes in contact under tension (largest {check.max_tension_mpa:.2e} MPa, tensile force "
+                   f"{100 * check.tension_fraction:.2g}% of the load), {check.penetrating_nodes} free nodes "
+                   f"penetrating (largest {check.max_penetration_mm:.2e} mm)"
+                   + (f", {check.mismatched_nodes} sliding nodes off the texture" if check.mismatched_nodes else ""))
     return ContactResult(
         u=u,
         indentation_mm=float(delta),
@@ -192,10 +326,12 @@ def solve_contact(
         linear_solves=solves,
         cg_iterations=cg_iterations,
         amg_setups=problem.amg.setups - setups_before,
-        unresolved=int(np.count_nonzero(violated)),
+        unresolved=check.violations,
         cycled=cycled,
         contact_history=history,
-        max_penetration_mm=float(max(0.0, penetration[~contact].max(initial=0.0))),
-        max_tension_mpa=float(max(0.0, -pressure[contact].min(initial=0.0))),
+        max_penetration_mm=check.max_penetration_mm,
+        max_tension_mpa=check.max_tension_mpa,
         warm=(u_tex, u_unit),
+        check=check,
+        damped_rounds=damped_rounds,
     )

@@ -1,24 +1,29 @@
-"""The contact face: its triangles, nodal areas, and contact pressure from nodal reactions.
+"""The contact face: its triangles, nodal areas, and the nodal contact pressure.
 
-With P2 elements a uniform pressure puts no consistent nodal force on triangle corners,
-so contact decisions use the pressure p = M^-1 r recovered with the face mass matrix M;
-with P1 the lumped p = r / area is used.
+The contact conditions are imposed node by node (simulate/contact.py), so the nodal z
+reactions r are their multipliers. With P1 the pressure is r / area (lumped nodal areas).
+With P2 a uniform pressure p puts no consistent force on triangle corners (r = 0 there, and
+r < 0 at the edge of a contact where p falls), so the pressure is judged in a modified quadratic
+basis N'_corner = N_corner + ALPHA x (the mid-side functions of its edges), N'_mid = (1 - 2 ALPHA)
+N_mid: a partition of unity whose functions all have positive integrals (the nodal areas).
+p = T r / area is exact for a uniform pressure, has the sign of r at mid-side nodes, and judges
+a corner together with its edges' mid-side nodes. Two alternatives measured worse
+(studies/results/contact_partial.md): p = M^-1 r with the face mass matrix M oscillates in sign at
+the edge of contact, so the contact set cycled; p = r / area releases corners inside the contact
+(holes 4 um deep under a Hertz sphere).
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as sla
 
 from .mesh import Mesh
 
 # Tet faces as (corner, corner, corner, mid(0-1), mid(1-2), mid(0-2)) in VTK quadratic order.
 _FACES = np.array([[0, 1, 2, 4, 5, 6], [0, 1, 3, 4, 8, 7], [0, 2, 3, 6, 9, 7], [1, 2, 3, 5, 9, 8]])
-# Mass matrix of the 6-node triangle, times 180 / area; mids 3, 4, 5 lie on edges 01, 12, 02.
-_P2_MASS = np.array([
-    [6, -1, -1, 0, -4, 0], [-1, 6, -1, 0, 0, -4], [-1, -1, 6, -4, 0, 0],
-    [0, 0, -4, 32, 16, 16], [-4, 0, 0, 16, 32, 16], [0, -4, 0, 16, 16, 32]]) / 180.0
-_SUBTRIANGLES = np.array([[0, 3, 5], [1, 4, 3], [2, 5, 4], [3, 4, 5]])
+# Mids 3, 4, 5 of a 6-node triangle lie on edges 01, 12, 02: (corner, mid) pairs along the edges.
+_EDGE_MIDS = np.array([[0, 3], [1, 3], [1, 4], [2, 4], [0, 5], [2, 5]])
+ALPHA = 0.2  # weight of a mid-side function in its corners' modified basis functions
 
 
 def triangles(mesh: Mesh, z: float = 0.0) -> np.ndarray:
@@ -35,7 +40,7 @@ def _area(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
 
 
 class ContactFace:
-    """Nodal areas (mm^2) and pressure recovery (MPa) on the contact-face nodes ``nodes``."""
+    """Nodal areas (mm^2) and nodal contact pressure (MPa) on the contact-face nodes ``nodes``."""
 
     def __init__(self, mesh: Mesh, nodes: np.ndarray) -> None:
         tri = triangles(mesh)
@@ -43,18 +48,22 @@ class ContactFace:
         local[nodes] = np.arange(len(nodes))
         tri = local[tri]
         area = _area(mesh.points[nodes], tri)
-        linear = tri[:, _SUBTRIANGLES].reshape(-1, 3) if mesh.order == 2 else tri
-        sub_area = np.repeat(area / 4, 4) if mesh.order == 2 else area
-        self.area = np.bincount(linear.ravel(), np.repeat(sub_area / 3, 3), minlength=len(nodes))
-        self._mass = None
-        if mesh.order == 2:
-            rows = np.repeat(tri, 6, axis=1).ravel()
-            cols = np.tile(tri, (1, 6)).ravel()
-            vals = (area[:, None, None] * _P2_MASS).ravel()
-            self._mass = sla.splu(sp.csc_matrix((vals, (rows, cols)), shape=(len(nodes),) * 2))
+        n = len(nodes)
+        self._transform = None
+        if mesh.order == 1:
+            self.area = np.bincount(tri.ravel(), np.repeat(area / 3, 3), minlength=n)
+            return
+        mids = np.unique(tri[:, 3:])
+        integral = np.bincount(tri[:, 3:].ravel(), np.repeat(area / 3, 3), minlength=n)  # corners integrate to 0
+        pairs = np.unique(tri[:, _EDGE_MIDS].reshape(-1, 2), axis=0)  # each edge once
+        diagonal = np.ones(n)
+        diagonal[mids] = 1 - 2 * ALPHA
+        self._transform = (sp.diags(diagonal) + sp.csr_matrix(
+            (np.full(len(pairs), ALPHA), (pairs[:, 0], pairs[:, 1])), shape=(n, n))).tocsr()
+        self.area = self._transform @ integral
 
     def pressure(self, reaction_z: np.ndarray) -> np.ndarray:
-        """Contact pressure (MPa) from the nodal z reactions (N)."""
-        if self._mass is None:
+        """Nodal contact pressure (MPa) from the nodal z reactions (N); see the module docstring."""
+        if self._transform is None:
             return reaction_z / self.area
-        return self._mass.solve(reaction_z)
+        return (self._transform @ reaction_z) / self.area

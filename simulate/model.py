@@ -15,7 +15,7 @@ from roughness.core.hashing import canonical_json
 
 from . import mesh as meshing
 from .config import BlockSpec, SimConfig
-from .contact import MAX_FLIPS, ContactError, ContactProblem, ContactResult, ContactRound, solve_contact
+from .contact import ContactCheck, ContactError, ContactProblem, ContactResult, ContactRound, solve_contact
 from .curved import FLAT, BaseShape, base_surface, textured_surface
 from .elasticity import rigid_body_modes, stiffness
 from .face import ContactFace
@@ -30,7 +30,6 @@ MAX_INDENTATION_TISSUES = 4.0
 DEEP_INDENTATION_TISSUES = 2.0  # beyond this an indentation is unusual (a note on stderr)
 MIN_FOOTPRINT_PIXELS = 10  # the skin footprint must span at least this many pixels across
 LOCKING_POISSON = 0.49  # P1 elements lock above this Poisson ratio
-HELD_TENSION_FRACTION = 0.01  # nodes held in contact pulling more than this share of the force are unusual
 
 
 @dataclass(frozen=True)
@@ -38,10 +37,10 @@ class Note:
     """A remark on how a result was obtained; ``unusual`` ones are worth a user's attention.
 
     Codes: ``indentation`` (deeper than the tissue: outside small strain, as in the paper's
-    model; unusual beyond ``DEEP_INDENTATION_TISSUES``), ``not_converged``, ``cycled``,
-    ``unresolved`` (nodes held in contact under tension; unusual when they pull more than
-    ``HELD_TENSION_FRACTION`` of the force), ``locking`` (P1 near incompressibility),
-    ``unresolved_texture`` (features finer than the contact mesh), ``tolerance_not_met``
+    model; unusual beyond ``DEEP_INDENTATION_TISSUES``), ``not_converged`` (the contact
+    conditions do not hold within tolerance: what is left), ``cycled`` (a contact set recurred,
+    so the contact steps were damped; unusual if it did not converge), ``locking`` (P1 near
+    incompressibility), ``unresolved_texture`` (features finer than the contact mesh), ``tolerance_not_met``
     (``converged`` stopped at its finest level above the tolerance).
     """
 
@@ -55,7 +54,9 @@ class Result:
     """Roughness of one texture and how it was obtained (mm, N, s).
 
     ``iterations``: contact rounds; ``cg_iterations``, ``amg_setups``: linear-solver work of
-    this texture's contact solve; ``notes``: see ``Note``; ``discretization_error``: estimated
+    this texture's contact solve; ``converged``: every contact condition holds within tolerance,
+    ``contact_check``: how far each is from holding (nodes, largest penetration and tension,
+    tensile force as a fraction of the load); ``notes``: see ``Note``; ``discretization_error``: estimated
     relative error of V from the mesh (``simulate.discretization``), with ``ladder`` the levels
     solved for it (``simulate.converged.Level``, the last one this result's).
     """
@@ -83,6 +84,7 @@ class Result:
     state: ContactResult | None = field(default=None, repr=False)
     discretization_error: float | None = None
     ladder: list = field(default_factory=list)
+    contact_check: ContactCheck | None = None
 
     def summary(self) -> dict:
         """The scalars, contact history, notes and main settings, as plain Python types (JSON-ready)."""
@@ -95,7 +97,8 @@ class Result:
                    fidelity=self.config.fidelity, h_contact_mm=self.config.h_contact_mm,
                    force_n=self.config.force_n, poisson=self.config.poisson, contact=self.config.contact,
                    element=self.config.element, bone=self.config.bone, tolerance=self.config.tolerance,
-                   ladder=[asdict(level) for level in self.ladder])
+                   ladder=[asdict(level) for level in self.ladder],
+                   contact_check=None if self.contact_check is None else asdict(self.contact_check))
         if self.config.curvature_mm is not None:  # the curved base under the texture
             out.update(curvature_mm=self.config.curvature_mm, base=self.config.base,
                        curvature_axis=self.config.curvature_axis, texture_along=self.config.texture_along)
@@ -267,6 +270,7 @@ class Simulator:
             notes=_notes(config, state, heightmap),
             config=config,
             state=state,
+            contact_check=state.check,
         )
 
 
@@ -299,17 +303,11 @@ def _notes(config: SimConfig, state: ContactResult, heightmap: Heightmap) -> lis
                         "tissue: linear small-strain elasticity past its range (as in the paper's model)",
                         unusual=ratio > DEEP_INDENTATION_TISSUES))
     if not state.success:
-        out.append(Note("not_converged", f"{state.message}; {state.unresolved} nodes still violate contact (max "
-                        f"penetration {state.max_penetration_mm:.2e} mm, max tension {state.max_tension_mpa:.2e} MPa)",
+        out.append(Note("not_converged", f"{state.message}; {state.unresolved} nodes still violate contact",
                         unusual=True))
-    elif state.unresolved:
-        held = state.in_contact & (state.normal_reaction < 0)
-        tension_n = float(-state.normal_reaction[held].sum())
-        out.append(Note("unresolved", f"{state.unresolved} nodes held in contact under tension after changing state "
-                        f"{MAX_FLIPS} times (max {state.max_tension_mpa:.2e} MPa, {tension_n:.2g} N in all)",
-                        unusual=tension_n > HELD_TENSION_FRACTION * config.force_n))
     if state.cycled:
-        out.append(Note("cycled", "the contact set revisited an earlier state (cycling)", unusual=True))
+        out.append(Note("cycled", "the contact set revisited an earlier state (cycling); damped steps followed",
+                        unusual=not state.success))
     if config.element == "p1" and config.poisson > LOCKING_POISSON:
         out.append(Note("locking", f"P1 elements lock at Poisson ratio {config.poisson} > {LOCKING_POISSON}: strain "
                         "is underestimated; use element p2", unusual=True))

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 from . import common
 from .common import FRACTION, POISSON, POSITIVE, SEED, Number, add_heightmap_args, log
@@ -119,6 +120,8 @@ def run(args: argparse.Namespace) -> int:
         _print_result(result)
     for note in result.unusual_notes:
         log(args, f"note: {note.message}")
+    if not result.converged:
+        print(contact_warning(result), file=sys.stderr, flush=True)
     return 0
 
 
@@ -128,6 +131,15 @@ def _spacing(config, hm) -> str:
     return f"{config.spacing_mm(hm)} mm"
 
 
+def contact_warning(r) -> str:
+    """One line on what is left of the contact conditions of an unconverged result (shown even with --quiet)."""
+    c = r.contact_check
+    return (f"warning: contact NOT converged after {r.iterations} rounds: {c.violations} nodes violate contact "
+            f"({c.tension_nodes} held under tension, largest {c.max_tension_mpa:.2e} MPa, tensile force "
+            f"{100 * c.tension_fraction:.2g}% of the {r.config.force_n:g} N load; {c.penetrating_nodes} penetrating, "
+            f"largest {c.max_penetration_mm:.2e} mm); V is not reliable")
+
+
 def _print_result(r) -> None:
     print(f"roughness V        {r.roughness:.5f} ± {r.roughness_stderr:.5f} (Monte Carlo) ± "
           f"{r.discretization_error * abs(r.roughness):.5f} (discretization, {100 * r.discretization_error:.1f}%)")
@@ -135,10 +147,11 @@ def _print_result(r) -> None:
     print(f"contact fraction   {100 * r.contact_fraction:.1f}%")
     print(f"indentation        {r.indentation_mm:.3f} mm at {r.config.force_n} N")
     if r.converged:
-        status = "converged" + (f"; {r.unresolved_nodes} nodes held in contact under slight tension"
-                                if r.unresolved_nodes else "")
+        c = r.contact_check
+        status = (f"converged: no penetration beyond {c.gap_tol_mm:g} mm, no tension beyond "
+                  f"{c.tension_tol_mpa:.1e} MPa")
     else:
-        status = f"NOT converged; {r.unresolved_nodes} nodes unresolved"
+        status = f"NOT converged; {r.unresolved_nodes} nodes violate contact"
     print(f"contact rounds     {r.iterations} ({status})")
     print(f"mesh               {r.nodes} nodes, {r.config.element.upper()}, h = {r.config.h_contact_mm} mm ({_level(r)})")
     print(f"time               {r.seconds:.2f} s")
