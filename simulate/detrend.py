@@ -20,7 +20,12 @@ from roughness.core.errors import InputError
 from .heightmap import Heightmap
 
 METHODS = ("lowpass",)
-CUTOFF_WAVELENGTHS = 8.0  # default cut-off: this many dominant texture wavelengths
+# Default cut-off: this many dominant texture wavelengths. Measured at coarse fidelity on standard
+# textures (lambda 0.75/1.0/1.25 mm, 12 mm maps): flat maps change V by at most 1.55% at 8, 0.50% at
+# 12, 0.22% at 16; maps on cylinders of R = +-8 mm are recovered within 0.35% at 8, 1.56% at 12 and
+# 2.42% at 16 (the longer cut-off leaves more of the shape beyond its quadratic fit). 12 keeps both
+# within the targets (flat < 1%, curved < 5%).
+CUTOFF_WAVELENGTHS = 12.0
 LONGEST_TEXTURE_FRACTION = 0.25  # the texture's wavelength is sought below this fraction of the map's side
 
 
