@@ -28,13 +28,7 @@ def footprint_patch(heightmap: Heightmap, centre_mm: tuple[float, float] | None 
     (``_average``: gathers and weighted sums, no matrix product, so no BLAS threads start for a
     small patch). Raises InputError (from the heightmap) if the footprint leaves a non-tiled map.
     """
-    heightmap.require_footprint(width_mm, centre_mm, tile)
-    cx, cy = centre_mm or heightmap.centre_mm
-    n = round(width_mm / pixel_mm)
-    sub = max(1, math.ceil(pixel_mm / heightmap.pixel_mm - 1e-9))
-    band = _average(heightmap.heights, 0, cy - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, tile)
-    patch = _average(band, 1, cx - width_mm / 2, n, pixel_mm, sub, heightmap.pixel_mm, tile)
-    return (patch - patch.max()).astype(np.float32)
+    return footprint_patches(heightmap, np.array([centre_mm or heightmap.centre_mm]), tile, pixel_mm, width_mm)[0]
 
 
 def _average(values: np.ndarray, axis: int, start_mm: float, n: int, pixel_mm: float, sub: int,

@@ -169,11 +169,13 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
     # evaluate the best model on every split (multi-fidelity: its answers against the labels at the
     # query spacing); fit its input domain on the training inputs (each texture once)
     model.load_state_dict(torch.load(out / "best.pt"))
+    ids, first = np.unique(samples.ids, return_index=True)  # rows of one texture share its patch
+    answers, codes = infer(model, samples.patches[first])  # at the query spacing
+    trained = samples.split[first] == "train"
+    domain = Domain.fit(samples.descriptors[first][trained], codes[trained])
     scored = samples.at_level(query) if multi else samples
-    predicted, embeddings = infer(model, scored.patches)
-    _, first = np.unique(samples.ids, return_index=True)
-    train_rows = first[samples.split[first] == "train"]
-    domain = Domain.fit(samples.descriptors[train_rows], infer(model, samples.patches[train_rows])[1])
+    row = np.searchsorted(ids, scored.ids)
+    predicted, embeddings = answers[row], codes[row]
     flagged = np.array([bool(r) for r in domain.check(scored.descriptors, embeddings)])
     metrics = {}
     for split in ("train", "val", "test", "ood"):
