@@ -310,7 +310,9 @@ def solve_contact(
     if success:
         message = "contact set settled"
     else:
-        message = (f"contact conditions not satisfied after {rounds} rounds (max_rounds): {check.tension_nodes} "
+        message = (f"contact conditions not satisfied after {rounds} rounds"
+                   f"{' (max_rounds)' if rounds == max_rounds else ' (nothing left to release or add)'}: "
+                   f"{check.tension_nodes} "
                    f"nodes in contact under tension (largest {check.max_tension_mpa:.2e} MPa, tensile force "
                    f"{100 * check.tension_fraction:.2g}% of the load), {check.penetrating_nodes} free nodes "
                    f"penetrating (largest {check.max_penetration_mm:.2e} mm)"
