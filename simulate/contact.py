@@ -24,9 +24,10 @@ mid-side nodes swapped for 24 rounds). studies/results/contact_partial.md (part 
 measured choice.
 
 Each round is one semismooth Newton step on these conditions (a primal-dual active-set
-step; the problem is linear for a fixed contact set): solve the linear problem for the
-current set twice (texture gaps with the bone held, and a unit bone displacement) and
-combine the two so that the total contact reaction equals the force; then release contact
+step; the problem is linear for a fixed contact set): one solve of the linear problem for the
+current set with the bone as a force-controlled rigid plate (``ConstrainedSystem.solve_plate``:
+the texture gaps prescribed, the bone's displacement one more unknown, its force the load),
+so that the total contact reaction equals the force; then release contact
 nodes under tension beyond the tolerance and add free nodes that penetrate beyond it.
 Safeguard against cycling: once a contact set recurs (or a node has changed state
 ``DAMP_AFTER_FLIPS`` times) the step is damped: only the nodes whose violation is at least
@@ -110,7 +111,8 @@ class ContactResult:
     ``success``: every contact condition holds within tolerance (``check`` says what is left
     otherwise, ``message`` says why); ``unresolved``: nodes that still violate a condition;
     ``cycled``: a contact set recurred; ``damped_rounds``: rounds taken with the damped step;
-    ``warm``: the texture and unit-bone solutions, to warm-start a related problem.
+    ``warm``: the displacements and the bone's unit motion extended into the block
+    (``solve_plate``'s plate), to warm-start a related problem.
     """
 
     u: np.ndarray
@@ -248,14 +250,20 @@ def solve_contact(
     cycled = damping = False
     damped_rounds = solves = cg_iterations = 0
     setups_before = problem.amg.setups
-    u_tex, u_unit = warm if warm is not None else (None, None)
     unit = np.zeros(problem.n_dofs)
     unit[3 * problem.top + 2] = -1.0
+    u, plate = warm if warm is not None else (None, None)
     for rounds in range(1, max_rounds + 1):
         round_setups = problem.amg.setups
         fixed = problem.constraints(contact, slides)
         if system is None or not np.array_equal(fixed, system.fixed):  # sliding rounds reuse the system
             system = constrain(problem.stiffness, fixed, problem.amg, problem.rtol)
+        round_cg = 0
+        if plate is None:  # the bone's unit motion, extended into the block by its free response
+            first = system.solve(unit)
+            plate, round_cg = first.u, first.iterations
+            solves += 1
+        plate = np.where(fixed, unit, plate)
         idx = problem.bottom[contact]
         moved = problem.bottom_xy + lateral
         values = np.zeros(problem.n_dofs)
@@ -263,18 +271,14 @@ def solve_contact(
         stuck = problem.bottom[contact & ~slides]
         values[3 * stuck] = lateral[contact & ~slides, 0]
         values[3 * stuck + 1] = lateral[contact & ~slides, 1]
-        tex = system.solve(values, x0=u_tex)
-        unit_bone = system.solve(unit, x0=u_unit)
-        u_tex, u_unit = tex.u, unit_bone.u
-        solves += 2
-        round_cg = tex.iterations + unit_bone.iterations
+        solved = system.solve_plate(values, plate, force_n, x0=u)
+        u, delta = solved.u, solved.plate_mm
+        solves += 1
+        round_cg += solved.iterations
         cg_iterations += round_cg
-        r_unit_z = unit_bone.reaction[3 * idx + 2].sum()
-        if not r_unit_z > 0:
+        if not delta > 0 or not np.isfinite(delta):
             raise ContactError("the skin does not touch the texture: no force can be transmitted")
-        delta = (force_n - tex.reaction[3 * idx + 2].sum()) / r_unit_z
-        u = u_tex + delta * u_unit
-        normal_reaction = np.where(contact, (tex.reaction + delta * unit_bone.reaction)[3 * problem.bottom + 2], 0.0)
+        normal_reaction = np.where(contact, solved.reaction[3 * problem.bottom + 2], 0.0)
         pressure = problem.face.pressure(normal_reaction)
         penetration = _penetration(problem, surface, u)
         release = contact & (pressure < -tol_p)
@@ -333,7 +337,7 @@ def solve_contact(
         contact_history=history,
         max_penetration_mm=check.max_penetration_mm,
         max_tension_mpa=check.max_tension_mpa,
-        warm=(u_tex, u_unit),
+        warm=(u, plate),
         check=check,
         damped_rounds=damped_rounds,
     )
