@@ -199,7 +199,7 @@ class ConstrainedSystem:
         return LinearSolution(u, self.k @ u - f, iterations, residual)
 
     def solve_plate(self, values: np.ndarray, plate: np.ndarray, force: float,
-                    x0: np.ndarray | None = None) -> LinearSolution:
+                    x0: np.ndarray | None = None, rtol: float | None = None) -> LinearSolution:
         """Prescribed DOFs at ``values`` + d ``plate`` (mm), with the plate displacement d such that the
         plate's force ``plate`` . (K u) is ``force`` (N): a force-controlled rigid plate in one solve.
 
@@ -231,15 +231,15 @@ class ConstrainedSystem:
         if x0 is not None:
             d0 = float(np.median(x0[fixed & (plate != 0)] / plate[fixed & (plate != 0)]))
             start = np.append(np.where(fixed, 0.0, x0 - vp - d0 * plate), d0)
-        z, iterations, residual = self._cg(a, b, start, m, norm_b)
-        if self.amg.too_slow(iterations):
+        z, iterations, residual = self._cg(a, b, start, m, norm_b, rtol)
+        if rtol is None and self.amg.too_slow(iterations):
             self.amg.build(self.matrix, fixed)
         d = float(z[n])
         u = vp + d * plate + np.where(fixed, 0.0, z[:n])
         return LinearSolution(u, self.k @ u, iterations, residual, d)
 
     def _cg(self, a, b: np.ndarray, x0: np.ndarray | None, m: sla.LinearOperator,
-            norm_b: float) -> tuple[np.ndarray, int, float]:
+            norm_b: float, rtol: float | None = None) -> tuple[np.ndarray, int, float]:
         count = 0
 
         def tick(_: np.ndarray) -> None:
@@ -247,7 +247,7 @@ class ConstrainedSystem:
             count += 1
 
         norm_b = max(norm_b, 1e-300)
-        x, info = sla.cg(a, b, x0=x0, M=m, rtol=0.0, atol=self.rtol * norm_b, maxiter=self.maxiter,
+        x, info = sla.cg(a, b, x0=x0, M=m, rtol=0.0, atol=(rtol or self.rtol) * norm_b, maxiter=self.maxiter,
                          callback=tick)
         residual = float(np.linalg.norm(b - a @ x)) / norm_b
         if info != 0 or not np.all(np.isfinite(x)):
