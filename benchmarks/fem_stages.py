@@ -1,8 +1,9 @@
 """FEM cost per stage and peak memory at each fidelity, and the linear-solver choice.
 
 Each fidelity runs in a fresh process with an empty mesh cache (cold: mesh, assembly,
-sampler, base field with the AMG set-up), then on five standard textures with the block
-warm. A second table times one constrained solve of the default block with each solver.
+sampler, base field with the AMG set-up), then on the 24 textures of the convergence panel
+(studies/convergence_panel.py: every family, small-feature, sparse and low-relief textures)
+with the block warm. A second table times one constrained solve of the default block with each solver.
 
 ``--baseline DIR`` also runs every fidelity with the source tree in DIR (e.g. the commit
 before a speed change: ``git archive <commit> | tar -x -C DIR``), alternating old and new
@@ -28,13 +29,13 @@ from pathlib import Path
 OUT = Path(__file__).parent / "results"
 FIDELITIES = ("coarse", "default", "fine")
 REPEATS = 5
-WARM_TEXTURES = [(0.75, 1), (1.0, 2), (1.25, 3), (1.5, 4), (0.625, 5)]
 
 
 def one_fidelity(fidelity: str) -> dict:
     from roughness.dataset.textures import standard_texture
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator
+    from studies.convergence_panel import panel
 
     sim = Simulator(SimConfig(fidelity=fidelity))
     # one level per texture: the discretization estimate's coarser solve is not a stage (older trees lack the flag)
@@ -44,9 +45,9 @@ def one_fidelity(fidelity: str) -> dict:
     cold = time.perf_counter() - t
     warm = []
     roughness = [first.roughness]
-    for lam, seed in WARM_TEXTURES:
+    for make in panel().values():
         rounds = []
-        r = sim.run(standard_texture(lam, seed=seed), callback=rounds.append, **single)
+        r = sim.run(make(), callback=rounds.append, **single)
         roughness.append(r.roughness)
         warm.append({"seconds": r.seconds, **r.stage_seconds, "rounds": r.iterations,
                      "cg_iterations": [x.cg_iterations for x in rounds], "amg_setups": r.amg_setups})
@@ -60,6 +61,10 @@ def one_fidelity(fidelity: str) -> dict:
         "warm_cg_iterations": [w["cg_iterations"] for w in warm], "warm_amg_setups": [w["amg_setups"] for w in warm],
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "roughness": roughness,
     }
+
+
+def _mean(values: list[float]) -> float:
+    return sum(values) / len(values)
 
 
 def solver_comparison(direct: bool, fidelity: str = "default") -> list[dict]:
@@ -163,11 +168,10 @@ def plot(rows: list[dict]) -> None:
 
 
 def measure(fidelity: str, threads: int, source: Path | None = None) -> dict:
-    """``one_fidelity`` in a fresh process with an empty mesh cache, importing roughness from ``source``."""
+    """``one_fidelity`` in a fresh process with an empty mesh cache, importing roughness from ``source`` (default: this tree)."""
     with tempfile.TemporaryDirectory() as cache:
         env = {**os.environ, "ROUGHNESS_CACHE": cache, "OMP_NUM_THREADS": str(threads)}
-        if source is not None:
-            env["PYTHONPATH"] = str(source)
+        env["PYTHONPATH"] = str(source or Path(__file__).resolve().parents[1])  # roughness and studies
         out = subprocess.run([sys.executable, __file__, "--one", fidelity], env=env, check=True,
                              capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
@@ -176,23 +180,24 @@ def measure(fidelity: str, threads: int, source: Path | None = None) -> dict:
 def stage_table(rows: list[dict]) -> list[str]:
     lines = [("| fidelity | h (mm) | nodes | mesh (s) | assembly (s) | sampler (s) | base field + AMG (s) | "
              "cold total (s) | contact (s/texture) | strain (s) | variation (s) | warm total (s/texture, mean / max) "
-             "| contact rounds | peak RSS (MB) |"), "|" + "---|" * 14]
+             "| contact rounds (mean / max) | peak RSS (MB) |"), "|" + "---|" * 14]
     for r in rows:
         c, w = r["cold_stages"], r["warm_stages"]
         lines.append(f"| {r['fidelity']} | {r['h_contact_mm']} | {r['nodes']} | {c['mesh']:.2f} | {c['assembly']:.2f} "
                      f"| {c['sampler']:.2f} | {c['base_field']:.2f} | {r['cold_seconds']:.2f} | {w['contact']:.2f} "
                      f"| {w['strain']:.3f} | {w['variation']:.4f} | {r['warm_seconds_mean']:.2f} / "
-                     f"{r['warm_seconds_max']:.2f} | {r['warm_rounds']} | {r['peak_rss_mb']:.0f} |")
+                     f"{r['warm_seconds_max']:.2f} | {_mean(r['warm_rounds']):.1f} / {max(r['warm_rounds'])} "
+                     f"| {r['peak_rss_mb']:.0f} |")
     return lines
 
 
 def ratio_table(pairs: list[tuple[dict, dict]]) -> list[str]:
     """New/old time ratios per stage and the largest relative change of V, per fidelity."""
     lines = [("| fidelity | assembly | base field + AMG | cold total | contact (warm) | warm total (mean) "
-             "| max relative change of V | CG iterations per texture, old -> new |"), "|" + "---|" * 8]
+             "| max relative change of V | CG iterations per texture (mean), old -> new |"), "|" + "---|" * 8]
     for old, new in pairs:
         change = max(abs(a - b) / abs(b) for a, b in zip(new["roughness"], old["roughness"]))
-        cg = f"{[sum(x) for x in old['warm_cg_iterations']]} -> {[sum(x) for x in new['warm_cg_iterations']]}"
+        cg = f"{_mean([sum(x) for x in old['warm_cg_iterations']]):.1f} -> {_mean([sum(x) for x in new['warm_cg_iterations']]):.1f}"
         lines.append(f"| {new['fidelity']} | {new['cold_stages']['assembly'] / old['cold_stages']['assembly']:.2f} "
                      f"| {new['cold_stages']['base_field'] / old['cold_stages']['base_field']:.2f} "
                      f"| {new['cold_seconds'] / old['cold_seconds']:.2f} "

@@ -6,7 +6,7 @@ median time, solves each once with a warm block, and records per contact round t
 contact, released and added, and the CG iterations; plus the contact fraction and V.
 
     python benchmarks/fem_tail.py [--fidelity default] [--slowest 8] [--typical 4]
-    # writes benchmarks/results/fem_tail.{md,json}
+    # writes benchmarks/results/fem_tail.{md,json} (other fidelities: fem_tail_<fidelity>.{md,json})
 """
 from __future__ import annotations
 
@@ -65,9 +65,10 @@ def main() -> None:
                      "per_round": [(r.in_contact, r.released, r.added, r.cg_iterations) for r in rounds]})
         print(json.dumps(rows[-1]), flush=True)
     OUT.mkdir(exist_ok=True)
-    (OUT / "fem_tail.json").write_text(json.dumps({"fidelity": args.fidelity, "rows": rows}, indent=1))
+    stem = "fem_tail" + ("" if args.fidelity == "default" else f"_{args.fidelity}")
+    (OUT / f"{stem}.json").write_text(json.dumps({"fidelity": args.fidelity, "rows": rows}, indent=1))
     lines = [f"# FEM tail latency ({args.fidelity}, warm block, one BLAS thread)", "",
-             "Regenerate: `python benchmarks/fem_tail.py`. The slowest validation textures by the build time of "
+             f"Regenerate: `python benchmarks/fem_tail.py --fidelity {args.fidelity}`. The slowest validation textures by the build time of "
              "their stored `fine` label, and some of median time, solved again one after the other in one "
              "process. Per round: nodes in contact / released / added / CG iterations.", "",
              "| texture | family | stored fine (s) | now (s) | rounds | CG iterations | contact fraction | rounds |",
@@ -84,7 +85,7 @@ def main() -> None:
                          f"{statistics.median(r['rounds'] for r in group):g} rounds, "
                          f"{statistics.median(r['cg_iterations'] for r in group):g} CG iterations, contact fraction "
                          f"{statistics.median(r['contact_fraction'] for r in group):.3f}")
-    (OUT / "fem_tail.md").write_text("\n".join(lines) + "\n")
+    (OUT / f"{stem}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
 

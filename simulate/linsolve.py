@@ -7,6 +7,13 @@ reactions come for free). The smoothed-aggregation hierarchy (pyamg) lives in an
 prescribed set has drifted or CG needed clearly more iterations than on a fresh hierarchy, so
 that a contact loop pays the set-up cost about once per texture.
 
+``solve_plate`` adds one unknown, the displacement of a rigid plate (the bone) loaded by a
+force: the contact loop's force control in one solve per round instead of two (texture gaps
+with the bone held, then a unit bone displacement, combined). Its extra row is preconditioned
+by the plate's stiffness; the plate's motion is extended into the block by an earlier free
+response, so the coupling to the free DOFs is small and CG needs about the iterations of one
+held solve (studies/results/fem_speed.md has the measurements).
+
 CG runs in float64; the preconditioner is one V-cycle of that hierarchy in float32
 (``AMG_PRECISION``), applied directly to the levels (pyamg's own ``aspreconditioner`` also
 computes two residuals per call that CG does not use). Halving the bytes the cycle reads is
@@ -146,12 +153,14 @@ class _Layout:
 
 @dataclass(frozen=True)
 class LinearSolution:
-    """Displacements u (mm), reactions K u - f (N), CG iterations and the achieved relative residual."""
+    """Displacements u (mm), reactions K u - f (N), CG iterations and the achieved relative residual;
+    ``plate_mm``: the plate's displacement d of a ``solve_plate`` solve."""
 
     u: np.ndarray
     reaction: np.ndarray
     iterations: int
     residual: float
+    plate_mm: float = 0.0
 
 
 class ConstrainedSystem:
@@ -178,7 +187,9 @@ class ConstrainedSystem:
         vp = np.where(fixed, values, 0.0)
         f = np.zeros_like(vp) if load is None else load
         b = np.where(fixed, self.diag * vp, f - self.k @ vp)
-        u, iterations, residual = self._cg(b, None if x0 is None else np.where(fixed, vp, x0))
+        norm_b = float(np.linalg.norm(b))
+        m = sla.LinearOperator(self.matrix.shape, self.amg.hierarchy, dtype=float)
+        u, iterations, residual = self._cg(self.matrix, b, None if x0 is None else np.where(fixed, vp, x0), m, norm_b)
         if self.amg.too_slow(iterations):
             self.amg.build(self.matrix, fixed)
         # The preconditioner couples prescribed and free DOFs, so CG honours prescribed values only to its
@@ -187,18 +198,58 @@ class ConstrainedSystem:
         u = np.where(fixed, vp, u)
         return LinearSolution(u, self.k @ u - f, iterations, residual)
 
-    def _cg(self, b: np.ndarray, x0: np.ndarray | None) -> tuple[np.ndarray, int, float]:
+    def solve_plate(self, values: np.ndarray, plate: np.ndarray, force: float,
+                    x0: np.ndarray | None = None, rtol: float | None = None) -> LinearSolution:
+        """Prescribed DOFs at ``values`` + d ``plate`` (mm), with the plate displacement d such that the
+        plate's force ``plate`` . (K u) is ``force`` (N): a force-controlled rigid plate in one solve.
+
+        ``plate`` is the plate's unit motion on the prescribed DOFs; on the free DOFs it is any
+        extension of it (the closer to the free response, e.g. an earlier solve's, the better the
+        preconditioner). The unknowns are the free DOFs and d: an SPD system of one more row, CG
+        preconditioned by the V-cycle on the free block and the plate's stiffness on d. ``x0``: warm
+        start displacements (mm), ``plate_mm`` of the result is d.
+        """
+        fixed, n = self.fixed, len(self.fixed)
+        vp = np.where(fixed, values, 0.0)
+        k_plate = self.k @ plate
+        coupling = np.where(fixed, 0.0, k_plate)
+        stiffness = float(plate @ k_plate)
+        k_vp = self.k @ vp
+        b = np.append(np.where(fixed, 0.0, -k_vp), force - plate @ k_vp)
+        # Stop at the scale of ``solve``'s right-hand side, which carries the prescribed values too.
+        norm_b = float(np.hypot(np.linalg.norm(b), np.linalg.norm(self.diag * vp)))
+
+        def matvec(v: np.ndarray) -> np.ndarray:
+            return np.append(self.matrix @ v[:n] + coupling * v[n], coupling @ v[:n] + stiffness * v[n])
+
+        def precondition(r: np.ndarray) -> np.ndarray:
+            return np.append(self.amg.hierarchy(r[:n]), r[n] / stiffness)
+
+        a = sla.LinearOperator((n + 1, n + 1), matvec, dtype=float)
+        m = sla.LinearOperator((n + 1, n + 1), precondition, dtype=float)
+        start = None
+        if x0 is not None:
+            d0 = float(np.median(x0[fixed & (plate != 0)] / plate[fixed & (plate != 0)]))
+            start = np.append(np.where(fixed, 0.0, x0 - vp - d0 * plate), d0)
+        z, iterations, residual = self._cg(a, b, start, m, norm_b, rtol)
+        if rtol is None and self.amg.too_slow(iterations):
+            self.amg.build(self.matrix, fixed)
+        d = float(z[n])
+        u = vp + d * plate + np.where(fixed, 0.0, z[:n])
+        return LinearSolution(u, self.k @ u, iterations, residual, d)
+
+    def _cg(self, a, b: np.ndarray, x0: np.ndarray | None, m: sla.LinearOperator,
+            norm_b: float, rtol: float | None = None) -> tuple[np.ndarray, int, float]:
         count = 0
 
         def tick(_: np.ndarray) -> None:
             nonlocal count
             count += 1
 
-        norm_b = max(float(np.linalg.norm(b)), 1e-300)
-        m = sla.LinearOperator(self.matrix.shape, self.amg.hierarchy, dtype=float)
-        x, info = sla.cg(self.matrix, b, x0=x0, M=m, rtol=0.0, atol=self.rtol * norm_b, maxiter=self.maxiter,
+        norm_b = max(norm_b, 1e-300)
+        x, info = sla.cg(a, b, x0=x0, M=m, rtol=0.0, atol=(rtol or self.rtol) * norm_b, maxiter=self.maxiter,
                          callback=tick)
-        residual = float(np.linalg.norm(b - self.matrix @ x)) / norm_b
+        residual = float(np.linalg.norm(b - a @ x)) / norm_b
         if info != 0 or not np.all(np.isfinite(x)):
             raise SolverError(
                 f"CG did not converge in {self.maxiter} iterations (relative residual {residual:.2e}); "

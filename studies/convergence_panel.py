@@ -296,7 +296,7 @@ def write_table(rows: list[dict], names: list[str], path: Path) -> None:
         "the reference itself is not converged, and only the absolute criterion |V - ref| <= tolerance x "
         f"max(V, {V_FLOOR}) is meaningful (these textures have V far below the standard scale).",
         "Cost: wall time of a converged run (all its levels) over a plain default solve of the same texture, "
-        "both warm, measured one after the other in one process on a shared 2-core machine.",
+        "both warm, measured one after the other in one process on a 2-core machine (otherwise idle for the rows of 2026-11-22).",
         "",
         f"- textures: {n}; converged runs: {cn} (tolerance {tol})",
         f"- converged within {tol} (relative) of the reference: {stats['conv_rel']}/{cn}; within "

@@ -146,3 +146,33 @@ def test_prescribed_values_hold_exactly_after_a_solve(mesh):
     sol = constrain(k, fixed, AMGCache(rigid_body_modes(mesh.points))).solve(values)
     assert np.array_equal(sol.u[fixed], values[fixed])
     np.testing.assert_allclose(sol.reaction, k @ sol.u)  # no load: the reaction is K u of the returned u
+
+
+def test_plate_solve_equals_two_held_solves_combined(mesh):
+    """solve_plate (the bone as a force-controlled rigid plate, one solve) against the former scheme: a
+    solve with the bone held, one with a unit bone displacement, combined so the plate carries the
+    force. Both are solved to a relative residual of 1e-12; the small block's condition number (below
+    1e5 with the bone and contact held) bounds their difference by 1e-7 of the displacements."""
+    from roughness.simulate.linsolve import AMGCache, constrain
+
+    k = stiffness(mesh, np.full(len(mesh.tets), 0.042), np.full(len(mesh.tets), 0.45))
+    rng = np.random.default_rng(1)
+    touching = mesh.bottom[rng.random(len(mesh.bottom)) < 0.6]
+    fixed = np.zeros(k.shape[0], dtype=bool)
+    fixed[3 * mesh.top[:, None] + np.arange(3)] = True
+    fixed[3 * touching[:, None] + np.arange(3)] = True
+    values = np.zeros(k.shape[0])
+    values[3 * touching + 2] = rng.uniform(-0.1, 0.0, len(touching))
+    unit = np.zeros(k.shape[0])
+    unit[3 * mesh.top + 2] = -1.0
+    force = 0.5
+    system = constrain(k, fixed, AMGCache(rigid_body_modes(mesh.points)), rtol=1e-12)
+    held, bone = system.solve(values), system.solve(unit)
+    delta = (force - unit @ held.reaction) / (unit @ bone.reaction)
+    combined = held.u + delta * bone.u
+    for plate in (unit, bone.u):  # the plate's motion alone, or extended into the block by its response
+        sol = system.solve_plate(values, plate, force)
+        assert sol.plate_mm == pytest.approx(delta, rel=1e-7)
+        assert np.abs(sol.u - combined).max() <= 1e-7 * np.abs(combined).max()
+        assert unit @ sol.reaction == pytest.approx(force, rel=1e-7)  # the plate carries the force
+        np.testing.assert_array_equal(sol.u[fixed], values[fixed] + sol.plate_mm * unit[fixed])  # held exactly
