@@ -109,7 +109,9 @@ class AMGCache:
         return np.count_nonzero(fixed != self.built_for) <= self.rebuild_drift * len(fixed)
 
     def build(self, matrix: sp.csr_matrix, fixed: np.ndarray) -> None:
-        multilevel = pyamg.smoothed_aggregation_solver(matrix, B=self.near_null, symmetry="symmetric")
+        compact = matrix.copy()  # without the stored zeros of prescribed rows and columns (and own indices)
+        compact.eliminate_zeros()
+        multilevel = pyamg.smoothed_aggregation_solver(compact, B=self.near_null, symmetry="symmetric")
         self.hierarchy = VCycle(multilevel, self.precision)
         self.built_for = fixed.copy()
         self.fresh_iterations = 0
@@ -130,25 +132,57 @@ class AMGCache:
 
 
 class _Layout:
-    """Where the entries of a CSR matrix sit: their rows, and the positions of the diagonal."""
+    """Where the entries of a CSR matrix sit: their rows, the diagonal, and each entry's transpose.
+
+    ``constrained`` returns the stiffness with the rows and columns of prescribed DOFs zeroed but
+    for their diagonal, keeping the stiffness's sparsity (zeros stored, index arrays shared): a
+    contact round that changes a few nodes then updates only their rows and columns of the last
+    matrix instead of masking every entry (at ``fine``, 0.18 s per round before).
+    """
+
+    # above this share of changed DOFs, the matrix is masked afresh instead of updated
+    UPDATE_LIMIT = 0.05
 
     def __init__(self, stiffness: sp.csr_matrix) -> None:
+        if not stiffness.has_sorted_indices:
+            raise ValueError("the stiffness matrix needs sorted column indices")
         self.stiffness = stiffness
-        self.rows = np.repeat(np.arange(stiffness.shape[0]), np.diff(stiffness.indptr))
+        index = np.int32 if stiffness.nnz < 2**31 else np.int64
+        self.rows = np.repeat(np.arange(stiffness.shape[0], dtype=index), np.diff(stiffness.indptr))
         self.diagonal = np.flatnonzero(self.rows == stiffness.indices)
         if len(self.diagonal) != stiffness.shape[0]:
             raise ValueError("the stiffness matrix has a row without a stored diagonal entry")
+        self.diagonal_values = stiffness.data[self.diagonal]
+        # position of entry (j, i) for each entry (i, j): in CSC order the entries come in the CSR
+        # order of their transposes, as the structure is symmetric (checked)
+        positions = sp.csr_matrix((np.arange(stiffness.nnz, dtype=float), stiffness.indices, stiffness.indptr),
+                                  shape=stiffness.shape).tocsc()
+        positions.sort_indices()
+        self.transpose = positions.data.astype(index)
+        if not (np.array_equal(positions.indptr, stiffness.indptr)
+                and np.array_equal(stiffness.indices[self.transpose], self.rows)):
+            raise ValueError("the stiffness matrix is not structurally symmetric")
+        self._last: tuple[np.ndarray, np.ndarray] | None = None  # (fixed, data) of the last matrix
 
-    def constrained(self, fixed: np.ndarray, diag: np.ndarray) -> sp.csr_matrix:
-        """The stiffness with the rows and columns of ``fixed`` zeroed and ``diag`` added on the diagonal."""
+    def constrained(self, fixed: np.ndarray) -> sp.csr_matrix:
+        """The stiffness with the rows and columns of ``fixed`` zeroed except their diagonal entries."""
         k = self.stiffness
-        coupled = fixed[self.rows] | fixed[k.indices]
-        data = np.where(coupled, 0.0, k.data)
-        data[self.diagonal] += diag
-        kept = ~coupled
-        kept[self.diagonal] = True
-        indptr = np.concatenate([[0], np.cumsum(np.bincount(self.rows[kept], minlength=k.shape[0]))])
-        return sp.csr_matrix((data[kept], k.indices[kept], indptr), shape=k.shape)
+        changed = None if self._last is None else np.flatnonzero(fixed != self._last[0])
+        if changed is None or len(changed) > self.UPDATE_LIMIT * len(fixed):
+            data = np.where(fixed[self.rows] | fixed[k.indices], 0.0, k.data)
+            data[self.diagonal] = self.diagonal_values
+        else:
+            data = self._last[1].copy()
+            starts, lengths = k.indptr[changed], np.diff(k.indptr)[changed]
+            before = np.cumsum(lengths) - lengths  # entries of the earlier changed rows
+            in_rows = np.arange(lengths.sum()) + np.repeat(starts - before, lengths)
+            touched = np.concatenate([in_rows, self.transpose[in_rows]])
+            data[touched] = np.where(fixed[self.rows[touched]] | fixed[k.indices[touched]], 0.0, k.data[touched])
+            data[self.diagonal[changed]] = self.diagonal_values[changed]
+        self._last = (fixed.copy(), data)
+        matrix = sp.csr_matrix((data, k.indices, k.indptr), shape=k.shape, copy=False)
+        matrix.has_sorted_indices = True
+        return matrix
 
 
 @dataclass(frozen=True)
@@ -175,8 +209,9 @@ class ConstrainedSystem:
         self.maxiter = maxiter
         # Prescribed rows keep their stiffness diagonal (not 1): a hierarchy built for a
         # slightly different set then stays well scaled on the DOFs that changed.
-        self.diag = np.where(fixed, stiffness.diagonal(), 0.0)
-        self.matrix = amg.layout_of(stiffness).constrained(fixed, self.diag)
+        layout = amg.layout_of(stiffness)
+        self.diag = np.where(fixed, layout.diagonal_values, 0.0)
+        self.matrix = layout.constrained(fixed)
         if not amg.fits(fixed):
             amg.build(self.matrix, fixed)
 

@@ -15,7 +15,7 @@ from roughness.simulate.elasticity import (
     shape_gradients,
     stiffness,
 )
-from roughness.simulate.linsolve import AMGCache, constrain
+from roughness.simulate.linsolve import AMGCache, _Layout, constrain
 from roughness.simulate.mesh import build
 
 
@@ -79,8 +79,29 @@ def test_constrained_matrix_is_the_projection_and_leaves_the_stiffness_alone(sma
     assert abs(system.matrix - projection).max() == 0.0
     stored = system.matrix.tocoo()
     coupled = (fixed[stored.row] | fixed[stored.col]) & (stored.row != stored.col)
-    assert not coupled.any()  # prescribed rows and columns store nothing off the diagonal
+    assert np.all(stored.data[coupled] == 0)  # prescribed rows and columns: zeros off the diagonal
     assert all(np.array_equal(a, b) for a, b in zip(before, (k.data, k.indices, k.indptr)))
+
+
+def test_constrained_matrices_updated_round_by_round_equal_fresh_projections(small):
+    """A few nodes change state per contact round: each new matrix is the last one updated in their rows
+    and columns, and must equal the projection built from scratch; earlier systems keep their matrix."""
+    m, k, fixed, _ = small
+    amg = AMGCache(rigid_body_modes(m.points))
+    rng = np.random.default_rng(3)
+    systems, sets = [], []
+    current = fixed.copy()
+    for changes in (0, 3, 1, 12, len(m.bottom) // 2):  # the last beyond UPDATE_LIMIT: masked afresh
+        flip = rng.choice(m.bottom, changes, replace=False)
+        current = current.copy()
+        current[3 * flip[:, None] + np.arange(3)] ^= True
+        systems.append(constrain(k, current, amg))
+        sets.append(current)
+    assert 3 * (len(m.bottom) // 2) > _Layout.UPDATE_LIMIT * k.shape[0] > 3 * 12
+    for system, held in zip(systems, sets):
+        keep = sp.diags((~held).astype(float))
+        projection = (keep @ k @ keep + sp.diags(np.where(held, k.diagonal(), 0.0))).tocsr()
+        assert abs(system.matrix - projection).max() == 0.0
 
 
 def test_float32_v_cycle_converges_like_float64_to_the_same_solution(small):
