@@ -20,6 +20,7 @@ import inspect
 import json
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -29,6 +30,19 @@ from pathlib import Path
 OUT = Path(__file__).parent / "results"
 FIDELITIES = ("coarse", "default", "fine")
 REPEATS = 5
+
+
+def cold_only(fidelity: str) -> dict:
+    """Seconds of the first texture in a fresh process (mesh, assembly, sampler, base field, solve)."""
+    from roughness.dataset.textures import standard_texture
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.model import Simulator
+
+    sim = Simulator(SimConfig(fidelity=fidelity))
+    single = {"estimate_error": False} if "estimate_error" in inspect.signature(sim.run).parameters else {}
+    t = time.perf_counter()
+    first = sim.run(standard_texture(1.0, seed=0), **single)
+    return {"fidelity": fidelity, "cold_seconds": time.perf_counter() - t, "cold_stages": first.stage_seconds}
 
 
 def one_fidelity(fidelity: str) -> dict:
@@ -167,12 +181,13 @@ def plot(rows: list[dict]) -> None:
     fig.savefig(OUT / "fem_stages.png", dpi=110)
 
 
-def measure(fidelity: str, threads: int, source: Path | None = None) -> dict:
-    """``one_fidelity`` in a fresh process with an empty mesh cache, importing roughness from ``source`` (default: this tree)."""
+def measure(fidelity: str, threads: int, source: Path | None = None, mode: str = "--one") -> dict:
+    """``one_fidelity`` (``mode`` "--cold": ``cold_only``) in a fresh process with an empty mesh cache,
+    importing roughness from ``source`` (default: this tree)."""
     with tempfile.TemporaryDirectory() as cache:
         env = {**os.environ, "ROUGHNESS_CACHE": cache, "OMP_NUM_THREADS": str(threads)}
         env["PYTHONPATH"] = str(source or Path(__file__).resolve().parents[1])  # roughness and studies
-        out = subprocess.run([sys.executable, __file__, "--one", fidelity], env=env, check=True,
+        out = subprocess.run([sys.executable, __file__, mode, fidelity], env=env, check=True,
                              capture_output=True, text=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -209,6 +224,9 @@ def ratio_table(pairs: list[tuple[dict, dict]]) -> list[str]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--one", choices=FIDELITIES, help="internal: measure one fidelity in this process, print JSON")
+    parser.add_argument("--cold", choices=FIDELITIES, help="internal: only the first texture in this process, print JSON")
+    parser.add_argument("--cold-repeats", type=int, default=3,
+                        help="fresh processes per fidelity (and tree) timing only the cold first texture (default 3)")
     parser.add_argument("--solvers", action="store_true", help="internal: only the solver comparison, print JSON")
     parser.add_argument("--fidelities", nargs="+", choices=FIDELITIES, default=list(FIDELITIES),
                         help="fidelities to measure (default: all three)")
@@ -224,6 +242,9 @@ def main() -> None:
     if args.one:
         print(json.dumps(one_fidelity(args.one)))
         return
+    if args.cold:
+        print(json.dumps(cold_only(args.cold)))
+        return
     if args.solvers:
         print(json.dumps(solver_comparison(args.direct, args.solver_fidelity)))
         return
@@ -237,6 +258,13 @@ def main() -> None:
         print(rows[-1], flush=True)
         if args.baseline is not None:
             pairs.append((old, rows[-1]))
+    trees = [("new", None)] + ([("old", args.baseline)] if args.baseline is not None else [])
+    colds: dict[str, dict[str, list[float]]] = {f: {name: [] for name, _ in trees} for f in args.fidelities}
+    for fidelity in args.fidelities:
+        for _ in range(args.cold_repeats):  # the trees alternate, so a change of machine speed hits both
+            for name, source in trees:
+                colds[fidelity][name].append(measure(fidelity, args.threads, source, "--cold")["cold_seconds"])
+        print("cold", fidelity, colds[fidelity], flush=True)
     env = {**os.environ, "OMP_NUM_THREADS": str(args.threads)}
     command = [sys.executable, __file__, "--solvers", "--solver-fidelity", args.solver_fidelity]
     command += ["--direct"] if args.direct else []
@@ -244,11 +272,17 @@ def main() -> None:
                                         text=True).stdout.strip().splitlines()[-1])
     (OUT / "fem_stages.json").write_text(json.dumps(
         {"threads": args.threads, "note": args.note, "solver_fidelity": args.solver_fidelity, "fidelities": rows, "solvers": solvers,
-         "baseline": [old for old, _ in pairs]}, indent=1))
+         "baseline": [old for old, _ in pairs], "cold_repeats": colds}, indent=1))
     lines = ([args.note, ""] if args.note else []) + [f"OMP_NUM_THREADS={args.threads}.", ""] + stage_table(rows)
     if pairs:
         lines += ["", (f"New / old, measured alternately in the same session against the source tree "
                       f"`{args.baseline.name}` (below 1: faster now):"), ""] + ratio_table(pairs)
+    if args.cold_repeats:
+        lines += ["", (f"Cold first texture (default force, standard lambda 1 mm) in {args.cold_repeats} more fresh "
+                       "processes per fidelity and tree, alternating, empty mesh cache: min / median (s)"), "",
+                  "| fidelity | " + " | ".join(name for name, _ in trees) + " |", "|---|" + "---|" * len(trees)]
+        lines += [f"| {f} | " + " | ".join(f"{min(colds[f][name]):.2f} / {statistics.median(colds[f][name]):.2f}"
+                                          for name, _ in trees) + " |" for f in args.fidelities]
     lines += ["", (f"Linear solvers, one solve of the {args.solver_fidelity} block ({solvers[0]['dofs']} free DOFs, all contact nodes "
                   f"held; best of {REPEATS}):"), "", "| solver | set-up (s) | solve (s) | warm-started solve (s) |",
               "|---|---|---|---|"]

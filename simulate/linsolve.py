@@ -2,7 +2,8 @@
 
 ``constrain(stiffness, fixed, amg)`` returns a new ``ConstrainedSystem`` for one set of
 prescribed degrees of freedom (like scikit-fem's ``condense``, but keeping the full size so
-reactions come for free). The smoothed-aggregation hierarchy (pyamg) lives in an explicit
+reactions come for free; a system for a contact set that differs in a few nodes is the last
+one updated in their rows and columns). The smoothed-aggregation hierarchy (pyamg) lives in an explicit
 ``AMGCache`` passed to every system of the same stiffness matrix: it is rebuilt only when the
 prescribed set has drifted or CG needed clearly more iterations than on a fresh hierarchy, so
 that a contact loop pays the set-up cost about once per texture.
