@@ -32,31 +32,30 @@ FIDELITIES = ("coarse", "default", "fine")
 REPEATS = 5
 
 
-def cold_only(fidelity: str) -> dict:
-    """Seconds of the first texture in a fresh process (mesh, assembly, sampler, base field, solve)."""
+def _first_texture(fidelity: str):
+    """A fresh simulator, the run options, its first (cold) result and that run's seconds."""
     from roughness.dataset.textures import standard_texture
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator
-
-    sim = Simulator(SimConfig(fidelity=fidelity))
-    single = {"estimate_error": False} if "estimate_error" in inspect.signature(sim.run).parameters else {}
-    t = time.perf_counter()
-    first = sim.run(standard_texture(1.0, seed=0), **single)
-    return {"fidelity": fidelity, "cold_seconds": time.perf_counter() - t, "cold_stages": first.stage_seconds}
-
-
-def one_fidelity(fidelity: str) -> dict:
-    from roughness.dataset.textures import standard_texture
-    from roughness.simulate.config import SimConfig
-    from roughness.simulate.model import Simulator
-    from studies.convergence_panel import panel
 
     sim = Simulator(SimConfig(fidelity=fidelity))
     # one level per texture: the discretization estimate's coarser solve is not a stage (older trees lack the flag)
     single = {"estimate_error": False} if "estimate_error" in inspect.signature(sim.run).parameters else {}
     t = time.perf_counter()
     first = sim.run(standard_texture(1.0, seed=0), **single)
-    cold = time.perf_counter() - t
+    return sim, single, first, time.perf_counter() - t
+
+
+def cold_only(fidelity: str) -> dict:
+    """Seconds of the first texture in a fresh process (mesh, assembly, sampler, base field, solve)."""
+    _, _, first, cold = _first_texture(fidelity)
+    return {"fidelity": fidelity, "cold_seconds": cold, "cold_stages": first.stage_seconds}
+
+
+def one_fidelity(fidelity: str) -> dict:
+    from studies.convergence_panel import panel
+
+    sim, single, first, cold = _first_texture(fidelity)
     warm = []
     roughness = [first.roughness]
     for make in panel().values():

@@ -65,12 +65,12 @@ GAP_TOL_MM = 1e-4  # largest penetration of any node, and height mismatch of a (
 TENSION_TOL = 1e-2  # largest tension at a contact node, as a fraction of the mean pressure force / face area
 RESTICK_AFTER_RELEASES = 1  # stick: a node released this often sticks where it touches when added again
 DAMP_AFTER_FLIPS = 8  # a node changing state this often (or a recurring contact set) switches damping on
-DAMPING = 0.5
+DAMPING = 0.5  # damped step: only nodes whose violation is at least this share of the largest change
 # CG tolerance of the rounds before the contact set settles: they only decide which nodes change
 # state. Once a set survives such a round, one solve to the full tolerance (``rtol``) confirms it.
 # 1e-4 halves the CG iterations of a warm default texture and changes V by at most 1e-5
-# relative (1e-3: more rounds, as the confirming solve then finds changes; fem_speed.md).
-SETTLE_RTOL = 1e-4  # damped step: only nodes whose violation is at least this share of the largest change
+# relative (1e-3: more rounds, as the confirming solve then finds changes; README, Performance).
+SETTLE_RTOL = 1e-4
 
 
 class ContactError(RuntimeError):
