@@ -5,7 +5,8 @@ Model-only latency at batch 1 on one thread (the graph alone), end-to-end time p
 throughput on 1 and 2 threads, FEM `default` and `coarse` per texture (warm block: the
 mesh, assembly and base field are excluded, as they are paid once per process), and a fresh
 Python process that imports roughness, loads the README's example and predicts it (wall time
-of the whole process, and of the first predict call in it).
+of the whole process, and of the first predict call in it), and the README's main job in a
+fresh process: ``roughness predict`` on that example, wall time of the whole command.
 
     python benchmarks/surrogate_latency.py [--model models/roughness-cnn.onnx]
     # writes benchmarks/results/surrogate_latency.{md,json}
@@ -48,6 +49,19 @@ def fresh_process(model: str, repeats: int = 5) -> tuple[float, float]:
         walls.append(time.perf_counter() - t)
         calls.append(float(out.stdout.split()[-1]))
     return statistics.median(walls), statistics.median(calls)
+
+
+def fresh_cli(model: str, repeats: int = 5) -> float:
+    """Median wall time (s) of ``roughness predict`` on the README example in a fresh process (the console
+    command's own start-up: argument parsing, imports, model loading, reading the file, printing)."""
+    command = [sys.executable, "-m", "roughness.cli", "predict", str(ROOT / "examples" / "standard-1.0mm.png"),
+               "--pixel-mm", "0.05", "--height-mm", "1", "--engine", "surrogate", "--model", model]
+    walls = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        subprocess.run(command, capture_output=True, text=True, check=True, cwd=ROOT)
+        walls.append(time.perf_counter() - t)
+    return statistics.median(walls)
 
 
 def timed(fn, repeats: int) -> list[float]:
@@ -108,6 +122,7 @@ def main() -> None:
                 "batched_2threads_per_s": len(batch) / min(timed(lambda: q2.session.run(None, {INPUT: batch}), 5))}
 
     fresh_wall, fresh_call = fresh_process(args.model)
+    cli_wall = fresh_cli(args.model)
     fem = {}
     for fidelity in ("coarse", "default"):
         sim = Simulator(SimConfig(fidelity=fidelity))
@@ -128,6 +143,7 @@ def main() -> None:
         "speedup_vs_fem_coarse_end_to_end": fem["coarse"] / e2e,
         "int8": int8,
         "fresh_process_wall_s": fresh_wall, "fresh_process_first_predict_s": fresh_call,
+        "fresh_cli_predict_wall_s": cli_wall,
     }
     OUT.mkdir(exist_ok=True)
     (OUT / "surrogate_latency.json").write_text(json.dumps(result, indent=1))
@@ -140,6 +156,7 @@ def main() -> None:
         ("end to end, batch 64, 2 threads", f"{e2e_batched:,.0f} heightmaps/s"),
         ("fresh process: import, load the README example, predict (wall, median of 5)", f"{fresh_wall:.2f} s"),
         ("fresh process: its first predict call (model loading included)", f"{1e3 * fresh_call:.0f} ms"),
+        ("fresh process: `roughness predict` on the README example (wall, median of 5)", f"{cli_wall:.2f} s"),
         ("FEM coarse, warm, per texture", f"{fem['coarse']:.2f} s"),
         ("FEM default, warm, per texture", f"{fem['default']:.2f} s"),
         ("speed-up over FEM default (end to end, batch 1)", f"{result['speedup_vs_fem_default_end_to_end']:,.0f}x"),

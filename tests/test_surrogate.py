@@ -207,6 +207,23 @@ print('ok', sorted(m for m in sys.modules if m.split('.')[0] in ('torch', 'onnx'
     assert out.stdout.strip() == "ok []"
 
 
+
+def test_predict_command_loads_no_fem_design_or_scipy(tiny):
+    """The README's main job starts fast: ``roughness predict`` builds only its own parser and imports neither
+    the FEM solver, the design tools, scipy nor the package metadata (each cost 20-300 ms at start-up)."""
+    code = f"""
+import sys
+from roughness.cli import main
+code = main(['predict', {str(ROOT / "examples" / "standard-1.0mm.png")!r}, '--pixel-mm', '0.05', '--height-mm', '1',
+             '--engine', 'surrogate', '--model', {str(tiny.model)!r}])
+heavy = ('scipy', 'torch', 'roughness.simulate.model', 'roughness.design', 'roughness.cli.perception',
+         'importlib.metadata', 'numpy.ma')
+print(code, sorted(m for m in sys.modules if m in heavy or m.startswith(tuple(h + '.' for h in heavy))))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip().splitlines()[-1] == "0 []"
+
 def test_batch_and_single_predictions_agree(tiny):
     maps = [realise(sample_record(Recipe(seed=11, families={"bumps": 1, "woven": 1}), i)) for i in range(6)]
     one = predict(maps, engine="surrogate", model=tiny.model, batch_size=1)
