@@ -197,6 +197,11 @@ def test_numeric_option_out_of_domain(path, flag, value, workdir, capsys):
     _expect_refusal([*path, *BASE[path], flag, value], workdir, capsys, (flag,))
 
 
+@pytest.mark.parametrize("value", ["8,0", "8,-16", "8,a", "", "8.5"])
+def test_bad_channel_widths_are_refused(value, workdir, capsys):
+    _expect_refusal(["train", *BASE[("train",)], "--widths", value], workdir, capsys, ("--widths",))
+
+
 @pytest.mark.parametrize("path, where, suffix, extra, kind", _file_cases(), ids=lambda v: str(v))
 def test_broken_input_file(path, where, suffix, extra, kind, workdir, capsys):
     name = f"broken{suffix}"

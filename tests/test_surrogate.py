@@ -494,6 +494,19 @@ def test_too_small_a_dataset_states_the_minimum(tiny, tmp_path, capsys):
     assert not out.exists()  # nothing left behind
 
 
+def test_train_cli_builds_the_network_it_is_given(tiny, tmp_path):
+    from roughness.cli import main
+    from roughness.surrogate.export import load_checkpoint
+
+    out = tmp_path / "small"
+    assert main(["train", str(tiny.data), "--out", str(out), "--max-epochs", "1", "--batch-size", "8",
+                 "--widths", "4,8,12", "--hidden", "16"]) == 0
+    model, meta = load_checkpoint(out / "checkpoint.pt")
+    assert meta.widths == (4, 8, 12) and meta.hidden == 16
+    assert [m.out_channels for m in model.modules() if isinstance(m, torch.nn.Conv2d)][-1] == 12
+    assert model.head[0].out_features == 16
+
+
 def test_training_metrics_are_printed_with_units():
     from roughness.surrogate.train import format_scores
 

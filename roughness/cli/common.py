@@ -20,6 +20,17 @@ def float_pair(text: str) -> tuple[float, float]:
     return x, y
 
 
+def count_list(text: str) -> tuple[int, ...]:
+    """``A,B,...``: positive integers (e.g. channel widths), for argparse."""
+    try:
+        values = tuple(int(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated positive integers, got {text!r}") from None
+    if not values or min(values) < 1:
+        raise argparse.ArgumentTypeError(f"expected comma-separated positive integers, got {text!r}")
+    return values
+
+
 class Number:
     """An argparse type for a number with a declared domain; ``invalid`` lists values it refuses.
 

@@ -5,7 +5,7 @@ import argparse
 import json
 import sys
 
-from .common import COUNT, POSITIVE, SEED, add_overwrite, defaults, finish
+from .common import COUNT, POSITIVE, SEED, add_overwrite, count_list, defaults, finish
 
 
 def add_parser(sub) -> None:
@@ -29,6 +29,11 @@ def add_parser(sub) -> None:
                     help=f"epochs of the cosine schedule (default: {d['max_epochs']})")
     tr.add_argument("--max-minutes", type=POSITIVE, default=d["max_minutes"],
                     help=f"wall-clock budget for the epochs in minutes (default: {d['max_minutes']:g})")
+    tr.add_argument("--widths", type=count_list, default=d["widths"], metavar="W1,W2,...",
+                    help="channels of the convolution stages; each stage halves the grid (default: "
+                         f"{','.join(map(str, d['widths']))})")
+    tr.add_argument("--hidden", type=COUNT, default=d["hidden"],
+                    help=f"units of the dense layer (default: {d['hidden']})")
     tr.add_argument("--threads", type=COUNT, default=d["threads"], help=f"torch threads (default: {d['threads']})")
     tr.add_argument("--levels", choices=("last", "all"), default=d["levels"],
                     help="labels: 'last', each sample's V; 'all', every mesh level the FEM solved for it (a default "
@@ -69,7 +74,7 @@ def train(args: argparse.Namespace) -> int:
     train(TrainConfig(data=args.data, out=args.out, seed=args.seed, holdout_family=args.holdout_family,
                       batch_size=args.batch_size, max_epochs=args.max_epochs, max_minutes=args.max_minutes,
                       threads=args.threads, extra_data=tuple(args.extra_data), levels=args.levels,
-                      query_h_mm=args.query_h_mm), overwrite=args.overwrite)
+                      query_h_mm=args.query_h_mm, widths=args.widths, hidden=args.hidden), overwrite=args.overwrite)
     return 0
 
 
