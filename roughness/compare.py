@@ -1,6 +1,7 @@
 """`roughness compare`: every engine on every texture of a set, scored against a reference engine.
 
-Inputs: a dataset file (its stored FEM labels serve as results of ``fem:<its fidelity>`` when its
+Inputs: a dataset file (its stored FEM labels serve as results of ``fem:<its fidelity>``, or of
+``fem:converged@TOL`` for a build converged to another tolerance than the default, when its
 simulation parameters are the defaults), a folder of heightmaps, or a recipe JSON (its first
 ``n`` samples). Results go to ``results.jsonl`` in the output folder as they arrive, one line per
 (engine, texture), keyed by the texture's content (its heights and pixel size) and the engine's
@@ -28,7 +29,7 @@ from roughness.core.files import atomic_write, check_output_folder
 from roughness.core.hashing import array_digest
 from roughness.simulate.heightmap import Heightmap
 
-from .engines import FEM_FIDELITIES, Engine, fem_identity
+from .engines import FEM_FIDELITIES, Engine, fem_identity, fem_spec
 
 RESULTS_FILE = "results.jsonl"
 MANIFEST_FILE = "compare.json"  # what the report in a folder compares: input, reference, engines
@@ -67,8 +68,9 @@ def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dic
     textures = [Texture(str(table["id"][i]), recipes[i]["family"], partial(samples.heightmap, str(table["id"][i])))
                 for i in ok]
     stored: dict[str, dict[str, dict]] = {}
-    if fidelity in FEM_FIDELITIES and fem_identity(simulation) == fem_identity(SimConfig(fidelity=fidelity).as_dict()):
-        stored[f"fem:{fidelity}"] = {str(table["id"][i]): {"value": float(table["V"][i]),
+    if fidelity in FEM_FIDELITIES and fem_identity(simulation) == fem_identity(SimConfig(
+            fidelity=fidelity, tolerance=simulation.get("tolerance", SimConfig.tolerance)).as_dict()):
+        stored[fem_spec(simulation)] = {str(table["id"][i]): {"value": float(table["V"][i]),
                                                           "seconds": float(table["seconds"][i]), "source": STORED}
                                      for i in ok}
     return textures, stored

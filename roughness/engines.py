@@ -2,7 +2,8 @@
 
 Used by ``roughness predict``, ``roughness compare`` and the Python API (``roughness.predict``).
 
-Spec strings (compare): ``fem:coarse``, ``fem:default``, ``fem:fine``, ``fem:converged``, ``surrogate`` (or
+Spec strings (compare): ``fem:coarse``, ``fem:default``, ``fem:fine``, ``fem:converged`` (or ``fem:converged@TOL``,
+refined to the relative tolerance TOL instead of the default 0.03), ``surrogate`` (or
 ``surrogate:PATH.onnx``), and the classical measures ``ra``, ``p90``, ``glcm_sum_of_squares``,
 ``glcm_sum_variance``. Each engine returns a value and the seconds it took for one texture: FEM
 reports the solve with its block prepared (mesh, assembly and base field are paid once per process
@@ -21,7 +22,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Protocol
 
@@ -153,15 +154,35 @@ class ClassicalEngine:
         return value, time.perf_counter() - start
 
 
+def fem_spec(simulation: dict) -> str:
+    """The spec string of FEM results with this simulation configuration: ``fem:<fidelity>``, and
+    ``fem:converged@TOL`` when converged to another tolerance than the default."""
+    from roughness.simulate.config import SimConfig
+
+    fidelity = simulation.get("fidelity", "default")
+    tolerance = simulation.get("tolerance", SimConfig.tolerance)
+    return f"fem:{fidelity}@{tolerance:g}" if fidelity == "converged" and tolerance != SimConfig.tolerance \
+        else f"fem:{fidelity}"
+
+
 def make_engine(spec: str) -> Engine:
     """Engine for a spec string; InputError lists the valid ones."""
     if spec.startswith("fem:") and spec[4:] in FEM_FIDELITIES:
         return FemEngine.of(spec[4:])
+    if spec.startswith("fem:converged@"):
+        try:
+            tolerance = float(spec.partition("@")[2])
+        except ValueError:
+            raise InputError(f"engine {spec!r}: the tolerance after @ must be a number, e.g. fem:converged@0.01",
+                             parameter="engines") from None
+        engine = FemEngine.of("converged", {"tolerance": tolerance})  # SimConfig checks 0 < tolerance < 1
+        return replace(engine, spec=spec)
     if spec == "surrogate" or spec.startswith("surrogate:"):
         return SurrogateEngine(spec, spec.partition(":")[2] or None)
     if spec in MEASURES:
         return ClassicalEngine(spec)
-    valid = [f"fem:{f}" for f in FEM_FIDELITIES] + ["surrogate", "surrogate:MODEL.onnx", *MEASURES]
+    valid = [f"fem:{f}" for f in FEM_FIDELITIES] + ["fem:converged@TOL", "surrogate", "surrogate:MODEL.onnx",
+                                                    *MEASURES]
     raise InputError(f"unknown engine {spec!r}; valid: {', '.join(valid)}", parameter="engines")
 
 

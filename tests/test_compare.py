@@ -267,3 +267,30 @@ def test_a_dataset_sample_has_the_content_key_of_its_texture(tiny_set):
             assert content_key(data.heightmap(sample_id(record))) == content_key(hm)
             assert content_key(Heightmap(hm.heights, hm.pixel_mm * 1.01)) != content_key(hm)
             assert content_key(Heightmap(hm.heights * 1.001, hm.pixel_mm)) != content_key(hm)
+
+
+@pytest.mark.parametrize("tolerance, spec", [(0.01, "fem:converged@0.01"), (0.03, "fem:converged")])
+def test_stored_converged_labels_serve_the_engine_of_their_tolerance(tolerance, spec, tmp_path):
+    """A build converged to 1% is the reference ``fem:converged@0.01``, never the default-tolerance engine."""
+    from roughness.compare import dataset_textures
+
+    path = tmp_path / "converged.h5"
+    recipe = Recipe(name="tiny", seed=8, families={"bumps": 1})
+    config = {"recipe": {"name": "tiny"}, "simulation": SimConfig(fidelity="converged", tolerance=tolerance).as_dict()}
+    with DatasetWriter(path, config, "test") as writer:
+        record = sample_record(recipe, 0)
+        hm = realise(record)
+        writer.write_result(record, hm.heights, hm.pixel_mm, fields(0.05), np.zeros((5, 5)))
+    _, stored = dataset_textures(path)
+    assert list(stored) == [spec]
+    engine = make_engine(spec)
+    assert engine.spec == spec and engine.config.tolerance == tolerance
+    assert engine.identity == make_engine("fem:converged").identity if tolerance == 0.03 else \
+        engine.identity != make_engine("fem:converged").identity
+
+
+@pytest.mark.parametrize("spec, message", [("fem:converged@x", "must be a number"),
+                                           ("fem:converged@0", "positive"), ("fem:converged@1.5", "between 0 and 1")])
+def test_bad_converged_tolerance_specs_are_refused(spec, message):
+    with pytest.raises(InputError, match=message):
+        make_engine(spec)
