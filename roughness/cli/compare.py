@@ -18,8 +18,8 @@ def add_parser(sub) -> None:
                      help="folder for results.jsonl (the cache), tables, plots, report.md; rerunning the same "
                           "comparison there resumes it, another comparison is refused unless --overwrite")
     cmp.add_argument("--engines", nargs="+", default=list(COMPARE_ENGINES), metavar="ENGINE",
-                     help="fem:coarse fem:default fem:fine fem:converged[@TOL] surrogate[:MODEL.onnx] ra p90 glcm_sum_of_squares "
-                          f"glcm_sum_variance (default: {' '.join(COMPARE_ENGINES)})")
+                     help="fem:coarse fem:default fem:fine fem:converged[@TOL] surrogate[:MODEL.onnx] ra p90 "
+                          f"glcm_sum_of_squares glcm_sum_variance (default: {' '.join(COMPARE_ENGINES)})")
     cmp.add_argument("--reference", default=REFERENCE,
                      help=f"engine the others are scored against (default: {REFERENCE})")
     cmp.add_argument("--n", type=COUNT, help="number of textures, the first n (default: all; required for a recipe)")
