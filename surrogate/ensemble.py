@@ -125,9 +125,8 @@ def export_ensemble(checkpoints: list[str | Path], out: str | Path,
         predicted = roughness_from_log(logs.mean(axis=1), first.log_offset)
         metrics = {s: scores(samples.roughness[samples.split == s], predicted[samples.split == s])
                    for s in ("train", "val", "test", "ood") if (samples.split == s).any()}
-        test = samples.split == "test"
-        by_family = {f: scores(samples.roughness[test & (samples.family == f)], predicted[test & (samples.family == f)])
-                     for f in np.unique(samples.family[test])}
+        by_family = _scores_by_family(samples, predicted, samples.split == "test")
+        info["ood_by_family"] = _scores_by_family(samples, predicted, samples.split == "ood")  # held-out families
     info["metrics_of"] = "ensemble" if data is not None else "member 0 (no --data given)"
     meta = replace(first, metrics=metrics, test_by_family=by_family, ensemble=info,
                    parameters=sum(m.parameters for m in metas), minutes=sum(m.minutes for m in metas),
@@ -149,6 +148,12 @@ def export_ensemble(checkpoints: list[str | Path], out: str | Path,
 
     atomic_write(out, write)
     return {"path": str(out), "bytes": out.stat().st_size, "check": report, **info}
+
+
+def _scores_by_family(samples, predicted: np.ndarray, rows: np.ndarray) -> dict[str, dict]:
+    """``scores`` of the predictions per family, over the selected rows."""
+    return {f: scores(samples.roughness[rows & (samples.family == f)], predicted[rows & (samples.family == f)])
+            for f in np.unique(samples.family[rows])}
 
 
 def _samples(data: str | Path | list[str | Path], meta: ModelMetadata):

@@ -566,7 +566,7 @@ def ensemble(tmp_path_factory):
             writer.write_result(record, hm.heights, hm.pixel_mm, fake_fields(0.05 * descriptors(footprint_patch(hm))[2]),
                                 np.zeros((5, 5)))
     checkpoints = [train(TrainConfig(data=str(data), out=str(root / f"m{k}"), seed=k, max_epochs=2, batch_size=8,
-                                     val_fraction=0.3, threads=1)) for k in range(3)]
+                                     val_fraction=0.3, threads=1, holdout_family="knurl")) for k in range(3)]
     report = export_ensemble(checkpoints, root / "ensemble.onnx", data=data)
     return SimpleNamespace(root=root, data=data, checkpoints=checkpoints, model=root / "ensemble.onnx", report=report)
 
@@ -587,7 +587,11 @@ def test_ensemble_graph_returns_the_members_mean_and_spread(ensemble):
     np.testing.assert_allclose(estimate.relative_std, scale * logs.std(axis=1, ddof=1), rtol=1e-3)
     np.testing.assert_allclose(estimate.roughness_std, (estimate.roughness + offset) * estimate.relative_std,
                                rtol=1e-6)
-    assert onnx_metadata(ensemble.model).ensemble["metrics_of"] == "ensemble"
+    info = onnx_metadata(ensemble.model).ensemble
+    assert info["metrics_of"] == "ensemble"
+    assert list(info["ood_by_family"]) == ["knurl"]  # the held-out family, scored on its own
+    assert info["ood_by_family"]["knurl"]["n"] + info["ood_by_family"]["knurl"]["n_zero"] == \
+        onnx_metadata(ensemble.model).metrics["ood"]["n"] + onnx_metadata(ensemble.model).metrics["ood"]["n_zero"]
     assert {"coverage_2sigma_test", "sent_to_fem_test"} <= ensemble.report.keys()
 
 
