@@ -16,6 +16,7 @@ from roughness.simulate.heightmap import Heightmap, bracket
 FOOTPRINT_MM = 10.0  # the skin block's width (simulate.config default)
 PATCH_PIXEL_MM = 0.1  # model pixel size
 PATCH_SIZE = round(FOOTPRINT_MM / PATCH_PIXEL_MM)
+ON_CENTRE = 1e-9  # a sample this close to a pixel centre (in pixels) reads that pixel
 DESCRIPTOR_NAMES = ("relief_mm", "feature_mm", "rms_slope", "p99_slope")
 
 
@@ -34,16 +35,26 @@ def footprint_patch(heightmap: Heightmap, centre_mm: tuple[float, float] | None 
 def _average(values: np.ndarray, axis: int, start_mm: float, n: int, pixel_mm: float, sub: int,
              map_pixel_mm: float, periodic: bool) -> np.ndarray:
     """``values`` (2-D) averaged along ``axis`` into ``n`` pixels of ``pixel_mm`` from ``start_mm``:
-    each the mean of ``sub`` bilinear samples."""
+    each the mean of ``sub`` bilinear samples.
+
+    Works on rows (axis 1 through the transposed view: gathering rows and summing strided row slices is
+    several times faster than np.take along the last axis and a reshaped mean). Samples that fall on
+    pixel centres (a 0.05 mm map on the 0.1 mm grid, footprint on the pixel lattice) are read, not
+    interpolated."""
     offsets = (np.arange(sub) + 0.5) / sub * pixel_mm
     u = ((start_mm + np.arange(n)[:, None] * pixel_mm + offsets) / map_pixel_mm - 0.5).ravel()
     lower, upper, frac = bracket(u, values.shape[axis], periodic)
-    low = np.take(values, lower, axis)
-    frac = frac[:, None] if axis == 0 else frac[None, :]
-    samples = low + (np.take(values, upper, axis) - low) * frac
-    if axis == 0:
-        return samples.reshape(n, sub, -1).mean(axis=1)
-    return samples.reshape(-1, n, sub).mean(axis=2)
+    rows = values if axis == 0 else values.T
+    if np.all((frac < ON_CENTRE) | (frac > 1 - ON_CENTRE)):
+        samples = rows[np.where(frac > 0.5, upper, lower)]
+    else:
+        low = rows[lower]
+        samples = low + (rows[upper] - low) * frac[:, None]
+    out = samples[0::sub].copy()  # sample k of output pixel i is row i * sub + k
+    for k in range(1, sub):
+        out += samples[k::sub]
+    out *= 1.0 / sub
+    return out if axis == 0 else out.T
 
 
 def footprint_patches(heightmap: Heightmap, centres_mm: np.ndarray, tile: bool = False,
