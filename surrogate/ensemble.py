@@ -12,7 +12,7 @@ With ``--data`` (the members' training data, checked by its inputs checksum) the
 uncertainty on the members' own validation split, never trained on: ``std_scale`` is chosen so that
 95% of validation samples lie within 2 sigma of the mean (an ensemble of a few members is usually
 over-confident), and ``max_std`` -- the default of ``predict --engine auto --max-std`` -- so that 10%
-of validation inputs go to the FEM. Their effect is then reported on the test split: the 2-sigma
+of validation inputs go to the FEM, counting those sent anyway as out of domain (member 0's domain). Their effect is then reported on the test split: the 2-sigma
 coverage, the share sent to the FEM, and the share of predictions off by more than 15% that it catches.
 Without ``--data`` neither is measured: ``std_scale`` is 1 and there is no default threshold.
 """
@@ -34,10 +34,12 @@ from roughness.core.errors import InputError, OutputExists
 from roughness.core.files import atomic_write, check_output
 from roughness.core.hashing import file_sha256
 
+from .domain import Domain
 from .export import RTOL, ExportError, check_patches, load_checkpoint
 from .metadata import METADATA_KEY, ModelMetadata
 from .metrics import scores
 from .network import RoughnessNet
+from .patch import batch_descriptors
 from .predictor import EMBEDDING_OUTPUT, INPUT, LOG_OUTPUT, STD_OUTPUT
 from .target import roughness_from_log
 
@@ -86,25 +88,44 @@ def member_logs(members: list[RoughnessNet], patches: np.ndarray, batch: int = 2
     return np.concatenate(out).astype(np.float64)
 
 
-def calibrate(logs: np.ndarray, roughness: np.ndarray, split: np.ndarray, log_offset: float) -> dict:
-    """``std_scale`` and ``max_std`` from the validation split and what they achieve on the test split."""
+@torch.no_grad()
+def out_of_domain(member: RoughnessNet, meta: ModelMetadata, patches: np.ndarray, batch: int = 256) -> np.ndarray:
+    """Which patches (n, P, P) lie outside the member's input domain (the ensemble graph's domain is member 0's)."""
+    embeddings = np.concatenate([member.eval()(torch.from_numpy(np.ascontiguousarray(
+        patches[i:i + batch, None], dtype=np.float32)))[1].numpy() for i in range(0, len(patches), batch)])
+    reasons = Domain.from_dict(meta.domain).check(batch_descriptors(patches, meta.patch_pixel_mm), embeddings)
+    return np.array([bool(why) for why in reasons])
+
+
+def calibrate(logs: np.ndarray, roughness: np.ndarray, split: np.ndarray, log_offset: float,
+              outside: np.ndarray | None = None) -> dict:
+    """``std_scale`` and ``max_std`` from the validation split and what they achieve on the test split.
+
+    ``outside``: inputs out of domain (auto sends them to the FEM whatever their spread); the threshold
+    spends only what is left of the SENT_TO_FEM budget (none if they alone exceed it).
+    """
     mean, std = logs.mean(axis=1), logs.std(axis=1, ddof=1)
+    outside = np.zeros(len(mean), bool) if outside is None else np.asarray(outside, bool)
     z = np.abs(np.log(roughness + log_offset) - mean) / np.maximum(std, 1e-12)
     val, test = split == "val", split == "test"
     if val.sum() < 10:
         raise InputError(f"{val.sum()} validation samples are too few to calibrate the uncertainty on",
                          parameter="data")
     std_scale = float(np.quantile(z[val], COVERAGE) / 2)
-    max_std = float(np.quantile(std[val] * std_scale, 1 - SENT_TO_FEM))
+    inside = std[val & ~outside] * std_scale
+    left = min(max(SENT_TO_FEM * val.sum() - (val & outside).sum(), 0) / max(len(inside), 1), 1.0)
+    max_std = float(np.quantile(inside, 1 - left)) if len(inside) else float(std[val].max() * std_scale)
     out = {"std_scale": std_scale, "max_std": max_std, "validation_inputs": int(val.sum()),
-           "raw_coverage_2sigma_val": float(np.mean(z[val] <= 2))}
+           "raw_coverage_2sigma_val": float(np.mean(z[val] <= 2)),
+           "out_of_domain_val": float(outside[val].mean())}
     if test.any():
         predicted = roughness_from_log(mean[test], log_offset)
         rel = np.abs(predicted - roughness[test]) / np.maximum(roughness[test], 1e-12)
-        sent = std[test] * std_scale > max_std
+        sent = (std[test] * std_scale > max_std) | outside[test]
         large = rel > LARGE_ERROR
         out |= {"test_inputs": int(test.sum()), "coverage_2sigma_test": float(np.mean(z[test] <= 2 * std_scale)),
-                "sent_to_fem_test": float(sent.mean()), "large_errors_test": int(large.sum()),
+                "sent_to_fem_test": float(sent.mean()), "out_of_domain_test": float(outside[test].mean()),
+                "large_errors_test": int(large.sum()),
                 "large_errors_caught_test": float(sent[large].mean()) if large.any() else None}
     return out
 
@@ -121,7 +142,8 @@ def export_ensemble(checkpoints: list[str | Path], out: str | Path,
     if data is not None:
         samples = _samples(data, first)
         logs = member_logs(members, samples.patches)
-        info |= calibrate(logs, samples.roughness, samples.split, first.log_offset)
+        info |= calibrate(logs, samples.roughness, samples.split, first.log_offset, out_of_domain(members[0], first,
+                                                                                                samples.patches))
         predicted = roughness_from_log(logs.mean(axis=1), first.log_offset)
         metrics = {s: scores(samples.roughness[samples.split == s], predicted[samples.split == s])
                    for s in ("train", "val", "test", "ood") if (samples.split == s).any()}

@@ -616,6 +616,26 @@ def test_ensemble_calibration_matches_a_known_spread():
     assert out["max_std"] == pytest.approx(np.quantile(sigma[: n // 2] * out["std_scale"], 0.9))
 
 
+
+@pytest.mark.parametrize("outside_share, expected_sent", [(0.04, 0.10), (0.25, 0.25)])
+def test_default_threshold_counts_out_of_domain_inputs_in_the_budget(outside_share, expected_sent):
+    """auto sends out-of-domain inputs to the FEM anyway: the spread threshold spends only the rest of the
+    10% budget (none when they alone exceed it). Shares on 1,500 test draws: binomial SE <= 0.011."""
+    from roughness.surrogate.ensemble import calibrate
+
+    rng = np.random.default_rng(1)
+    n = 3000
+    sigma = rng.uniform(0.02, 0.2, n)
+    logs = rng.uniform(-5, -2, n)[:, None] + sigma[:, None] * np.array([-1.0, 0.0, 1.0])
+    truth = np.exp(logs.mean(axis=1) + sigma * rng.standard_normal(n)) - 1e-3
+    split = np.where(np.arange(n) < n // 2, "val", "test")
+    outside = rng.random(n) < outside_share
+    out = calibrate(logs, np.maximum(truth, 0), split, 1e-3, outside)
+    assert out["out_of_domain_val"] == pytest.approx(outside_share, abs=0.02)
+    assert out["sent_to_fem_test"] == pytest.approx(expected_sent, abs=0.035)
+    uncertain = (sigma * out["std_scale"] > out["max_std"]) & ~outside
+    assert uncertain[split == "val"].mean() == pytest.approx(max(0.10 - outside[split == "val"].mean(), 0), abs=2e-3)
+
 def test_auto_sends_uncertain_inputs_to_fem(ensemble, tiny, monkeypatch):
     from roughness.engines import FemEngine
 
