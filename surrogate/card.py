@@ -124,6 +124,51 @@ Its V differs from this model's by {100 * report['standard_median_rel_diff_vs_fp
 """
 
 
+def multi_fidelity_section(meta: ModelMetadata) -> str:
+    """How a multi-fidelity model's labels were made: rows per contact spacing and the spacing it answers for."""
+    mf = meta.multi_fidelity
+    if not mf:
+        return ""
+    levels = sorted(mf["rows_by_h_mm"].items(), key=lambda kv: -float(kv[0]))
+    rows = ", ".join(f"h = {float(h):g} mm: {n:,}" for h, n in levels)
+    extra = ", ".join(f"`{e.get('file')}`" for e in mf.get("extra_data", [])) or "none"
+    return f"""
+### Multi-fidelity labels
+Every mesh level the FEM solved for a texture is a label row, with the contact spacing h as an input
+of the dense head (`roughness train ... --levels all`); the exported graph answers at
+h = {mf['query_h_mm']:g} mm (`{meta.label_fidelity}`). Label rows per spacing: {rows}. Extra files of the
+same textures: {extra}. Scores below are against the labels at h = {mf['query_h_mm']:g} mm.
+"""
+
+
+def ensemble_section(meta: ModelMetadata) -> str:
+    """An ensemble graph's members, the calibration of its spread and auto's default threshold."""
+    e = meta.ensemble
+    if not e:
+        return ""
+    calibrated = e.get("max_std") is not None
+    test = (f"On the test split ({e['test_inputs']} inputs) the 2-sigma interval holds the label for "
+            f"{100 * e['coverage_2sigma_test']:.1f}%; the default threshold sends {100 * e['sent_to_fem_test']:.1f}% "
+            f"to the FEM ({100 * e.get('out_of_domain_test', 0):.1f}% as out of domain) and catches "
+            + (f"{100 * e['large_errors_caught_test']:.0f}% of the {e['large_errors_test']} predictions off by more "
+               "than 15%." if e.get("large_errors_caught_test") is not None else "no prediction off by more than 15% "
+                                                                                 "(there were none).")
+            if calibrated and "test_inputs" in e else "")
+    ood = e.get("ood_by_family") or {}
+    by_family = metric_table(ood, {f: f for f in sorted(ood)}).replace("| split |", "| family |")
+    ood_table = f"\nFamilies never trained on, one by one:\n\n{by_family}\n" if ood else ""
+    return f"""
+## Ensemble and uncertainty
+{e['members']} members (checkpoints `{'`, `'.join(e['member_sha256'])}`, first 16 hex digits of their sha256),
+trained alike with seeds 0..{e['members'] - 1}, exported as one graph that returns their mean of log(V + offset)
+and its spread (`python -m roughness.surrogate.ensemble RUN*/checkpoint.pt --out MODEL.onnx --data DATA...`).
+""" + (f"""The spread is scaled by {e['std_scale']:.3g} so that 95% of validation labels lie within 2 sigma
+(raw coverage {100 * e['raw_coverage_2sigma_val']:.1f}%), and `--engine auto` sends inputs whose relative spread
+exceeds {e['max_std']:.3g} to the FEM: the threshold at which 10% of the validation inputs go to the FEM,
+counting the {100 * e.get('out_of_domain_val', 0):.1f}% sent as out of domain. {test}
+""" if calibrated else "The spread is not calibrated (exported without `--data`): no default threshold.\n") + ood_table
+
+
 def read_latency(path: Path | None, model_path: Path) -> dict | None:
     """The latency benchmark's results if they timed this model (by file name), else None."""
     if path is None or not path.exists():
@@ -201,7 +246,7 @@ best validation epoch {meta.best_epoch} of {meta.epochs}, {meta.minutes:.1f} min
 ![training history]({rel / 'surrogate_training.png'})
 
 ## Accuracy against FEM ({meta.label_fidelity} labels)
-
+""" + multi_fidelity_section(meta) + f"""
 {metric_table(meta.metrics, SPLIT_NAMES)}
 
 Held-out textures by family:
@@ -226,7 +271,7 @@ relative error; they are counted in the metadata (`n_zero`).
 {latency['fem_warm_seconds']['default']:.2f} s per texture with a warm block in the same run: a speed-up of
 {latency['speedup_vs_fem_default_end_to_end']:,.0f}x.
 """ if latency else f"Not measured for this model: `python benchmarks/surrogate_latency.py --model {model_path}`.\n") \
-        + int8_section(model_path, meta, latency) + f"""
+        + int8_section(model_path, meta, latency) + ensemble_section(meta) + f"""
 ## Input domain
 An input is flagged `in_domain: false` (and `--engine auto` runs the FEM for it) when a descriptor of
 its footprint patch leaves the training range (0.5th to 99.5th percentile, widened by 5% of the span)

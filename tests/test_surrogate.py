@@ -537,6 +537,20 @@ def test_card_of_a_custom_model_describes_that_model(tiny, tmp_path):
     assert "| family |" not in text or any("spearman" in m for m in families.values())
 
 
+
+def test_card_of_an_ensemble_states_its_members_calibration_and_unseen_families(ensemble, tmp_path):
+    from roughness.surrogate.card import write_card
+    from roughness.surrogate.metadata import onnx_metadata
+
+    card = tmp_path / "CARD.md"
+    write_card(ensemble.root / "m0", ensemble.model, card, tmp_path)
+    text = card.read_text()
+    info = onnx_metadata(ensemble.model).ensemble
+    section = text.split("## Ensemble and uncertainty")[1].split("\n## ")[0]
+    assert f"{info['members']} members" in section and info["member_sha256"][2] in section
+    assert f"scaled by {info['std_scale']:.3g}" in section and f"exceeds {info['max_std']:.3g}" in section
+    assert "Families never trained on" in section and "| knurl |" in section
+
 def test_splits_are_those_the_shipped_model_was_trained_with():
     from collections import Counter
 
@@ -764,6 +778,14 @@ def test_multi_fidelity_training_uses_every_level_and_answers_at_the_finest(tmp_
     report = export_ensemble(members, tmp_path / "e.onnx", data=[default, fine_all])
     assert report["members"] == 2 and report["metrics_of"] == "ensemble"
     assert onnx_metadata(tmp_path / "e.onnx").query_h_mm == 0.14
+
+    # its card says how the labels were made and what it answers for
+    from roughness.surrogate.card import write_card
+
+    write_card(tmp_path / "m0", tmp_path / "e.onnx", tmp_path / "CARD.md", tmp_path)
+    section = (tmp_path / "CARD.md").read_text().split("### Multi-fidelity labels")[1].split("\n#")[0]
+    assert "h = 0.14 mm (`fine`)" in section and "h = 0.3 mm: 40, h = 0.2 mm: 40, h = 0.14 mm: 40" in section
+    assert "`fine-all.h5`" in section or str(fine_all) in section
 
 
 def test_multi_fidelity_refuses_other_physics_and_a_missing_query_level(tmp_path):
