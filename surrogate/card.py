@@ -124,6 +124,29 @@ Its V differs from this model's by {100 * report['standard_median_rel_diff_vs_fp
 """
 
 
+def training_commands(meta: ModelMetadata, model_name: str) -> str:
+    """The commands that made the model, from its training configuration (defaults left out)."""
+    from .config import TrainConfig
+
+    config, default = meta.train_config, TrainConfig("", "")
+    options = [("--levels", config.get("levels", "last"), default.levels),
+               ("--query-h-mm", config.get("query_h_mm"), default.query_h_mm),
+               ("--holdout-family", config.get("holdout_family"), default.holdout_family),
+               ("--widths", ",".join(map(str, config.get("widths", default.widths))), ",".join(map(str, default.widths))),
+               ("--hidden", config.get("hidden", default.hidden), default.hidden),
+               ("--max-epochs", config.get("max_epochs"), default.max_epochs),
+               ("--batch-size", config.get("batch_size"), default.batch_size)]
+    extra = [Path(p).name for p in config.get("extra_data", [])]
+    train = " ".join([f"roughness train {meta.data.get('file')}", *(["--extra-data", *extra] if extra else []),
+                      *(f"{flag} {value}" for flag, value, given in options if value != given)])
+    if not meta.ensemble:
+        return f"`{train} --out RUN`, then\n`roughness export RUN/checkpoint.pt --out {model_name}`"
+    k = meta.ensemble["members"]
+    data = " ".join([str(meta.data.get("file")), *extra])
+    return (f"`{train} --seed K --out runK` for K = 0..{k - 1}, then\n"
+            f"`python -m roughness.surrogate.ensemble run*/checkpoint.pt --out {model_name} --data {data}`")
+
+
 def multi_fidelity_section(meta: ModelMetadata) -> str:
     """How a multi-fidelity model's labels were made: rows per contact spacing and the spacing it answers for."""
     mf = meta.multi_fidelity
@@ -236,13 +259,15 @@ Tymms et al. 2018) of a texture from its heightmap, in about a millisecond inste
          else "No family is held out.") + f"""
 
 ## Training
-`roughness train {meta.data.get('file')} --out RUN`, then
-`roughness export RUN/checkpoint.pt --out {model_path.name}`:
+{training_commands(meta, model_path.name)}:
 seed {config['seed']}, AdamW (learning rate {config['learning_rate']:g}, cosine schedule over
 {config['max_epochs']} epochs), batch {config['batch_size']}, a random 90-degree rotation and mirror per batch,
-best validation epoch {meta.best_epoch} of {meta.epochs}, {meta.minutes:.1f} min on {config['threads']} CPU threads.
-""" + ("Against FEM `fine` on the 160-texture validation set, with the other engines: "
-       "benchmarks/results/trade/report.md.\n" if shipped else "") + f"""
+best validation epoch {meta.best_epoch} of {meta.epochs}""" + (
+        f", {meta.minutes:.1f} min on {config['threads']} CPU threads.\n" if not meta.ensemble else
+        f" (member 0); all {meta.ensemble['members']} members took {meta.minutes:.1f} min on {config['threads']} CPU "
+        f"threads ({meta.cost_core_seconds.get('training', 0) / 3600:.2f} core-hours).\n") + (
+        "Against FEM on the 160-texture validation set, with the other engines: "
+        "benchmarks/results/trade/report.md.\n" if shipped else "") + f"""
 ![training history]({rel / 'surrogate_training.png'})
 
 ## Accuracy against FEM ({meta.label_fidelity} labels)

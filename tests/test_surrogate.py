@@ -550,6 +550,8 @@ def test_card_of_an_ensemble_states_its_members_calibration_and_unseen_families(
     assert f"{info['members']} members" in section and info["member_sha256"][2] in section
     assert f"scaled by {info['std_scale']:.3g}" in section and f"exceeds {info['max_std']:.3g}" in section
     assert "Families never trained on" in section and "| knurl |" in section
+    assert "--holdout-family knurl --max-epochs 2 --batch-size 8 --seed K --out runK` for K = 0..2" in text
+    assert "python -m roughness.surrogate.ensemble run*/checkpoint.pt --out ensemble.onnx --data small.h5" in text
 
 def test_splits_are_those_the_shipped_model_was_trained_with():
     from collections import Counter
@@ -785,7 +787,9 @@ def test_multi_fidelity_training_uses_every_level_and_answers_at_the_finest(tmp_
     write_card(tmp_path / "m0", tmp_path / "e.onnx", tmp_path / "CARD.md", tmp_path)
     section = (tmp_path / "CARD.md").read_text().split("### Multi-fidelity labels")[1].split("\n#")[0]
     assert "h = 0.14 mm (`fine`)" in section and "h = 0.3 mm: 40, h = 0.2 mm: 40, h = 0.14 mm: 40" in section
-    assert "`fine-all.h5`" in section or str(fine_all) in section
+    assert "`fine-all.h5`" in section
+    assert "roughness train default.h5 --extra-data fine-all.h5 --levels all --max-epochs 2" in \
+        (tmp_path / "CARD.md").read_text()
 
 
 def test_multi_fidelity_refuses_other_physics_and_a_missing_query_level(tmp_path):
