@@ -1,7 +1,7 @@
 """A deep ensemble of trained surrogates as one ONNX graph that returns its mean and spread.
 
     for k in 0 1 2 3 4; do roughness train DATA.h5 --out runs/m$k --seed $k; done
-    python -m roughness.surrogate.ensemble runs/m*/checkpoint.pt --out models/roughness-ensemble.onnx --data DATA.h5
+    python -m roughness.surrogate.ensemble runs/m*/checkpoint.pt --out MODEL.onnx --data DATA.h5 [--int8 MODEL-int8.onnx]
 
 The graph takes ``heights`` like a single model and returns ``log_roughness`` (the members' mean of
 log(V + offset)), ``log_roughness_std`` (their standard deviation times ``std_scale``: the relative
@@ -227,17 +227,30 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--data", nargs="+", help="the members' training dataset (.h5; a multi-fidelity model's "
                                                   "files in training order): calibrate the spread on its validation "
                                                   "split and report it on the test split (default: not calibrated)")
-    parser.add_argument("--overwrite", action="store_true", help="replace --out if it exists")
+    parser.add_argument("--int8", metavar="FILE", help="also write the int8 graph of the ensemble (surrogate/quantize.py; "
+                                                       "nothing is written if it strays from fp32 beyond its limits)")
+    parser.add_argument("--overwrite", action="store_true", help="replace --out (and --int8) if they exist")
     args = parser.parse_args(argv)
+    from .quantize import QuantizationError, quantize
+
     try:
+        if args.int8:  # both outputs checked before anything is computed
+            check_output(args.int8, args.overwrite, "int8")
+            if Path(args.int8).resolve() == Path(args.out).resolve():
+                raise InputError("--int8 must name another file than --out", parameter="int8")
         report = export_ensemble(args.checkpoints, args.out, args.data, args.overwrite)
+        print(json.dumps({k: v for k, v in report.items() if k != "member_val"}))
+        if args.int8:
+            print(json.dumps(quantize(args.out, args.int8, overwrite=args.overwrite)))
     except OutputExists as err:
         print(f"roughness: error: {err.path} already exists; pass --overwrite to replace it", file=sys.stderr)
         return 2
     except InputError as err:
         print(f"roughness: error: {err}", file=sys.stderr)
         return 2
-    print(json.dumps({k: v for k, v in report.items() if k != "member_val"}))
+    except QuantizationError as err:
+        print(f"roughness: int8 check failed, {args.int8} not written: {err}", file=sys.stderr)
+        return 1
     return 0
 
 

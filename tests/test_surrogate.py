@@ -553,6 +553,24 @@ def test_card_of_an_ensemble_states_its_members_calibration_and_unseen_families(
     assert "--holdout-family knurl --max-epochs 2 --batch-size 8 --seed K --out runK` for K = 0..2" in text
     assert "python -m roughness.surrogate.ensemble run*/checkpoint.pt --out ensemble.onnx --data small.h5" in text
 
+
+def test_ensemble_int8_graph_keeps_mean_and_spread(ensemble, tmp_path, capsys):
+    from roughness.surrogate.ensemble import main as ensemble_main
+    from roughness.surrogate.quantize import relative_difference, standard_patches
+
+    out, int8 = tmp_path / "e.onnx", tmp_path / "e-int8.onnx"
+    assert ensemble_main([*map(str, ensemble.checkpoints), "--out", str(out), "--int8", str(out)]) == 2
+    assert "--int8 must name another file" in capsys.readouterr().err and not out.exists()
+    assert ensemble_main([*map(str, ensemble.checkpoints), "--out", str(out), "--int8", str(int8)]) == 0
+    fp32, q = SurrogateModel(out), SurrogateModel(int8)
+    assert q.has_std and q.meta.int8["standard_max_rel_diff_vs_fp32"] < 0.02
+    standard = standard_patches()[:, 0]
+    a, b = fp32.evaluate(standard), q.evaluate(standard)
+    assert relative_difference(b.roughness, a.roughness).max() < 0.02
+    assert ensemble_main([*map(str, ensemble.checkpoints), "--out", str(tmp_path / "new.onnx"), "--int8",
+                          str(int8)]) == 2  # an existing int8 file is refused before anything is written
+    assert not (tmp_path / "new.onnx").exists()
+
 def test_splits_are_those_the_shipped_model_was_trained_with():
     from collections import Counter
 
