@@ -28,3 +28,29 @@ def test_help_does_not_run(script, tmp_path):
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.startswith("usage:"), out.stdout[:500]
     assert _results(script.parent) == before  # nothing written
+
+
+def test_surrogate_report_counts_coverage_and_what_auto_catches(monkeypatch):
+    """The report's arithmetic on a hand-made case: 2-sigma coverage in log(V + offset), auto's routing
+    (out of domain, or spread above max_std) and the share of >15% errors it catches."""
+    import importlib.util
+
+    import numpy as np
+
+    spec = importlib.util.spec_from_file_location("surrogate_report", ROOT / "benchmarks" / "surrogate_report.py")
+    report = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, spec.name, report)  # its dataclass looks its module up
+    spec.loader.exec_module(report)
+    offset = 0.001
+    reference = np.array([0.10, 0.10, 0.10, 0.10])
+    predicted = np.array([0.101, 0.13, 0.08, 0.10])  # errors 1%, 30%, 20%, 0%
+    spread = np.array([0.05, 0.30, 0.02, 0.05])  # relative spread of V + offset
+    p = {"id": np.array(["a", "b", "c", "d"]), "family": np.array(["x"] * 4), "reference": reference,
+         "predicted": predicted, "relative_std": spread, "in_domain": np.array([True, True, True, False]),
+         "log_offset": offset, "max_std": 0.1}
+    out = report.uncertainty(p)
+    z = np.abs(np.log(reference + offset) - np.log(predicted + offset)) / spread
+    assert out["coverage_2sigma"] == np.mean(z <= 2) == 0.75  # c: 20% off with a 2% spread
+    assert out["sent_to_fem"] == 0.5 and out["sent_out_of_domain"] == 0.25  # b (uncertain) and d (outside)
+    assert out["large_errors"] == 2 and out["large_errors_caught"] == 0.5  # b caught, c missed
+    assert [w["id"] for w in report.worst(p, 2)] == ["b", "c"]
