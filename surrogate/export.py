@@ -52,8 +52,8 @@ def load_checkpoint(path: str | Path) -> tuple[RoughnessNet, ModelMetadata]:
 
 
 def check_patches(n: int = 16) -> np.ndarray:
-    """Footprint patches of ``n`` textures drawn as the default recipe draws them (all families)."""
-    from roughness.dataset.natural import FAMILIES
+    """Footprint patches of ``n`` textures, every family drawn alike (bumps, natural and engineered)."""
+    from roughness.dataset.families import FAMILIES
     from roughness.dataset.recipe import Recipe, realise, sample_record
 
     recipe = Recipe(name="export-check", seed=7, families={f: 1.0 for f in ("bumps", *FAMILIES)})
