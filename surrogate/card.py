@@ -154,7 +154,8 @@ def multi_fidelity_section(meta: ModelMetadata) -> str:
         return ""
     levels = sorted(mf["rows_by_h_mm"].items(), key=lambda kv: -float(kv[0]))
     rows = ", ".join(f"h = {float(h):g} mm: {n:,}" for h, n in levels)
-    extra = ", ".join(f"`{e.get('file')}`" for e in mf.get("extra_data", [])) or "none"
+    extra = ", ".join(f"`{e.get('file')}` (inputs_sha256 `{e.get('inputs_sha256')}`)"
+                      for e in mf.get("extra_data", [])) or "none"
     return f"""
 ### Multi-fidelity labels
 Every mesh level the FEM solved for a texture is a label row, with the contact spacing h as an input

@@ -805,7 +805,7 @@ def test_multi_fidelity_training_uses_every_level_and_answers_at_the_finest(tmp_
     write_card(tmp_path / "m0", tmp_path / "e.onnx", tmp_path / "CARD.md", tmp_path)
     section = (tmp_path / "CARD.md").read_text().split("### Multi-fidelity labels")[1].split("\n#")[0]
     assert "h = 0.14 mm (`fine`)" in section and "h = 0.3 mm: 40, h = 0.2 mm: 40, h = 0.14 mm: 40" in section
-    assert "`fine-all.h5`" in section
+    assert f"`fine-all.h5` (inputs_sha256 `{inputs_sha256(fine_all)}`)" in section
     assert "roughness train default.h5 --extra-data fine-all.h5 --levels all --max-epochs 2" in \
         (tmp_path / "CARD.md").read_text()
 
