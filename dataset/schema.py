@@ -10,7 +10,8 @@ Layout ("roughness.dataset", version 2)
 ``/samples/<id>``        ``<id> = sample_id(recipe)``, 16 hex digits
   ``heightmap``          float32 (ny, nx) heights in mm, one gzip chunk; shapes may differ between samples;
                          absent for a failed sample whose texture could not be made
-  ``fluctuation``        float32 strain fluctuation map at receptor depth (ok samples), one gzip chunk;
+  ``fluctuation``        float32 strain fluctuation map at receptor depth (ok samples that were simulated,
+                         not restored from a labels file), one gzip chunk;
                          attr ``grid_axis_mm``: coordinates (mm) of its rows and columns
 Version 1 files (no ``/index``; each sample group carries the ``Entry`` fields as attributes) are
 read by walking the groups, and converted to version 2 by the next writer.
@@ -163,6 +164,7 @@ class Entry:
     discretization_error: float = math.nan  # estimated relative error of V from the mesh (nan: none)
     ladder_h_mm: tuple[float, ...] = field(default=())  # contact spacing of each solved level, coarsest first
     ladder_V: tuple[float, ...] = field(default=())  # V at each of those levels (the last is V)
+    restored: bool = False  # result taken from a labels file (dataset.labels): no fluctuation map
 
     def values(self) -> dict:
         """Scalar values of the sample (Sample.values): results if ok, the error if failed."""
@@ -173,7 +175,7 @@ class Entry:
 
 ENTRY_FIELDS = tuple(f.name for f in fields(Entry))
 # Entry fields added to version 2 after it first shipped: absent from older files' index (defaults).
-ADDED_FIELDS = ("discretization_error", "ladder_h_mm", "ladder_V")
+ADDED_FIELDS = ("discretization_error", "ladder_h_mm", "ladder_V", "restored")
 TEXT_FIELDS = ("id", "recipe", "family", "status", "written", "roughness_version", "error")
 
 

@@ -122,6 +122,14 @@ class DatasetWriter:
                 "grid_axis_mm": np.asarray(result_fields["grid_axis_mm"], dtype=float)}
         return self._write(recipe, pixel_mm, "ok", values, maps)
 
+    def write_labelled(self, recipe: dict, heightmap: np.ndarray | None, pixel_mm: float, values: dict) -> bool:
+        """Store a sample with a result computed before (``labels.Label.values``: Entry fields, its time and
+        version of writing kept); no fluctuation map. False, writing nothing, if its id is present."""
+        values = {**values, "restored": True}
+        ok = values.get("status") == "ok"
+        maps = {} if heightmap is None else {"heightmap": _map("heightmap", heightmap, finite=ok)}
+        return self._write(recipe, pixel_mm, values.pop("status"), values, maps)
+
     def write_failure(self, recipe: dict, heightmap: np.ndarray | None, pixel_mm: float, error: str) -> bool:
         """Record a sample whose simulation failed and why; False, writing nothing, if its id is present."""
         if not isinstance(error, str) or not error.strip():
@@ -148,9 +156,9 @@ class DatasetWriter:
     def _write(self, recipe: dict, pixel_mm: float, status: str, values: dict, maps: dict) -> bool:
         if not isinstance(recipe, dict) or not isinstance(recipe.get("family"), str):
             raise ValueError(f"a recipe is a dict with a 'family' string, got {recipe!r}")
+        values = {"written": _now(), "roughness_version": self._version, **values}
         entry = Entry(id=sample_id(recipe), recipe=canonical_json(recipe), family=recipe["family"], status=status,
-                      pixel_mm=positive("pixel_mm", pixel_mm), written=_now(), roughness_version=self._version,
-                      **values)
+                      **as_tuples({**values, "pixel_mm": positive("pixel_mm", pixel_mm)}))
         if self._lock < 0:
             raise ValueError(f"the writer of {self.path} is closed")
         if entry.id in self._ids:
@@ -432,8 +440,14 @@ class Dataset:
         return Heightmap(self._maps(sid, "heightmap")["heightmap"].astype(float), self._entry(sid).pixel_mm)
 
     def fluctuation(self, sid: str) -> np.ndarray:
-        """Strain fluctuation map at receptor depth of ok sample ``sid`` (float32, on grid_axis_mm)."""
+        """Strain fluctuation map at receptor depth of ok sample ``sid`` (float32, on grid_axis_mm).
+
+        KeyError for a failed sample and for one restored from a labels file (which has none)."""
         return self._maps(sid, "fluctuation")["fluctuation"]
+
+    def entries(self) -> dict[str, Entry]:
+        """The index entries, by id (sorted)."""
+        return dict(self._entries)
 
     def iter_samples(self, status: str | None = "ok") -> Iterator[Sample]:
         """Samples with ``status`` ("ok", "failed", or None for all), maps included, in id order."""
@@ -477,7 +491,8 @@ class Dataset:
         if maps is None:
             maps = _group_maps(self._h5["samples"][sid])
         if needed is not None and needed not in maps:
-            raise KeyError(f"sample {sid} ({entry.status}) has no {needed}")
+            restored = " restored from a labels file" if entry.restored else ""
+            raise KeyError(f"sample {sid} ({entry.status}{restored}) has no {needed}")
         return maps
 
 
@@ -503,6 +518,7 @@ def info(path: str | os.PathLike) -> dict:
             "samples": len(ds),
             **{status: int(np.sum(table["status"] == status)) for status in STATUSES},
             "converged": int(np.sum(table["converged"][ok])),
+            "restored": sum(e.restored for e in ds.entries().values()),
             "families": {f: {s: counts[s] for s in STATUSES} for f, counts in sorted(families.items())},
             "V": _span(table["V"][ok]),
             "contact_fraction": _span(table["contact_fraction"][ok]),
@@ -560,7 +576,7 @@ def _entry_problems(entry: Entry, maps: dict[str, np.ndarray]) -> list[str]:
                                     if kind is float and k not in OPTIONAL_FLOATS]:
             if not math.isfinite(getattr(entry, name)):
                 problems.append(f"{name} is {getattr(entry, name)}")
-        for name in MAPS:
+        for name in [m for m in MAPS if not (entry.restored and m == "fluctuation")]:
             if name not in maps or maps[name].ndim != 2:
                 problems.append(f"{name} is missing or not 2-D")
             elif not np.all(np.isfinite(maps[name])):

@@ -33,7 +33,7 @@ def test_recipe_is_deterministic_and_prefix_stable():
 def test_local_dask_run_with_two_workers(tmp_path):
     out = tmp_path / "d.h5"
     counts = build(str(out), 6, RECIPE, SMALL, workers=2, quiet=True)
-    assert counts == {"requested": 6, "already_done": 0, "written": 6, "failed": 0}
+    assert counts == {"requested": 6, "already_done": 0, "written": 6, "failed": 0, "restored": 0}
     with open_dataset(out) as ds:
         assert sorted(ds.ids) == sorted(sample_id(r) for r in expand(RECIPE, 6))
         assert np.all(np.isfinite(ds.table()["V"]))
@@ -106,3 +106,74 @@ def test_input_digest_is_reproducible_across_builds(tmp_path):
     build(str(b), 3, RECIPE, SMALL, workers=1, quiet=True)
     assert inputs_sha256(a) == inputs_sha256(b)
     assert len(file_sha256(a)) == 64
+
+
+def test_labels_file_remakes_a_build_without_the_fem(tmp_path):
+    """A labels file (FEM results and heightmap digests, no maps) restores a build; a sample whose texture
+    no longer matches its label, or that has none, is simulated."""
+    import gzip
+
+    from roughness.core.errors import InputError
+    from roughness.dataset.digest import inputs_sha256
+    from roughness.dataset.labels import export_labels, load_labels
+
+    first, labels = tmp_path / "first.h5", tmp_path / "first.labels.jsonl.gz"
+    build(str(first), 4, RECIPE, SMALL, workers=1, quiet=True)
+    exported = export_labels(first, labels)
+    assert len(exported) == 4 and load_labels(labels) == exported
+    again = tmp_path / "again.labels.jsonl.gz"
+    export_labels(first, again)
+    assert again.read_bytes() == labels.read_bytes()  # same labels, same bytes (committable)
+    with pytest.raises(InputError, match="already exists"):
+        export_labels(first, labels)
+
+    remade = tmp_path / "remade.h5"
+    counts = build(str(remade), 5, RECIPE, SMALL, workers=1, quiet=True, labels=load_labels(labels))
+    assert counts["restored"] == 4 and counts["written"] == 1  # the fifth sample has no label
+    with open_dataset(first) as a, open_dataset(remade) as b:
+        ea, eb = a.entries(), b.entries()
+        for sid in ea:
+            assert eb[sid].restored and not ea[sid].restored
+            assert (eb[sid].V, eb[sid].ladder_V, eb[sid].written) == (ea[sid].V, ea[sid].ladder_V, ea[sid].written)
+            with pytest.raises(KeyError, match="restored from a labels file"):
+                b.fluctuation(sid)
+        assert sum(not e.restored for e in eb.values()) == 1
+    assert verify(remade) == []
+    four = tmp_path / "four.h5"
+    build(str(four), 4, RECIPE, SMALL, workers=1, quiet=True, labels=load_labels(labels))
+    assert inputs_sha256(four) == inputs_sha256(first)
+
+    # a label whose heightmap digest no longer matches (the generator changed) is not taken
+    lines = gzip.decompress(labels.read_bytes()).decode().splitlines()
+    row = json.loads(lines[1])
+    row["heights"] = "0" * 16
+    stale = tmp_path / "stale.labels.jsonl.gz"
+    stale.write_bytes(gzip.compress("\n".join([lines[0], json.dumps(row), *lines[2:]]).encode()))
+    counts = build(str(tmp_path / "stale.h5"), 4, RECIPE, SMALL, workers=1, quiet=True, labels=load_labels(stale))
+    assert counts["restored"] == 3 and counts["written"] == 1
+
+
+def test_labels_of_another_configuration_or_damaged_are_refused(tmp_path):
+    from dataclasses import replace
+
+    from roughness.cli import main
+    from roughness.core.errors import InputError
+    from roughness.dataset.labels import export_labels, load_labels
+
+    first, labels = tmp_path / "first.h5", tmp_path / "l.jsonl.gz"
+    build(str(first), 1, RECIPE, SMALL, workers=1, quiet=True)
+    export_labels(first, labels)
+    with pytest.raises(InputError, match="another configuration.*force_n"):
+        build(str(tmp_path / "other.h5"), 1, RECIPE, replace(SMALL, force_n=2.0), quiet=True, labels=load_labels(labels))
+    truncated = tmp_path / "t.jsonl.gz"
+    import gzip
+    truncated.write_bytes(gzip.compress(gzip.decompress(labels.read_bytes()).splitlines()[0]))
+    with pytest.raises(InputError, match="truncated"):
+        load_labels(truncated)
+    (tmp_path / "junk.gz").write_text("not gzip")
+    with pytest.raises(InputError, match="not a gzip file"):
+        load_labels(tmp_path / "junk.gz")
+    assert main(["dataset", "build", "--n", "1", "--out", str(tmp_path / "x.h5"), "--labels",
+                 str(tmp_path / "missing.gz")]) == 2
+    assert main(["dataset", "labels", str(first), "--out", str(labels)]) == 2  # exists: --overwrite to replace
+    assert main(["dataset", "labels", str(first), "--out", str(labels), "--overwrite"]) == 0

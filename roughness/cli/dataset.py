@@ -5,7 +5,7 @@ import argparse
 import json
 import sys
 
-from .common import COUNT, FRACTION, SEED, finish, write_stdout
+from .common import COUNT, FRACTION, SEED, add_overwrite, finish, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -30,8 +30,16 @@ def add_parser(sub) -> None:
     b.add_argument("--scheduler", metavar="ADDRESS",
                    help="address of a running Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
     b.add_argument("--seed", type=SEED, help="replace the recipe's seed (default: the recipe's)")
+    b.add_argument("--labels", metavar="LABELS", help="labels file of an earlier build of this configuration "
+                   "(roughness dataset labels): samples whose remade texture matches take its results, without FEM")
     b.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
     finish(b, build)
+    lab = data_sub.add_parser("labels", help="write a dataset's FEM results without its maps (small: to commit; "
+                              "build --labels remakes the dataset from it)")
+    lab.add_argument("dataset", metavar="DATASET", help="HDF5 dataset file")
+    lab.add_argument("--out", required=True, metavar="LABELS", help="labels file to write (.jsonl.gz)")
+    add_overwrite(lab)
+    finish(lab, labels)
     i = data_sub.add_parser("info", help="counts by family, value ranges, failures")
     i.add_argument("dataset", metavar="DATASET", help="HDF5 dataset file")
     i.add_argument("--json", action="store_true", help="one JSON line instead of indented JSON")
@@ -51,14 +59,28 @@ def build(args: argparse.Namespace) -> int:
     if args.seed is not None:
         recipe = replace(recipe, seed=args.seed)
     config = replace(BUILD_CONFIG, fidelity=args.fidelity, tolerance=args.tolerance)
+    labels = None
+    if args.labels:
+        from roughness.dataset.labels import load_labels
+
+        labels = load_labels(args.labels)
     try:
         counts = build(args.out, args.n, recipe, config, workers=args.workers, scheduler=args.scheduler,
-                       quiet=args.quiet)
+                       quiet=args.quiet, labels=labels)
     except KeyboardInterrupt:
         print(f"roughness: interrupted; the samples written so far are kept in {args.out}; "
               "run the same command again to resume", file=sys.stderr)
         return 130
     write_stdout(json.dumps(counts))
+    return 0
+
+
+def labels(args: argparse.Namespace) -> int:
+    from roughness.dataset.labels import export_labels
+
+    written = export_labels(args.dataset, args.out, args.overwrite)
+    ok = sum(label.values["status"] == "ok" for label in written.labels.values())
+    write_stdout(json.dumps({"labels": str(args.out), "samples": len(written), "ok": ok}))
     return 0
 
 
