@@ -124,14 +124,20 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
     if multi:
         log(f"labels per contact spacing: {_rows_by_level(samples)}; the model answers at h = {query:g} mm")
 
-    # model and optimiser: AdamW, linear warm-up then cosine decay over max_epochs
+    # model and optimiser: AdamW, linear warm-up then cosine decay to zero over max_epochs or the
+    # time budget, whichever runs out first (a budget that ends the epochs early still anneals)
     model = RoughnessNet(cfg.widths, cfg.hidden, query)
     log(f"model: {parameter_count(model):,} parameters")
     optimizer = torch.optim.AdamW(model.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
     steps_per_epoch = math.ceil(len(tr) / cfg.batch_size)
     total_steps, warmup = cfg.max_epochs * steps_per_epoch, 3 * steps_per_epoch
+    epochs_start = time.monotonic()
+
+    def progress(step: int) -> float:
+        return min(max(step / total_steps, (time.monotonic() - epochs_start) / (60 * cfg.max_minutes)), 1.0)
+
     schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, lambda s: min((s + 1) / warmup, 0.5 * (
-        1 + math.cos(math.pi * min(s / total_steps, 1.0)))))
+        1 + math.cos(math.pi * progress(s)))))
     generator = torch.Generator().manual_seed(cfg.seed)
 
     best_val, best_epoch, history = math.inf, -1, []
@@ -162,7 +168,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         if epoch - best_epoch >= cfg.patience:
             log(f"early stop: no better validation loss for {cfg.patience} epochs")
             break
-        if minutes > cfg.max_minutes:
+        if time.monotonic() - epochs_start > 60 * cfg.max_minutes:
             log(f"time budget of {cfg.max_minutes} min reached")
             break
 

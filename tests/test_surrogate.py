@@ -153,6 +153,18 @@ def test_training_writes_checkpoint_metrics_and_history(tiny):
     assert np.isfinite(metrics["metrics"]["val"]["spearman"])
 
 
+def test_a_time_budget_that_ends_training_early_still_anneals_the_learning_rate(tiny, tmp_path):
+    """The cosine decays over max_epochs or max_minutes, whichever runs out first: a run cut by its time
+    budget long before max_epochs ends at a learning rate of zero, not at its peak."""
+    cfg = TrainConfig(data=str(tiny.data), out=str(tmp_path / "run"), max_epochs=10_000, max_minutes=0.05,
+                      batch_size=8, val_fraction=0.2)
+    train(cfg)
+    history = (tmp_path / "run" / "history.csv").read_text().splitlines()[1:]
+    rates = [float(line.split(",")[3]) for line in history]
+    assert len(rates) < 10_000 and max(rates) > 0.5 * cfg.learning_rate  # cut by time, after the warm-up
+    assert rates[-1] == pytest.approx(0.0, abs=1e-12)  # the last steps ran past the budget: fully annealed
+
+
 def test_export_round_trip(tiny):
     assert tiny.report["max_rel_diff_V"] < 1e-4 and tiny.report["batch_axis"]
     graph = onnx.load(tiny.model)
