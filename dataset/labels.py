@@ -83,6 +83,8 @@ def export_labels(dataset: str | os.PathLike, out: str | os.PathLike, overwrite:
 def load_labels(path: str | os.PathLike) -> LabelSet:
     """Read a labels file; InputError says what is wrong with it."""
     path = Path(path)
+    if path.is_dir():
+        raise InputError(f"{path} is a folder, not a labels file", parameter="labels")
     if not path.is_file():
         raise InputError(f"no labels file {path}", parameter="labels")
     try:

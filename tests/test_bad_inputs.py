@@ -28,6 +28,7 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("dataset", "build"): ["--out", "new.h5", "--n", "2"],
     ("dataset", "info"): ["data.h5"],
     ("dataset", "verify"): ["data.h5"],
+    ("dataset", "labels"): ["data.h5", "--out", "new.jsonl.gz"],
     ("train",): ["data.h5", "--out", "run"],
     ("export",): ["checkpoint.pt", "--out", "new.onnx"],
     ("predict",): ["map.npy", "--pixel-mm", "0.05", "--engine", "surrogate"],
@@ -47,9 +48,10 @@ BASE: dict[tuple[str, ...], list[str]] = {
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("simulate",): [(0, ".npy", [])],
-    ("dataset", "build"): [("--recipe", ".json", [])],
+    ("dataset", "build"): [("--recipe", ".json", []), ("--labels", ".gz", [])],
     ("dataset", "info"): [(0, ".h5", [])],
     ("dataset", "verify"): [(0, ".h5", [])],
+    ("dataset", "labels"): [(0, ".h5", [])],
     ("train",): [(0, ".h5", [])],
     ("export",): [(0, ".pt", [])],
     ("predict",): [(0, ".npy", []), ("--model", ".onnx", [])],
@@ -68,6 +70,7 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("simulate",): ["--save-strain", "--save-vtu"],
     ("texture", "make"): ["--out"],
+    ("dataset", "labels"): ["--out"],
     ("train",): ["--out"],
     ("export",): ["--out"],
     ("predict",): ["--map"],
