@@ -177,3 +177,14 @@ def test_labels_of_another_configuration_or_damaged_are_refused(tmp_path):
                  str(tmp_path / "missing.gz")]) == 2
     assert main(["dataset", "labels", str(first), "--out", str(labels)]) == 2  # exists: --overwrite to replace
     assert main(["dataset", "labels", str(first), "--out", str(labels), "--overwrite"]) == 0
+
+
+def test_a_texture_that_cannot_be_made_takes_a_label_only_if_its_labelled_run_could_not_make_it_either():
+    from roughness.dataset.build import simulate_record
+    from roughness.dataset.labels import Label
+
+    record = dict(expand(RECIPE, 1)[0], family="no-such-family")
+    failed = Label("", {"status": "failed", "error": "InputError: no such family"})
+    assert simulate_record(record, SMALL.as_dict(), failed)["label"] is failed
+    made = Label("0123456789abcdef", {"status": "ok"})  # labelled on a texture that was made: not this run's
+    assert "no-such-family" in simulate_record(record, SMALL.as_dict(), made)["error"]

@@ -473,3 +473,35 @@ def test_index_written_before_the_discretization_columns_reads_with_their_defaul
         assert np.isnan(ds.table()["discretization_error"]).all()
         assert all(s.values["ladder_V"] == [] for s in ds.iter_samples())
     assert verify(path) == []
+
+
+def test_labels_round_trip_every_entry_value_and_restore_into_a_new_file(tmp_path):
+    """Labels keep each entry's values exactly (nan discretization errors, ladders, failures with and without a
+    heightmap); write_labelled stores them with their original time and version, marked restored, no fluctuation."""
+    from dataclasses import asdict
+
+    from roughness.dataset.labels import export_labels, heights_digest, load_labels
+
+    path = tmp_path / "d.h5"
+    with DatasetWriter(path, CONFIG, "1.2.3") as writer:
+        for i in range(4):
+            writer.write_result(*sample(i))
+        writer.write_failure({"family": "cellular", "seed": 7}, np.ones((40, 40)), 0.05, "contact did not converge")
+        writer.write_failure({"family": "woven", "seed": 8}, None, 0.05, "generator raised")
+    export_labels(path, tmp_path / "l.jsonl.gz")
+    labels = load_labels(tmp_path / "l.jsonl.gz")
+    assert labels.config == DatasetConfig(**CONFIG) and len(labels) == 6
+    copy = tmp_path / "copy.h5"
+    with open_dataset(path) as ds, DatasetWriter(copy, CONFIG, "9.9.9") as writer:
+        for sid, entry in ds.entries().items():
+            label = labels.labels[sid]
+            heights = ds.heightmap(sid) if label.heights else None
+            if heights is not None:
+                assert label.heights == heights_digest(heights.heights, heights.pixel_mm)
+            assert writer.write_labelled(json.loads(entry.recipe), None if heights is None else heights.heights,
+                                         entry.pixel_mm, label.values)
+    with open_dataset(path) as a, open_dataset(copy) as b:
+        for sid, entry in a.entries().items():
+            restored = b.entries()[sid]
+            assert restored.restored and json.dumps(asdict(restored) | {"restored": False}) == json.dumps(asdict(entry))
+    assert verify(copy) == [] and info(copy)["restored"] == 6
