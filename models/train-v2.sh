@@ -14,7 +14,7 @@ set -euo pipefail
 DATA=${1:?usage: train-v2.sh DATA RUNS}
 RUNS=${2:?usage: train-v2.sh DATA RUNS}
 MEMBERS=${MEMBERS:-5}
-MINUTES=${MINUTES:-25}
+MINUTES=${MINUTES:-20}
 WIDTHS=${WIDTHS:-8,16,32,64}  # 5 members at 75k parameters each: about 0.44 ms per graph call at batch 1
 HIDDEN=${HIDDEN:-32}
 mkdir -p "$RUNS"
