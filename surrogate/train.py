@@ -132,12 +132,8 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
     steps_per_epoch = math.ceil(len(tr) / cfg.batch_size)
     total_steps, warmup = cfg.max_epochs * steps_per_epoch, 3 * steps_per_epoch
     epochs_start = time.monotonic()
-
-    def progress(step: int) -> float:
-        return min(max(step / total_steps, (time.monotonic() - epochs_start) / (60 * cfg.max_minutes)), 1.0)
-
-    schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, lambda s: min((s + 1) / warmup, 0.5 * (
-        1 + math.cos(math.pi * progress(s)))))
+    schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, lambda s: lr_factor(
+        s, total_steps, warmup, (time.monotonic() - epochs_start) / (60 * cfg.max_minutes)))
     generator = torch.Generator().manual_seed(cfg.seed)
 
     best_val, best_epoch, history = math.inf, -1, []
@@ -216,6 +212,13 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
             scored.ids, scored.family, scored.split, scored.roughness, predicted, flagged, scored.h_mm)))
     log(f"wrote {out / 'checkpoint.pt'} (best epoch {best_epoch}, {meta.minutes:.1f} min)")
     return out / "checkpoint.pt"
+
+
+def lr_factor(step: int, total_steps: int, warmup: int, elapsed_fraction: float) -> float:
+    """The learning rate's factor at optimiser ``step``: a linear warm-up over ``warmup`` steps, then a cosine
+    from 1 to 0 over the steps or the time budget (``elapsed_fraction`` of it used), whichever runs out first."""
+    progress = min(max(step / total_steps, elapsed_fraction), 1.0)
+    return min((step + 1) / warmup, 0.5 * (1 + math.cos(math.pi * progress)))
 
 
 def _require_same_textures(data: Dataset, extra: Dataset) -> None:
