@@ -115,21 +115,21 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
                          parameter="labels")
     known = {} if labels is None else labels.labels
     with DatasetWriter(out, file_config, package_version()) as writer:
-        pending = [r for r, i in zip(records, ids) if i not in writer.ids]
+        pending = [(r, known.get(i)) for r, i in zip(records, ids) if i not in writer.ids]  # (record, label or None)
         counts = {"requested": n, "already_done": n - len(pending), "written": 0, "failed": 0, "restored": 0}
-        labelled = sum(sample_id(r) in known for r in pending)
+        labelled = sum(label is not None for _, label in pending)
         if not quiet:
             print(f"{out}: {counts['already_done']} of {n} samples present; "
                   f"{f'{labelled} labelled (restored if their textures match), ' if labels is not None else ''}"
                   f"simulating {len(pending) - labelled} on {scheduler or f'{workers} local workers'}",
                   file=sys.stderr, flush=True)
         if pending:
-            _run(writer, pending, config.as_dict(), workers, scheduler, counts, quiet, known)
+            _run(writer, pending, config.as_dict(), workers, scheduler, counts, quiet)
     return counts
 
 
-def _run(writer: DatasetWriter, pending: list[dict], config: dict, workers: int, scheduler: str | None,
-         counts: dict, quiet: bool, labels: dict[str, Label]) -> None:
+def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config: dict, workers: int,
+         scheduler: str | None, counts: dict, quiet: bool) -> None:
     from dask.distributed import Client, LocalCluster, as_completed
 
     for name in THREAD_VARIABLES:  # inherited by the worker processes
@@ -139,7 +139,7 @@ def _run(writer: DatasetWriter, pending: list[dict], config: dict, workers: int,
     client = Client(scheduler or cluster)
     progress = Progress(total=len(pending), start=time.perf_counter())
     try:
-        futures = [client.submit(simulate_record, r, config, labels.get(sample_id(r)), pure=False) for r in pending]
+        futures = [client.submit(simulate_record, r, config, label, pure=False) for r, label in pending]
         for future in as_completed(futures):
             res = future.result()
             if "label" in res:

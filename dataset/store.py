@@ -125,10 +125,10 @@ class DatasetWriter:
     def write_labelled(self, recipe: dict, heightmap: np.ndarray | None, pixel_mm: float, values: dict) -> bool:
         """Store a sample with a result computed before (``labels.Label.values``: Entry fields, its time and
         version of writing kept); no fluctuation map. False, writing nothing, if its id is present."""
-        values = {**values, "restored": True}
-        ok = values.get("status") == "ok"
-        maps = {} if heightmap is None else {"heightmap": _map("heightmap", heightmap, finite=ok)}
-        return self._write(recipe, pixel_mm, values.pop("status"), values, maps)
+        status = values["status"]
+        maps = {} if heightmap is None else {"heightmap": _map("heightmap", heightmap, finite=status == "ok")}
+        rest = {k: v for k, v in values.items() if k != "status"}
+        return self._write(recipe, pixel_mm, status, {**rest, "restored": True}, maps)
 
     def write_failure(self, recipe: dict, heightmap: np.ndarray | None, pixel_mm: float, error: str) -> bool:
         """Record a sample whose simulation failed and why; False, writing nothing, if its id is present."""
