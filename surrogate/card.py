@@ -45,7 +45,7 @@ def plot_accuracy(rows: list[dict], holdout: str | None, fidelity: str, out: Pat
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.8), sharex=True, sharey=True)
     families = sorted({r["family"] for r in rows})
-    colours = dict(zip(families, plt.cm.tab10.colors))
+    colours = dict(zip(families, plt.cm.tab20(np.arange(len(families)) % 20)))  # the v2 data has 14 families
     for ax, split in zip(axes, ("test", "ood")):
         part = [r for r in rows if r["split"] == split and float(r["V_fem"]) > 0]
         for family in families:
@@ -251,13 +251,13 @@ Tymms et al. 2018) of a texture from its heightmap, in about a millisecond inste
   models are outside what it was trained on: use `--engine fem` for them.{coarse_note}
 
 ## Training data
-- Dataset `{meta.data.get('file')}` (recipe `{meta.data.get('recipe')}`): {len(predictions)} FEM samples; by family:
+- Dataset `{meta.data.get('file')}` (recipe `{meta.data.get('recipe')}`): {len(predictions)} FEM samples labelled at `{meta.label_fidelity}`; by family:
   {', '.join(f'{f} {n}' for f, n in sorted(families.items()))}.
 - Data checksum (inputs_sha256): `{meta.data.get('inputs_sha256')}`
 - Splits by base texture (family, parameters, seed; perturbations ignored), so no perturbed sibling of a
   test texture is trained on: test {100 * meta.test_fraction:.0f}%, validation {100 * config['val_fraction']:.0f}%, the rest training.
-  """ + (f"Family `{meta.holdout_family}` is held out entirely (out-of-family score)." if meta.holdout_family
-         else "No family is held out.") + f"""
+  """ + (f"Held out entirely (out-of-family score): {', '.join(f'`{f}`' for f in meta.holdout_family.split(','))}."
+         if meta.holdout_family else "No family is held out.") + f"""
 
 ## Training
 {training_commands(meta, model_path.name)}:
