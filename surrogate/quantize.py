@@ -68,7 +68,7 @@ def standard_patches() -> np.ndarray:
     return np.stack([footprint_patch(standard_texture(lam)) for lam in STANDARD_LAMBDAS_MM])[:, None]
 
 
-def quantize(fp32_path: str | Path, out: str | Path, calibration: int = 256, check: int = 32,
+def quantize(fp32_path: str | Path, out: str | Path, calibration: int = 512, check: int = 32,
              overwrite: bool = False) -> dict:
     """Write the int8 model and return the checks' numbers; nothing is written if a check fails.
 
