@@ -234,6 +234,7 @@ def write_card(run: Path, model_path: Path, card: Path, plots: Path, latency_pat
     coarse_note = (" The coarse labels sit a few %\n  below `default` FEM (studies/results/mesh_convergence.md); the "
                    "standard scale used for the\n  equivalent wavelength is computed at the same fidelity, so "
                    "equivalent wavelengths and JNDs carry over." if meta.label_fidelity == "coarse" else "")
+    extra_files = "".join(f" with `{e['file']}`" for e in (meta.multi_fidelity or {}).get("extra_data", []))
     text = f"""# Model card: {model_path.name}
 
 A small CNN that predicts the FEM roughness V (strain variation at the Merkel receptor depth,
@@ -251,7 +252,7 @@ Tymms et al. 2018) of a texture from its heightmap, in about a millisecond inste
   models are outside what it was trained on: use `--engine fem` for them.{coarse_note}
 
 ## Training data
-- Dataset `{meta.data.get('file')}` (recipe `{meta.data.get('recipe')}`): {len(predictions)} FEM samples labelled at `{meta.label_fidelity}`; by family:
+- Dataset `{meta.data.get('file')}`{extra_files} (recipe `{meta.data.get('recipe')}`): {len(predictions)} FEM samples labelled at `{meta.label_fidelity}`; by family:
   {', '.join(f'{f} {n}' for f, n in sorted(families.items()))}.
 - Data checksum (inputs_sha256): `{meta.data.get('inputs_sha256')}`
 - Splits by base texture (family, parameters, seed; perturbations ignored), so no perturbed sibling of a
