@@ -136,6 +136,8 @@ def _prediction_line(p) -> str:
              f"off the standard scale: ~ lambda {where.equivalent_lambda_mm:.3f} mm extrapolated by the scale's power "
              f"law, {where.jnd_from_nearest:+.1f} JND from {where.nearest_standard}")
     domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
+    if p.in_domain and p.domain_notes:  # an ensemble's answer above the spread limit (auto would run the FEM)
+        domain += " but " + "; ".join(p.domain_notes)
     sure = f" ± {p.roughness_stderr:.4f} (Monte Carlo)" if p.roughness_stderr is not None else ""  # FEM only
     sure += f" ± {p.roughness_std:.4f} (ensemble spread)" if p.roughness_std is not None else ""
     if p.discretization_error is not None:
