@@ -20,6 +20,7 @@ from roughness.dataset.recipe import Recipe, realise, sample_record
 from roughness.dataset.store import DatasetWriter, open_dataset
 from roughness.dataset.textures import standard_texture
 from roughness.engines import predict
+from roughness.simulate.linsolve import CG_RTOL
 from roughness.simulate.heightmap import Heightmap
 from roughness.simulate.io import save_heightmap
 from roughness.surrogate.calibration import StandardScale, load_scale
@@ -399,7 +400,9 @@ def test_extreme_inputs_give_finite_answers_or_are_flagged():
     for name in ("near-flat", "single spike"):
         assert answers[name].roughness < 0.05 * answers["tiny pixels"].roughness, name
     [fem] = predict(Heightmap(np.zeros((240, 240)), 0.05), engine="auto", model=model)
-    assert fem.engine == "fem" and fem.roughness == pytest.approx(0.0, abs=1e-9)
+    # a flat texture's strain field is uniform, so its V is the CG solve's error: strains of order 1 (10 N on
+    # 0.042 MPa skin) to the relative tolerance CG_RTOL (3e-7 measured at fine; exactly 0 on some runs)
+    assert fem.engine == "fem" and fem.roughness == pytest.approx(0.0, abs=10 * CG_RTOL)
 
 
 def test_roughness_map_matches_single_predictions(tmp_path, capsys):
