@@ -11,10 +11,11 @@ Three choices, each measured (models/MODEL_CARD.md, int8 variant):
 - The first convolution (it sees the raw heights, whose 8-bit step would be several um for a 1 mm
   relief and erase low-relief textures) and the dense head (its output is log V: an 8-bit step there
   is ~2% of V) stay in fp32; they hold a small share of the arithmetic.
-- Activation ranges from the 0.001st..99.999th percentiles of 256 calibration textures of every family
+- Activation ranges from the 0.001st..99.999th percentiles of 512 calibration textures of every family
   (bumps, natural, engineered), rather than their min/max, so a few extreme inputs do not coarsen every
-  step. With 64 textures of the natural families only, the 5-member ensemble's int8 V strayed 2.4% from
-  fp32 on a standard texture; with these 256, 1.2% (by hand, session 23).
+  step. With 64 textures of the natural families only, a 5-member test ensemble's int8 V strayed 2.4% from
+  fp32 on a standard texture; with 256, 1.2% (by hand, session 23). The shipped v2 ensemble strayed 2.4%
+  with 256 and 1.9% with 512 (session 25).
 
 The int8 graph keeps the fp32 model's metadata (domain, scale, metrics of the fp32 model); how far
 its V moves from the fp32 V on the standard textures and on other recipe textures is stored under
