@@ -344,8 +344,11 @@ def test_reading_while_the_writer_packs(tmp_path):
 
 # --- crash safety: writer processes that die ------------------------------------------------------
 
+# The child pauses after each sample it reports, so a signal sent after a report lands while it writes, never
+# after its last sample (a SIGINT during the closing pack leaves the parts for the next writer: nothing is lost,
+# but the test would not see the interrupted writer pack; with 12 small samples that happened on an idle machine).
 CHILD = """
-import sys
+import sys, time
 sys.path[:0] = [{root!r}, {tests!r}]
 import test_store as t
 from roughness.dataset.store import DatasetWriter
@@ -354,6 +357,7 @@ with DatasetWriter(path, t.CONFIG, "test") as writer:
     for i in range(n):
         if writer.write_result(*t.sample(i)):
             print(i, flush=True)
+            time.sleep(0.5)
 """
 
 
