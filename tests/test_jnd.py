@@ -10,7 +10,7 @@ import pytest
 from roughness.cli import main
 from roughness.dataset.textures import standard_texture
 from roughness.simulate.io import save_heightmap
-from roughness.surrogate.calibration import StandardScale, jnd_distance
+from roughness.surrogate.calibration import StandardScale, jnd_distance, load_scale
 
 SCALE = StandardScale((0.5, 1.0, 2.0), (0.025, 0.1, 0.4), "test")  # V = 0.1 lambda^2 exactly
 STEP = math.log(1.19)
@@ -49,12 +49,14 @@ def test_cli_tells_distant_standard_textures_apart(pair, capsys):
     out = json.loads(capsys.readouterr().out)
     # lambda 0.75 vs 1.25: ln(0.75 / 1.25) / ln 1.19 = -2.9 JND; the surrogate places them within 0.5 JND of that
     assert out["jnd"] == pytest.approx(math.log(0.75 / 1.25) / STEP, abs=0.5)
-    assert out["verdict"] == "tell apart" and out["jnd_stderr"] is None
-    assert out["a"]["engine"] == "surrogate" and out["a"]["roughness_stderr"] is None
+    assert out["verdict"] == "tell apart" and out["a"]["engine"] == "surrogate" and out["a"]["roughness_stderr"] is None
+    # the shipped ensemble's spreads propagate like Monte Carlo errors: d ln(lambda) = d ln(V) / b, in JNDs
+    se = [out[k]["roughness_std"] / out[k]["roughness"] for k in ("a", "b")]
+    assert out["jnd_stderr"] == pytest.approx(math.hypot(*se) / load_scale("fine").power_law[1] / STEP, rel=1e-9)
 
 
 def test_cli_same_texture_is_too_close(pair, capsys):
     a, _ = pair
     assert main(["jnd", str(a), str(a), "--engine", "surrogate"]) == 0
     out = capsys.readouterr().out
-    assert "0.00 JND" in out and "equally rough: TOO CLOSE" in out and "not estimated" in out
+    assert "0.00 JND" in out and "equally rough: TOO CLOSE" in out and "(2 sigma: ensemble spread)" in out

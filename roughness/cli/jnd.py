@@ -30,14 +30,16 @@ def run(args: argparse.Namespace) -> int:
     maps = [load_heightmap(path, args.pixel_mm, args.height_mm) for path in (args.a, args.b)]
     pa, pb = predict(maps, engine=args.engine, model=args.model, sources=[args.a, args.b])
     scale = load_scale(pa.fidelity)
-    distance = jnd_distance(scale, pa.roughness, pb.roughness, pa.roughness_stderr, pb.roughness_stderr)
+    distance = jnd_distance(scale, pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
     if args.json:
         write_stdout(json.dumps({"a": pa.as_dict(), "b": pb.as_dict(), "jnd": distance.jnd,
                                  "jnd_stderr": distance.jnd_stderr, "verdict": distance.verdict}))
         return 0
     lines = [_line(p) for p in (pa, pb)]
-    sure = (f" ± {2 * distance.jnd_stderr:.2f} (2 standard errors, Monte Carlo of V)"
-            if distance.jnd_stderr is not None else " (the surrogate's model uncertainty is not estimated yet)")
+    kinds = " and ".join(dict.fromkeys("Monte Carlo of V" if p.roughness_stderr is not None else "ensemble spread"
+                                       for p in (pa, pb)))
+    sure = (f" ± {2 * distance.jnd_stderr:.2f} (2 sigma: {kinds})" if distance.jnd_stderr is not None
+            else " (no uncertainty: the surrogate is a single network without a spread)")
     rougher = "A rougher" if distance.jnd > 0 else "B rougher" if distance.jnd < 0 else "equally rough"
     lines.append(f"distance: {abs(distance.jnd):.2f} JND{sure}, {rougher}: {distance.verdict.upper()} "
                  "(one JND = a 19% step in equivalent wavelength, told apart 75% of the time)")
@@ -45,8 +47,15 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _uncertainty(p) -> float | None:
+    """The standard error of a V: FEM's Monte Carlo error, else an ensemble's spread (treated as independent
+    between the two textures, which overstates the distance's uncertainty when their errors are alike)."""
+    return p.roughness_stderr if p.roughness_stderr is not None else p.roughness_std
+
+
 def _line(p) -> str:
     where = p.placement
-    v = f"V = {p.roughness:.4f}" + (f" ± {p.roughness_stderr:.4f}" if p.roughness_stderr is not None else "")
+    se = _uncertainty(p)
+    v = f"V = {p.roughness:.4f}" + (f" ± {se:.4f}" if se is not None else "")
     lam = f"lambda {where.equivalent_lambda_mm:.3f} mm" + ("" if where.on_scale else " (extrapolated off the scale)")
     return f"{p.source}: {v} ({p.engine}, {'in domain' if p.in_domain else 'OUT OF DOMAIN'}), {lam}"
