@@ -84,12 +84,22 @@ def validation_predictions(labels: Path, model_path: str) -> dict[str, np.ndarra
             "max_std": (model.meta.ensemble or {}).get("max_std"), "meta": model.meta}
 
 
+def relative_error(p: dict) -> np.ndarray:
+    """|predicted - reference| / max(reference, V_FLOOR) per validation texture, as the trade report takes it."""
+    return np.abs(p["predicted"] - p["reference"]) / np.maximum(p["reference"], V_FLOOR)
+
+
+def trained_on(p: dict) -> np.ndarray:
+    """Which validation textures belong to a family the model was trained on (not held out)."""
+    return ~np.isin(p["family"], list(filter(None, (p["meta"].holdout_family or "").split(","))))
+
+
 def uncertainty(p: dict) -> dict:
     """Coverage of the +-2 sigma interval (in log(V + offset), the space the spread is made in) and auto's
     routing with its default threshold, on the validation textures."""
     offset = p["log_offset"]
     z = np.abs(np.log(p["reference"] + offset) - np.log(p["predicted"] + offset)) / p["relative_std"]
-    rel = np.abs(p["predicted"] - p["reference"]) / np.maximum(p["reference"], V_FLOOR)
+    rel = relative_error(p)
     sent = ~p["in_domain"] | (p["relative_std"] > p["max_std"]) if p["max_std"] is not None else ~p["in_domain"]
     large = rel > LARGE_ERROR
     return {"n": len(z), "coverage_2sigma": float(np.mean(z <= 2)), "sent_to_fem": float(sent.mean()),
@@ -104,7 +114,7 @@ ROUTING_THRESHOLDS = (0.05, 0.08, 0.10, 0.12, 0.15, 0.20, 0.25, 0.30, 0.40)  # r
 
 def routing(p: dict, rows: np.ndarray, thresholds: tuple[float, ...] = ROUTING_THRESHOLDS) -> list[dict]:
     """What auto would send to the FEM and catch at other thresholds (the default's trade, seen whole)."""
-    rel = np.abs(p["predicted"] - p["reference"]) / np.maximum(p["reference"], V_FLOOR)
+    rel = relative_error(p)
     large = (rel > LARGE_ERROR)[rows]
     out = []
     for t in thresholds:
@@ -143,24 +153,22 @@ def accuracy(p: dict, rows: np.ndarray) -> dict:
     """Median and p95 relative error and Spearman of the predictions on the selected validation rows."""
     from scipy.stats import spearmanr
 
-    ref, pred = p["reference"][rows], p["predicted"][rows]
-    rel = np.abs(pred - ref) / np.maximum(ref, V_FLOOR)
+    rel = relative_error(p)[rows]
     return {"n": int(rows.sum()), "median_rel_err": float(np.median(rel)), "p95_rel_err": float(np.percentile(rel, 95)),
-            "spearman": float(spearmanr(ref, pred).statistic)}
+            "spearman": float(spearmanr(p["reference"][rows], p["predicted"][rows]).statistic)}
 
 
 def by_training(p: dict) -> dict[str, dict]:
     """Accuracy on the validation families the model was trained on, and on each family held out of training."""
-    held_out = set(filter(None, (p["meta"].holdout_family or "").split(",")))
-    seen = ~np.isin(p["family"], sorted(held_out))
+    seen = trained_on(p)
     out = {"trained families": accuracy(p, seen)} if seen.any() else {}
-    return out | {f"{f} (never trained on)": accuracy(p, p["family"] == f) for f in sorted(held_out)
+    return out | {f"{f} (never trained on)": accuracy(p, p["family"] == f) for f in np.unique(p["family"][~seen])
                   if (p["family"] == f).sum() >= 3}
 
 
 def worst(p: dict, k: int = 10) -> list[dict]:
     """The k textures the surrogate gets most wrong against the reference."""
-    rel = np.abs(p["predicted"] - p["reference"]) / np.maximum(p["reference"], V_FLOOR)
+    rel = relative_error(p)
     order = np.argsort(-rel)[:k]
     return [{"id": str(p["id"][i]), "family": str(p["family"][i]), "reference": float(p["reference"][i]),
              "predicted": float(p["predicted"][i]), "relative_std": float(p["relative_std"][i]),
@@ -226,9 +234,8 @@ def main() -> None:
     surrogate_row = trade_row("surrogate" if Path(model) == (ROOT / "models" / "roughness-cnn.onnx").resolve()
                               else f"surrogate:{Path(model).relative_to(ROOT)}")
     split = by_training(p)
-    held_out = list(filter(None, (meta.holdout_family or "").split(",")))
     curves = {"all validation textures": routing(p, np.ones(len(p["id"]), bool)),
-              "trained families only": routing(p, ~np.isin(p["family"], held_out))}
+              "trained families only": routing(p, trained_on(p))}
     plot_routing(curves, p["max_std"], RESULTS / "surrogate_routing.png")
     table = targets(surrogate_row, meta, unc, latency, maps, split)
     cost = meta.cost_core_seconds or {}

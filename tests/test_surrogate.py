@@ -20,9 +20,9 @@ from roughness.dataset.recipe import Recipe, realise, sample_record
 from roughness.dataset.store import DatasetWriter, open_dataset
 from roughness.dataset.textures import standard_texture
 from roughness.engines import predict
-from roughness.simulate.linsolve import CG_RTOL
 from roughness.simulate.heightmap import Heightmap
 from roughness.simulate.io import save_heightmap
+from roughness.simulate.linsolve import CG_RTOL
 from roughness.surrogate.calibration import StandardScale, load_scale
 from roughness.surrogate.data import split_of
 from roughness.surrogate.export import (
