@@ -1,0 +1,184 @@
+"""The spectral skin engine: the FEM's roughness model with the skin as an infinite elastic layer.
+
+A texture's footprint (``width_mm`` square, at the heightmap's own pixel size) is mirror-extended
+into one period of a periodic texture, the layer is pressed onto it at the footprint's mean
+pressure (force / footprint area), contact is solved on the pixel grid (``contact``), and the
+strain at the receptor depth follows per Fourier mode (``modes``). The texture's strain is added
+to the flat state (the strain of the untextured skin), lambda3 is taken, the flat lambda3
+subtracted, and V sampled as in the FEM (``simulate.variation``). No mesh: the only
+discretization is the pixel.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from roughness.core.errors import InputError
+
+from ..config import SimConfig
+from ..heightmap import Heightmap
+from ..model import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES
+from ..variation import PairSampling, variation
+from .contact import ContactState, solve_contact
+from .layer import Tissue
+from .modes import GridKey, modes
+
+FLAT_STATES = ("layer", "block")
+MIN_FOOTPRINT_PIXELS = 10  # the footprint must span at least this many pixels across
+MAX_FOOTPRINT_PIXELS = 1024  # and at most this many (the mirrored period is twice as wide: 2048^2 FFTs)
+
+
+@dataclass
+class SpectralResult:
+    """Roughness of one texture from the spectral engine (mm, MPa, s).
+
+    ``fluctuation``/``lambda3``: fields on ``grid_axis_mm`` (pixel grid, centred on the footprint)
+    over the sampling window; ``converged``: the contact conditions hold (``message`` otherwise).
+    """
+
+    roughness: float
+    roughness_stderr: float
+    contact_fraction: float
+    indentation_mm: float
+    converged: bool
+    message: str
+    iterations: int
+    seconds: float
+    fluctuation: np.ndarray = field(repr=False)
+    lambda3: np.ndarray = field(repr=False)
+    grid_axis_mm: np.ndarray = field(repr=False)
+    flat_state: np.ndarray = field(repr=False)
+    contact: ContactState = field(repr=False)
+    notes: list[str] = field(default_factory=list)
+
+
+def tissue_of(config: SimConfig) -> Tissue:
+    return Tissue(config.tissue_mm, config.young_mpa, config.poisson)
+
+
+def layer_flat_state(config: SimConfig) -> np.ndarray:
+    """The untextured infinite layer's strain (3, 3): uniaxial compression under the mean pressure."""
+    pressure = config.force_n / config.width_mm**2
+    flat = np.zeros((3, 3))
+    flat[2, 2] = -pressure / tissue_of(config).oedometric_mpa
+    return flat
+
+
+def footprint_heights(heightmap: Heightmap, width_mm: float, centre_mm: tuple[float, float],
+                      tile: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Heights (n, n) at the pixel grid of the footprint centred at ``centre_mm`` and its axis (mm, from the centre)."""
+    n = round(width_mm / heightmap.pixel_mm)
+    if n < MIN_FOOTPRINT_PIXELS:
+        raise InputError(f"the {width_mm:g} mm footprint spans only {n} pixels of {heightmap.pixel_mm:g} mm "
+                         f"(at least {MIN_FOOTPRINT_PIXELS} needed): is the pixel size in mm?", parameter="pixel_mm")
+    if n > MAX_FOOTPRINT_PIXELS:
+        raise InputError(f"the {width_mm:g} mm footprint spans {n} pixels of {heightmap.pixel_mm:g} mm; the spectral "
+                         f"engine solves at most {MAX_FOOTPRINT_PIXELS} across (pixels of "
+                         f"{width_mm / MAX_FOOTPRINT_PIXELS:.3g} mm or more): resample the heightmap",
+                         parameter="pixel_mm")
+    axis = (np.arange(n) - (n - 1) / 2) * heightmap.pixel_mm
+    cx, cy = centre_mm
+    return heightmap.sample(cx + axis[None, :], cy + axis[:, None], periodic=tile), axis
+
+
+def mirrored(heights: np.ndarray) -> np.ndarray:
+    """One period (2n, 2m) of the texture mirrored across the footprint's edges (no jump at the seams)."""
+    top = np.concatenate([heights, heights[:, ::-1]], axis=1)
+    return np.concatenate([top, top[::-1]], axis=0)
+
+
+def min_eigenvalue(xx: np.ndarray, yy: np.ndarray, zz: np.ndarray, xy: np.ndarray, xz: np.ndarray,
+                   yz: np.ndarray) -> np.ndarray:
+    """The smallest eigenvalue of symmetric 3 x 3 tensors given by their components (closed form,
+    trigonometric: exact where the two larger eigenvalues coincide, as in the flat state)."""
+    q = (xx + yy + zz) / 3
+    off = xy**2 + xz**2 + yz**2
+    p = np.sqrt(((xx - q) ** 2 + (yy - q) ** 2 + (zz - q) ** 2 + 2 * off) / 6)
+    safe = np.where(p > 0, p, 1.0)
+    bxx, byy, bzz = (xx - q) / safe, (yy - q) / safe, (zz - q) / safe
+    bxy, bxz, byz = xy / safe, xz / safe, yz / safe
+    det = bxx * (byy * bzz - byz**2) - bxy * (bxy * bzz - byz * bxz) + bxz * (bxy * byz - byy * bxz)
+    phi = np.arccos(np.clip(det / 2, -1.0, 1.0)) / 3
+    return np.where(p > 0, q + 2 * p * np.cos(phi + 2 * np.pi / 3), q)
+
+
+def lambda3(strain: np.ndarray, flat: np.ndarray) -> np.ndarray:
+    """lambda3 (the most negative principal strain) of the fields ``strain`` (6, ...) plus the flat state (3, 3)."""
+    order = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+    return min_eigenvalue(*(strain[i] + flat[j] for i, j in enumerate(order)))
+
+
+class SpectralSimulator:
+    """Roughness V by the spectral engine for a ``SimConfig`` (its mesh fields are not used)."""
+
+    def __init__(self, config: SimConfig | None = None, flat_state: str = "block") -> None:
+        if flat_state not in FLAT_STATES:
+            raise InputError(f"flat_state must be one of {', '.join(FLAT_STATES)}, got {flat_state!r}",
+                             parameter="flat_state")
+        self.config = config or SimConfig()
+        self.flat_state = flat_state
+
+    def flat(self, config: SimConfig) -> np.ndarray:
+        """The flat state's strain tensor (3, 3)."""
+        if self.flat_state == "layer":
+            return layer_flat_state(config)
+        from .flat_state import block_flat_state
+
+        return block_flat_state(config)
+
+    def run(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False,
+            **overrides) -> SpectralResult:
+        """V of ``heightmap`` under the footprint centred at ``centre_mm`` (default: the map's centre)."""
+        start = time.perf_counter()
+        config = SimConfig(**{**self.config.__dict__, **overrides})
+        if config.curvature_mm is not None:
+            raise InputError("the spectral engine models a flat skin layer; curved bases need the FEM "
+                             "(engine fem)", parameter="curvature_mm")
+        centre = centre_mm or heightmap.centre_mm
+        heightmap.require_footprint(config.width_mm, centre, tile)
+        heights, axis = footprint_heights(heightmap, config.width_mm, centre, tile)
+        domain = mirrored(heights)
+        key = GridKey(domain.shape, heightmap.pixel_mm, tissue_of(config), config.depth_mm)
+        grid = modes(key)
+        pressure = config.force_n / config.width_mm**2
+        frictionless = config.contact == "frictionless"
+        state = solve_contact(grid, domain, pressure, frictionless)
+        n = heights.shape[0]
+        inside = np.abs(axis) <= config.window_mm / 2 + heightmap.pixel_mm
+        strain = grid.strain(state.face)[:, :n, :n][:, inside][:, :, inside]
+        flat = self.flat(config)
+        lam3 = lambda3(strain, flat)
+        fluct = lam3 - lambda3(np.zeros((6, 1, 1)), flat)
+        window_axis = axis[inside]
+        pairs = PairSampling(config.window_mm, config.pair_distance_mm, config.disk_radius_mm, config.pairs,
+                             config.seed)
+        v, se = variation(fluct, window_axis, pairs)
+        if not (math.isfinite(v) and np.all(np.isfinite(fluct))):
+            raise InputError("the strain field is not finite", parameter="heightmap")
+        contact_fraction = float(state.in_contact[:n, :n].mean())
+        indentation = float(heights.max() + state.offset_mm)
+        notes = _notes(config, indentation, state.success, state.message)
+        return SpectralResult(v, se, contact_fraction, indentation, state.success, state.message, state.iterations,
+                              time.perf_counter() - start, fluct, lam3, window_axis, flat, state, notes)
+
+
+def _notes(config: SimConfig, indentation_mm: float, converged: bool, message: str) -> list[str]:
+    """Remarks on the answer; InputError where linear elasticity cannot answer (as in the FEM)."""
+    ratio = indentation_mm / config.tissue_mm
+    if ratio > MAX_INDENTATION_TISSUES:
+        raise InputError(
+            f"the skin would be pushed {indentation_mm:.4g} mm into the texture, {ratio:.3g} times its "
+            f"{config.tissue_mm:g} mm thickness (limit {MAX_INDENTATION_TISSUES:g}): linear elasticity cannot answer "
+            "this; the features are taller than the skin can wrap, the force too large, or the heights not in mm",
+            parameter="force_n")
+    notes = []
+    if ratio > 1:
+        notes.append(f"indentation {indentation_mm:.2f} mm exceeds the {config.tissue_mm:g} mm tissue: linear "
+                     "small-strain elasticity past its range (as in the paper's model)"
+                     + (" (unusually deep)" if ratio > DEEP_INDENTATION_TISSUES else ""))
+    if not converged:
+        notes.append(message)
+    return notes

@@ -1,0 +1,142 @@
+"""The layer's transfer functions on a periodic pixel grid, and the fields they make.
+
+A ``Modes`` object holds, for every wave vector of an (ny, nx) grid of ``pixel_mm`` pixels (rfft2
+layout), the layer's response (``layer.mode_response``) and the direction cosines of the mode's
+axis. With it a face displacement (u_x, u_y, u_z) becomes the strain tensor field at the receptor
+depth, and face tractions become face displacements (the compliance, for the contact solver).
+The uniform mode (k = 0) carries no texture: the engine adds the flat state for it. Units: mm, MPa.
+"""
+from __future__ import annotations
+
+from collections import OrderedDict
+from dataclasses import dataclass
+from threading import Lock
+
+import numpy as np
+
+from .layer import Tissue, mode_response
+
+FACE_COMPONENTS = 3  # u_x, u_y, u_z
+STRAIN_COMPONENTS = ("xx", "yy", "zz", "xy", "xz", "yz")
+
+
+@dataclass(frozen=True)
+class GridKey:
+    """What the transfer functions depend on: grid shape (pixels), pixel (mm), tissue, depth (mm)."""
+
+    shape: tuple[int, int]
+    pixel_mm: float
+    tissue: Tissue
+    depth_mm: float
+
+
+class Modes:
+    """Transfer functions of one ``GridKey`` (arrays of the rfft2 shape (ny, nx // 2 + 1))."""
+
+    def __init__(self, key: GridKey) -> None:
+        self.key = key
+        ny, nx = key.shape
+        kx = 2 * np.pi * np.fft.rfftfreq(nx, key.pixel_mm)
+        ky = 2 * np.pi * np.fft.fftfreq(ny, key.pixel_mm)
+        kx, ky = np.meshgrid(kx, ky)
+        k = np.hypot(kx, ky)
+        k[0, 0] = 1.0  # placeholder: the uniform mode is set apart below
+        self.c, self.s = kx / k, ky / k
+        self.c[0, 0] = self.s[0, 0] = 0.0
+        response = mode_response(k.ravel(), key.tissue, key.depth_mm)
+        shape = k.shape
+
+        def grid(values: np.ndarray) -> np.ndarray:
+            out = values.reshape(shape + values.shape[1:]).copy()
+            out[0, 0] = 0.0
+            return out
+
+        self.exx, self.ezz, self.exz = grid(response.exx), grid(response.ezz), grid(response.exz)
+        self.exy, self.eyz = grid(response.exy), grid(response.eyz)
+        stiffness = response.traction.reshape(shape + (2, 2)).copy()
+        thickness, mu = key.tissue.thickness_mm, key.tissue.shear_mpa
+        stiffness[0, 0] = np.diag([mu, key.tissue.oedometric_mpa]) / thickness  # uniform shear and compression
+        antiplane = response.antiplane_traction.reshape(shape).copy()
+        antiplane[0, 0] = mu / thickness
+        self.stiffness, self.antiplane = stiffness, antiplane
+        self.compliance = np.linalg.inv(stiffness)
+        # Frictionless face (no shear traction): A = -K_SB / K_SS B, and the normal stiffness left.
+        self.slide = -stiffness[..., 0, 1] / stiffness[..., 0, 0]
+        self.normal_stiffness = stiffness[..., 1, 1] - stiffness[..., 0, 1] ** 2 / stiffness[..., 0, 0]
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.key.shape
+
+    def to_mode_frame(self, ux: np.ndarray, uy: np.ndarray, uz: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Fourier face displacements (x, y, z) -> (A, B, C): u_x' = i A, u_z = B, u_y' = C."""
+        along = self.c * ux + self.s * uy
+        return -1j * along, uz, -self.s * ux + self.c * uy
+
+    def from_mode_frame(self, along: np.ndarray, across: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Fourier components along x' and y' -> along x and y."""
+        return self.c * along - self.s * across, self.s * along + self.c * across
+
+    def strain(self, face: np.ndarray) -> np.ndarray:
+        """Strain components (6, ny, nx) at the depth, in the order ``STRAIN_COMPONENTS``, from Fourier
+        face displacements (3, ny, nx//2+1). The uniform mode of ``face`` is ignored (the engine's
+        flat state stands for it)."""
+        a, b, c = self.to_mode_frame(*face)
+        e_aa = self.exx[..., 0] * a + self.exx[..., 1] * b
+        e_zz = self.ezz[..., 0] * a + self.ezz[..., 1] * b
+        e_az = 1j * (self.exz[..., 0] * a + self.exz[..., 1] * b)
+        e_ab = 1j * self.exy * c
+        e_bz = self.eyz * c
+        cc, ss, cs = self.c**2, self.s**2, self.c * self.s
+        xz, yz = self.from_mode_frame(e_az, e_bz)
+        spectra = np.stack([cc * e_aa - 2 * cs * e_ab, ss * e_aa + 2 * cs * e_ab, e_zz,
+                            cs * e_aa + (cc - ss) * e_ab, xz, yz])
+        return np.fft.irfft2(spectra, s=self.shape)
+
+    def slid(self, uz: np.ndarray) -> np.ndarray:
+        """Fourier face displacements (3, ...) of a frictionless face whose normal displacement is ``uz``."""
+        along = 1j * self.slide * uz  # u_x' = i A with A = slide * B
+        ux, uy = self.from_mode_frame(along, np.zeros_like(uz))
+        return np.stack([ux, uy, uz])
+
+    def displacement(self, traction: np.ndarray, frictionless: bool) -> np.ndarray:
+        """Fourier face displacements (3, ...) under Fourier face tractions (3, ...) on the skin.
+
+        ``frictionless``: only the normal traction acts (the face slides freely).
+        """
+        if frictionless:
+            return self.slid(traction[2] / self.normal_stiffness)
+        a_t, p, c_t = self.to_mode_frame(*traction)  # t_x' = i S: S = -i t_x' = a_t
+        g = self.compliance
+        a = g[..., 0, 0] * a_t + g[..., 0, 1] * p
+        b = g[..., 1, 0] * a_t + g[..., 1, 1] * p
+        ux, uy = self.from_mode_frame(1j * a, c_t / self.antiplane)
+        return np.stack([ux, uy, b])
+
+    def traction(self, face: np.ndarray) -> np.ndarray:
+        """Fourier face tractions (3, ...) that hold Fourier face displacements (3, ...) in place."""
+        a, b, c = self.to_mode_frame(*face)
+        k = self.stiffness
+        s = k[..., 0, 0] * a + k[..., 0, 1] * b
+        p = k[..., 1, 0] * a + k[..., 1, 1] * b
+        tx, ty = self.from_mode_frame(1j * s, self.antiplane * c)
+        return np.stack([tx, ty, p])
+
+
+_CACHE: OrderedDict[GridKey, Modes] = OrderedDict()
+_CACHE_LOCK = Lock()
+CACHE_SIZE = 8  # grids kept (a 400 x 400 grid holds about 20 MB of transfer functions)
+
+
+def modes(key: GridKey) -> Modes:
+    """The (cached, thread-safe) transfer functions of ``key``."""
+    with _CACHE_LOCK:
+        if key in _CACHE:
+            _CACHE.move_to_end(key)
+            return _CACHE[key]
+    built = Modes(key)
+    with _CACHE_LOCK:
+        _CACHE[key] = built
+        while len(_CACHE) > CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    return built

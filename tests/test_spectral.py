@@ -1,0 +1,227 @@
+"""The spectral skin engine: the layer's closed forms, contact, and the engine at its extremes."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from roughness.core.errors import InputError
+from roughness.simulate.config import SimConfig
+from roughness.simulate.heightmap import Heightmap, flat
+from roughness.simulate.spectral.contact import GAP_TOLERANCE, solve_contact
+from roughness.simulate.spectral.engine import (MAX_FOOTPRINT_PIXELS, SpectralSimulator, lambda3,
+                                                layer_flat_state)
+from roughness.simulate.spectral.layer import Tissue, mode_response
+from roughness.simulate.spectral.modes import GridKey, modes
+
+TISSUE = Tissue()
+DEPTH = 0.75
+CHEBYSHEV_NODES = 200  # the collocation reference is good to about 1e-9 (5e-7 at nu = 0.499, ill-conditioned)
+
+
+def _ode_mode(k: float, column: int, tissue: Tissue = TISSUE) -> tuple[float, float, float, float]:
+    """a, a', b, b' at the depth from the mode's Navier ODE solved by Chebyshev collocation (the
+    independent reference): mu (a'' - k^2 a) + (lam + mu) k (b' - k a) = 0 and
+    (lam + 2 mu) b'' - mu k^2 b - (lam + mu) k a' = 0, with (a, b) = (1, 0) or (0, 1) on the face, 0 on the bone."""
+    n, thickness = CHEBYSHEV_NODES, tissue.thickness_mm
+    x = np.cos(np.pi * np.arange(n + 1) / n)
+    c = np.r_[2, np.ones(n - 1), 2] * (-1) ** np.arange(n + 1)
+    dx = x[:, None] - x[None, :] + np.eye(n + 1)
+    d = np.outer(c, 1 / c) / dx
+    d -= np.diag(d.sum(axis=1))
+    dz = d * (-2 / thickness)  # z = (1 - x) T / 2: the face at x = 1, the bone at x = -1
+    d2, eye = dz @ dz, np.eye(n + 1)
+    mu, lam = tissue.shear_mpa, tissue.lame_mpa
+    system = np.block([[mu * (d2 - k * k * eye) - (lam + mu) * k * k * eye, (lam + mu) * k * dz],
+                       [-(lam + mu) * k * dz, (lam + 2 * mu) * d2 - mu * k * k * eye]])
+    rhs = np.zeros(2 * (n + 1))
+    for row, value in ((0, column == 0), (n, 0.0), (n + 1, column == 1), (2 * n + 1, 0.0)):
+        system[row] = 0.0
+        system[row, row] = 1.0
+        rhs[row] = value
+    solution = np.linalg.solve(system, rhs)
+    a, b = solution[: n + 1], solution[n + 1:]
+    weights = np.r_[0.5, np.ones(n - 1), 0.5] * (-1) ** np.arange(n + 1) / (1 - 2 * DEPTH / thickness - x)
+
+    def at_depth(f: np.ndarray) -> float:  # barycentric interpolation
+        return float(weights @ f / weights.sum())
+
+    return at_depth(a), at_depth(dz @ a), at_depth(b), at_depth(dz @ b)
+
+
+@pytest.mark.parametrize("wavelength", [0.5, 1.0, 4.0, 20.0])
+@pytest.mark.parametrize("poisson", [0.3, 0.45, 0.499])
+def test_closed_forms_solve_the_mode_equations(wavelength, poisson):
+    tissue = Tissue(poisson=poisson)
+    k = 2 * math.pi / wavelength
+    response = mode_response(np.array([k]), tissue, DEPTH)
+    for column in (0, 1):
+        a, da, b, db = _ode_mode(k, column, tissue)
+        expected = (-k * a, db, (da + k * b) / 2)
+        got = (response.exx[0, column], response.ezz[0, column], response.exz[0, column])
+        scale = max(abs(v) for v in expected)
+        assert np.allclose(got, expected, rtol=0, atol=1e-6 * scale), (column, got, expected)
+
+
+def test_layer_limits():
+    """k -> 0: uniform compression and shear of the layer (M/T, mu/T); k -> inf: the half-space (E* k / 2)."""
+    grid = modes(GridKey((64, 64), 0.05, TISSUE, DEPTH))
+    low = mode_response(np.array([1e-6]), TISSUE, DEPTH)
+    assert low.traction[0, 1, 1] == pytest.approx(TISSUE.oedometric_mpa / TISSUE.thickness_mm, rel=1e-6)
+    assert low.traction[0, 0, 0] == pytest.approx(TISSUE.shear_mpa / TISSUE.thickness_mm, rel=1e-6)
+    high_k = 2 * math.pi / 0.1
+    e_star = TISSUE.young_mpa / (1 - TISSUE.poisson**2)
+    high = modes(GridKey((64, 64), 0.1 / 64 * 8, TISSUE, DEPTH))
+    assert grid.normal_stiffness[0, 0] == pytest.approx(TISSUE.oedometric_mpa / TISSUE.thickness_mm)
+    row = high.normal_stiffness[0, 8]  # the mode with 8 periods in 64 pixels: k = 2 pi / 0.1 mm
+    assert row == pytest.approx(e_star * high_k / 2, rel=1e-12)
+
+
+def _sinusoid(wavelength: float, amplitude: float, pixel: float = 0.05, width: float = 10.0) -> Heightmap:
+    """A cosine along x whose crests sit on the footprint's edges (its mirror image is itself)."""
+    n = round(width / pixel)
+    x = (np.arange(n) + 0.5) * pixel
+    return Heightmap(np.tile(amplitude * np.cos(2 * math.pi * x / wavelength), (n, 1)), pixel)
+
+
+@pytest.mark.parametrize("wavelength", [0.5, 1.0, 2.5])
+def test_engine_strain_of_a_sinusoid_is_the_closed_form(wavelength):
+    """Full stick contact with a single mode: the strain field is the ODE's, to 1e-6 relative."""
+    amplitude = 1e-3
+    hm = _sinusoid(wavelength, amplitude)
+    sim = SpectralSimulator(flat_state="layer")
+    result = sim.run(hm)
+    assert result.contact.message == "full contact"
+    k = 2 * math.pi / wavelength
+    a, da, b, db = _ode_mode(k, 1)
+    strain = modes(GridKey((400, 400), 0.05, TISSUE, DEPTH)).strain(result.contact.face)
+    x = (np.arange(400) + 0.5) * 0.05
+    expected = {0: -k * a * np.cos(k * x), 2: db * np.cos(k * x), 4: -(da + k * b) / 2 * np.sin(k * x)}
+    expected = {c: amplitude * f for c, f in expected.items()}
+    for component, field in expected.items():
+        scale = np.abs(field).max()
+        assert np.abs(strain[component] - field[None, :]).max() <= 1e-6 * scale, component
+    for component in (1, 3, 5):  # nothing along y
+        assert np.abs(strain[component]).max() <= 1e-12
+
+
+def test_lambda3_closed_form_equals_eigvalsh():
+    rng = np.random.default_rng(0)
+    parts = rng.normal(0, 0.1, (6, 500))
+    flat_state = np.diag([0.21, 0.21, -1.2])  # the degenerate case: two equal eigenvalues
+    got = lambda3(parts, flat_state)
+    order = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+    tensors = np.zeros((500, 3, 3))
+    for i, (r, c) in enumerate(order):
+        tensors[:, r, c] += parts[i] + flat_state[r, c]
+        if r != c:
+            tensors[:, c, r] = tensors[:, r, c]
+    assert np.allclose(got, np.linalg.eigvalsh(tensors)[:, 0], rtol=0, atol=1e-12)
+    assert lambda3(np.zeros((6, 1)), flat_state)[0] == pytest.approx(-1.2, abs=1e-15)
+
+
+def test_frictionless_partial_contact_matches_westergaard():
+    """A sinusoid much shorter than the tissue, on the half-space limit: Westergaard's (1939) contact.
+
+    At mean pressure p = p* sin^2(pi a / lambda), with p* = pi E* h / lambda the pressure of full
+    contact, the contact is 2a wide per period; the pixel (lambda / 128) bounds the error.
+    """
+    wavelength, per_period, periods = 0.2, 128, 4
+    pixel = wavelength / per_period
+    amplitude = 1e-3
+    e_star = TISSUE.young_mpa / (1 - TISSUE.poisson**2)
+    full = math.pi * e_star * amplitude / wavelength
+    x = (np.arange(per_period * periods) + 0.5) * pixel
+    heights = np.tile(amplitude * np.cos(2 * math.pi * x / wavelength), (4, 1))
+    grid = modes(GridKey(heights.shape, pixel, TISSUE, DEPTH))
+    for fraction in (0.3, 0.5, 0.8):
+        pressure = full * math.sin(math.pi * fraction / 2) ** 2
+        state = solve_contact(grid, heights, pressure, frictionless=True)
+        assert state.success, state.message
+        assert state.in_contact.mean() == pytest.approx(fraction, abs=2 / per_period)
+        a = fraction * wavelength / 2
+        xs = (x + wavelength / 2) % wavelength - wavelength / 2  # from the nearest crest
+        inside = np.abs(xs) < a
+        analytic = np.zeros_like(x)
+        analytic[inside] = (2 * pressure / math.sin(math.pi * a / wavelength) ** 2 * np.cos(math.pi * xs[inside] / wavelength)
+                            * np.sqrt(math.sin(math.pi * a / wavelength) ** 2 - np.sin(math.pi * xs[inside] / wavelength) ** 2))
+        assert state.traction[2].mean() == pytest.approx(pressure, rel=1e-12)
+        # the square-root edge is smeared over a pixel: compare away from it, where the profile is smooth
+        away = np.abs(np.abs(xs) - a) > 3 * pixel
+        assert np.abs(state.traction[2, 0, away] - analytic[away]).max() <= 0.05 * analytic.max()
+
+
+@pytest.mark.parametrize("contact", ["stick", "frictionless"])
+def test_partial_contact_holds_the_contact_conditions(contact):
+    """A single 1 mm spike on a flat map: the skin touches the spike and, around it, the plane."""
+    heights = np.zeros((240, 240))
+    heights[120, 120] = 1.0
+    result = SpectralSimulator(SimConfig(contact=contact)).run(Heightmap(heights, 0.05))
+    state = result.contact
+    assert result.converged, state.message
+    assert state.max_tension_mpa == 0.0
+    assert state.max_penetration_mm <= GAP_TOLERANCE * 1.0
+    assert 0.9 < result.contact_fraction < 1.0
+    assert state.traction[2].mean() == pytest.approx(10.0 / 100.0, rel=1e-12)
+    assert math.isfinite(result.roughness) and result.roughness > 0
+
+
+def test_flat_texture_has_no_roughness():
+    result = SpectralSimulator().run(flat(12.0, 0.05, height_mm=0.3))
+    assert result.contact.message == "full contact"
+    assert result.roughness == 0.0
+    assert result.contact_fraction == 1.0
+
+
+def test_features_taller_than_the_tissue_are_refused():
+    heights = np.zeros((240, 240))
+    heights[::40, ::40] = 12.0  # sparse 12 mm needles: the skin would wrap far past its thickness
+    with pytest.raises(InputError, match="linear elasticity cannot answer"):
+        SpectralSimulator().run(Heightmap(heights, 0.05))
+
+
+@pytest.mark.parametrize("force", [0.01, 50.0])
+def test_tiny_and_large_forces_stay_finite(force):
+    rng = np.random.default_rng(3)
+    hm = Heightmap(rng.random((220, 220)) * 0.2, 0.05)
+    result = SpectralSimulator(SimConfig(force_n=force), flat_state="layer").run(hm)
+    assert result.converged, result.message
+    assert math.isfinite(result.roughness)
+    if force > 10:
+        assert result.contact_fraction == 1.0
+    else:
+        assert result.contact_fraction < 0.2
+
+
+def test_a_force_that_pushes_past_the_tissue_is_refused():
+    hm = _sinusoid(1.0, 0.1)
+    with pytest.raises(InputError, match="times its 2.5 mm thickness"):
+        SpectralSimulator(SimConfig(force_n=1000.0), flat_state="layer").run(hm)
+
+
+def test_near_incompressible_tissue_is_finite():
+    """nu -> 0.5: the texture's strain has a finite limit (the Lame constant's growth is cancelled)."""
+    hm = _sinusoid(1.0, 0.05)
+    runs = [SpectralSimulator(SimConfig(poisson=nu), flat_state="layer").run(hm) for nu in (0.499, 0.4999)]
+    assert all(math.isfinite(r.roughness) and r.converged for r in runs)
+    fields = [modes(GridKey((400, 400), 0.05, Tissue(poisson=nu), DEPTH)).strain(r.contact.face)[2]
+              for nu, r in zip((0.499, 0.4999), runs)]
+    assert np.abs(fields[1] - fields[0]).max() <= 0.01 * np.abs(fields[0]).max()
+
+
+def test_non_square_map_and_pixel_limits():
+    rng = np.random.default_rng(4)
+    wide = Heightmap(rng.random((210, 400)) * 0.1, 0.05)
+    assert math.isfinite(SpectralSimulator(flat_state="layer").run(wide).roughness)
+    with pytest.raises(InputError, match="at least 10"):
+        SpectralSimulator().run(Heightmap(np.zeros((12, 12)), 2.0), tile=True)
+    tiny = Heightmap(np.zeros((20, 20)), 10.0 / (MAX_FOOTPRINT_PIXELS + 1))
+    with pytest.raises(InputError, match=f"at most {MAX_FOOTPRINT_PIXELS}"):
+        SpectralSimulator().run(tiny, tile=True)
+
+
+def test_layer_flat_state_is_uniaxial():
+    state = layer_flat_state(SimConfig())
+    assert state[2, 2] == pytest.approx(-0.1 / TISSUE.oedometric_mpa)
+    assert np.count_nonzero(state) == 1
