@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from roughness.core.checks import positive
 from roughness.core.errors import InputError
 
 from ..config import SimConfig
@@ -112,14 +113,20 @@ def lambda3(strain: np.ndarray, flat: np.ndarray) -> np.ndarray:
 
 
 class SpectralSimulator:
-    """Roughness V by the spectral engine for a ``SimConfig`` (its mesh fields are not used)."""
+    """Roughness V by the spectral engine for a ``SimConfig`` (its mesh fields are not used).
 
-    def __init__(self, config: SimConfig | None = None, flat_state: str = "block") -> None:
+    ``flat_state``: ``block`` (the FEM block's centre strain) or ``layer`` (the infinite layer's);
+    ``pressure_factor``: the layer's mean pressure over force / footprint area (1: the footprint's mean).
+    """
+
+    def __init__(self, config: SimConfig | None = None, flat_state: str = "block",
+                 pressure_factor: float = 1.0) -> None:
         if flat_state not in FLAT_STATES:
             raise InputError(f"flat_state must be one of {', '.join(FLAT_STATES)}, got {flat_state!r}",
                              parameter="flat_state")
         self.config = config or SimConfig()
         self.flat_state = flat_state
+        self.pressure_factor = positive("pressure_factor", pressure_factor)
 
     def flat(self, config: SimConfig) -> np.ndarray:
         """The flat state's strain tensor (3, 3)."""
@@ -143,7 +150,7 @@ class SpectralSimulator:
         domain = mirrored(heights)
         key = GridKey(domain.shape, heightmap.pixel_mm, tissue_of(config), config.depth_mm)
         grid = modes(key)
-        pressure = config.force_n / config.width_mm**2
+        pressure = self.pressure_factor * config.force_n / config.width_mm**2
         frictionless = config.contact == "frictionless"
         state = solve_contact(grid, domain, pressure, frictionless)
         n = heights.shape[0]

@@ -1,0 +1,171 @@
+"""The spectral engine against the FEM reference: the validation set and the convergence panel.
+
+References: the 160 validation textures with their FEM labels converged to 1% (a build of
+``datasets/validation.json``, see ``datasets/build-v2.sh``), and the 24-texture convergence panel's
+P1 h = 0.1 mm results (``studies/results/convergence_panel.jsonl``). For every texture the spectral
+engine runs once per flat state (``block``: the FEM block's centre strain, the default; ``layer``:
+the infinite layer's own uniaxial state), so the choice is measured, not assumed. Writes
+results/spectral_validation.{jsonl,md} and results/spectral_validation.png.
+
+    roughness dataset build --recipe datasets/validation.json --n 160 --fidelity converged --tolerance 0.01 \\
+        --labels datasets/labels/validation-converged.labels.jsonl.gz --workers 2 --out validation-converged.h5
+    python studies/spectral_validation.py --labels validation-converged.h5
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+HERE = Path(__file__).parent
+OUT = HERE / "results" / "spectral_validation"
+PANEL = HERE / "results" / "convergence_panel.jsonl"
+VARIANTS = {"block": {"variant": "block"}, "layer": {"variant": "layer"},
+            "block_p1.2": {"variant": "block", "pressure_factor": 1.2}}  # 1.2: the FEM's pressure at the centre
+WORST = 10
+
+
+def _spectral(heightmap, variant: str) -> dict:
+    from roughness.simulate.spectral.engine import SpectralSimulator
+
+    result = SpectralSimulator(**VARIANTS[variant]).run(heightmap)
+    return {"V": result.roughness, "contact_fraction": result.contact_fraction, "converged": result.converged,
+            "iterations": result.iterations, "seconds": result.seconds}
+
+
+def validation_rows(labels: Path) -> list[dict]:
+    from roughness.dataset.store import Dataset
+
+    rows = []
+    with Dataset(labels) as data:
+        for sample in data.iter_samples():
+            row = {"set": "validation", "id": sample.id, "family": sample.recipe.get("family", "?"),
+                   "V_ref": sample.values["V"], "contact_fraction_ref": sample.values["contact_fraction"]}
+            for variant in VARIANTS:
+                row[variant] = _spectral(sample.heightmap, variant)
+            rows.append(row)
+            print(f"{len(rows):4d} {row['family']:10s} ref {row['V_ref']:.4f} block {row['block']['V']:.4f} "
+                  f"layer {row['layer']['V']:.4f} p1.2 {row['block_p1.2']['V']:.4f} cf {row['contact_fraction_ref']:.3f} "
+                  f"{row['block']['contact_fraction']:.3f} {row['block_p1.2']['contact_fraction']:.3f}", file=sys.stderr, flush=True)
+    return rows
+
+
+def panel_rows() -> list[dict]:
+    sys.path.insert(0, str(HERE))
+    from convergence_panel import REFERENCE, _rows, panel
+
+    textures = panel()
+    reference = {r["texture"]: r for r in _rows(PANEL) if (r["element"], r["h_contact_mm"]) == REFERENCE}
+    rows = []
+    for name, make in textures.items():
+        if name not in reference:
+            continue
+        heightmap = make()
+        row = {"set": "panel", "id": name, "family": name.split("-")[0], "V_ref": reference[name]["roughness"],
+               "contact_fraction_ref": reference[name]["contact_fraction"]}
+        for variant in VARIANTS:
+            row[variant] = _spectral(heightmap, variant)
+        rows.append(row)
+    return rows
+
+
+def _errors(rows: list[dict], variant: str) -> np.ndarray:
+    return np.array([r[variant]["V"] / r["V_ref"] - 1 for r in rows])
+
+
+def _stats(rows: list[dict], variant: str) -> dict:
+    from scipy.stats import spearmanr
+
+    err = _errors(rows, variant)
+    ref = [r["V_ref"] for r in rows]
+    got = [r[variant]["V"] for r in rows]
+    return {"n": len(rows), "median_abs": float(np.median(np.abs(err))), "p95_abs": float(np.percentile(np.abs(err), 95)),
+            "median_signed": float(np.median(err)), "spearman": float(spearmanr(ref, got).statistic),
+            "seconds_median": float(np.median([r[variant]["seconds"] for r in rows]))}
+
+
+def write_report(rows: list[dict], out: Path) -> str:
+    lines = ["# The spectral engine against the FEM reference", "",
+             "Relative error of V = spectral / reference - 1; reference: FEM converged to 1% (validation set) or "
+             "P1 at h = 0.1 mm (convergence panel). Regenerate: `python studies/spectral_validation.py --labels "
+             "validation-converged.h5`.", ""]
+    for name in ("validation", "panel"):
+        subset = [r for r in rows if r["set"] == name]
+        if not subset:
+            continue
+        lines += [f"## {name} ({len(subset)} textures)", "",
+                  "| flat state | median abs | p95 abs | median signed | Spearman | median s |", "|---|---|---|---|---|---|"]
+        for variant in VARIANTS:
+            s = _stats(subset, variant)
+            lines.append(f"| {variant} | {100 * s['median_abs']:.1f}% | {100 * s['p95_abs']:.1f}% | "
+                         f"{100 * s['median_signed']:+.1f}% | {s['spearman']:.4f} | {s['seconds_median']:.3f} |")
+        lines += ["", "Per family (flat state block):", "",
+                  "| family | n | median abs | p95 abs | median signed |", "|---|---|---|---|---|"]
+        for family in sorted({r["family"] for r in subset}):
+            group = [r for r in subset if r["family"] == family]
+            err = _errors(group, "block")
+            lines.append(f"| {family} | {len(group)} | {100 * np.median(np.abs(err)):.1f}% | "
+                         f"{100 * np.percentile(np.abs(err), 95):.1f}% | {100 * np.median(err):+.1f}% |")
+        lines += ["", f"Worst {WORST} (flat state block):", "",
+                  "| texture | family | V ref | V spectral | error | contact ref | contact spectral |",
+                  "|---|---|---|---|---|---|---|"]
+        for r in sorted(subset, key=lambda r: -abs(r["block"]["V"] / r["V_ref"] - 1))[:WORST]:
+            lines.append(f"| {r['id'][:16]} | {r['family']} | {r['V_ref']:.4f} | {r['block']['V']:.4f} | "
+                         f"{100 * (r['block']['V'] / r['V_ref'] - 1):+.1f}% | {100 * r['contact_fraction_ref']:.1f}% | "
+                         f"{100 * r['block']['contact_fraction']:.1f}% |")
+        partial = [r for r in subset if r["contact_fraction_ref"] < 0.98]
+        if partial:
+            gap = np.array([r["block"]["contact_fraction"] - r["contact_fraction_ref"] for r in partial])
+            lines += ["", f"Contact fraction on the {len(partial)} textures below 98% contact in the FEM: spectral minus "
+                      f"FEM median {100 * np.median(gap):+.1f} points, largest |difference| {100 * np.abs(gap).max():.1f} "
+                      "points."]
+        lines.append("")
+    text = "\n".join(lines)
+    out.with_suffix(".md").write_text(text)
+    return text
+
+
+def plot(rows: list[dict], out: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.5, 5))
+    for name, marker in (("validation", "o"), ("panel", "s")):
+        subset = [r for r in rows if r["set"] == name]
+        ax.scatter([r["V_ref"] for r in subset], [r["block"]["V"] for r in subset], s=14, marker=marker, label=name)
+    values = [r["V_ref"] for r in rows]
+    line = [min(values), max(values)]
+    ax.plot(line, line, "k:", lw=1)
+    ax.set(xscale="log", yscale="log", xlabel="V, FEM reference", ylabel="V, spectral (flat state block)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out.with_suffix(".png"), dpi=120)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--labels", type=Path, help="validation set with converged FEM labels (.h5)")
+    parser.add_argument("--report-only", action="store_true", help="rewrite the report from the stored JSONL")
+    args = parser.parse_args(argv)
+    jsonl = OUT.with_suffix(".jsonl")
+    if args.report_only:
+        rows = [json.loads(line) for line in jsonl.read_text().splitlines()]
+    else:
+        rows = (validation_rows(args.labels) if args.labels else []) + panel_rows()
+        jsonl.write_text("".join(json.dumps(r, sort_keys=True) + "\n" for r in rows))
+    print(write_report(rows, OUT))
+    plot(rows, OUT)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
