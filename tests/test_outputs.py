@@ -160,19 +160,19 @@ def test_same_file_through_a_link_or_another_spelling(tmp_path):
 
 # --- concurrent writers ---------------------------------------------------------------------------
 
-# Each writer waits at the moment of publishing (its temporary file written, the output checked
-# absent) until all have arrived: the race the check-then-rename of old lost, every time.
+# Each writer waits when its temporary file is written (the output checked absent, not yet published)
+# until all have arrived: the check-then-rename race, lost by every writer but one, every time.
 WRITER = """
 import os, sys, time
 from pathlib import Path
-import roughness.core.files as files
-publish = files._publish
-def held(tmp, path, overwrite):
+import numpy as np
+save = np.save
+def held(*args, **kwargs):
+    save(*args, **kwargs)
     Path(f"ready-{os.getpid()}").touch()
     while not Path("go").exists():
         time.sleep(0.005)
-    publish(tmp, path, overwrite)
-files._publish = held
+np.save = held
 from roughness.cli import main
 sys.exit(main(["texture", "make", "standard-1.0", "--out", "same.npy", "--size-mm", "4"]))
 """
