@@ -234,7 +234,8 @@ def main(argv: list[str] | None = None) -> int:
     from .quantize import QuantizationError, quantize
 
     try:
-        check_distinct({"--out": args.out, "--int8": args.int8}, {"CHECKPOINT": args.checkpoints, "--data": args.data})
+        check_distinct({"--out": args.out, "--int8": args.int8},
+                       {"CHECKPOINT": args.checkpoints, "--data": args.data})
         if args.int8:  # both outputs checked before anything is computed
             check_output(args.int8, args.overwrite, "int8")
         report = export_ensemble(args.checkpoints, args.out, args.data, args.overwrite)

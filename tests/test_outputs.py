@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import json
 import os
 import resource
 import signal
@@ -246,8 +247,8 @@ def _file_size_limit(limit: int):
 def test_a_real_short_write_is_an_error_without_a_partial_file(tmp_path):
     """A file size limit makes a real short write (as a full disk does): exit 2, a message, no file left."""
     result = subprocess.run([sys.executable, "-m", "roughness.cli", "texture", "make", "standard-1.0", "--out",
-                             "big.npy"], cwd=tmp_path, capture_output=True, text=True, preexec_fn=_file_size_limit(100_000),
-                            env={**os.environ, "OMP_NUM_THREADS": "1"})
+                             "big.npy"], cwd=tmp_path, capture_output=True, text=True,
+                            preexec_fn=_file_size_limit(100_000), env={**os.environ, "OMP_NUM_THREADS": "1"})
     assert result.returncode == 2, result.stderr
     assert "roughness: error: cannot write big.npy: " in result.stderr and "Traceback" not in result.stderr
     assert not list(tmp_path.iterdir())
@@ -297,13 +298,23 @@ def test_palette_from_a_folder_with_one_stem_twice_keeps_both_textures(workdir, 
     assert code == 0, err
     members = load_palette(workdir / "pal")
     assert [name for name, _, _ in members] == ["tex.npy", "tex.npz"]
-    assert np.array_equal(members[0][1].heights, smooth.heights) and np.array_equal(members[1][1].heights, rough.heights)
+    assert np.array_equal(members[0][1].heights, smooth.heights)
+    assert np.array_equal(members[1][1].heights, rough.heights)
+    from PIL import Image
+
+    rgb = np.zeros((20, 40, 3), dtype=np.uint8)
+    rgb[:, :20], rgb[:, 20:] = (250, 250, 250), (20, 20, 90)
+    Image.fromarray(rgb).save(workdir / "two.png")
+    code, err = _run(["tactile-image", "two.png", "--palette", "pal", "--out", "plate", "--size-mm", "40",
+                      "--step-mm", "2", "--json", "--quiet"], capsys)
+    assert code == 0, err
+    regions = json.loads((workdir / "plate" / "plate.json").read_text())["regions"]
+    assert [r["texture"] for r in regions] == ["tex.npy", "tex.npz"]
+    assert regions[1]["plate_roughness"] > 2 * regions[0]["plate_roughness"]  # lambda 1.625 vs 0.625 mm: ~7x
 
 
 def test_tactile_image_refuses_a_palette_with_one_member_file_twice(workdir, capsys):
     """A palette folder written before the fix lists one name twice: refused, not printed as two textures."""
-    import json
-
     from roughness.dataset.textures import standard_texture
     from roughness.simulate.io import save_heightmap
 
