@@ -267,6 +267,30 @@ def test_full_disk_while_train_saves_a_checkpoint(tmp_path, monkeypatch):
     assert [p.name for p in tmp_path.iterdir()] == ["ok.pt"]
 
 
+def test_full_disk_during_train_is_exit_2_and_leaves_no_run_folder(tmp_path, capsys, monkeypatch):
+    """`roughness train` on a tiny store with a disk that fills at the first checkpoint: a message, exit 2."""
+    pytest.importorskip("torch")
+    from test_surrogate import CONFIG, fake_fields
+
+    from roughness.dataset.recipe import Recipe, realise, sample_record
+    from roughness.dataset.store import DatasetWriter
+    from roughness.surrogate.patch import descriptors, footprint_patch
+
+    data = tmp_path / "small.h5"
+    recipe = Recipe(name="tiny", seed=9, families={"bumps": 1, "fbm": 1, "grating": 1, "knurl": 1})
+    with DatasetWriter(data, CONFIG, "test") as writer:
+        for i in range(48):
+            hm = realise(sample_record(recipe, i))
+            writer.write_result(sample_record(recipe, i), hm.heights, hm.pixel_mm,
+                                fake_fields(0.05 * descriptors(footprint_patch(hm))[2]), np.zeros((5, 5)))
+    monkeypatch.setattr(Path, "write_bytes", _no_space)  # how train writes its checkpoints
+    code, err = _run(["train", str(data), "--out", str(tmp_path / "run"), "--max-epochs", "1", "--batch-size", "8",
+                      "--threads", "1", "--holdout-family", "knurl"], capsys)
+    assert code == 2 and "Traceback" not in err, err
+    assert "cannot write " in err and "best.pt: no space left on device" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["small.h5"]
+
+
 # --- palette members from files with one stem -----------------------------------------------------
 
 def test_candidate_names_are_distinct(tmp_path):
