@@ -76,7 +76,7 @@ def export_labels(dataset: str | os.PathLike, out: str | os.PathLike, overwrite:
             values = {k: list(v) if k in TUPLE_FIELDS else v for k, v in asdict(entry).items() if k in KEPT_FIELDS}
             labels[sid] = Label(digest, values)
         result = LabelSet(ds.config, labels)
-    atomic_write(out, lambda tmp: Path(tmp).write_bytes(_encode(result)))
+    atomic_write(out, lambda tmp: Path(tmp).write_bytes(_encode(result)), overwrite)
     return result
 
 

@@ -94,7 +94,7 @@ def heightmap_files(folder: str | Path) -> list[Path]:
 
 
 def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = None,
-                   base_mm: float | None = None) -> None:
+                   base_mm: float | None = None, overwrite: bool = True) -> None:
     """Write ``hm`` atomically, with its pixel size wherever the format can hold it.
 
     .npy: heights in mm (no room for the pixel size); .npz and .h5: heights in mm and
@@ -103,7 +103,8 @@ def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = No
     ``height_mm`` defaulting to the height range, with pixel size, full-scale height and the
     minimum in a text chunk, so that the file loads back without flags; .stl: a watertight
     printable plate in mm, the texture standing on ``base_mm`` of solid (default 2 mm; see
-    ``stl.plate``), written but not read back.
+    ``stl.plate``), written but not read back. Unless ``overwrite``, an existing file is never
+    replaced, not even by a concurrent writer (OutputExists).
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -118,26 +119,26 @@ def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = No
         raise InputError(f"cannot write {path}: its folder does not exist", parameter="out")
     units = {"pixel_mm": hm.pixel_mm}
     if suffix == ".npy":
-        atomic_write(path, lambda tmp: np.save(tmp, hm.heights))
+        atomic_write(path, lambda tmp: np.save(tmp, hm.heights), overwrite)
     elif suffix == ".npz":
-        atomic_write(path, lambda tmp: np.savez_compressed(tmp, heightmap=hm.heights, pixel_mm=hm.pixel_mm))
+        atomic_write(path, lambda tmp: np.savez_compressed(tmp, heightmap=hm.heights, pixel_mm=hm.pixel_mm), overwrite)
     elif suffix == ".png":
         counts, full = _png_counts(hm.heights, height_mm)
         info = PngImagePlugin.PngInfo()
         info.add_text(UNITS_KEY, json.dumps(units | {"height_mm": full, "base_mm": float(hm.heights.min())}))
-        atomic_write(path, lambda tmp: Image.fromarray(counts).save(tmp, format="PNG", pnginfo=info))
+        atomic_write(path, lambda tmp: Image.fromarray(counts).save(tmp, format="PNG", pnginfo=info), overwrite)
     elif suffix == ".stl":
         data = stl_bytes(plate(hm, DEFAULT_BASE_MM if base_mm is None else base_mm))
-        atomic_write(path, lambda tmp: Path(tmp).write_bytes(data))
+        atomic_write(path, lambda tmp: Path(tmp).write_bytes(data), overwrite)
     elif suffix in (".tif", ".tiff"):
         import tifffile
 
         per_cm = 10.0 / hm.pixel_mm
         atomic_write(path, lambda tmp: tifffile.imwrite(
             tmp, hm.heights.astype(np.float32), description=json.dumps({UNITS_KEY: units}),
-            resolution=(per_cm, per_cm), resolutionunit="CENTIMETER", metadata=None))
+            resolution=(per_cm, per_cm), resolutionunit="CENTIMETER", metadata=None), overwrite)
     else:
-        atomic_write(path, lambda tmp: _write_h5(tmp, hm))
+        atomic_write(path, lambda tmp: _write_h5(tmp, hm), overwrite)
 
 
 def _write_h5(path: str, hm: Heightmap) -> None:

@@ -11,7 +11,7 @@ from .elasticity import strain_tensors, vertex_strain_operator
 from .model import Block, Result
 
 
-def save_strain_png(result: Result, path: str | Path) -> None:
+def save_strain_png(result: Result, path: str | Path, overwrite: bool = True) -> None:
     """Image of lambda3 at receptor depth and its fluctuation (strain, dimensionless)."""
     import matplotlib
 
@@ -33,12 +33,12 @@ def save_strain_png(result: Result, path: str | Path) -> None:
     fig.suptitle(f"FEM ({c.fidelity} fidelity, h = {c.h_contact_mm} mm): V = {result.roughness:.4g} ± "
                  f"{result.roughness_stderr:.2g}   (F = {c.force_n} N, contact {100 * result.contact_fraction:.0f}%)")
     try:
-        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
+        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"), overwrite)
     finally:
         plt.close(fig)
 
 
-def save_vtu(result: Result, block: Block, path: str | Path) -> None:
+def save_vtu(result: Result, block: Block, path: str | Path, overwrite: bool = True) -> None:
     """Deformed mesh with displacement, element strain and lambda3 for ParaView."""
     import meshio
 
@@ -55,5 +55,5 @@ def save_vtu(result: Result, block: Block, path: str | Path) -> None:
         point_data={"displacement": u.reshape(-1, 3)},
         cell_data={"strain": [voigt], "lambda3": [lam[:, 0]], "region": [mesh.region.astype(np.int32)]},
     )
-    atomic_write(path, lambda tmp: meshio.write(tmp, m, file_format="vtu"))
+    atomic_write(path, lambda tmp: meshio.write(tmp, m, file_format="vtu"), overwrite)
 

@@ -31,7 +31,7 @@ import torch
 from torch import nn
 
 from roughness.core.errors import InputError, OutputExists
-from roughness.core.files import atomic_write, check_output
+from roughness.core.files import atomic_write, check_distinct, check_output
 from roughness.core.hashing import file_sha256
 
 from .domain import Domain
@@ -168,7 +168,7 @@ def export_ensemble(checkpoints: list[str | Path], out: str | Path,
         onnx.save(graph, tmp)
         report.update(_verify(model, tmp, patches))
 
-    atomic_write(out, write)
+    atomic_write(out, write, overwrite)
     return {"path": str(out), "bytes": out.stat().st_size, "check": report, **info}
 
 
@@ -234,10 +234,10 @@ def main(argv: list[str] | None = None) -> int:
     from .quantize import QuantizationError, quantize
 
     try:
+        check_distinct({"--out": args.out, "--int8": args.int8},
+                       {"CHECKPOINT": args.checkpoints, "--data": args.data})
         if args.int8:  # both outputs checked before anything is computed
             check_output(args.int8, args.overwrite, "int8")
-            if Path(args.int8).resolve() == Path(args.out).resolve():
-                raise InputError("--int8 must name another file than --out", parameter="int8")
         report = export_ensemble(args.checkpoints, args.out, args.data, args.overwrite)
         print(json.dumps({k: v for k, v in report.items() if k != "member_val"}))
         if args.int8:

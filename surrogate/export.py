@@ -80,7 +80,7 @@ def export(checkpoint_path: str | Path, out: str | Path, patches: np.ndarray | N
         onnx.save(graph, tmp)
         report.update(verify(model, tmp, patches))
 
-    atomic_write(out, write)
+    atomic_write(out, write, overwrite)
     return report | {"path": str(out), "bytes": out.stat().st_size}
 
 

@@ -97,13 +97,13 @@ def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 
     return RoughnessMap(xs, ys, np.concatenate(values).reshape(shape), np.array(flags).reshape(shape), spread)
 
 
-def save_map(result: RoughnessMap, path: str | Path) -> None:
+def save_map(result: RoughnessMap, path: str | Path, overwrite: bool = True) -> None:
     """.npy: the V array (rows = y); .png: a figure with axes in mm, out-of-domain positions hatched."""
     path = Path(path)
     if path.suffix.lower() not in MAP_SUFFIXES:
         raise InputError(f"cannot write {path}: a roughness map is saved as .npy or .png", parameter="map")
     if path.suffix.lower() == ".npy":
-        atomic_write(path, lambda tmp: np.save(tmp, result.roughness))
+        atomic_write(path, lambda tmp: np.save(tmp, result.roughness), overwrite)
         return
     import matplotlib
 
@@ -123,5 +123,5 @@ def save_map(result: RoughnessMap, path: str | Path) -> None:
         ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"{label} per footprint centre (hatched: out of domain)")
         fig.colorbar(image, ax=ax, label=label)
     fig.tight_layout()
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110))
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110), overwrite)
     plt.close(fig)

@@ -19,6 +19,7 @@ query spacing (default: the finest labelled). Scores are against the labels at t
 """
 from __future__ import annotations
 
+import io
 import json
 import math
 import sys
@@ -158,7 +159,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         improved = val_loss < best_val
         if improved:
             best_val, best_epoch = val_loss, epoch
-            torch.save(model.state_dict(), out / "best.pt")
+            save_torch(model.state_dict(), out / "best.pt")
         log(f"epoch {epoch:3d}  train {train_loss:.4f}  val {val_loss:.4f}  lr {history[-1][3]:.2e}  "
             f"{minutes:5.1f} min{'  *' if improved else ''}")
         if epoch - best_epoch >= cfg.patience:
@@ -202,8 +203,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         multi_fidelity={"query_h_mm": query, "rows_by_h_mm": _rows_by_level(samples),
                         "extra_data": [{"file": Path(p).name, "inputs_sha256": inputs_sha256(p)} for p in cfg.extra_data]}
         if multi else None)
-    atomic_write(out / "checkpoint.pt", lambda path: torch.save({"state_dict": model.state_dict(), **meta.to_dict()},
-                                                               path))
+    save_torch({"state_dict": model.state_dict(), **meta.to_dict()}, out / "checkpoint.pt")
     write_text(out / "metrics.json", json.dumps({k: v for k, v in meta.to_dict().items() if k != "domain"}, indent=1))
     write_text(out / "history.csv", "epoch,train_loss,val_loss,lr,minutes\n" + "".join(
         ",".join(f"{v:.6g}" for v in row) + "\n" for row in history))
@@ -247,6 +247,14 @@ def _fidelity_name(h_mm: float) -> str:
 
 def write_text(path: Path, text: str) -> None:
     atomic_write(path, lambda tmp: Path(tmp).write_text(text))
+
+
+def save_torch(obj: object, path: Path) -> None:
+    """``torch.save`` atomically, through a buffer: torch's own file writer reports a full disk as an unexplained
+    RuntimeError, a plain write as the OSError that ``atomic_write`` words ("no space left on device")."""
+    buffer = io.BytesIO()
+    torch.save(obj, buffer)
+    atomic_write(path, lambda tmp: Path(tmp).write_bytes(buffer.getvalue()))
 
 
 def log(message: str) -> None:

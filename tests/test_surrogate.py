@@ -593,7 +593,7 @@ def test_ensemble_int8_graph_keeps_mean_and_spread(ensemble, tmp_path, capsys):
 
     out, int8 = tmp_path / "e.onnx", tmp_path / "e-int8.onnx"
     assert ensemble_main([*map(str, ensemble.checkpoints), "--out", str(out), "--int8", str(out)]) == 2
-    assert "--int8 must name another file" in capsys.readouterr().err and not out.exists()
+    assert "--out and --int8 name the same file" in capsys.readouterr().err and not out.exists()
     assert ensemble_main([*map(str, ensemble.checkpoints), "--out", str(out), "--int8", str(int8)]) == 0
     fp32, q = SurrogateModel(out), SurrogateModel(int8)
     assert q.has_std and q.meta.int8["standard_max_rel_diff_vs_fp32"] < 0.02

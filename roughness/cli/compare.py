@@ -34,12 +34,14 @@ def run(args: argparse.Namespace) -> int:
 
     from roughness.compare import ResultCache, check_report_folder, run, textures_of, write_manifest
     from roughness.core.errors import InputError
+    from roughness.core.files import check_distinct
     from roughness.engines import make_engine
     from roughness.report import write_report
 
     specs = list(dict.fromkeys([args.reference, *args.engines]))
     engines = [make_engine(spec) for spec in specs]
     out = Path(args.out)
+    check_distinct({"--out": out}, {"INPUT": args.input})
     manifest = {"input": args.input, "n": args.n, "reference": args.reference, "engines": sorted(specs)}
     check_report_folder(out, manifest, args.overwrite)
     textures, stored = textures_of(args.input, args.n, args.pixel_mm, args.height_mm)

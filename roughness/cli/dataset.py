@@ -52,9 +52,11 @@ def add_parser(sub) -> None:
 def build(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
+    from roughness.core.files import check_distinct
     from roughness.dataset.build import BUILD_CONFIG, build
     from roughness.dataset.recipe import Recipe, load_recipe
 
+    check_distinct({"--out": args.out}, {"--recipe": args.recipe, "--labels": args.labels})
     recipe = load_recipe(args.recipe) if args.recipe else Recipe()
     if args.seed is not None:
         recipe = replace(recipe, seed=args.seed)
@@ -76,8 +78,10 @@ def build(args: argparse.Namespace) -> int:
 
 
 def labels(args: argparse.Namespace) -> int:
+    from roughness.core.files import check_distinct
     from roughness.dataset.labels import export_labels
 
+    check_distinct({"--out": args.out}, {"DATASET": args.dataset})
     written = export_labels(args.dataset, args.out, args.overwrite)
     ok = sum(label.values["status"] == "ok" for label in written.labels.values())
     write_stdout(json.dumps({"labels": str(args.out), "samples": len(written), "ok": ok}))

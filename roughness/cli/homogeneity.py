@@ -42,11 +42,12 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
-    from roughness.core.files import check_output
+    from roughness.core.files import check_distinct, check_output
     from roughness.design.evaluation import Evaluator
     from roughness.design.homogeneity import homogeneity, save_map
     from roughness.simulate.io import load_heightmap
 
+    check_distinct({"--map": args.map}, {"HEIGHTMAP": args.heightmap, "--model": args.model})
     if args.map:
         if not args.map.lower().endswith(".png"):
             raise InputError(f"cannot write {args.map}: the map is a .png picture", parameter="map")
@@ -59,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     result = homogeneity(hm, args.engine, args.window_mm, args.n, args.seed, args.tile, evaluator,
                          progress=lambda done, total: log(args, f"  FEM window {done}/{total}"))
     if args.map:
-        save_map(result, hm, args.map)
+        save_map(result, hm, args.map, args.overwrite)
     summary = {"input": args.heightmap, **result.summary()}
     if args.json:
         write_stdout(json.dumps(summary))

@@ -51,10 +51,11 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
-    from roughness.core.files import check_output_folder
+    from roughness.core.files import check_distinct, check_output_folder
     from roughness.design.evaluation import Evaluator
-    from roughness.design.palette import family_palette, folder_palette, save_palette
+    from roughness.design.palette import candidate_names, family_palette, folder_palette, save_palette
 
+    check_distinct({"--out": args.out}, {"--from": args.candidates, "--model": args.model})
     out = check_output_folder(args.out, args.overwrite, "out")
     if args.k < 2:
         raise InputError(f"a palette needs at least 2 textures, got {args.k}", "k")
@@ -66,14 +67,15 @@ def run(args: argparse.Namespace) -> int:
         from roughness.simulate.io import heightmap_files, load_heightmap
 
         files = heightmap_files(args.candidates)
-        candidates = [(f.stem, load_heightmap(f, args.pixel_mm, args.height_mm)) for f in files]
+        candidates = [(name, load_heightmap(f, args.pixel_mm, args.height_mm))
+                      for name, f in zip(candidate_names(files), files)]
         log(args, f"palette: choosing {args.k} of {len(candidates)} textures, {args.min_jnd:g} JND apart")
         palette = folder_palette(candidates, args.k, args.min_jnd, evaluator, args.tile, progress)
     else:
         log(args, f"palette: {args.k} variants of {args.family} by {args.by}, {args.min_jnd:g} JND apart")
         palette = family_palette(args.k, args.min_jnd, args.family, args.by, evaluator, args.tolerance_jnd,
                                  seed=args.seed, progress=progress)
-    save_palette(palette, out, args.stl, args.base_mm)
+    save_palette(palette, out, args.stl, args.base_mm, args.overwrite)
     summary = palette.summary()
     if args.json:
         write_stdout(json.dumps(summary))

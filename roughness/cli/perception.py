@@ -150,11 +150,13 @@ def _add_truth_args(p: argparse.ArgumentParser) -> None:
                    default="surrogate", help="engine for the true V (default surrogate)")
     p.add_argument("--cache", metavar="DIR", help="FEM result cache (default: DIR/fem-cache)")
 
-def _outputs(folder: str, names: tuple[str, ...], overwrite: bool) -> dict[str, Path]:
-    """The output files in ``folder``, checked before any computation (the folder is made by ``_made``)."""
-    from roughness.core.files import check_output, check_output_folder
+def _outputs(folder: str, names: tuple[str, ...], overwrite: bool, inputs: dict) -> dict[str, Path]:
+    """The output files in ``folder``, checked before any computation (the folder is made by ``_made``);
+    none of them may be one of ``inputs`` (label -> path)."""
+    from roughness.core.files import check_distinct, check_output, check_output_folder
 
     out = Path(folder)
+    check_distinct({"--out": [out, *(out / name for name in names)]}, inputs)
     if not out.is_dir():  # a new folder (its parent must be writable), or a file in the way: refused
         check_output_folder(out, name="out")
         return {name: out / name for name in names}
@@ -179,7 +181,7 @@ def run_embed(args: argparse.Namespace) -> int:
     ids = [s.stimulus for s in read_stimuli(args.stimuli)] if args.stimuli else None
     trials = read_trials(args.trials, ids, args.repeats)
     files = _outputs(args.out, ("embedding.csv", "embedding.json", "embedding.png", "cross_validation.png"),
-                     args.overwrite)
+                     args.overwrite, {"TRIALS": args.trials, "--stimuli": args.stimuli})
     log(args, f"{args.trials}: {len(trials)} trials, {len(trials.stimuli)} stimuli, "
               f"{len(set(trials.subjects))} subject(s); {args.workers} worker(s)")
     analysis = analyse(trials, lam=args.lam, folds=args.folds, resamples=args.resamples, seed=args.seed,
@@ -234,7 +236,7 @@ def run_fit(args: argparse.Namespace) -> int:
     if args.forces and not fem:
         raise InputError("--forces re-runs the FEM: use a FEM --engine", parameter="forces")
     names = ("fit.csv", "fit.json", "fit.png") + (("sampling.png",) if fem else ())
-    files = _outputs(args.out, names, args.overwrite)
+    files = _outputs(args.out, names, args.overwrite, {"EMBEDDING": args.embedding, "--stimuli": args.stimuli})
     cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
     heightmaps = [s.heightmap() for s in stimuli]
     spreads, inhomogeneous = None, []
@@ -309,12 +311,13 @@ def _num(x: float) -> str:
 
 def run_design(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
-    from roughness.core.files import check_output, check_output_folder
+    from roughness.core.files import check_distinct, check_output, check_output_folder
     from roughness.perception.design import FIELDNAMES, balanced_design
     from roughness.perception.stimuli import read_stimuli
     from roughness.perception.trials import write_trials
     from roughness.simulate.io import save_heightmap
 
+    check_distinct({"--out": args.out, "--plates": args.plates}, {"--stimuli": args.stimuli})
     stimuli = read_stimuli(args.stimuli)
     ids = [s.stimulus for s in stimuli]
     out = check_output(args.out, args.overwrite, "out")
@@ -329,8 +332,8 @@ def run_design(args: argparse.Namespace) -> int:
         maps = {s.stimulus: s.plate_heightmap(args.plate_mm) for s in stimuli}  # every map, before writing any
         plates.mkdir(exist_ok=True)
         for stimulus, hm in maps.items():
-            save_heightmap(hm, plates / f"{names[stimulus]}.stl", base_mm=args.base_mm)
-    write_trials(out, (t.row() for t in trials), FIELDNAMES)
+            save_heightmap(hm, plates / f"{names[stimulus]}.stl", base_mm=args.base_mm, overwrite=args.overwrite)
+    write_trials(out, (t.row() for t in trials), FIELDNAMES, args.overwrite)
     print(f"wrote {out}: {len(trials)} trials ({args.trials} per subject, {len(subjects)} subject(s)) over "
           f"{len(ids)} stimuli; fill the answer column with left or right"
           + (f"; {len(ids)} plates of {args.plate_mm:g} mm in {plates}" if plates is not None else ""))
@@ -355,7 +358,8 @@ def run_simulate(args: argparse.Namespace) -> int:
     ids = [s.stimulus for s in stimuli]
     observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
     v = _read_truth(args.truth, ids) if args.truth else None
-    files = _outputs(args.out, ("trials.csv", "truth.csv"), args.overwrite)
+    files = _outputs(args.out, ("trials.csv", "truth.csv"), args.overwrite,
+                     {"--stimuli": args.stimuli, "--truth": args.truth})
     if v is not None:
         source = f"--truth {args.truth}"
     else:
@@ -399,7 +403,8 @@ def run_plan(args: argparse.Namespace) -> int:
     ids = [s.stimulus for s in stimuli]
     observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
     v = _read_truth(args.truth, ids) if args.truth else None
-    files = _outputs(args.out, ("plan.csv", "plan.json"), args.overwrite)
+    files = _outputs(args.out, ("plan.csv", "plan.json"), args.overwrite,
+                     {"--stimuli": args.stimuli, "--truth": args.truth})
     if v is None:
         cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
         log(args, f"true V of {len(ids)} stimuli with {args.engine} ...")

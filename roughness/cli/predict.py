@@ -70,7 +70,10 @@ def run(args: argparse.Namespace) -> int:
 
     if args.map:
         from roughness.core.errors import InputError
+        from roughness.core.files import check_distinct
         from roughness.surrogate.roughness_map import check_map_path
+
+        check_distinct({"--map": args.map}, {"HEIGHTMAP": args.inputs, "--model": args.model})
 
         if args.curvature_mm is not None:
             raise InputError("--map slides the footprint over a flat object; it does not take --curvature-mm")
@@ -120,7 +123,7 @@ def _predict_map(args: argparse.Namespace, model) -> int:
 
     result = roughness_map(model, hm, args.step_mm, args.tile, args.batch_size,
                            progress=progress)
-    save_map(result, args.map)
+    save_map(result, args.map, args.overwrite)
     summary = {"input": args.inputs[0], "map": args.map, **result.summary(), "seconds": time.perf_counter() - start}
     print(json.dumps(summary) if args.json else
           f"{args.inputs[0]}: {summary['positions']} footprint positions, V {summary['roughness_min']:.4f} to "

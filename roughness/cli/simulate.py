@@ -81,11 +81,12 @@ def _detrend_spec(text: str):
 
 
 def run(args: argparse.Namespace) -> int:
-    from roughness.core.files import check_output
+    from roughness.core.files import check_distinct, check_output
     from roughness.simulate.config import SimConfig
     from roughness.simulate.io import load_heightmap
     from roughness.simulate.model import Simulator
 
+    check_distinct({"--save-strain": args.save_strain, "--save-vtu": args.save_vtu}, {"HEIGHTMAP": args.heightmap})
     for name in ("save_strain", "save_vtu"):
         if getattr(args, name):
             check_output(getattr(args, name), args.overwrite, name)
@@ -107,12 +108,12 @@ def run(args: argparse.Namespace) -> int:
     if args.save_strain:
         from roughness.simulate.output import save_strain_png
 
-        save_strain_png(result, args.save_strain)
+        save_strain_png(result, args.save_strain, args.overwrite)
         log(args, f"strain map written to {args.save_strain}")
     if args.save_vtu:
         from roughness.simulate.output import save_vtu
 
-        save_vtu(result, sim.block(result.config), args.save_vtu)
+        save_vtu(result, sim.block(result.config), args.save_vtu, args.overwrite)
         log(args, f"deformed mesh written to {args.save_vtu}")
     if args.json:
         print(json.dumps({"input": args.heightmap, **result.summary()}))

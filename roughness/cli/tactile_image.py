@@ -48,12 +48,13 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from roughness.core.files import atomic_write, check_output_folder
+    from roughness.core.files import atomic_write, check_distinct, check_output_folder
     from roughness.design.evaluation import Evaluator
     from roughness.design.palette import family_palette, load_palette, save_palette
     from roughness.design.tactile_image import flat_colours, hex_colour, read_image, save_figures, tactile_image
     from roughness.simulate.io import save_heightmap
 
+    check_distinct({"--out": args.out}, {"IMAGE": args.image, "--palette": args.palette, "--model": args.model})
     out = check_output_folder(args.out, args.overwrite, "out")
     rgb = read_image(args.image)
     colours, _ = flat_colours(rgb)
@@ -76,13 +77,14 @@ def run(args: argparse.Namespace) -> int:
                           args.step_mm, args.strain, evaluator, progress)
     out.mkdir(parents=True, exist_ok=True)
     if not args.palette:
-        save_palette(palette, out / "palette")
-    save_heightmap(plate.heightmap, out / "plate.npz")
-    save_heightmap(plate.heightmap, out / "plate.stl", base_mm=args.base_mm)
-    atomic_write(out / "roughness_map.npy", lambda tmp: np.save(tmp, plate.roughness_map))
+        save_palette(palette, out / "palette", overwrite=args.overwrite)
+    save_heightmap(plate.heightmap, out / "plate.npz", overwrite=args.overwrite)
+    save_heightmap(plate.heightmap, out / "plate.stl", base_mm=args.base_mm, overwrite=args.overwrite)
+    atomic_write(out / "roughness_map.npy", lambda tmp: np.save(tmp, plate.roughness_map), args.overwrite)
     save_figures(plate, out)
     summary = {"image": args.image, "out": str(out), **plate.summary()}
-    atomic_write(out / "plate.json", lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=1) + "\n"))
+    atomic_write(out / "plate.json", lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=1) + "\n"),
+                 args.overwrite)
     if args.json:
         write_stdout(json.dumps(summary))
         return 0

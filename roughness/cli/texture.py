@@ -54,7 +54,7 @@ def run_make(args: argparse.Namespace) -> int:
         raise InputError("applies only to STL output", "base_mm")
     hm, recipe = make_texture(args.name, seed=args.seed, size_mm=args.size_mm, pixel_mm=args.pixel_mm,
                               params=parse_params(args.param))
-    save_heightmap(hm, out, height_mm=args.height_mm, base_mm=args.base_mm)
+    save_heightmap(hm, out, height_mm=args.height_mm, base_mm=args.base_mm, overwrite=args.overwrite)
     ny, nx = hm.shape
     note = "; a printable plate in mm" if suffix == ".stl" else "; the file states its pixel size" \
         if suffix != ".npy" else ""

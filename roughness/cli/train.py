@@ -62,9 +62,10 @@ def train(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
 
     _require_torch("train")
-    from roughness.core.files import check_output_folder
+    from roughness.core.files import check_distinct, check_output_folder
     from roughness.surrogate.train import TrainConfig, train
 
+    check_distinct({"--out": args.out}, {"DATASET": args.data, "--extra-data": args.extra_data})
     check_output_folder(args.out, args.overwrite)
     for path, flag in [(args.data, "DATASET"), *((p, "--extra-data") for p in args.extra_data)]:
         if not os.path.isfile(path):
@@ -79,19 +80,15 @@ def train(args: argparse.Namespace) -> int:
 
 
 def export(args: argparse.Namespace) -> int:
-    from pathlib import Path
+    from roughness.core.files import check_distinct, check_output
 
-    from roughness.core.errors import InputError
-    from roughness.core.files import check_output
-
+    check_distinct({"--out": args.out, "--int8": args.int8}, {"CHECKPOINT": args.checkpoint})
     _require_torch("export")
     from roughness.surrogate.export import ExportError, export
 
     check_output(args.out, args.overwrite, "out")  # both outputs checked before anything is computed or written
     if args.int8:
         check_output(args.int8, args.overwrite, "int8")
-        if Path(args.int8).resolve() == Path(args.out).resolve():
-            raise InputError("--int8 must name another file than --out", parameter="int8")
     try:
         report = export(args.checkpoint, args.out, overwrite=args.overwrite)
     except ExportError as err:

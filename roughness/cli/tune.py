@@ -41,11 +41,12 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
-    from roughness.core.files import check_output
+    from roughness.core.files import check_distinct, check_output
     from roughness.design.evaluation import Evaluator
     from roughness.design.tune import FACTOR_RANGE, target_of, tune
     from roughness.simulate.io import SAVE_SUFFIXES, load_heightmap, save_heightmap
 
+    check_distinct({"--out": args.out}, {"HEIGHTMAP": args.heightmap, "--like": args.like, "--model": args.model})
     out = check_output(args.out, args.overwrite, "out")
     if out.suffix.lower() not in SAVE_SUFFIXES:
         raise InputError(f"cannot save {out}: unsupported format {out.suffix or '(no suffix)'!r}; "
@@ -66,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
               f"{args.by} factors {factors[0]:g}..{factors[1]:g}")
     result = tune(hm, target, args.by, evaluator, factors, args.tolerance_jnd, args.max_fem, args.tile,
                   progress=lambda line: log(args, "  " + line))
-    save_heightmap(result.heightmap, out, base_mm=args.base_mm)
+    save_heightmap(result.heightmap, out, base_mm=args.base_mm, overwrite=args.overwrite)
     summary = {"input": args.heightmap, "out": str(out), **result.summary()}
     if args.json:
         write_stdout(json.dumps(summary))

@@ -156,7 +156,7 @@ def homogeneity(heightmap: Heightmap, engine: str = "surrogate", window_mm: floa
                        float(np.std(steps, ddof=1)), float(p90 - p10), mean)
 
 
-def save_map(result: Homogeneity, heightmap: Heightmap, path) -> None:
+def save_map(result: Homogeneity, heightmap: Heightmap, path, overwrite: bool = True) -> None:
     """PNG: the heightmap in grey with each window outlined and coloured by its V."""
     import matplotlib
 
@@ -183,5 +183,5 @@ def save_map(result: Homogeneity, heightmap: Heightmap, path) -> None:
            title=f"{result.verdict}: relative variance {result.relative_variance:.1e}, "
                  f"spread {result.spread_jnd:.2f} JND")
     fig.tight_layout()
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=80))
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=80), overwrite)
     plt.close(fig)

@@ -16,7 +16,9 @@ Every distance reported is between FEM answers; ``verified`` says whether all pa
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -137,9 +139,36 @@ def widest_selection(positions: np.ndarray, k: int) -> tuple[list[int], float]:
     return [int(order[i]) for i in best], best_gap
 
 
+def candidate_names(files: list[Path]) -> list[str]:
+    """A member name per candidate file: its stem, or its whole file name where stems collide (tex.npy
+    and tex.npz become "tex.npy" and "tex.npz"). Names are compared ignoring case, as the members are
+    written as NAME.npz; InputError naming both files if two are still alike."""
+    stems = Counter(f.stem.casefold() for f in files)
+    names = [f.stem if stems[f.stem.casefold()] == 1 else f.name for f in files]
+    clash = _clash(names)
+    if clash:
+        i, j = clash
+        raise InputError(f"{files[i]} and {files[j]} would both be the palette member {names[j]!r} (one file "
+                         f"{names[j]}.npz): rename one of them", parameter="candidates")
+    return names
+
+
+def _clash(names: list[str]) -> tuple[int, int] | None:
+    """The first two members that would share a file NAME.npz (names alike ignoring case), if any."""
+    first: dict[str, int] = {}
+    for j, name in enumerate(names):
+        i = first.setdefault(str(name).casefold(), j)
+        if i != j:
+            return i, j
+    return None
+
+
 def folder_palette(candidates: list[tuple[str, Heightmap]], k: int, min_jnd: float = 2.0,
                    evaluator: Evaluator | None = None, tile: bool = False, progress=None) -> Palette:
-    """The k candidates farthest apart, FEM-verified (module docstring)."""
+    """The k candidates farthest apart, FEM-verified (module docstring); their names must differ
+    (``candidate_names``)."""
+    if _clash([name for name, _ in candidates]):
+        raise InputError("two candidates share a name (see candidate_names)", parameter="candidates")
     k, min_jnd = _check(k, min_jnd)
     if len(candidates) < k:
         raise InputError(f"{len(candidates)} candidate textures, fewer than k={k}", parameter="k")
@@ -169,7 +198,7 @@ def folder_palette(candidates: list[tuple[str, Heightmap]], k: int, min_jnd: flo
     return Palette(tuple(members), min_jnd, _distances(members), f"{len(candidates)} candidates")
 
 
-def save_preview(palette: Palette, path) -> None:
+def save_preview(palette: Palette, path, overwrite: bool = True) -> None:
     """PNG sheet: each member's heightmap with its FEM V and equivalent wavelength."""
     import matplotlib
 
@@ -187,14 +216,15 @@ def save_preview(palette: Palette, path) -> None:
         ax.set_xticks([]), ax.set_yticks([])
     fig.suptitle(f"closest pair {palette.closest_jnd:.2f} JND (FEM; asked >= {palette.min_jnd:g})", fontsize=10)
     fig.tight_layout()
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=100))
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=100), overwrite)
     plt.close(fig)
 
 
-def save_palette(palette: Palette, folder, stl: bool = False, base_mm: float | None = None) -> None:
-    """The folder: one .npz per member (and .stl plates if asked), palette.json, preview.png."""
+def save_palette(palette: Palette, folder, stl: bool = False, base_mm: float | None = None,
+                 overwrite: bool = True) -> None:
+    """The folder: one NAME.npz per member (and NAME.stl plates if asked), palette.json, preview.png;
+    unless ``overwrite``, none of them replaces an existing file."""
     import json
-    from pathlib import Path
 
     from roughness.core.files import atomic_write
     from roughness.simulate.io import save_heightmap
@@ -202,19 +232,19 @@ def save_palette(palette: Palette, folder, stl: bool = False, base_mm: float | N
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     for m in palette.members:
-        save_heightmap(m.heightmap, folder / f"{m.name}.npz")
+        save_heightmap(m.heightmap, folder / f"{m.name}.npz", overwrite=overwrite)
         if stl:
-            save_heightmap(m.heightmap, folder / f"{m.name}.stl", base_mm=base_mm)
-    save_preview(palette, folder / "preview.png")
+            save_heightmap(m.heightmap, folder / f"{m.name}.stl", base_mm=base_mm, overwrite=overwrite)
+    save_preview(palette, folder / "preview.png", overwrite)
     text = json.dumps(palette.summary(), indent=1) + "\n"
-    atomic_write(folder / PALETTE_FILE, lambda tmp: Path(tmp).write_text(text))
+    atomic_write(folder / PALETTE_FILE, lambda tmp: Path(tmp).write_text(text), overwrite)
 
 
 
 def load_palette(folder) -> list[tuple[str, Heightmap, dict]]:
-    """(name, heightmap, summary entry) of each member of a palette folder written by ``save_palette``."""
+    """(name, heightmap, summary entry) of each member of a palette folder written by ``save_palette``;
+    InputError if two members share a name (one file: a folder written before member names were unique)."""
     import json
-    from pathlib import Path
 
     from roughness.simulate.io import load_heightmap
 
@@ -225,6 +255,11 @@ def load_palette(folder) -> list[tuple[str, Heightmap, dict]]:
                          parameter="palette")
     try:
         members = json.loads(path.read_text())["members"]
+        clash = _clash([m["name"] for m in members])
+        if clash:
+            raise InputError(f"{path} lists two members named {members[clash[1]]['name']!r}, which share one file "
+                             "(a palette written before member names were made unique): make the palette again",
+                             parameter="palette")
         return [(m["name"], load_heightmap(folder / f"{m['name']}.npz"), m) for m in members]
     except (json.JSONDecodeError, KeyError, TypeError) as err:
         raise InputError(f"{path} is not a palette description: {err}", parameter="palette") from None

@@ -153,8 +153,9 @@ def listed(what: str, items: list[str]) -> str:
     return f"{what}: {'; '.join(items[:MAX_LISTED])}{more}"
 
 
-def write_trials(path: str | Path, rows: Iterable[dict[str, object]], fieldnames: Sequence[str]) -> Path:
-    """Write rows (dicts with at least COLUMNS) as a trials CSV, atomically."""
+def write_trials(path: str | Path, rows: Iterable[dict[str, object]], fieldnames: Sequence[str],
+                 overwrite: bool = True) -> Path:
+    """Write rows (dicts with at least COLUMNS) as a trials CSV, atomically (replacing ``path`` only if ``overwrite``)."""
     rows = list(rows)
 
     def write(tmp: str) -> None:
@@ -163,4 +164,4 @@ def write_trials(path: str | Path, rows: Iterable[dict[str, object]], fieldnames
             writer.writeheader()
             writer.writerows(rows)
 
-    return atomic_write(path, write)
+    return atomic_write(path, write, overwrite)
