@@ -231,9 +231,9 @@ def test_trials_against_a_stimuli_table_and_repeats():
     assert trials.rows[0]["rt_ms"] == "812" and trials.fieldnames[-1] == "rt_ms"
     a, b, c = 2, 1, 0
     assert trials.triplets.tolist() == [[a, b, c], [a, c, b], [a, c, b]]
-    # different subjects may disagree; the same subject twice is a contradiction unless kept
+    # different subjects may disagree; the same subject twice is a contradiction if asked to refuse those
     with pytest.raises(InputError, match="contradictory"):
-        parse_trials(text, "t.csv")
+        parse_trials(text, "t.csv", repeats="error")
 
 
 # --- observer and design -----------------------------------------------------------------------------
