@@ -38,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.report import write_report
 
     specs = list(dict.fromkeys([args.reference, *args.engines]))
-    engines = [make_engine(spec) for spec in specs]
+    engines = [make_engine(spec, "reference" if spec == args.reference else "engines") for spec in specs]
     out = Path(args.out)
     manifest = {"input": args.input, "n": args.n, "reference": args.reference, "engines": sorted(specs)}
     check_report_folder(out, manifest, args.overwrite)

@@ -432,6 +432,7 @@ def run_plan(args: argparse.Namespace) -> int:
 
 def _read_truth(path: str, ids: list[str]):
     import csv
+    import math
 
     import numpy as np
 
@@ -449,6 +450,10 @@ def _read_truth(path: str, ids: list[str]):
     missing = [i for i in ids if i not in rows]
     if missing:
         raise InputError(listed(f"{path}: no roughness for", missing), parameter="truth")
+    bad = [f"{i} ({rows[i]:g})" for i in ids if not (math.isfinite(rows[i]) and rows[i] > 0)]
+    if bad:
+        raise InputError(listed(f"{path}: roughness V must be a positive finite number (the observer compares "
+                                "ln V); not so for", bad), parameter="truth")
     return np.array([rows[i] for i in ids])
 
 
