@@ -219,7 +219,7 @@ def test_bootstrap_is_deterministic_for_a_seed_and_across_workers(noisy_trials):
 ])
 def test_bad_trials_are_refused_with_the_line(text, message):
     with pytest.raises(InputError, match=message):
-        parse_trials(text, "t.csv")
+        parse_trials(text, "t.csv", repeats="error")  # refuses contradictory duplicates too
 
 
 def test_trials_against_a_stimuli_table_and_repeats():
@@ -380,7 +380,8 @@ def test_cli_embed_writes_embedding_and_refuses_to_overwrite(tmp_path, capsys):
 ])
 def test_cli_bad_trials_exit_2(tmp_path, capsys, text, message):
     trials = _write(tmp_path / "t.csv", text)
-    assert main(["perception", "embed", str(trials), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    argv = ["perception", "embed", str(trials), "--out", str(tmp_path / "o"), "--quiet", "--repeats", "error"]
+    assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
 
