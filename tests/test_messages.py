@@ -279,3 +279,11 @@ def test_a_disconnected_design_is_warned_about(tmp_path, capsys):
     summary = json.loads((tmp_path / "emb" / "embedding.json").read_text())
     assert summary["disconnected_groups"] == [["d", "e", "f", "g"], ["a", "b", "c"]]
     assert len(summary["warnings"]) == 1 and "never compared" in summary["warnings"][0]
+
+
+def test_a_stimulus_without_roughness_is_named(tmp_path, capsys):
+    table, truth = _stimuli_and_truth(tmp_path)
+    truth.write_text(truth.read_text().replace("standard-1.0,0.06", "standard-1.0,0"))  # e.g. a flat texture's V
+    code, err = _cli(["perception", "simulate", "--stimuli", table, "--truth", truth, "--trials", "20",
+                      "--out", tmp_path / "sim"], capsys)
+    assert code == 2 and "not so for: standard-1.0 (V = 0)" in err

@@ -369,7 +369,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         values = stimulus_values(ids, [s.heightmap() for s in stimuli], args.engine, cache, lambda m: log(args, m))
         v = np.array([x.roughness for x in values])
         source = args.engine
-    truth = perceptual_coordinate(v)
+    truth = perceptual_coordinate(v, ids)
     subjects = [f"s{i}" for i in range(1, args.subjects + 1)]
     design = balanced_design(ids, args.trials, subjects, args.seed)
     index = {s: i for i, s in enumerate(ids)}
@@ -432,7 +432,6 @@ def run_plan(args: argparse.Namespace) -> int:
 
 def _read_truth(path: str, ids: list[str]):
     import csv
-    import math
 
     import numpy as np
 
@@ -450,10 +449,6 @@ def _read_truth(path: str, ids: list[str]):
     missing = [i for i in ids if i not in rows]
     if missing:
         raise InputError(listed(f"{path}: no roughness for", missing), parameter="truth")
-    bad = [f"{i} ({rows[i]:g})" for i in ids if not (math.isfinite(rows[i]) and rows[i] > 0)]
-    if bad:
-        raise InputError(listed(f"{path}: roughness V must be a positive finite number (the observer compares "
-                                "ln V); not so for", bad), parameter="truth")
     return np.array([rows[i] for i in ids])
 
 
