@@ -124,11 +124,11 @@ def picture_rgb(image) -> np.ndarray:
         return np.repeat(np.round(grey).astype(np.uint8)[..., None], 3, axis=2)
     if "A" in mode or "a" in mode or "transparency" in image.info:
         rgba = np.asarray(image.convert("RGBA"))
-        rgb, alpha = rgba[..., :3].astype(float), rgba[..., 3:].astype(float) / 255
-        drawn = rgb[alpha[..., 0] > 0]
-        light = drawn.size and float((drawn @ [0.299, 0.587, 0.114]).mean()) > 127.5
+        drawn = rgba[rgba[..., 3] > 0, :3]
+        light = drawn.size > 0 and float(drawn.mean(axis=0) @ [0.299, 0.587, 0.114]) > 127.5
+        alpha = rgba[..., 3:].astype(np.float32) / 255
         background = 0.0 if light else 255.0
-        return np.round(rgb * alpha + background * (1 - alpha)).astype(np.uint8)
+        return np.round(rgba[..., :3] * alpha + background * (1 - alpha)).astype(np.uint8)
     return np.asarray(image.convert("RGB"))
 
 
