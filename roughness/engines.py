@@ -165,8 +165,8 @@ def fem_spec(simulation: dict) -> str:
         else f"fem:{fidelity}"
 
 
-def make_engine(spec: str) -> Engine:
-    """Engine for a spec string; InputError lists the valid ones."""
+def make_engine(spec: str, parameter: str = "engines") -> Engine:
+    """Engine for a spec string; InputError lists the valid ones (naming ``parameter``, the option it came from)."""
     if spec.startswith("fem:") and spec[4:] in FEM_FIDELITIES:
         return FemEngine.of(spec[4:])
     if spec.startswith("fem:converged@"):
@@ -174,8 +174,11 @@ def make_engine(spec: str) -> Engine:
             tolerance = float(spec.partition("@")[2])
         except ValueError:
             raise InputError(f"engine {spec!r}: the tolerance after @ must be a number, e.g. fem:converged@0.01",
-                             parameter="engines") from None
-        engine = FemEngine.of("converged", {"tolerance": tolerance})  # SimConfig checks 0 < tolerance < 1
+                             parameter=parameter) from None
+        try:
+            engine = FemEngine.of("converged", {"tolerance": tolerance})  # SimConfig checks 0 < tolerance < 1
+        except InputError as err:
+            raise InputError(f"engine {spec!r}: {err}", parameter=parameter) from None
         return replace(engine, spec=spec)
     if spec == "surrogate" or spec.startswith("surrogate:"):
         return SurrogateEngine(spec, spec.partition(":")[2] or None)
@@ -183,7 +186,7 @@ def make_engine(spec: str) -> Engine:
         return ClassicalEngine(spec)
     valid = [f"fem:{f}" for f in FEM_FIDELITIES] + ["fem:converged@TOL", "surrogate", "surrogate:MODEL.onnx",
                                                     *MEASURES]
-    raise InputError(f"unknown engine {spec!r}; valid: {', '.join(valid)}", parameter="engines")
+    raise InputError(f"unknown engine {spec!r}; valid: {', '.join(valid)}", parameter=parameter)
 
 
 @dataclass(frozen=True)

@@ -115,6 +115,12 @@ class SimConfig:
             if real("curvature_mm", self.curvature_mm) == 0:
                 raise InputError("curvature_mm is a signed radius (> 0 convex, < 0 concave); 0 is not a radius "
                                  "(leave it unset for a flat base)", parameter="curvature_mm")
+            if abs(self.curvature_mm) < self.depth_mm:
+                raise InputError(
+                    f"a base of radius {abs(self.curvature_mm):g} mm is far below the {self.width_mm:g} mm skin "
+                    f"footprint's scale: at the {self.depth_mm:g} mm depth where the model reads the skin's strain it "
+                    f"is an edge, not a curved surface; |curvature_mm| must be at least {self.depth_mm:g} mm "
+                    "(the receptor depth)", parameter="curvature_mm")
             require_restable(self.base_shape(), self.width_mm)
 
     def base_shape(self) -> BaseShape:

@@ -41,7 +41,7 @@ class Detrend:
             raise InputError(f"detrend method must be one of {', '.join(METHODS)}; got {self.method!r}",
                              parameter="detrend")
         if self.cutoff_mm is not None:
-            positive("detrend cut-off (mm)", self.cutoff_mm)
+            positive("cutoff_mm", self.cutoff_mm)
 
 
 @dataclass(frozen=True)

@@ -235,7 +235,7 @@ class Simulator:
         except (ContactError, SolverError) as err:
             raise SimulationError(str(err)) from err
         stages["contact"] = time.perf_counter() - t
-        _require_small_strain_regime(config, state)
+        _require_small_strain_regime(config, state, shape, base_indentation)
         t = time.perf_counter()
         lam3 = block.sampler.max_compression(state.u)
         stages["strain"] = time.perf_counter() - t
@@ -283,9 +283,18 @@ def _require_resolved_footprint(heightmap: Heightmap, config: SimConfig) -> None
                          "resolved at the fingertip's scale; is the pixel size in mm?", parameter="pixel_mm")
 
 
-def _require_small_strain_regime(config: SimConfig, state: ContactResult) -> None:
-    """InputError if the skin was pushed beyond MAX_INDENTATION_TISSUES tissue thicknesses."""
+def _require_small_strain_regime(config: SimConfig, state: ContactResult, shape: BaseShape,
+                                 base_indentation_mm: float) -> None:
+    """InputError if the skin was pushed beyond MAX_INDENTATION_TISSUES tissue thicknesses; it names the
+    curved base when the base without its texture already pushes it that far, else the force."""
     ratio = state.indentation_mm / config.tissue_mm
+    base_ratio = base_indentation_mm / config.tissue_mm
+    if not shape.flat and base_ratio > MAX_INDENTATION_TISSUES:
+        raise InputError(
+            f"on the {shape.describe()} the skin would be pushed {base_indentation_mm:.4g} mm, {base_ratio:.3g} times "
+            f"its {config.tissue_mm:g} mm thickness (limit {MAX_INDENTATION_TISSUES:g}), before any texture: the "
+            f"base is too sharp for {config.force_n:g} N; use a larger radius (or a force below about "
+            f"{config.force_n * MAX_INDENTATION_TISSUES / base_ratio:.2g} N)", parameter="curvature_mm")
     if ratio > MAX_INDENTATION_TISSUES:
         below = config.force_n * MAX_INDENTATION_TISSUES / ratio
         raise InputError(

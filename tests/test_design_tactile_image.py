@@ -73,7 +73,7 @@ def test_plate_is_a_watertight_printable_mesh(plate, tmp_path):
 
 def test_too_few_textures_and_too_small_plates_are_refused():
     textures = [("a", standard_texture(1.0, seed=1), None), ("b", standard_texture(1.5, seed=1), None)]
-    with pytest.raises(InputError, match="3 flat colours but the palette only 2"):
+    with pytest.raises(InputError, match="3 flat colours but only 2 textures"):
         tactile_image(three_stripes(), textures, evaluator=EVALUATOR)
     with pytest.raises(InputError, match="smaller than the 10 mm skin footprint"):
         tactile_image(three_stripes(), textures + textures[:1], width_mm=15.0, evaluator=EVALUATOR)

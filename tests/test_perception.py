@@ -219,7 +219,7 @@ def test_bootstrap_is_deterministic_for_a_seed_and_across_workers(noisy_trials):
 ])
 def test_bad_trials_are_refused_with_the_line(text, message):
     with pytest.raises(InputError, match=message):
-        parse_trials(text, "t.csv")
+        parse_trials(text, "t.csv", repeats="error")  # refuses contradictory duplicates too
 
 
 def test_trials_against_a_stimuli_table_and_repeats():
@@ -231,9 +231,9 @@ def test_trials_against_a_stimuli_table_and_repeats():
     assert trials.rows[0]["rt_ms"] == "812" and trials.fieldnames[-1] == "rt_ms"
     a, b, c = 2, 1, 0
     assert trials.triplets.tolist() == [[a, b, c], [a, c, b], [a, c, b]]
-    # different subjects may disagree; the same subject twice is a contradiction unless kept
+    # different subjects may disagree; the same subject twice is a contradiction if asked to refuse those
     with pytest.raises(InputError, match="contradictory"):
-        parse_trials(text, "t.csv")
+        parse_trials(text, "t.csv", repeats="error")
 
 
 # --- observer and design -----------------------------------------------------------------------------
@@ -380,7 +380,8 @@ def test_cli_embed_writes_embedding_and_refuses_to_overwrite(tmp_path, capsys):
 ])
 def test_cli_bad_trials_exit_2(tmp_path, capsys, text, message):
     trials = _write(tmp_path / "t.csv", text)
-    assert main(["perception", "embed", str(trials), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    argv = ["perception", "embed", str(trials), "--out", str(tmp_path / "o"), "--quiet", "--repeats", "error"]
+    assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
 

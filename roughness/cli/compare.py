@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.report import write_report
 
     specs = list(dict.fromkeys([args.reference, *args.engines]))
-    engines = [make_engine(spec) for spec in specs]
+    engines = [make_engine(spec, "reference" if spec == args.reference else "engines") for spec in specs]
     out = Path(args.out)
     check_distinct({"--out": out}, {"INPUT": args.input})
     manifest = {"input": args.input, "n": args.n, "reference": args.reference, "engines": sorted(specs)}

@@ -5,6 +5,7 @@ import argparse
 import json
 import os
 import re
+import sys
 from pathlib import Path
 
 from .common import COUNT, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, log
@@ -51,8 +52,9 @@ def add_parser(sub) -> None:
                      help="bootstrap resamples for the 5-95%% intervals (default 500; 0: none)")
     emb.add_argument("--workers", type=COUNT, default=os.cpu_count() or 1,
                      help="processes for cross-validation and bootstrap (default: all cores)")
-    emb.add_argument("--repeats", choices=("error", "keep"), default="error",
-                     help="contradictory answers of one subject to the same trial: error (default) or keep both")
+    emb.add_argument("--repeats", choices=("keep", "error"), default="keep",
+                     help="one subject's different answers to a repeated trial: keep both (default: normal in "
+                          "psychophysics) or error (refuse them: data that should hold no repeats)")
     emb.add_argument("--scale", choices=("sdp", "thurstone"), default="sdp",
                      help="the 1-D coordinate: sdp (the SDP's principal coordinate, the paper's; default) or thurstone "
                           "(maximum likelihood under the Thurstone observer, started from the SDP: metric, in noise "
@@ -88,7 +90,7 @@ def add_parser(sub) -> None:
                      help="forces (N) of a re-fit over force (new FEM runs, cached; default: none)")
     add_overwrite(fit)
     add_quiet(fit)
-    finish(fit, run_fit)
+    finish(fit, run_fit, force_n="--forces")
 
     des = ps.add_parser("design", help="a balanced, randomised triplet trial list for an experiment")
     des.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (its ids are used)")
@@ -175,11 +177,14 @@ def run_embed(args: argparse.Namespace) -> int:
     from roughness.perception.parallel import stderr_progress
     from roughness.perception.plots import plot_cross_validation, plot_embedding
     from roughness.perception.stimuli import read_stimuli
-    from roughness.perception.trials import read_trials
+    from roughness.perception.trials import disconnection_warning, read_trials
 
     require_cvxpy()
     ids = [s.stimulus for s in read_stimuli(args.stimuli)] if args.stimuli else None
     trials = read_trials(args.trials, ids, args.repeats)
+    disconnected = disconnection_warning(trials.groups())
+    if disconnected:
+        print(f"roughness: warning: {args.trials}: {disconnected}", file=sys.stderr, flush=True)
     files = _outputs(args.out, ("embedding.csv", "embedding.json", "embedding.png", "cross_validation.png"),
                      args.overwrite, {"TRIALS": args.trials, "--stimuli": args.stimuli})
     log(args, f"{args.trials}: {len(trials)} trials, {len(trials.stimuli)} stimuli, "
@@ -368,7 +373,7 @@ def run_simulate(args: argparse.Namespace) -> int:
         values = stimulus_values(ids, [s.heightmap() for s in stimuli], args.engine, cache, lambda m: log(args, m))
         v = np.array([x.roughness for x in values])
         source = args.engine
-    truth = perceptual_coordinate(v)
+    truth = perceptual_coordinate(v, ids)
     subjects = [f"s{i}" for i in range(1, args.subjects + 1)]
     design = balanced_design(ids, args.trials, subjects, args.seed)
     index = {s: i for i, s in enumerate(ids)}

@@ -48,19 +48,27 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
+    from roughness.core.errors import InputError
     from roughness.core.files import atomic_write, check_distinct, check_output_folder
     from roughness.design.evaluation import Evaluator
     from roughness.design.palette import family_palette, load_palette, save_palette
-    from roughness.design.tactile_image import flat_colours, hex_colour, read_image, save_figures, tactile_image
+    from roughness.design.tactile_image import (describe_picture, flat_colours, hex_colour, read_image, save_figures,
+                                                tactile_image)
     from roughness.simulate.io import save_heightmap
 
     check_distinct({"--out": args.out}, {"IMAGE": args.image, "--palette": args.palette, "--model": args.model})
     out = check_output_folder(args.out, args.overwrite, "out")
     rgb = read_image(args.image)
-    colours, _ = flat_colours(rgb)
+    colours, _ = flat_colours(rgb, source=describe_picture(args.image))
+    if args.k is not None and args.k < len(colours):
+        raise InputError(f"the picture has {len(colours)} flat colours: a palette of {args.k} textures cannot cover "
+                         f"them (give at least {len(colours)})", "k")
     evaluator = Evaluator(args.model)
     if args.palette:
         textures = [(name, hm, m.get("fem_roughness")) for name, hm, m in load_palette(args.palette)]
+        if len(textures) < len(colours):
+            raise InputError(f"the picture has {len(colours)} flat colours but the palette only {len(textures)} "
+                             "textures", "palette")
     else:
         k = args.k or len(colours)
         log(args, f"tactile-image: {len(colours)} colours; making a palette of {k} textures {args.min_jnd:g} JND apart")

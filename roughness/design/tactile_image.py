@@ -91,7 +91,7 @@ def _rounded(a: np.ndarray) -> list:
 
 
 def read_image(path: str | Path) -> np.ndarray:
-    """RGB pixels (h, w, 3) uint8 of a picture file; InputError if it cannot be read."""
+    """RGB pixels (h, w, 3) uint8 of a picture file (``picture_rgb``); InputError if it cannot be read."""
     from PIL import Image, UnidentifiedImageError
 
     path = Path(path)
@@ -100,19 +100,67 @@ def read_image(path: str | Path) -> np.ndarray:
                          parameter="image")
     try:
         with Image.open(path) as image:
-            return np.asarray(image.convert("RGB"))
+            return picture_rgb(image)
     except (UnidentifiedImageError, OSError, ValueError) as err:
         raise InputError(f"{path} is not a readable image: {err}", parameter="image") from None
 
 
-def flat_colours(rgb: np.ndarray, min_fraction: float = MIN_COLOUR_FRACTION) -> tuple[np.ndarray, np.ndarray]:
-    """The picture's main colours (n, 3), lightest first, and each pixel's region index (h, w)."""
+def picture_rgb(image) -> np.ndarray:
+    """A PIL picture as RGB pixels (h, w, 3) uint8 whose distinct colours are the picture's.
+
+    16/32-bit greyscale (modes I;16*, I) is scaled to 8 bits (v / 257; values outside 0..65535: min..max),
+    floating-point greyscale (F) min..max: Pillow's own conversion clips them at 255, merging all but black.
+    A picture with transparency is composited over white, or over black when what is drawn on it is light
+    (a white logo on a transparent background): its shapes may be in the alpha channel only.
+    """
+    mode = image.mode
+    if mode.startswith("I") or mode == "F":
+        values = np.asarray(image, dtype=float)
+        if mode == "F" or values.min() < 0 or values.max() > 65535:
+            low, span = values.min(), np.ptp(values)
+            grey = (values - low) * (255 / span) if span > 0 else np.zeros_like(values)
+        else:
+            grey = values / 257
+        return np.repeat(np.round(grey).astype(np.uint8)[..., None], 3, axis=2)
+    if "A" in mode or "a" in mode or "transparency" in image.info:
+        rgba = np.asarray(image.convert("RGBA"))
+        drawn = rgba[rgba[..., 3] > 0, :3]
+        light = drawn.size > 0 and float(drawn.mean(axis=0) @ [0.299, 0.587, 0.114]) > 127.5
+        alpha = rgba[..., 3:].astype(np.float32) / 255
+        background = 0.0 if light else 255.0
+        return np.round(rgba[..., :3] * alpha + background * (1 - alpha)).astype(np.uint8)
+    return np.asarray(image.convert("RGB"))
+
+
+def describe_picture(path: str | Path) -> str:
+    """What a picture file is, from its header: e.g. ``x.png (a 16-bit greyscale picture, mode I;16)``."""
+    from PIL import Image
+
+    kinds = {"1": "1-bit black-and-white", "L": "8-bit greyscale", "LA": "8-bit greyscale with alpha",
+             "P": "8-bit palette", "RGB": "8-bit RGB", "RGBA": "8-bit RGB with alpha", "CMYK": "8-bit CMYK",
+             "I;16": "16-bit greyscale", "I;16B": "16-bit greyscale", "I;16L": "16-bit greyscale",
+             "I": "32-bit integer greyscale", "F": "32-bit floating-point greyscale"}
+    with Image.open(path) as image:
+        width, height = image.size
+        return f"{path} (a {width} x {height} {kinds.get(image.mode, 'picture')} picture, mode {image.mode})"
+
+
+def flat_colours(rgb: np.ndarray, min_fraction: float = MIN_COLOUR_FRACTION,
+                 source: str = "the picture") -> tuple[np.ndarray, np.ndarray]:
+    """The picture's main colours (n, 3), lightest first, and each pixel's region index (h, w).
+
+    ``source`` names the picture in the error when it has fewer than 2 main colours.
+    """
     flat = rgb.reshape(-1, 3)
     colours, inverse, counts = np.unique(flat, axis=0, return_inverse=True, return_counts=True)
     main = colours[counts >= min_fraction * len(flat)]
     if len(main) < 2:
-        raise InputError("the picture has fewer than 2 flat colours (each covering >= "
-                         f"{100 * min_fraction:g}% of its pixels)", parameter="image")
+        raise InputError(
+            f"{source} has fewer than 2 flat colours: {len(colours)} distinct colour(s) "
+            f"({', '.join(hex_colour(c) for c in colours[:5])}{', ...' if len(colours) > 5 else ''}), "
+            f"{len(main)} covering >= {100 * min_fraction:g}% of its pixels; a tactile image needs a picture with "
+            "2 or more flat colours, one per region (e.g. an 8-bit RGB or greyscale PNG, or shapes on a "
+            "transparent background)", parameter="image")
     lightness = main.astype(float) @ [0.299, 0.587, 0.114]
     main = main[np.argsort(-lightness, kind="stable")]
     nearest = np.argmin(((colours[:, None, :].astype(float) - main[None].astype(float)) ** 2).sum(-1), axis=1)
@@ -192,8 +240,8 @@ def tactile_image(rgb: np.ndarray, textures: list[tuple[str, Heightmap, float | 
     evaluator = evaluator or Evaluator()
     colours, picture_labels = flat_colours(rgb)
     if len(colours) > len(textures):
-        raise InputError(f"the picture has {len(colours)} flat colours but the palette only {len(textures)} textures",
-                         parameter="palette")
+        raise InputError(f"the picture has {len(colours)} flat colours but only {len(textures)} textures were given",
+                         parameter="textures")
     notes = []
     if len(textures) > len(colours):  # spread the regions over the palette: first, last and evenly between
         pick = np.round(np.linspace(0, len(textures) - 1, len(colours))).astype(int)

@@ -40,6 +40,11 @@ class Target:
     lambda_mm: float
     given_as: str  # "lambda", "roughness" or "like <source>"
 
+    @property
+    def parameter(self) -> str:
+        """The option the target came from (the CLI names it in errors about the target)."""
+        return {"lambda": "target_lambda", "roughness": "target_v"}.get(self.given_as, "like")
+
 
 @dataclass(frozen=True)
 class Step:
@@ -108,7 +113,7 @@ def target_of(evaluator: Evaluator, lambda_mm: float | None = None, roughness: f
              if v is not None]
     if len(given) != 1:
         raise InputError("give exactly one target: an equivalent wavelength, a V, or a reference texture"
-                         + (f" (got {', '.join(given)})" if given else ""), parameter="target_lambda")
+                         + (f" (got {', '.join(given)})" if given else ""), parameter=given[-1] if given else None)
     if lambda_mm is not None:
         lam = positive("target_lambda", lambda_mm)
         return Target(roughness_of_lambda(evaluator.scale, lam), lam, "lambda")
@@ -149,7 +154,7 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
         raise InputError(
             f"target V {target.roughness:.4f} (equivalent lambda {target.lambda_mm:.3f} mm) is out of reach by "
             f"{by} factors {lo:g}..{hi:g}: this texture reaches V {reachable[0]:.4f}..{reachable[1]:.4f} "
-            f"(lambda {lam_lo:.3f}..{lam_hi:.3f} mm) on the surrogate", parameter="target_lambda")
+            f"(lambda {lam_lo:.3f}..{lam_hi:.3f} mm) on the surrogate", parameter=target.parameter)
     notes = []
     if np.any(np.diff(v_grid) <= 0):
         notes.append(f"the surrogate's V does not rise monotonically with the {by} factor; the first crossing is used")

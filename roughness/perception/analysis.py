@@ -26,7 +26,7 @@ from .bootstrap import PERCENTILES, Bootstrap, bootstrap, thurstone_bootstrap
 from .crossval import CrossValidation, cross_validate
 from .embed import EmbedResult, TripletSDP, oriented, triplet_error
 from .thurstone import DEFAULT_LAPSE, ThurstoneFit, thurstone_scale
-from .trials import Trials
+from .trials import Trials, disconnection_warning
 
 SCALES = ("sdp", "thurstone")
 EMBEDDING_COLUMNS = ("stimulus", "coordinate", "low", "high")
@@ -51,8 +51,11 @@ class EmbeddingAnalysis:
         spectrum = self.fit.eigenvalues
         unique, inverse = trials.unique()
         weights = np.bincount(inverse, minlength=len(unique)).astype(float)
+        groups = trials.groups()
         return {
             "stimuli": len(self.stimuli), "trials": len(trials), "distinct_triplets": len(unique),
+            "disconnected_groups": [list(g) for g in groups] if len(groups) > 1 else None,
+            "warnings": [w for w in (disconnection_warning(groups),) if w],
             "subjects": len(set(trials.subjects)), "lambda": self.fit.lam,
             "lambda_source": "cross-validation" if self.cv else "given",
             "cross_validation": self.cv.summary() if self.cv else None,

@@ -15,6 +15,7 @@ Phi(0.174 / (sigma sqrt 2)) = 0.75, i.e. sigma = 0.174 / (0.674 sqrt 2) = 0.18.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,15 +23,20 @@ import numpy as np
 from roughness.core.checks import in_range, non_negative
 from roughness.core.errors import InputError
 
+from .trials import listed
+
 WEBER_FRACTION = 0.19
 DEFAULT_SIGMA = math.log(1 + WEBER_FRACTION) / (0.6744897501960817 * math.sqrt(2))  # 0.182
 
 
-def perceptual_coordinate(roughness: np.ndarray) -> np.ndarray:
-    """p = ln(V) / 2 of strain variations V (> 0)."""
+def perceptual_coordinate(roughness: np.ndarray, stimuli: Sequence[str] | None = None) -> np.ndarray:
+    """p = ln(V) / 2 of strain variations V (> 0); ``stimuli`` (their ids) name the offending ones in the error."""
     v = np.asarray(roughness, dtype=float)
-    if not np.all(np.isfinite(v) & (v > 0)):
-        raise InputError("the observer needs positive finite roughness values V for every stimulus")
+    bad = ~(np.isfinite(v) & (v > 0))
+    if np.any(bad):
+        names = [f"{stimuli[i] if stimuli is not None else f'#{i + 1}'} (V = {v[i]:g})" for i in np.flatnonzero(bad)]
+        raise InputError(listed("the observer needs a positive finite roughness V for every stimulus (it compares "
+                                "ln V; a flat or featureless texture has none); not so for", names))
     return 0.5 * np.log(v)
 
 

@@ -108,7 +108,7 @@ def plan_trials(ids: Sequence[str], roughness: np.ndarray, trial_counts: Sequenc
     for count in trial_counts:
         integer("trials", count, minimum=1)
     v = np.asarray(roughness, dtype=float)
-    truth = perceptual_coordinate(v)
+    truth = perceptual_coordinate(v, ids)
     if np.ptp(truth) == 0:
         raise InputError("all stimuli have the same V: there is no scale to recover")
     counts = sorted(set(int(c) for c in trial_counts))

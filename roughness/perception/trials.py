@@ -10,8 +10,9 @@ reference. Extra columns (response time, trial number, ...) are kept and written
 
 A row answers the triplet (reference, closer, farther). Two rows of one subject on the same
 reference and the same pair of comparisons that give opposite answers are *contradictory
-duplicates*: an error by default (``repeats="error"``, usually a data-entry or merge mistake); an
-experiment that repeats trials on purpose passes ``repeats="keep"`` and both answers are used.
+duplicates*. Repeated trials with different answers are normal in psychophysics (and what
+``perception simulate`` writes): both answers are used by default (``repeats="keep"``);
+``repeats="error"`` refuses them, to catch a data-entry or merge mistake in data with no repeats.
 """
 from __future__ import annotations
 
@@ -50,8 +51,21 @@ class Trials:
         keys, inverse = np.unique(self.triplets, axis=0, return_inverse=True)
         return keys, inverse.reshape(-1)
 
+    def groups(self) -> tuple[tuple[str, ...], ...]:
+        """The stimuli in groups never compared with each other (the connected components of the graph whose
+        edges join each trial's reference to its comparisons), largest first; one group if the design is connected."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
 
-def read_trials(path: str | Path, stimuli: Sequence[str] | None = None, repeats: str = "error") -> Trials:
+        n = len(self.stimuli)
+        ref = np.repeat(self.triplets[:, 0], 2)
+        graph = coo_matrix((np.ones(len(ref)), (ref, self.triplets[:, 1:].ravel())), shape=(n, n))
+        count, label = connected_components(graph, directed=False)
+        groups = [tuple(s for s, g in zip(self.stimuli, label) if g == k) for k in range(count)]
+        return tuple(sorted(groups, key=len, reverse=True))
+
+
+def read_trials(path: str | Path, stimuli: Sequence[str] | None = None, repeats: str = "keep") -> Trials:
     """Trials from a CSV file; ``stimuli`` (ids of a stimuli table), when given, must contain every id used."""
     path = Path(path)
     if not path.is_file():
@@ -64,7 +78,7 @@ def read_trials(path: str | Path, stimuli: Sequence[str] | None = None, repeats:
 
 
 def parse_trials(text: str, source: str = "trials", stimuli: Sequence[str] | None = None,
-                 repeats: str = "error") -> Trials:
+                 repeats: str = "keep") -> Trials:
     """Trials from CSV text; InputError names the file, the line and the problem."""
     if repeats not in REPEATS:
         raise InputError(f"repeats must be one of {', '.join(REPEATS)}, got {repeats!r}", parameter="repeats")
@@ -143,8 +157,21 @@ def _refuse_contradictions(source: str, lines: list[int], subjects: list[str], t
         first.setdefault(key, (line, c))
     if problems:
         raise InputError(listed(f"{source}: contradictory duplicates (same subject, reference and pair, opposite "
-                                 "answers; if trials were repeated on purpose, keep both answers: --repeats keep)", problems),
+                                 "answers; refused by --repeats error)",
+                                 problems),
                          parameter="trials")
+
+
+def disconnection_warning(groups: Sequence[Sequence[str]]) -> str | None:
+    """A warning naming the groups of stimuli never compared with each other, or None for one group."""
+    if len(groups) < 2:
+        return None
+    named = " | ".join(", ".join(g[:MAX_LISTED]) + (f" and {len(g) - MAX_LISTED} more" if len(g) > MAX_LISTED else "")
+                       for g in groups[:MAX_LISTED])
+    more = f" | and {len(groups) - MAX_LISTED} more groups" if len(groups) > MAX_LISTED else ""
+    return (f"the trials fall into {len(groups)} groups of stimuli never compared with each other ({named}{more}): "
+            "the embedding cannot place one group against another (their relative positions are arbitrary and "
+            "a group may collapse to a point); add trials that compare stimuli across the groups")
 
 
 def listed(what: str, items: list[str]) -> str:

@@ -1,0 +1,289 @@
+"""Clear messages (issue 26, root cause 9): errors name the option the value came from, pictures are read
+as what they are, simulated trials embed with default options, a disconnected design is warned about."""
+from __future__ import annotations
+
+import argparse
+import ast
+import itertools
+import json
+from importlib import import_module
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from roughness.cli import COMMANDS, build_parser, main
+from roughness.cli.common import error_message
+from roughness.core.errors import InputError
+from roughness.design.tactile_image import flat_colours, read_image
+from roughness.design.tune import Target, tune
+from roughness.perception.trials import parse_trials
+from roughness.simulate.config import SimConfig
+from roughness.simulate.curved import FLAT
+from roughness.simulate.heightmap import Heightmap
+from roughness.simulate.model import _require_small_strain_regime
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def _leaves(parser: argparse.ArgumentParser, path: tuple[str, ...] = ()):
+    subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    if not subs:
+        yield path, parser
+    for sub in subs:
+        for name, child in sub.choices.items():
+            yield from _leaves(child, path + (name,))
+
+
+def _names(parser: argparse.ArgumentParser) -> set[str]:
+    """The Python names a subcommand's errors may use: its flags' dests, their aliases, its positionals."""
+    return set(parser.get_default("flags") or {}) | {a.dest for a in parser._actions if not a.option_strings}
+
+
+def _flags(command: str) -> dict[str, str]:
+    parser = dict(_leaves(build_parser()))[tuple(command.split())]
+    return parser.get_default("flags")
+
+
+def _cli(argv: list[str], capsys) -> tuple[int, str]:
+    code = main([str(a) for a in argv])
+    return code, capsys.readouterr().err
+
+
+# --- every parameter= names a flag (or is documented as library-only) ----------------------------------------
+
+# Names InputErrors carry that no subcommand has as an option: the library's own argument or field names, for
+# Python callers (the CLI never passes a bad value there, or the CLI names its option on the way).
+LIBRARY_ONLY = {
+    "factor": "design.tune.scaled(factor): the CLI scales within --min-factor..--max-factor",
+    "lambdas": "perception.crossval.cross_validate(lambdas): the CLI takes one --lambda or cross-validates",
+    "textures": "design.tactile_image.tactile_image(textures): the CLI checks --k / --palette first",
+    "pairs": "SimConfig field (not an option)", "max_rounds": "SimConfig field", "h_contact_mm": "SimConfig field",
+    "depth_mm": "SimConfig field", "pair_distance_mm": "SimConfig field",
+    "cutoff_mm": "simulate.detrend.Detrend field (--detrend lowpass:MM is checked as it is parsed); fbm parameter",
+    "footprint width": "Heightmap.covers / max_in_footprint: the skin footprint width of a checked SimConfig/model",
+    "plots": "python -m surrogate.card --plots (a script, not a roughness subcommand)",
+    "checkpoints": "python -m surrogate.ensemble CHECKPOINTS (a script, not a roughness subcommand)",
+    # fields of a recipe file (load_recipe names the file and drops the parameter) or of --param KEY=VALUE
+    "families": "recipe field", "ranges": "recipe field", "perturb_probability": "recipe field",
+    "max_perturb_steps": "recipe field", "test_fraction": "recipe field", "max_steps": "perturbation (recipe)",
+    "hurst": "texture parameter (--param)", "rms_mm": "texture parameter (--param)",
+    "lambda_mm": "texture parameter (--param)", "base_diameter_mm": "texture parameter (--param)",
+    "top": "texture parameter (--param)", "top_diameter_mm": "texture parameter (--param)",
+}
+CHECK_HELPERS = {"real": 0, "positive": 0, "non_negative": 0, "in_range": 0, "integer": 0,
+                 "check_output": 2, "check_output_folder": 2}  # function -> position of its parameter-name argument
+
+
+def _parameter_names(path: Path) -> list[tuple[int, str]]:
+    """(line, name) of every literal parameter name in a file: InputError(..., parameter=...) or its second
+    positional argument, and the name argument of the checks in roughness/core (checks.py, files.py)."""
+    out = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if not isinstance(node, ast.Call):
+            continue
+        fn = node.func.id if isinstance(node.func, ast.Name) else getattr(node.func, "attr", None)
+        if fn in ("InputError", "OutputExists"):
+            given = [k.value for k in node.keywords if k.arg == "parameter"] + node.args[1:2]
+        elif fn in CHECK_HELPERS:
+            given = node.args[CHECK_HELPERS[fn]:CHECK_HELPERS[fn] + 1]
+        else:
+            continue
+        out += [(node.lineno, v.value) for v in given if isinstance(v, ast.Constant) and isinstance(v.value, str)]
+    return out
+
+
+def _sources() -> list[Path]:
+    return sorted(p for root in ("roughness", "simulate", "surrogate", "dataset") for p in (REPO / root).rglob("*.py"))
+
+
+def test_every_parameter_name_is_a_flag_or_library_only():
+    known = set().union(*(_names(p) for _, p in _leaves(build_parser())))
+    found = [(path, line, name) for path in _sources() for line, name in _parameter_names(path)]
+    assert len(found) > 100  # the scan sees the raises (a broken scan would pass vacuously)
+    unknown = [f"{p.relative_to(REPO)}:{line} {name!r}" for p, line, name in found
+               if name not in known and name not in LIBRARY_ONLY]
+    assert not unknown, f"parameter names that are no option of any subcommand (name the real one): {unknown}"
+    stale = set(LIBRARY_ONLY) - {name for _, _, name in found}
+    assert not stale, f"LIBRARY_ONLY lists names no longer raised: {stale}"
+
+
+def test_cli_modules_name_their_own_options():
+    """A parameter raised in roughness/cli/X.py names an option or positional of X's own subcommands."""
+    for module in sorted(set(COMMANDS.values())):
+        parser = argparse.ArgumentParser()
+        import_module(f"roughness.cli.{module}").add_parser(parser.add_subparsers())
+        own = set().union(*(_names(p) for _, p in _leaves(parser)))
+        names = _parameter_names(REPO / "roughness" / "cli" / f"{module}.py")
+        wrong = [(line, name) for line, name in names if name not in own]
+        assert not wrong, f"roughness/cli/{module}.py raises parameters it has no option for: {wrong}"
+
+
+# --- curved bases: the radius, not the force -----------------------------------------------------------------
+
+@pytest.mark.parametrize("radius", ["1e-9", "-1e-9", "0.5"])
+def test_a_radius_far_below_the_footprint_names_curvature_not_force(radius, tmp_path, capsys):
+    np.save(tmp_path / "map.npy", np.random.default_rng(0).random((240, 240)) * 0.05)
+    code, err = _cli(["simulate", tmp_path / "map.npy", "--pixel-mm", "0.05", f"--curvature-mm={radius}"], capsys)
+    assert code == 2
+    assert "--curvature-mm" in err and "--force" not in err
+    assert "at least 0.75 mm" in err and "not a curved surface" in err
+
+
+def test_a_base_too_sharp_for_the_force_is_blamed_on_the_base():
+    config = SimConfig(curvature_mm=1.0)
+    deep = SimpleNamespace(indentation_mm=5 * config.tissue_mm)  # 5 tissue thicknesses: beyond the limit of 4
+    with pytest.raises(InputError, match="before any texture: the base is too sharp") as err:
+        _require_small_strain_regime(config, deep, config.base_shape(), base_indentation_mm=4.5 * config.tissue_mm)
+    assert err.value.parameter == "curvature_mm" and "convex cylinder along x of radius 1 mm" in str(err.value)
+    # the base alone within the limit: the texture pushed the skin that far, the force is to blame
+    with pytest.raises(InputError, match="far too large for this texture") as err:
+        _require_small_strain_regime(config, deep, config.base_shape(), base_indentation_mm=1.0)
+    assert err.value.parameter == "force_n"
+    with pytest.raises(InputError) as err:
+        _require_small_strain_regime(SimConfig(), deep, FLAT, base_indentation_mm=4.5 * config.tissue_mm)
+    assert err.value.parameter == "force_n"
+
+
+# --- tune: the target's own option ---------------------------------------------------------------------------
+
+class _FlatSurrogate:
+    """An evaluator whose surrogate answers V = 0.01 for every texture (lambda 0.1 mm)."""
+
+    footprint_mm = 10.0
+
+    def surrogate(self, maps, tile=False):
+        return np.full(len(maps), 0.01), np.zeros(len(maps))
+
+    def lambda_of(self, v):
+        return 0.1
+
+
+@pytest.mark.parametrize("given_as, flag", [("like ref.npy", "--like"), ("roughness", "--target-v"),
+                                            ("lambda", "--target-lambda")])
+def test_an_out_of_reach_target_names_the_option_it_came_from(given_as, flag):
+    hm = Heightmap(np.random.default_rng(0).random((40, 40)) * 0.1, 0.25)
+    with pytest.raises(InputError, match="out of reach") as err:
+        tune(hm, Target(0.5, 2.0, given_as), "height", _FlatSurrogate(), tile=True)
+    message = error_message(err.value, _flags("tune"))
+    assert message.startswith(f"{flag}: ")
+    assert all(other not in message for other in ("--like", "--target-v", "--target-lambda") if other != flag)
+
+
+# --- tactile-image: what the picture is ----------------------------------------------------------------------
+
+def _grey16(levels: list[int]) -> np.ndarray:
+    """A 60 x 60 16-bit greyscale picture in vertical stripes of the given levels."""
+    a = np.zeros((60, 60), dtype=np.uint16)
+    for i, level in enumerate(levels):
+        a[:, i * 60 // len(levels):] = level
+    return a
+
+
+@pytest.mark.parametrize("suffix", [".png", ".tif"])
+def test_16_bit_greyscale_levels_are_distinct_flat_colours(suffix, tmp_path):
+    path = tmp_path / f"grey16{suffix}"
+    Image.fromarray(_grey16([0, 20000, 40000])).save(path)  # Pillow's own RGB conversion clips both to white
+    with Image.open(path) as image:
+        assert image.mode.startswith("I")
+    colours, labels = flat_colours(read_image(path))
+    assert len(colours) == 3
+    assert [tuple(c) for c in colours] == [(156,) * 3, (78,) * 3, (0,) * 3]  # v / 257, lightest first
+    assert labels[0, 0] == 2 and labels[0, 30] == 1 and labels[0, 59] == 0
+
+
+@pytest.mark.parametrize("ink", [(0, 0, 0), (255, 255, 255), (200, 30, 30)])
+def test_a_logo_on_a_transparent_background_has_two_colours(ink, tmp_path):
+    rgba = np.zeros((60, 60, 4), dtype=np.uint8)
+    rgba[..., :3] = ink  # the same colour everywhere: the shape is in the alpha channel only
+    rgba[15:45, 15:45, 3] = 255
+    rgba[14, 15:25, 3] = 96  # anti-aliased edge pixels (under 0.5% of the picture) join the nearest colour
+    Image.fromarray(rgba).save(tmp_path / "logo.png")
+    colours, labels = flat_colours(read_image(tmp_path / "logo.png"))
+    assert len(colours) == 2
+    inside, outside = labels[30, 30], labels[0, 0]
+    assert inside != outside and np.all(labels[15:45, 15:45] == inside) and (labels == inside).sum() == 30 * 30
+    assert tuple(colours[inside]) == ink  # the logo keeps its colour; the background contrasts with it
+
+
+def test_a_one_colour_picture_says_what_it_is_and_what_to_give(tmp_path, capsys):
+    Image.fromarray(_grey16([30000])).save(tmp_path / "one.png")
+    code, err = _cli(["tactile-image", tmp_path / "one.png", "--out", tmp_path / "plate"], capsys)
+    assert code == 2 and "Traceback" not in err
+    for part in ("16-bit greyscale", "mode I;16", "1 distinct colour", "#757575", "2 or more flat colours"):
+        assert part in err, (part, err)
+    assert not (tmp_path / "plate").exists()
+
+
+def test_too_few_textures_name_the_option_given(tmp_path, capsys):
+    Image.fromarray(_grey16([0, 20000, 40000])).save(tmp_path / "three.png")
+    code, err = _cli(["tactile-image", tmp_path / "three.png", "--out", tmp_path / "plate", "--k", "2"], capsys)
+    assert code == 2 and "--k: the picture has 3 flat colours" in err and "--palette" not in err
+
+
+# --- perception: repeated trials and disconnected designs ----------------------------------------------------
+
+STIMULI = ["standard-0.625", "standard-1.0", "standard-1.625", "flattop-0.1"]
+
+
+def _stimuli_and_truth(folder: Path) -> tuple[Path, Path]:
+    table, truth = folder / "stimuli.csv", folder / "truth.csv"
+    table.write_text("stimulus,texture,seed\n" + "".join(f"{s},{s},0\n" for s in STIMULI))
+    truth.write_text("stimulus,roughness\n" + "".join(f"{s},{v}\n" for s, v in zip(STIMULI, [0.03, 0.06, 0.11, 0.09])))
+    return table, truth
+
+
+def test_perception_simulate_output_embeds_with_default_options(tmp_path, capsys):
+    pytest.importorskip("cvxpy")
+    table, truth = _stimuli_and_truth(tmp_path)
+    code, err = _cli(["perception", "simulate", "--stimuli", table, "--truth", truth, "--trials", "60",
+                      "--sigma", "0.3", "--out", tmp_path / "sim", "--quiet"], capsys)
+    assert code == 0, err
+    text = (tmp_path / "sim" / "trials.csv").read_text()
+    with pytest.raises(InputError, match="contradictory duplicates"):  # a noisy observer answers repeats both ways
+        parse_trials(text, repeats="error")
+    code, err = _cli(["perception", "embed", tmp_path / "sim" / "trials.csv", "--out", tmp_path / "emb",
+                      "--folds", "2", "--resamples", "2", "--workers", "1", "--quiet"], capsys)
+    assert code == 0, err
+    assert "warning" not in err  # every stimulus compared with every other
+    summary = json.loads((tmp_path / "emb" / "embedding.json").read_text())
+    assert summary["trials"] == 60 and summary["disconnected_groups"] is None and summary["warnings"] == []
+    code, err = _cli(["perception", "embed", tmp_path / "sim" / "trials.csv", "--out", tmp_path / "emb2",
+                      "--repeats", "error"], capsys)
+    assert code == 2 and "contradictory duplicates" in err and "--repeats error" in err
+
+
+def _two_groups_text() -> str:
+    rows = ["subject,reference,left,right,answer"]
+    for group in (("a", "b", "c"), ("d", "e", "f", "g")):
+        for i, (r, left, right) in enumerate(itertools.permutations(group, 3)):
+            rows.append(f"s1,{r},{left},{right},{('left', 'right')[i % 2]}")
+    return "\n".join(rows) + "\n"
+
+
+def test_groups_of_a_design():
+    assert parse_trials(_two_groups_text()).groups() == (("d", "e", "f", "g"), ("a", "b", "c"))
+    bridged = _two_groups_text() + "s2,c,d,a,left\n"  # one trial comparing across the groups connects them
+    assert parse_trials(bridged).groups() == (("a", "b", "c", "d", "e", "f", "g"),)
+
+
+def test_a_disconnected_design_is_warned_about(tmp_path, capsys):
+    pytest.importorskip("cvxpy")
+    (tmp_path / "trials.csv").write_text(_two_groups_text())
+    code, err = _cli(["perception", "embed", tmp_path / "trials.csv", "--out", tmp_path / "emb", "--lambda", "0.1",
+                      "--resamples", "0", "--workers", "1", "--quiet"], capsys)
+    assert code == 0, err
+    assert "warning" in err and "2 groups of stimuli never compared with each other (d, e, f, g | a, b, c)" in err
+    summary = json.loads((tmp_path / "emb" / "embedding.json").read_text())
+    assert summary["disconnected_groups"] == [["d", "e", "f", "g"], ["a", "b", "c"]]
+    assert len(summary["warnings"]) == 1 and "never compared" in summary["warnings"][0]
+
+
+def test_a_stimulus_without_roughness_is_named(tmp_path, capsys):
+    table, truth = _stimuli_and_truth(tmp_path)
+    truth.write_text(truth.read_text().replace("standard-1.0,0.06", "standard-1.0,0"))  # e.g. a flat texture's V
+    code, err = _cli(["perception", "simulate", "--stimuli", table, "--truth", truth, "--trials", "20",
+                      "--out", tmp_path / "sim"], capsys)
+    assert code == 2 and "not so for: standard-1.0 (V = 0)" in err
