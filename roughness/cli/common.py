@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import json
 import math
 import os
 import re
@@ -146,6 +147,12 @@ def error_message(err: InputError, flags: dict[str, str]) -> str:
     if flag and "_" in err.parameter:  # the Python name (pixel_mm) reads as its flag (--pixel-mm)
         message = re.sub(rf"(?<![\w-]){re.escape(err.parameter)}(?![\w-])", flag, message)
     return f"{flag}: {message}" if flag and flag not in message else message
+
+
+def json_text(value: object, indent: int | None = None, default=None) -> str:
+    """``value`` as strict JSON: NaN or infinity is a bug at its source (which says null, with a note), so
+    it raises ValueError here rather than printing JSON that strict parsers refuse."""
+    return json.dumps(value, indent=indent, default=default, allow_nan=False)
 
 
 def write_stdout(text: str) -> None:
