@@ -2,11 +2,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
 from . import common
-from .common import FRACTION, POISSON, POSITIVE, SEED, Number, add_heightmap_args, log
+from .common import FRACTION, POISSON, POSITIVE, SEED, Number, add_heightmap_args, json_text, log
 
 SIGNED_RADIUS = Number(float)  # a signed radius in mm; 0 is refused by SimConfig (not a radius)
 
@@ -115,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
         save_vtu(result, sim.block(result.config), args.save_vtu)
         log(args, f"deformed mesh written to {args.save_vtu}")
     if args.json:
-        print(json.dumps({"input": args.heightmap, **result.summary()}))
+        print(json_text({"input": args.heightmap, **result.summary()}))
     else:
         _print_result(result)
     for note in result.unusual_notes:
