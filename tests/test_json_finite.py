@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from types import SimpleNamespace
 
 import numpy as np
@@ -187,6 +188,13 @@ CASES = {
 }
 
 
+# the same cases without --json: what the text must say (and it never says nan or inf)
+TEXT = {(("predict",), 0): ["below the standard scale"],
+        (("jnd",), 0): ["distance: none", "both below the standard scale", "TOO CLOSE"],
+        (("jnd",), 1): ["at least", "TELL APART"],
+        (("homogeneity",), 0): ["HOMOGENEOUS", "no roughness anywhere"]}  # not simulate: one FEM run is enough
+
+
 def test_every_json_command_is_swept():
     assert set(CASES) == JSON_COMMANDS
 
@@ -215,10 +223,8 @@ def near_zero(tmp_path, monkeypatch):
     return tmp_path
 
 
-@pytest.mark.parametrize("path, index", [(p, i) for p, cases in CASES.items() for i in range(len(cases))],
-                         ids=lambda v: " ".join(v) if isinstance(v, tuple) else str(v))
-def test_json_output_is_strict_and_sane_near_zero(path, index, near_zero, capsys, monkeypatch):
-    argv, expected, check = CASES[path][index]
+def _run_case(path, argv, expected, capsys, monkeypatch) -> str:
+    """Run one case; its stdout. Exit as expected, no traceback, a refusal (2) says why."""
     if path == ("simulate",):  # the FEM's V of a flat map is 0 or CG noise (1e-7): when 0 at one mesh only
         monkeypatch.setattr("roughness.simulate.converged.richardson", lambda *args: math.inf)
     try:
@@ -230,7 +236,28 @@ def test_json_output_is_strict_and_sane_near_zero(path, index, near_zero, capsys
     assert "Traceback" not in err
     if code == 2:
         assert err.strip(), "a refusal names its reason"
+    return out
+
+
+CASE_IDS = [(p, i) for p, cases in CASES.items() for i in range(len(cases))]
+
+
+@pytest.mark.parametrize("path, index", CASE_IDS, ids=lambda v: " ".join(v) if isinstance(v, tuple) else str(v))
+def test_json_output_is_strict_and_sane_near_zero(path, index, near_zero, capsys, monkeypatch):
+    argv, expected, check = CASES[path][index]
+    out = _run_case(path, argv, expected, capsys, monkeypatch)
     objects = [strict_json(line) for line in out.splitlines() if line.strip()]
-    assert objects or code == 2, "an answer prints JSON"
+    assert objects or expected == 2, "an answer prints JSON"
     if check:
         check(objects)
+
+
+@pytest.mark.parametrize("path, index", [c for c in CASE_IDS if c in TEXT],
+                         ids=lambda v: " ".join(v) if isinstance(v, tuple) else str(v))
+def test_text_output_says_below_the_scale(path, index, near_zero, capsys, monkeypatch):
+    argv, expected, _ = CASES[path][index]
+    out = _run_case(path, [a for a in argv if a != "--json"], expected, capsys, monkeypatch)
+    assert not re.search(r"\b(nan|inf|infinity)\b", out, re.IGNORECASE), out
+    assert "INHOMOGENEOUS" not in out.upper() or path != ("homogeneity",), out
+    for phrase in TEXT[path, index]:
+        assert phrase in out, out
