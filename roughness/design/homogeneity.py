@@ -211,7 +211,7 @@ def save_map(result: Homogeneity, heightmap: Heightmap, path) -> None:
                linewidths=0.4)
     fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="V of the window")
     ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"{result.verdict}: " + (
-        "every window below the standard scale" if result.spread_jnd is None else
+        "all below the standard scale" if result.spread_jnd is None else
         f"relative variance {_format(result.relative_variance, '.1e')}, spread {result.spread_jnd:.2f} JND"))
     fig.tight_layout()
     atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=80))
