@@ -11,10 +11,11 @@ ln(lambda_A / lambda_B) / ln(1.19). (A 19% step in V is only about half a JND.)
 The scale has a floor (``StandardScale.floor``): the V of the power law at ``FLOOR_LAMBDA_MM`` =
 0.2 mm, the shortest bump wavelength the standard textures can be drawn with (``MIN_PIXELS_PER_LAMBDA``
 = 4 pixels of the scale's 0.05 mm pixels), about 6.5 JND below the finest standard (0.625 mm): V about
-0.0031 at every tabulated fidelity, a ninth of the finest standard's. Down to it the power law still places bump textures at their own
-wavelength (the shipped surrogate reads bumps of 0.2, 0.25 and 0.3125 mm at 0.207, 0.242 and
-0.292 mm); below it no standard-like texture could be equivalent, and V there is within a few
-times the engines' own noise of zero (the ensemble's spread on a flat map is 1e-4). A V below the
+0.0031 at every tabulated fidelity, a ninth of the finest standard's. Down to it the power law still
+places bump textures at their own wavelength (the shipped surrogate reads bumps of 0.2, 0.25 and
+0.3125 mm at 0.207, 0.242 and 0.292 mm); below it no standard-like texture could be equivalent, and
+V there is within a few times the engines' own noise of zero (the ensemble's spread on a flat map is
+1e-4). A V below the
 floor is placed *below the scale*: no equivalent wavelength, no JND (``Placement.below_scale``),
 instead of the power law's meaningless microns (a flat plate was "lambda 4e-6 mm, -68 JND").
 
@@ -38,7 +39,7 @@ import argparse
 import json
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -96,13 +97,13 @@ class StandardScale:
         if len(v) != len(self.lambdas_mm) or len(v) < 2 or not np.all(v > 0) or not np.all(np.diff(v) > 0):
             raise ValueError(f"standard scale ({self.fidelity}) must be positive and rise with lambda: {self.roughness}")
 
-    @property
+    @cached_property
     def power_law(self) -> tuple[float, float]:
         """(a, b) of V = a lambda^b, least squares in log-log over the table (lambda in mm)."""
         b, log_a = np.polyfit(np.log(self.lambdas_mm), np.log(self.roughness), 1)
         return float(math.exp(log_a)), float(b)
 
-    @property
+    @cached_property
     def floor(self) -> float:
         """V below which a roughness is below the scale (module docstring): the power law at ``floor_lambda_mm``."""
         a, b = self.power_law
@@ -112,8 +113,7 @@ class StandardScale:
         """Equivalent wavelength (mm) of a roughness V, and whether it lies on the scale (not extrapolated).
 
         No floor: the design searches need a continuous map; what users see goes through ``place``."""
-        if not math.isfinite(roughness) or roughness < 0:
-            raise ValueError(f"roughness must be finite and >= 0, got {roughness}")
+        _check(roughness)
         log_v = np.log(self.roughness)
         x = math.log(max(roughness, 1e-12))  # V = 0 (flat): the smallest V a float field resolves
         if log_v[0] <= x <= log_v[-1]:
@@ -125,8 +125,7 @@ class StandardScale:
         """Equivalent lambda (mm) and signed JND distance (on lambda) from the nearest standard texture;
         below the floor neither (``below_scale``; the nearest standard is then the finest)."""
         floor = self.floor
-        if roughness < floor:
-            self.equivalent_lambda(roughness)  # the same checks of the value
+        if _check(roughness) < floor:
             return Placement(None, False, f"standard-{self.lambdas_mm[0]:g}", None, True, floor)
         lam, on_scale = self.equivalent_lambda(roughness)
         nearest = int(np.argmin(np.abs(np.log(self.lambdas_mm) - math.log(lam))))
@@ -136,6 +135,13 @@ class StandardScale:
     def floored_lambda(self, roughness: float) -> float:
         """Equivalent wavelength (mm) of V counted at the floor when below it: the scale's absolute threshold."""
         return self.equivalent_lambda(max(roughness, self.floor))[0]
+
+
+def _check(roughness: float) -> float:
+    """``roughness``; ValueError unless it is finite and >= 0."""
+    if not math.isfinite(roughness) or roughness < 0:
+        raise ValueError(f"roughness must be finite and >= 0, got {roughness}")
+    return roughness
 
 
 @dataclass(frozen=True)
