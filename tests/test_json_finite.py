@@ -36,6 +36,15 @@ def strict_json(text: str):
     return json.loads(text, parse_constant=refuse)
 
 
+def test_json_text_writes_null_where_a_number_is_not_finite():
+    from roughness.cli.common import json_text
+
+    text = json_text({"a": math.nan, "b": [1.0, np.float64(math.inf)], "c": {"d": -math.inf}, "e": 2.5})
+    assert strict_json(text) == {"a": None, "b": [1.0, None], "c": {"d": None}, "e": 2.5,
+                                 "non_finite": ["a", "b[1]", "c.d"]}
+    assert strict_json(json_text({"e": 2.5})) == {"e": 2.5}  # no note when all is finite
+
+
 # ---- the floor -------------------------------------------------------------------------------------------------
 
 def test_floor_is_the_shortest_standard_bump_on_the_power_law():
@@ -248,6 +257,7 @@ def test_json_output_is_strict_and_sane_near_zero(path, index, near_zero, capsys
     out = _run_case(path, argv, expected, capsys, monkeypatch)
     objects = [strict_json(line) for line in out.splitlines() if line.strip()]
     assert objects or expected == 2, "an answer prints JSON"
+    assert not any("non_finite" in o for o in objects), "undefined numbers are null with a note at their source"
     if check:
         check(objects)
 
