@@ -20,6 +20,7 @@ engines share one scale; equivalent wavelengths are read off the standard scale 
 from __future__ import annotations
 
 import itertools
+import math
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
@@ -302,9 +303,13 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
                 notes.append(f"uncertain: relative spread {rel:.3g} above the limit {max_std:.3g}")
             if engine == "fem" or (engine == "auto" and notes):
                 r = fem.simulate(hm)
+                error = r.discretization_error
+                if error is not None and not math.isfinite(error):  # relative to V = 0: undefined, not Infinity
+                    error = None
+                    notes.append("discretization error undefined: V is 0 at this mesh but not at the coarser one")
                 result = Prediction(source, r.roughness, "fem", fem.fidelity, not why, r.seconds,
                                     fem_scale.place(r.roughness), notes, r.roughness_stderr,
-                                    discretization_error=r.discretization_error)
+                                    discretization_error=error)
             else:
                 result = Prediction(source, float(v), "surrogate", model.fidelity, not why, share,
                                     surrogate_scale.place(float(v)), notes, roughness_std=std)

@@ -41,7 +41,8 @@ class Note:
     conditions do not hold within tolerance: what is left), ``cycled`` (a contact set recurred,
     so the contact steps were damped; unusual if it did not converge), ``locking`` (P1 near
     incompressibility), ``unresolved_texture`` (features finer than the contact mesh), ``tolerance_not_met``
-    (``converged`` stopped at its finest level above the tolerance).
+    (``converged`` stopped at its finest level above the tolerance), ``discretization_error_undefined`` (V is 0
+    at this mesh but not at the coarser one: no relative error; written by ``Result.summary``).
     """
 
     code: str
@@ -92,12 +93,20 @@ class Result:
                 "iterations", "cg_iterations", "amg_setups", "unresolved_nodes", "cycled", "nodes", "dofs",
                 "seconds", "discretization_error")
         out = {k: getattr(self, k) for k in keys}
+        notes = list(self.notes)
+        ladder = [asdict(level) for level in self.ladder]
+        if any(_undefined(x.get("discretization_error")) for x in [out, *ladder]):
+            # relative to V = 0 (simulate.discretization.richardson): undefined, null rather than Infinity
+            for x in (out, *ladder):
+                x["discretization_error"] = None if _undefined(x["discretization_error"]) else x["discretization_error"]
+            notes.append(Note("discretization_error_undefined", "V is 0 at a mesh but not at the next coarser one "
+                              "(see ladder): its relative discretization error is undefined", unusual=False))
         out.update(stage_seconds={k: round(v, 4) for k, v in self.stage_seconds.items()},
-                   contact_history=self.contact_history, notes=[asdict(n) for n in self.notes],
+                   contact_history=self.contact_history, notes=[asdict(n) for n in notes],
                    fidelity=self.config.fidelity, h_contact_mm=self.config.h_contact_mm,
                    force_n=self.config.force_n, poisson=self.config.poisson, contact=self.config.contact,
                    element=self.config.element, bone=self.config.bone, tolerance=self.config.tolerance,
-                   ladder=[asdict(level) for level in self.ladder],
+                   ladder=ladder,
                    contact_check=None if self.contact_check is None else asdict(self.contact_check))
         if self.config.curvature_mm is not None:  # the curved base under the texture
             out.update(curvature_mm=self.config.curvature_mm, base=self.config.base,
@@ -107,6 +116,10 @@ class Result:
     @property
     def unusual_notes(self) -> list[Note]:
         return [n for n in self.notes if n.unusual]
+
+
+def _undefined(value: float | None) -> bool:
+    return value is not None and not math.isfinite(value)
 
 
 class Block:

@@ -8,6 +8,23 @@ about as lambda^2), and beyond either end the power law V = a lambda^b fitted to
 lambda, so distances are counted in just-noticeable differences of the equivalent wavelength:
 ln(lambda_A / lambda_B) / ln(1.19). (A 19% step in V is only about half a JND.)
 
+The scale has a floor (``StandardScale.floor``): the V of the power law at ``FLOOR_LAMBDA_MM`` =
+0.2 mm, the shortest bump wavelength the standard textures can be drawn with (``MIN_PIXELS_PER_LAMBDA``
+= 4 pixels of the scale's 0.05 mm pixels), about 6.5 JND below the finest standard (0.625 mm): V about
+0.0031 at every tabulated fidelity, a ninth of the finest standard's. Down to it the power law still
+places bump textures at their own wavelength (the shipped surrogate reads bumps of 0.2, 0.25 and
+0.3125 mm at 0.207, 0.242 and 0.292 mm); below it no standard-like texture could be equivalent, and
+V there is within a few times the engines' own noise of zero (the ensemble's spread on a flat map is
+1e-4). A V below the
+floor is placed *below the scale*: no equivalent wavelength, no JND (``Placement.below_scale``),
+instead of the power law's meaningless microns (a flat plate was "lambda 4e-6 mm, -68 JND").
+
+Distances (``jnd_distance``) treat the floor as the scale's absolute threshold: a V below it is
+counted at the floor, so a distance from a texture below the scale is a lower bound
+(``JndDistance.lower_bound``), and two textures both below it are "too close" with no JND at all.
+Standard errors are carried in V and mapped through d ln(lambda) = dV / (b max(V, floor)), which is
+bounded at zero, instead of the relative errors se / V that explode there.
+
 Regenerate the shipped table (``models/standard_scale.json``, a few minutes on 2 cores)::
 
     python -m roughness.surrogate.calibration --fidelities coarse default          # 5 seeds each
@@ -22,7 +39,7 @@ import argparse
 import json
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -33,21 +50,32 @@ from roughness.models import MODELS_DIR
 
 WEBER_FRACTION = 0.19
 SCALE_PATH = MODELS_DIR / "standard_scale.json"
+FLOOR_LAMBDA_MM = 4 * 0.05  # dataset.textures.MIN_PIXELS_PER_LAMBDA pixels of the standard 0.05 mm (dataset.grid)
 
 
 @dataclass(frozen=True)
 class Placement:
-    """Where a roughness V sits on the standard scale."""
+    """Where a roughness V sits on the standard scale (module docstring: the floor)."""
 
-    equivalent_lambda_mm: float  # interpolated on the scale; the fitted power law beyond its ends
-    on_scale: bool  # False if V lies below the finest or above the coarsest standard texture (extrapolated)
+    equivalent_lambda_mm: float | None  # interpolated on the scale; the fitted power law beyond its ends; None below
+    on_scale: bool  # False if V lies below the finest or above the coarsest standard texture
     nearest_standard: str  # e.g. "standard-1.0"
-    jnd_from_nearest: float  # signed, on lambda: positive = rougher than the nearest standard texture
+    jnd_from_nearest: float | None  # signed, on lambda: positive = rougher than the nearest standard; None below
+    below_scale: bool = False  # V below the scale's floor: not placed
+    floor: float = 0.0  # the floor's V
 
     def as_dict(self) -> dict:
         return {"equivalent_lambda_mm": self.equivalent_lambda_mm, "on_scale": self.on_scale,
-                "extrapolated": not self.on_scale, "nearest_standard": self.nearest_standard,
+                "extrapolated": not self.on_scale and not self.below_scale, "below_scale": self.below_scale,
+                "scale_floor_roughness": self.floor, "nearest_standard": self.nearest_standard,
                 "jnd_from_nearest": self.jnd_from_nearest}
+
+    def describe(self) -> str:
+        """The placement in words (no V)."""
+        if self.below_scale:
+            return f"below the standard scale (V < floor {self.floor:.4f}): no equivalent lambda"
+        where = "" if self.on_scale else " (extrapolated off the scale)"
+        return f"lambda {self.equivalent_lambda_mm:.3f} mm{where}"
 
 
 def jnd(lambda_a_mm: float, lambda_b_mm: float) -> float:
@@ -62,22 +90,30 @@ class StandardScale:
     lambdas_mm: tuple[float, ...]
     roughness: tuple[float, ...]
     fidelity: str
+    floor_lambda_mm: float = FLOOR_LAMBDA_MM  # the floor: V of the power law here (module docstring)
 
     def __post_init__(self) -> None:
         v = np.asarray(self.roughness)
         if len(v) != len(self.lambdas_mm) or len(v) < 2 or not np.all(v > 0) or not np.all(np.diff(v) > 0):
             raise ValueError(f"standard scale ({self.fidelity}) must be positive and rise with lambda: {self.roughness}")
 
-    @property
+    @cached_property
     def power_law(self) -> tuple[float, float]:
         """(a, b) of V = a lambda^b, least squares in log-log over the table (lambda in mm)."""
         b, log_a = np.polyfit(np.log(self.lambdas_mm), np.log(self.roughness), 1)
         return float(math.exp(log_a)), float(b)
 
+    @cached_property
+    def floor(self) -> float:
+        """V below which a roughness is below the scale (module docstring): the power law at ``floor_lambda_mm``."""
+        a, b = self.power_law
+        return a * self.floor_lambda_mm**b
+
     def equivalent_lambda(self, roughness: float) -> tuple[float, bool]:
-        """Equivalent wavelength (mm) of a roughness V, and whether it lies on the scale (not extrapolated)."""
-        if not math.isfinite(roughness) or roughness < 0:
-            raise ValueError(f"roughness must be finite and >= 0, got {roughness}")
+        """Equivalent wavelength (mm) of a roughness V, and whether it lies on the scale (not extrapolated).
+
+        No floor: the design searches need a continuous map; what users see goes through ``place``."""
+        _check(roughness)
         log_v = np.log(self.roughness)
         x = math.log(max(roughness, 1e-12))  # V = 0 (flat): the smallest V a float field resolves
         if log_v[0] <= x <= log_v[-1]:
@@ -86,40 +122,92 @@ class StandardScale:
         return float(math.exp((x - math.log(a)) / b)), False
 
     def place(self, roughness: float) -> Placement:
-        """Equivalent lambda (mm) and signed JND distance (on lambda) from the nearest standard texture."""
+        """Equivalent lambda (mm) and signed JND distance (on lambda) from the nearest standard texture;
+        below the floor neither (``below_scale``; the nearest standard is then the finest)."""
+        floor = self.floor
+        if _check(roughness) < floor:
+            return Placement(None, False, f"standard-{self.lambdas_mm[0]:g}", None, True, floor)
         lam, on_scale = self.equivalent_lambda(roughness)
         nearest = int(np.argmin(np.abs(np.log(self.lambdas_mm) - math.log(lam))))
-        return Placement(lam, on_scale, f"standard-{self.lambdas_mm[nearest]:g}", jnd(lam, self.lambdas_mm[nearest]))
+        return Placement(lam, on_scale, f"standard-{self.lambdas_mm[nearest]:g}", jnd(lam, self.lambdas_mm[nearest]),
+                         False, floor)
+
+    def floored_lambda(self, roughness: float) -> float:
+        """Equivalent wavelength (mm) of V counted at the floor when below it: the scale's absolute threshold."""
+        return self.equivalent_lambda(max(roughness, self.floor))[0]
+
+
+def _check(roughness: float) -> float:
+    """``roughness``; ValueError unless it is finite and >= 0."""
+    if not math.isfinite(roughness) or roughness < 0:
+        raise ValueError(f"roughness must be finite and >= 0, got {roughness}")
+    return roughness
 
 
 @dataclass(frozen=True)
 class JndDistance:
-    """Signed distance of two roughness values on the standard scale, in JNDs of the equivalent wavelength."""
+    """Signed distance of two roughness values on the standard scale, in JNDs of the equivalent wavelength.
 
-    jnd: float  # ln(lambda_a / lambda_b) / ln(1.19): positive = a feels rougher
-    jnd_stderr: float | None  # from the values' standard errors (None if either has none)
+    A V below the scale's floor is counted at the floor (module docstring): the distance from it is then
+    a lower bound (``lower_bound``); with both below there is no distance (``jnd`` None) and the verdict
+    is "too close": the scale resolves nothing smoother than its floor.
+    """
+
+    jnd: float | None  # ln(lambda_a / lambda_b) / ln(1.19): positive = a feels rougher; None: both below the scale
+    jnd_stderr: float | None  # from the values' standard errors (None if either has none, or both below the scale)
     a: Placement
     b: Placement
 
     @property
+    def lower_bound(self) -> bool:
+        """One of the two is below the scale: counted at the floor, so the distance is at least ``jnd``."""
+        return self.a.below_scale != self.b.below_scale
+
+    @property
     def verdict(self) -> str:
-        """"tell apart" at one JND or more, "too close" below; "borderline" if +-2 standard errors straddle 1."""
+        """"tell apart" at one JND or more, "too close" below (and when both are below the scale);
+        "borderline" if +-2 standard errors straddle 1."""
+        if self.jnd is None:
+            return "too close"
         d = abs(self.jnd)
         if self.jnd_stderr is not None and d - 2 * self.jnd_stderr < 1 <= d + 2 * self.jnd_stderr:
             return "borderline"
         return "tell apart" if d >= 1 else "too close"
 
+    @property
+    def note(self) -> str:
+        """Why the distance is a bound or absent (empty when both are on or off the ends of the scale)."""
+        floor = self.a.floor
+        if self.a.below_scale and self.b.below_scale:
+            return f"both below the standard scale (V < {floor:.4f}): too smooth for the scale to tell apart"
+        if self.lower_bound:
+            which = "A" if self.a.below_scale else "B"
+            return (f"{which} is below the standard scale (V < {floor:.4f}) and is counted at its floor: "
+                    "at least this far apart")
+        return ""
+
+    def as_dict(self) -> dict:
+        return {"jnd": self.jnd, "jnd_stderr": self.jnd_stderr, "jnd_is_lower_bound": self.lower_bound,
+                "below_scale": [k for k, p in (("a", self.a), ("b", self.b)) if p.below_scale],
+                "verdict": self.verdict, "note": self.note}
+
 
 def jnd_distance(scale: StandardScale, v_a: float, v_b: float, se_a: float | None = None,
                  se_b: float | None = None) -> JndDistance:
-    """JND distance of V_a from V_b; standard errors propagate through lambda ~ V^(1/b) of the fitted power law."""
+    """JND distance of V_a from V_b, each V counted at least at the scale's floor.
+
+    Standard errors (of V) propagate through lambda ~ V^(1/b) of the fitted power law, with the slope
+    at the floor for a V below it: se of ln lambda = se / (b max(V, floor)), bounded as V -> 0.
+    """
     a, b = scale.place(v_a), scale.place(v_b)
+    if a.below_scale and b.below_scale:
+        return JndDistance(None, None, a, b)
     se = None
     if se_a is not None and se_b is not None:
-        exponent = scale.power_law[1]
-        se_ln = math.hypot(se_a / max(v_a, 1e-12), se_b / max(v_b, 1e-12)) / exponent  # of ln(lambda_a / lambda_b)
+        exponent, floor = scale.power_law[1], scale.floor
+        se_ln = math.hypot(se_a / max(v_a, floor), se_b / max(v_b, floor)) / exponent  # of ln(lambda_a / lambda_b)
         se = se_ln / math.log(1 + WEBER_FRACTION)
-    return JndDistance(jnd(a.equivalent_lambda_mm, b.equivalent_lambda_mm), se, a, b)
+    return JndDistance(jnd(scale.floored_lambda(v_a), scale.floored_lambda(v_b)), se, a, b)
 
 
 @lru_cache(maxsize=8)

@@ -351,8 +351,9 @@ def test_standard_scale_placement():
     high = scale.place(0.1 * 4.0**2)  # beyond the coarsest standard: extrapolated with the fitted power law
     assert not high.on_scale and high.as_dict()["extrapolated"] and high.equivalent_lambda_mm == pytest.approx(4.0)
     assert high.jnd_from_nearest == pytest.approx(math.log(2) / math.log(1.19)) and high.nearest_standard == "standard-2"
-    low = scale.place(0.0)
-    assert not low.on_scale and 0 < low.equivalent_lambda_mm < 0.5 and np.isfinite(low.jnd_from_nearest)
+    low = scale.place(0.0)  # below the scale's floor (V at lambda 0.2 mm): not placed, no microns of lambda
+    assert low.below_scale and not low.on_scale and low.equivalent_lambda_mm is None and low.jnd_from_nearest is None
+    assert 0 < scale.place(scale.floor).equivalent_lambda_mm < 0.5  # extrapolated down to the floor
     with pytest.raises(ValueError):
         scale.place(float("nan"))
     with pytest.raises(ValueError, match="rise with lambda"):
@@ -391,7 +392,8 @@ def test_extreme_inputs_give_finite_answers_or_are_flagged():
                for name, (h, px, _) in cases.items()}
     for name, p in answers.items():
         assert np.isfinite(p.roughness) and p.roughness >= 0, name
-        assert np.isfinite(p.placement.jnd_from_nearest), name
+        assert p.placement.below_scale or np.isfinite(p.placement.jnd_from_nearest), name
+    assert answers["flat"].placement.below_scale  # not a lambda of microns
     assert not answers["flat"].in_domain  # nothing like it was trained on
     assert answers["tiny pixels"].in_domain  # the same texture, finer sampled: the same patch
     # 1 um of noise is nearly flat, as FEM finds (V below 1% of the bumps'): tiny, whether flagged or not. So is

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import json
 import math
 import os
 import re
@@ -146,6 +147,31 @@ def error_message(err: InputError, flags: dict[str, str]) -> str:
     if flag and "_" in err.parameter:  # the Python name (pixel_mm) reads as its flag (--pixel-mm)
         message = re.sub(rf"(?<![\w-]){re.escape(err.parameter)}(?![\w-])", flag, message)
     return f"{flag}: {message}" if flag and flag not in message else message
+
+
+def json_text(value: object, indent: int | None = None, default=None) -> str:
+    """``value`` as strict JSON, which has no NaN or Infinity (strict parsers refuse them).
+
+    Where a number is undefined the command writes null with a note at its source; a non-finite float
+    that still gets here (a bug there) becomes null too, and a top-level object lists where under
+    ``non_finite``, so the output stays valid and says what is missing."""
+    where: list[str] = []
+    clean = _finite(value, "", where)
+    if where and isinstance(clean, dict):
+        clean = {**clean, "non_finite": where}
+    return json.dumps(clean, indent=indent, default=default, allow_nan=False)
+
+
+def _finite(value: object, path: str, where: list[str]) -> object:
+    """``value`` with every non-finite float replaced by None (its path appended to ``where``)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        where.append(path or "(value)")
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v, f"{path}.{k}" if path else str(k), where) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v, f"{path}[{i}]", where) for i, v in enumerate(value)]
+    return value
 
 
 def write_stdout(text: str) -> None:

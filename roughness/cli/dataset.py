@@ -2,10 +2,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
-from .common import COUNT, FRACTION, SEED, add_overwrite, finish, write_stdout
+from .common import COUNT, FRACTION, SEED, add_overwrite, finish, json_text, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -73,7 +72,7 @@ def build(args: argparse.Namespace) -> int:
         print(f"roughness: interrupted; the samples written so far are kept in {args.out}; "
               "run the same command again to resume", file=sys.stderr)
         return 130
-    write_stdout(json.dumps(counts))
+    write_stdout(json_text(counts))
     return 0
 
 
@@ -84,14 +83,14 @@ def labels(args: argparse.Namespace) -> int:
     check_distinct({"--out": args.out}, {"DATASET": args.dataset})
     written = export_labels(args.dataset, args.out, args.overwrite)
     ok = sum(label.values["status"] == "ok" for label in written.labels.values())
-    write_stdout(json.dumps({"labels": str(args.out), "samples": len(written), "ok": ok}))
+    write_stdout(json_text({"labels": str(args.out), "samples": len(written), "ok": ok}))
     return 0
 
 
 def info(args: argparse.Namespace) -> int:
     from roughness.dataset.store import info
 
-    write_stdout(json.dumps(info(args.dataset), indent=None if args.json else 1, default=str))
+    write_stdout(json_text(info(args.dataset), indent=None if args.json else 1, default=str))
     return 0
 
 

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 
 from .common import (
     COUNT,
@@ -12,6 +11,7 @@ from .common import (
     add_reading_args,
     defaults,
     finish,
+    json_text,
     log,
     write_stdout,
 )
@@ -63,12 +63,18 @@ def run(args: argparse.Namespace) -> int:
         save_map(result, hm, args.map, args.overwrite)
     summary = {"input": args.heightmap, **result.summary()}
     if args.json:
-        write_stdout(json.dumps(summary))
+        write_stdout(json_text(summary))
         return 0
+    stats = ""  # every window below the scale: the note says so
+    if result.spread_jnd is not None:
+        paper = ("undefined (mean V below the scale)" if result.relative_variance is None else
+                 f"{result.relative_variance:.1e} (the paper: ~1e-4 typical, > 1e-3 inhomogeneous: "
+                 f"{result.paper_verdict})")
+        stats = (f", relative variance {paper}; spread {result.spread_jnd:.2f} JND (SD), 10-90% range "
+                 f"{result.range_jnd:.2f} JND (a fingertip tells parts apart at >= 1)")
+    note = f"; {result.note}" if result.note else ""
     write_stdout(
         f"{args.heightmap}: {summary['verdict'].upper()} - V over {summary['windows']} windows of "
-        f"{result.window_mm:g} mm ({args.engine}): mean {result.mean_roughness:.4f}, relative variance "
-        f"{result.relative_variance:.1e} (the paper: ~1e-4 typical, > 1e-3 inhomogeneous: {result.paper_verdict}); "
-        f"spread {result.spread_jnd:.2f} JND (SD), 10-90% range {result.range_jnd:.2f} JND (a fingertip tells "
-        f"parts apart at >= 1)" + (f"; map written to {args.map}" if args.map else ""))
+        f"{result.window_mm:g} mm ({args.engine}): mean {result.mean_roughness:.4f}{stats}{note}"
+        + (f"; map written to {args.map}" if args.map else ""))
     return 0

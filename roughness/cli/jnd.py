@@ -2,9 +2,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 
-from .common import add_reading_args, defaults, finish, write_stdout
+from .common import add_reading_args, defaults, finish, json_text, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -32,17 +31,12 @@ def run(args: argparse.Namespace) -> int:
     scale = load_scale(pa.fidelity)
     distance = jnd_distance(scale, pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
     if args.json:
-        write_stdout(json.dumps({"a": pa.as_dict(), "b": pb.as_dict(), "jnd": distance.jnd,
-                                 "jnd_stderr": distance.jnd_stderr, "verdict": distance.verdict}))
+        write_stdout(json_text({"a": pa.as_dict(), "b": pb.as_dict(), **distance.as_dict()}))
         return 0
     lines = [_line(p) for p in (pa, pb)]
     kinds = " and ".join(dict.fromkeys("Monte Carlo of V" if p.roughness_stderr is not None else "ensemble spread"
                                        for p in (pa, pb)))
-    sure = (f" ± {2 * distance.jnd_stderr:.2f} (2 sigma: {kinds})" if distance.jnd_stderr is not None
-            else " (no uncertainty: the surrogate is a single network without a spread)")
-    rougher = "A rougher" if distance.jnd > 0 else "B rougher" if distance.jnd < 0 else "equally rough"
-    lines.append(f"distance: {abs(distance.jnd):.2f} JND{sure}, {rougher}: {distance.verdict.upper()} "
-                 "(one JND = a 19% step in equivalent wavelength, told apart 75% of the time)")
+    lines.append(_distance_line(distance, kinds))
     write_stdout("\n".join(lines))
     return 0
 
@@ -53,9 +47,20 @@ def _uncertainty(p) -> float | None:
     return p.roughness_stderr if p.roughness_stderr is not None else p.roughness_std
 
 
+def _distance_line(distance, kinds: str) -> str:
+    """The distance and verdict in words; none when both are below the scale, "at least" when one is."""
+    tail = "(one JND = a 19% step in equivalent wavelength, told apart 75% of the time)"
+    if distance.jnd is None:
+        return f"distance: none, {distance.note}: {distance.verdict.upper()} {tail}"
+    sure = (f" ± {2 * distance.jnd_stderr:.2f} (2 sigma: {kinds})" if distance.jnd_stderr is not None
+            else " (no uncertainty: the surrogate is a single network without a spread)")
+    rougher = "A rougher" if distance.jnd > 0 else "B rougher" if distance.jnd < 0 else "equally rough"
+    bound = f"at least {abs(distance.jnd):.2f} JND" if distance.lower_bound else f"{abs(distance.jnd):.2f} JND"
+    note = f" ({distance.note})" if distance.note else ""
+    return f"distance: {bound}{sure}, {rougher}{note}: {distance.verdict.upper()} {tail}"
+
+
 def _line(p) -> str:
-    where = p.placement
     se = _uncertainty(p)
     v = f"V = {p.roughness:.4f}" + (f" ± {se:.4f}" if se is not None else "")
-    lam = f"lambda {where.equivalent_lambda_mm:.3f} mm" + ("" if where.on_scale else " (extrapolated off the scale)")
-    return f"{p.source}: {v} ({p.engine}, {'in domain' if p.in_domain else 'OUT OF DOMAIN'}), {lam}"
+    return f"{p.source}: {v} ({p.engine}, {'in domain' if p.in_domain else 'OUT OF DOMAIN'}), {p.placement.describe()}"

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 
 from .common import (
     COUNT,
@@ -12,6 +11,7 @@ from .common import (
     add_reading_args,
     defaults,
     finish,
+    json_text,
     log,
     write_stdout,
 )
@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     save_palette(palette, out, args.stl, args.base_mm, args.overwrite)
     summary = palette.summary()
     if args.json:
-        write_stdout(json.dumps(summary))
+        write_stdout(json_text(summary))
     else:
         lines = [f"{m.name}: V {m.fem.roughness:.4f} ± {m.fem.roughness_stderr:.4f} (FEM), lambda "
                  f"{m.fem.equivalent_lambda_mm:.3f} mm" + ("" if m.fem.on_scale else " (extrapolated off the scale)")

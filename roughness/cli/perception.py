@@ -2,13 +2,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import re
 import sys
 from pathlib import Path
 
-from .common import COUNT, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, log
+from .common import COUNT, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, json_text, log
 
 NON_NEGATIVE = Number(float, low=0)
 PROBABILITY = Number(float, low=0, high=1)
@@ -384,7 +383,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     _write_truth(files["truth.csv"], ids, v, truth)
     disagree = float(np.mean(left != noiseless_answer(truth, triplets)))
     roughest = ids[int(np.argmax(v))]
-    print(json.dumps({"trials": len(rows), "stimuli": len(ids), "truth": source, "sigma": observer.sigma,
+    print(json_text({"trials": len(rows), "stimuli": len(ids), "truth": source, "sigma": observer.sigma,
                       "lapse": observer.lapse, "noise_floor": disagree, "roughest": roughest}))
     log(args, f"the observer's answers disagree with the noise-free ones in {disagree:.1%} of trials (the best "
               f"achievable triplet error); embed with --roughest {roughest}")

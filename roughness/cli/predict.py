@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -17,6 +16,7 @@ from .common import (
     defaults,
     finish,
     float_pair,
+    json_text,
     log,
 )
 from .simulate import add_curvature_args, curvature_fields
@@ -87,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
     def show(p) -> None:
         nonlocal done
         done += 1
-        print(json.dumps(p.as_dict()) if args.json else _prediction_line(p), flush=True)
+        print(json_text(p.as_dict()) if args.json else _prediction_line(p), flush=True)
         if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 
@@ -97,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
     for source, error in reader.errors:
         print(f"roughness: error: {error}", file=sys.stderr)
         if args.json:
-            print(json.dumps({"input": source, "error": error}))
+            print(json_text({"input": source, "error": error}))
     return 2 if reader.errors else 0
 
 
@@ -125,7 +125,7 @@ def _predict_map(args: argparse.Namespace, model) -> int:
                            progress=progress)
     save_map(result, args.map, args.overwrite)
     summary = {"input": args.inputs[0], "map": args.map, **result.summary(), "seconds": time.perf_counter() - start}
-    print(json.dumps(summary) if args.json else
+    print(json_text(summary) if args.json else
           f"{args.inputs[0]}: {summary['positions']} footprint positions, V {summary['roughness_min']:.4f} to "
           f"{summary['roughness_max']:.4f} (median {summary['roughness_median']:.4f}), "
           f"{100 * summary['in_domain_fraction']:.0f}% in domain, {summary['seconds']:.2f} s; map written to {args.map}")
@@ -134,7 +134,9 @@ def _predict_map(args: argparse.Namespace, model) -> int:
 
 def _prediction_line(p) -> str:
     where = p.placement
-    scale = (f"~ lambda {where.equivalent_lambda_mm:.3f} mm on the standard scale, {where.jnd_from_nearest:+.1f} JND "
+    scale = (f"below the standard scale (V < floor {where.floor:.4f}, the scale's finest bumps): no equivalent "
+             "lambda" if where.below_scale else
+             f"~ lambda {where.equivalent_lambda_mm:.3f} mm on the standard scale, {where.jnd_from_nearest:+.1f} JND "
              f"from {where.nearest_standard}" if where.on_scale else
              f"off the standard scale: ~ lambda {where.equivalent_lambda_mm:.3f} mm extrapolated by the scale's power "
              f"law, {where.jnd_from_nearest:+.1f} JND from {where.nearest_standard}")

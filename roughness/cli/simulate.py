@@ -2,11 +2,11 @@
 from __future__ import annotations
 
 import argparse
-import json
+import math
 import sys
 
 from . import common
-from .common import FRACTION, POISSON, POSITIVE, SEED, Number, add_heightmap_args, log
+from .common import FRACTION, POISSON, POSITIVE, SEED, Number, add_heightmap_args, json_text, log
 
 SIGNED_RADIUS = Number(float)  # a signed radius in mm; 0 is refused by SimConfig (not a radius)
 
@@ -116,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
         save_vtu(result, sim.block(result.config), args.save_vtu, args.overwrite)
         log(args, f"deformed mesh written to {args.save_vtu}")
     if args.json:
-        print(json.dumps({"input": args.heightmap, **result.summary()}))
+        print(json_text({"input": args.heightmap, **result.summary()}))
     else:
         _print_result(result)
     for note in result.unusual_notes:
@@ -142,8 +142,10 @@ def contact_warning(r) -> str:
 
 
 def _print_result(r) -> None:
-    print(f"roughness V        {r.roughness:.5f} ± {r.roughness_stderr:.5f} (Monte Carlo) ± "
-          f"{r.discretization_error * abs(r.roughness):.5f} (discretization, {100 * r.discretization_error:.1f}%)")
+    error = r.discretization_error
+    discretization = (f"± {error * abs(r.roughness):.5f} (discretization, {100 * error:.1f}%)" if math.isfinite(error)
+                      else "(discretization error undefined: V is 0 at this mesh but not at the coarser one)")
+    print(f"roughness V        {r.roughness:.5f} ± {r.roughness_stderr:.5f} (Monte Carlo) {discretization}")
     print(f"                   strain variation at {r.config.depth_mm} mm depth, d = r = {r.config.pair_distance_mm} mm")
     print(f"contact fraction   {100 * r.contact_fraction:.1f}%")
     print(f"indentation        {r.indentation_mm:.3f} mm at {r.config.force_n} N")

@@ -2,9 +2,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 
-from .common import COUNT, POSITIVE, add_model_tail, defaults, finish, log, write_stdout
+from .common import COUNT, POSITIVE, add_model_tail, defaults, finish, json_text, log, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -91,10 +90,10 @@ def run(args: argparse.Namespace) -> int:
     atomic_write(out / "roughness_map.npy", lambda tmp: np.save(tmp, plate.roughness_map), args.overwrite)
     save_figures(plate, out)
     summary = {"image": args.image, "out": str(out), **plate.summary()}
-    atomic_write(out / "plate.json", lambda tmp: Path(tmp).write_text(json.dumps(summary, indent=1) + "\n"),
+    atomic_write(out / "plate.json", lambda tmp: Path(tmp).write_text(json_text(summary, indent=1) + "\n"),
                  args.overwrite)
     if args.json:
-        write_stdout(json.dumps(summary))
+        write_stdout(json_text(summary))
         return 0
     lines = [f"plate {summary['width_mm']:.1f} x {summary['height_mm']:.1f} mm, relief {summary['relief_mm']:.2f} mm, "
              f"written to {out} (plate.npz, plate.stl, plate.json, relief.png, roughness_map.png"

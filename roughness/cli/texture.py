@@ -2,9 +2,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 
-from .common import POSITIVE, SEED, add_overwrite, finish, write_stdout
+from .common import POSITIVE, SEED, add_overwrite, finish, json_text, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -59,7 +58,7 @@ def run_make(args: argparse.Namespace) -> int:
     note = "; a printable plate in mm" if suffix == ".stl" else "; the file states its pixel size" \
         if suffix != ".npy" else ""
     write_stdout(f"wrote {out}: {nx} x {ny} px of {hm.pixel_mm} mm, heights {hm.heights.min():.3f} to "
-                 f"{hm.heights.max():.3f} mm{note}\n{json.dumps(recipe)}")
+                 f"{hm.heights.max():.3f} mm{note}\n{json_text(recipe)}")
     return 0
 
 

@@ -2,10 +2,9 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
-from .common import COUNT, POSITIVE, SEED, add_overwrite, count_list, defaults, finish
+from .common import COUNT, POSITIVE, SEED, add_overwrite, count_list, defaults, finish, json_text
 
 
 def add_parser(sub) -> None:
@@ -94,12 +93,12 @@ def export(args: argparse.Namespace) -> int:
     except ExportError as err:
         print(f"roughness: export check failed, nothing written: {err}", file=sys.stderr)
         return 1
-    print(json.dumps(report))
+    print(json_text(report))
     if args.int8:
         from roughness.surrogate.quantize import QuantizationError, quantize
 
         try:
-            print(json.dumps(quantize(args.out, args.int8, overwrite=args.overwrite)))
+            print(json_text(quantize(args.out, args.int8, overwrite=args.overwrite)))
         except QuantizationError as err:
             print(f"roughness: int8 check failed, {args.int8} not written: {err}", file=sys.stderr)
             return 1

@@ -2,9 +2,8 @@
 from __future__ import annotations
 
 import argparse
-import json
 
-from .common import COUNT, POSITIVE, add_model_tail, add_reading_args, defaults, finish, log, write_stdout
+from .common import COUNT, POSITIVE, add_model_tail, add_reading_args, defaults, finish, json_text, log, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -70,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
     save_heightmap(result.heightmap, out, base_mm=args.base_mm, overwrite=args.overwrite)
     summary = {"input": args.heightmap, "out": str(out), **result.summary()}
     if args.json:
-        write_stdout(json.dumps(summary))
+        write_stdout(json_text(summary))
     else:
         a = result.achieved
         lines = [f"{args.heightmap} -> {out}: {args.by} x {result.factor:.4f}",

@@ -9,11 +9,17 @@ Definition (written down, as the paper leaves the details open):
   seamless periodic tile, read periodically under the footprint. The default window is the footprint.
 * ``relative_variance`` = var(V_i) / mean(V_i)^2 (sample variance, n - 1): the squared coefficient
   of variation, dimensionless. The paper reports about 1e-4 for most of its textures and calls
-  textures above 1e-3 inhomogeneous (``PAPER_THRESHOLD``; ``paper_verdict``).
+  textures above 1e-3 inhomogeneous (``PAPER_THRESHOLD``; ``paper_verdict``). Undefined (None, and no
+  paper verdict) when mean V is below the standard scale's floor (``StandardScale.floor``, about
+  0.003): there the ratio measures the engine's noise around zero, not a texture (a flat map gave
+  "Infinity").
 * ``spread_jnd`` = standard deviation over the windows of ln(lambda_i) / ln(1.19), lambda_i the
-  equivalent wavelength of V_i on the standard scale; ``range_jnd`` = the 10th to 90th percentile of
-  the same. The ``verdict`` is perceptual: "inhomogeneous" if ``range_jnd`` >= 1, i.e. a fingertip
-  moved over the surface finds parts a just-noticeable difference apart.
+  equivalent wavelength of V_i on the standard scale, a window below the scale counted at its floor
+  (the scale's threshold, as in ``jnd_distance``: the spread is then a lower bound); ``range_jnd`` =
+  the 10th to 90th percentile of the same. The ``verdict`` is perceptual: "inhomogeneous" if
+  ``range_jnd`` >= 1, i.e. a fingertip moved over the surface finds parts a just-noticeable difference
+  apart. With every window below the scale there is no spread (None) and the verdict is "homogeneous":
+  no roughness anywhere.
 
 Measured (coarse FEM, footprint windows; see the README): a grating varies by 1e-4, as the paper's
 textures; random bump textures by about 1.5e-3 (the bumps under a 10 mm footprint differ from place
@@ -55,31 +61,51 @@ class Homogeneity:
     lambda_mm: np.ndarray
     in_domain: np.ndarray
     engine: str
-    relative_variance: float  # var(V) / mean(V)^2 over the windows
-    spread_jnd: float  # SD of ln(lambda_eq) / ln(1.19) over the windows
-    range_jnd: float  # 10th to 90th percentile of ln(lambda_eq) / ln(1.19)
+    relative_variance: float | None  # var(V) / mean(V)^2 over the windows; None: mean V below the scale's floor
+    spread_jnd: float | None  # SD of ln(lambda_eq) / ln(1.19) over the windows; None: every window below the scale
+    range_jnd: float | None  # 10th to 90th percentile of ln(lambda_eq) / ln(1.19); None as spread_jnd
     mean_roughness: float
+    floor: float = 0.0  # V of the standard scale's floor
+    below_scale: int = 0  # windows whose V is below the floor
 
     @property
     def verdict(self) -> str:
-        """Perceptual: "inhomogeneous" if the windows' 10-90% range spans a JND or more."""
-        return "inhomogeneous" if self.range_jnd >= JND_RANGE else "homogeneous"
+        """Perceptual: "inhomogeneous" if the windows' 10-90% range spans a JND or more (never with no range:
+        every window below the scale is smooth everywhere)."""
+        return "inhomogeneous" if self.range_jnd is not None and self.range_jnd >= JND_RANGE else "homogeneous"
 
     @property
-    def paper_verdict(self) -> str:
-        """The paper's: "inhomogeneous" above a relative variance of 1e-3."""
+    def paper_verdict(self) -> str | None:
+        """The paper's: "inhomogeneous" above a relative variance of 1e-3; None where that is undefined."""
+        if self.relative_variance is None:
+            return None
         return "inhomogeneous" if self.relative_variance > PAPER_THRESHOLD else "homogeneous"
+
+    @property
+    def note(self) -> str:
+        """What the windows below the scale's floor do to the statistics (empty if there are none)."""
+        n = len(self.roughness)
+        if self.below_scale == n:
+            return (f"no roughness anywhere: every window is below the standard scale (V < {self.floor:.4f}); "
+                    "relative variance undefined (mean V ~ 0), no spread in JND")
+        if not self.below_scale:
+            return ""
+        undefined = "; relative variance undefined (mean V below the floor)" if self.relative_variance is None else ""
+        return (f"{self.below_scale} of {n} windows are below the standard scale (V < {self.floor:.4f}), counted at "
+                f"its floor: the spread in JND is a lower bound{undefined}")
 
     def summary(self) -> dict:
         return {"engine": self.engine, "windows": len(self.roughness), "window_mm": self.window_mm,
                 "mean_roughness": self.mean_roughness, "relative_variance": self.relative_variance,
                 "spread_jnd": self.spread_jnd, "range_jnd": self.range_jnd, "verdict": self.verdict,
                 "paper_threshold": PAPER_THRESHOLD, "paper_verdict": self.paper_verdict,
+                "scale_floor_roughness": self.floor, "below_scale_windows": self.below_scale, "note": self.note,
                 "in_domain_fraction": float(np.mean(self.in_domain)),
                 "definition": "V_i: V of the footprint centred on window i (a window smaller than the footprint "
                               "is felt alone, mirror-tiled); relative_variance = var(V_i) / mean(V_i)^2; "
-                              "spread_jnd = SD of ln(lambda_i) / ln 1.19; range_jnd = its 10-90% range; "
-                              "verdict: inhomogeneous if range_jnd >= 1"}
+                              "spread_jnd = SD of ln(lambda_i) / ln 1.19 (a V below the scale's floor counted at "
+                              "it); range_jnd = its 10-90% range; verdict: inhomogeneous if range_jnd >= 1; "
+                              "relative_variance null if mean V is below the floor, spreads null if every V is"}
 
 
 def window_centres(heightmap: Heightmap, window_mm: float, footprint_mm: float, n: int, seed: int = 0,
@@ -147,13 +173,18 @@ def homogeneity(heightmap: Heightmap, engine: str = "surrogate", window_mm: floa
             if progress:
                 progress(i + 1, n)
         in_domain = np.ones(n, dtype=bool)
-    lam = np.array([evaluator.lambda_of(x) for x in v])
+    scale = evaluator.scale
+    floor, below = scale.floor, int(np.sum(v < scale.floor))
+    lam = np.array([scale.floored_lambda(float(x)) for x in v])  # below the scale: at its floor
     steps = np.log(lam) / math.log(1.19)
     mean = float(v.mean())
-    relative_variance = float(v.var(ddof=1) / mean**2) if mean > 0 else math.inf
-    p10, p90 = np.percentile(steps, [10, 90])
+    relative_variance = float(v.var(ddof=1) / mean**2) if mean >= floor else None
+    spread = range_ = None
+    if below < n:
+        p10, p90 = np.percentile(steps, [10, 90])
+        spread, range_ = float(np.std(steps, ddof=1)), float(p90 - p10)
     return Homogeneity(window_mm, centres[:, 0], centres[:, 1], v, lam, in_domain, engine, relative_variance,
-                       float(np.std(steps, ddof=1)), float(p90 - p10), mean)
+                       spread, range_, mean, floor, below)
 
 
 def save_map(result: Homogeneity, heightmap: Heightmap, path, overwrite: bool = True) -> None:
@@ -179,9 +210,13 @@ def save_map(result: Homogeneity, heightmap: Heightmap, path, overwrite: bool = 
     ax.scatter(result.x_mm, result.y_mm, c=result.roughness, cmap=cmap, norm=norm, s=25, edgecolors="white",
                linewidths=0.4)
     fig.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="V of the window")
-    ax.set(xlabel="x (mm)", ylabel="y (mm)",
-           title=f"{result.verdict}: relative variance {result.relative_variance:.1e}, "
-                 f"spread {result.spread_jnd:.2f} JND")
+    ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"{result.verdict}: " + (
+        "all below the standard scale" if result.spread_jnd is None else
+        f"relative variance {_format(result.relative_variance, '.1e')}, spread {result.spread_jnd:.2f} JND"))
     fig.tight_layout()
     atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=80), overwrite)
     plt.close(fig)
+
+
+def _format(value: float | None, spec: str) -> str:
+    return "undefined" if value is None else format(value, spec)
