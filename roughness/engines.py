@@ -38,7 +38,7 @@ from roughness.simulate.heightmap import Heightmap
 from .classical import MEASURES, footprint
 
 FEM_FIDELITIES = ("coarse", "default", "fine", "converged")
-PREDICT_ENGINES = ("surrogate", "fem", "auto")
+PREDICT_ENGINES = ("surrogate", "spectral", "fem", "auto")
 CURVATURE_RANGE_PATH = MODELS_DIR / "curvature_range.json"
 
 
@@ -94,6 +94,48 @@ class FemEngine:
             self._simulator = Simulator(self.config)
             self._simulator.block(self.config.resolved()).base(self.config.force_n, self.config.contact)
             self.setup_seconds = time.perf_counter() - start
+        return self._simulator.run(heightmap, self.centre_mm, self.tile)
+
+    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
+        result = self.simulate(heightmap)
+        return result.roughness, result.seconds
+
+
+@dataclass
+class SpectralEngine:
+    """The spectral skin engine (``roughness.simulate.spectral``) with a configuration (``SimConfig``)."""
+
+    spec: str
+    config: object  # SimConfig
+    centre_mm: tuple[float, float] | None = None
+    tile: bool = False
+    kind: str = "spectral"
+    setup_seconds: float = 0.0
+    _simulator: object = field(default=None, repr=False)
+
+    @classmethod
+    def of(cls, simulation: dict | None = None, centre_mm: tuple[float, float] | None = None,
+           tile: bool = False) -> SpectralEngine:
+        from roughness.simulate.config import SimConfig
+
+        return cls("spectral", SimConfig(**(simulation or {})), centre_mm, tile)
+
+    @property
+    def fidelity(self) -> str:
+        return "spectral"
+
+    @property
+    def identity(self) -> str:
+        from roughness.simulate.spectral.engine import ENGINE_VERSION
+
+        return "spectral-" + digest({**self.config.as_dict(), "engine_version": ENGINE_VERSION})
+
+    def simulate(self, heightmap: Heightmap):
+        """The ``SpectralResult`` of one heightmap."""
+        if self._simulator is None:
+            from roughness.simulate.spectral.engine import SpectralSimulator
+
+            self._simulator = SpectralSimulator(self.config)
         return self._simulator.run(heightmap, self.centre_mm, self.tile)
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
@@ -183,9 +225,11 @@ def make_engine(spec: str, parameter: str = "engines") -> Engine:
         return replace(engine, spec=spec)
     if spec == "surrogate" or spec.startswith("surrogate:"):
         return SurrogateEngine(spec, spec.partition(":")[2] or None)
+    if spec == "spectral":
+        return SpectralEngine.of()
     if spec in MEASURES:
         return ClassicalEngine(spec)
-    valid = [f"fem:{f}" for f in FEM_FIDELITIES] + ["fem:converged@TOL", "surrogate", "surrogate:MODEL.onnx",
+    valid = [f"fem:{f}" for f in FEM_FIDELITIES] + ["fem:converged@TOL", "surrogate", "surrogate:MODEL.onnx", "spectral",
                                                     *MEASURES]
     raise InputError(f"unknown engine {spec!r}; valid: {', '.join(valid)}", parameter=parameter)
 
@@ -275,6 +319,8 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     if engine not in PREDICT_ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(PREDICT_ENGINES)}", parameter="engine")
     integer("batch_size", batch_size, minimum=1)
+    if engine == "spectral":
+        return _predict_spectral(heightmaps, centre_mm, tile, fidelity, sources, on_result, curvature_mm)
     model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
     max_std = uncertainty_limit(model, max_std)
     curved = {"curvature_mm": curvature_mm, "base": base, "curvature_axis": curvature_axis,
@@ -324,6 +370,31 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
             flush()
     if batch:
         flush()
+    return results
+
+
+def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tuple[float, float] | None, tile: bool,
+                      fidelity: str | None, sources: Iterable[str] | None,
+                      on_result: Callable[[Prediction], None] | None, curvature_mm: float | None) -> list[Prediction]:
+    """``predict`` with the spectral engine: the paper's parameters, no surrogate loaded."""
+    from roughness.surrogate.calibration import load_scale
+
+    if fidelity is not None:
+        raise InputError("the spectral engine has no mesh: --fidelity applies to the FEM", parameter="fidelity")
+    if curvature_mm is not None:
+        raise InputError("the spectral engine models a flat skin layer; curved bases need --engine fem",
+                         parameter="curvature_mm")
+    spectral = SpectralEngine.of(centre_mm=centre_mm, tile=tile)
+    scale = load_scale("spectral")
+    names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
+    results = []
+    for hm in [heightmaps] if isinstance(heightmaps, Heightmap) else heightmaps:
+        r = spectral.simulate(hm)
+        result = Prediction(next(names), r.roughness, "spectral", "spectral", True, r.seconds, scale.place(r.roughness),
+                            list(r.notes), r.roughness_stderr)
+        results.append(result)
+        if on_result:
+            on_result(result)
     return results
 
 

@@ -34,7 +34,8 @@ def add_parser(sub) -> None:
                     help="heightmap files, folders of them, or roughness dataset files (.h5)")
     pr.add_argument("--model", help="ONNX surrogate (default: the shipped models/roughness-cnn.onnx)")
     pr.add_argument("--engine", choices=PREDICT_ENGINES, default=given["engine"],
-                    help=f"surrogate, fem, or auto: the surrogate, FEM for inputs outside its domain "
+                    help=f"surrogate (ms), spectral (the skin as an infinite layer: tens of ms, no mesh), fem "
+                         f"(seconds), or auto: the surrogate, FEM for inputs outside its domain "
                          f"(default: {given['engine']})")
     pr.add_argument("--max-std", type=POSITIVE,
                     help="ensemble models: --engine auto also runs the FEM where the relative spread "
@@ -65,6 +66,7 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from roughness.engines import predict
+    from roughness.simulate.config import SimConfig
     from roughness.surrogate.inputs import InputReader
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
@@ -78,10 +80,14 @@ def run(args: argparse.Namespace) -> int:
         if args.curvature_mm is not None:
             raise InputError("--map slides the footprint over a flat object; it does not take --curvature-mm")
         check_map_path(args.map, args.overwrite)
-    model = SurrogateModel(args.model or DEFAULT_MODEL, threads=args.threads)
+    if args.engine == "spectral":
+        model, footprint_mm = None, defaults(SimConfig)["width_mm"]
+    else:
+        model = SurrogateModel(args.model or DEFAULT_MODEL, threads=args.threads)
+        footprint_mm = model.footprint_mm
     if args.map:
         return _predict_map(args, model)
-    reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, model.footprint_mm, args.centre, args.tile)
+    reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, footprint_mm, args.centre, args.tile)
     start, done = time.monotonic(), 0
 
     def show(p) -> None:
@@ -109,7 +115,8 @@ def _predict_map(args: argparse.Namespace, model) -> int:
     if len(args.inputs) != 1 or os.path.isdir(args.inputs[0]):
         raise InputError("--map takes exactly one heightmap file")
     if args.engine == "fem":
-        raise InputError("--map runs the surrogate (thousands of footprints); use --engine surrogate or auto")
+        raise InputError("--map needs thousands of footprints: use --engine spectral (one solve over the whole map), "
+                         "surrogate or auto")
     hm = load_heightmap(args.inputs[0], args.pixel_mm, args.height_mm)
     start = last = time.perf_counter()
 
@@ -121,14 +128,21 @@ def _predict_map(args: argparse.Namespace, model) -> int:
             eta = (now - start) / done * (total - done)
             log(args, f"map: {done:,}/{total:,} footprint positions, {now - start:.0f} s, ETA {eta:.0f} s")
 
-    result = roughness_map(model, hm, args.step_mm, args.tile, args.batch_size,
-                           progress=progress)
+    notes = []
+    if args.engine == "spectral":  # one solve over the whole map
+        from roughness.simulate.spectral.maps import spectral_map
+
+        result, notes = spectral_map(hm, args.step_mm, args.tile, progress=progress)
+    else:
+        result = roughness_map(model, hm, args.step_mm, args.tile, args.batch_size, progress=progress)
     save_map(result, args.map, args.overwrite)
-    summary = {"input": args.inputs[0], "map": args.map, **result.summary(), "seconds": time.perf_counter() - start}
+    summary = {"input": args.inputs[0], "map": args.map, "engine": args.engine, **result.summary(), "notes": notes,
+               "seconds": time.perf_counter() - start}
     print(json_text(summary) if args.json else
           f"{args.inputs[0]}: {summary['positions']} footprint positions, V {summary['roughness_min']:.4f} to "
           f"{summary['roughness_max']:.4f} (median {summary['roughness_median']:.4f}), "
-          f"{100 * summary['in_domain_fraction']:.0f}% in domain, {summary['seconds']:.2f} s; map written to {args.map}")
+          f"{100 * summary['in_domain_fraction']:.0f}% in domain, {summary['seconds']:.2f} s; map written to {args.map}"
+          + "".join(f"\n  note: {note}" for note in notes))
     return 0
 
 

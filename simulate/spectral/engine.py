@@ -27,6 +27,7 @@ from .contact import ContactState, solve_contact
 from .layer import Tissue
 from .modes import GridKey, modes
 
+ENGINE_VERSION = 1  # bump when a change alters results (keys cached spectral results)
 FLAT_STATES = ("layer", "block")
 MIN_FOOTPRINT_PIXELS = 10  # the footprint must span at least this many pixels across
 MAX_FOOTPRINT_PIXELS = 1024  # and at most this many (the mirrored period is twice as wide: 2048^2 FFTs)
