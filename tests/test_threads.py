@@ -88,3 +88,14 @@ def test_a_dask_worker_with_several_threads_builds_the_sequential_dataset(record
     assert [stored[sample_id(record)] for record in records] == [v for v, _ in sequential]
     for fluctuation, (_, expected) in zip(fluctuations, sequential):
         assert np.array_equal(fluctuation, expected.astype(np.float32))
+
+
+def test_threads_sharing_a_fem_engine_prepare_it_once_and_give_the_sequential_answers(records, sequential):
+    """The FEM engine of ``predict``/``compare`` (roughness.engines), prepared lazily by whichever thread comes first."""
+    from roughness.engines import FemEngine
+
+    engine = FemEngine.of("coarse", CONFIG.as_dict())
+    with ThreadPoolExecutor(THREADS) as pool:
+        values = list(pool.map(lambda record: engine.measure(realise(record))[0], records * REPEATS))
+    assert values == [v for v, _ in sequential] * REPEATS
+    assert engine.setup_seconds > 0 and len(engine._simulator._blocks) == 2  # the level and its coarser one
