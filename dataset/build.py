@@ -12,6 +12,7 @@ process: the local workers are started ignoring SIGINT, and are closed by it (``
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import os
@@ -191,7 +192,8 @@ def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config
         # after a grace period) are expected, not news; a cluster of others (``scheduler``) is left alone.
         _quiet_distributed()
         if cluster is not None and client is not None:
-            client.run(_quiet_distributed)
+            with contextlib.suppress(Exception):  # quieter if it works; the interrupt goes on either way
+                client.run(_quiet_distributed, on_error="ignore")
         raise
     finally:
         if client is not None:

@@ -9,7 +9,8 @@ identity (configuration, model file); a rerun reads it and computes only what is
 interrupted comparison resumes, FEM results are never recomputed, and a replaced file or another
 ``--pixel-mm`` is computed afresh. The folder's manifest (``compare.json``: input, number of
 textures, reference, engines) is written before its first result, so that the same command finds
-the same comparison there after an interruption and resumes it; another is refused. Inputs that cannot be read are never cached: they are reported.
+the same comparison there after an interruption and resumes it; another is refused. Inputs that
+cannot be read are never cached: they are reported.
 Textures run one at a time, every engine in turn, in one process: the times are single-core times.
 """
 from __future__ import annotations

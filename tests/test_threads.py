@@ -91,7 +91,7 @@ def test_a_dask_worker_with_several_threads_builds_the_sequential_dataset(record
 
 
 def test_threads_sharing_a_fem_engine_prepare_it_once_and_give_the_sequential_answers(records, sequential):
-    """The FEM engine of ``predict``/``compare`` (roughness.engines), prepared lazily by whichever thread comes first."""
+    """The FEM engine of ``predict`` and ``compare``, prepared by whichever thread comes first."""
     from roughness.engines import FemEngine
 
     engine = FemEngine.of("coarse", CONFIG.as_dict())
