@@ -3,13 +3,22 @@
 Samples already in the file are skipped, so an interrupted build resumes where it
 stopped. With a labels file (``labels``), a sample whose remade heightmap matches its label
 takes the stored result instead of the FEM. Each worker process runs one BLAS/OpenMP thread and keeps one prepared
-``Simulator`` per configuration, so the block is meshed and assembled once per worker.
+``Simulator`` per configuration, so the block is meshed and assembled once per worker; the threads of a
+worker (a cluster's workers may run several) share it, and get the answers of a sequential run bit for bit
+(``Simulator`` is thread-safe and history-free).
+
+Ctrl-C, which a terminal sends to every process of its foreground group, stops only the calling
+process: the local workers are started ignoring SIGINT, and are closed by it (``Interrupted``).
 """
 from __future__ import annotations
 
+import contextlib
 import json
+import logging
 import os
+import signal
 import sys
+import threading
 import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -31,14 +40,37 @@ if TYPE_CHECKING:  # the texture generators load on first use (the CLI reads thi
 BUILD_CONFIG = SimConfig(fidelity="coarse")  # how the project's training sets are simulated
 WORKERS = 2  # local Dask worker processes
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-_SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration
+_SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration, shared by its threads
+_SIMULATORS_LOCK = threading.Lock()
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C during ``build``: ``counts`` so far (what was written is kept; the same build resumes)."""
+
+    def __init__(self, counts: dict) -> None:
+        super().__init__()
+        self.counts = counts
+
+    @property
+    def stored(self) -> int:
+        """Samples in the dataset now."""
+        return sum(self.counts[k] for k in ("already_done", "written", "failed", "restored"))
+
+
+def simulator(config: dict):
+    """This process's prepared ``Simulator`` for ``config`` (SimConfig fields), made once."""
+    from roughness.simulate.model import Simulator
+
+    key = json.dumps(config, sort_keys=True)
+    with _SIMULATORS_LOCK:
+        if key not in _SIMULATORS:
+            _SIMULATORS[key] = Simulator(SimConfig(**config))
+        return _SIMULATORS[key]
 
 
 def simulate_record(record: dict, config: dict, label: Label | None = None) -> dict:
     """Run the FEM for one sample record (on a worker), or take ``label`` if its heightmap digest matches
     the remade texture's (result key "label"); failures come back as data."""
-    from roughness.simulate.model import Simulator
-
     from .labels import heights_digest
     from .recipe import realise
 
@@ -52,11 +84,8 @@ def simulate_record(record: dict, config: dict, label: Label | None = None) -> d
         return {**out, "error": f"{type(err).__name__}: {err}"}
     if label is not None and label.heights == heights_digest(out["heights"], hm.pixel_mm):
         return {**out, "label": label}
-    key = json.dumps(config, sort_keys=True)
-    if key not in _SIMULATORS:
-        _SIMULATORS[key] = Simulator(SimConfig(**config))
     try:
-        result = _SIMULATORS[key].run(hm)
+        result = simulator(config).run(hm)
     except Exception as err:
         return {**out, "error": f"{type(err).__name__}: {err}"}
     return {**out, "fields": result_fields(result), "fluctuation": result.fluctuation.astype(np.float32)}
@@ -100,6 +129,7 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
     ``out`` is created, or added to if it is a dataset of the same configuration (resume).
     ``labels``: results of an earlier build of the same configuration (``labels.load_labels``),
     taken for the samples whose remade heightmap matches ("restored" in the counts).
+    ``Interrupted`` (a KeyboardInterrupt) on Ctrl-C, with the counts so far.
     """
     from .recipe import expand
     from .store import DatasetWriter
@@ -124,21 +154,24 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
                   f"simulating {len(pending) - labelled} on {scheduler or f'{workers} local workers'}",
                   file=sys.stderr, flush=True)
         if pending:
-            _run(writer, pending, config.as_dict(), workers, scheduler, counts, quiet)
+            try:
+                _run(writer, pending, config.as_dict(), workers, scheduler, counts, quiet)
+            except KeyboardInterrupt:
+                if not quiet and sys.stderr.isatty():
+                    print(file=sys.stderr)  # end the progress line
+                raise Interrupted(counts) from None
     return counts
 
 
 def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config: dict, workers: int,
          scheduler: str | None, counts: dict, quiet: bool) -> None:
-    from dask.distributed import Client, LocalCluster, as_completed
+    from dask.distributed import Client, as_completed
 
-    for name in THREAD_VARIABLES:  # inherited by the worker processes
-        os.environ[name] = "1"
-    cluster = None if scheduler else LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                                  dashboard_address=":0")
-    client = Client(scheduler or cluster)
+    cluster = client = None
     progress = Progress(total=len(pending), start=time.perf_counter())
     try:
+        cluster = None if scheduler else _local_cluster(workers)
+        client = Client(scheduler or cluster)
         futures = [client.submit(simulate_record, r, config, label, pure=False) for r, label in pending]
         for future in as_completed(futures):
             res = future.result()
@@ -154,8 +187,39 @@ def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config
                 counts["written"] += 1
             if not quiet:
                 progress.update("error" in res, "label" in res)
+    except KeyboardInterrupt:
+        # The workers are closed mid-task: distributed's warnings about it (tasks cancelled, workers killed
+        # after a grace period) are expected, not news; a cluster of others (``scheduler``) is left alone.
+        _quiet_distributed()
+        if cluster is not None and client is not None:
+            with contextlib.suppress(Exception):  # quieter if it works; the interrupt goes on either way
+                client.run(_quiet_distributed, on_error="ignore")
+        raise
     finally:
-        client.close()
+        if client is not None:
+            client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _quiet_distributed() -> None:
+    """Only errors from distributed's loggers in this process."""
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+
+
+def _local_cluster(workers: int):
+    """A local Dask cluster of ``workers`` processes, one thread and one BLAS thread each (the
+    environment, inherited), started ignoring SIGINT (also inherited), so that a Ctrl-C interrupts
+    only this process, which closes them; from a thread other than the main one, signals stay as they are."""
+    from dask.distributed import LocalCluster
+
+    for name in THREAD_VARIABLES:
+        os.environ[name] = "1"
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
 

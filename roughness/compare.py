@@ -7,7 +7,10 @@ simulation parameters are the defaults), a folder of heightmaps, or a recipe JSO
 (engine, texture), keyed by the texture's content (its heights and pixel size) and the engine's
 identity (configuration, model file); a rerun reads it and computes only what is missing, so an
 interrupted comparison resumes, FEM results are never recomputed, and a replaced file or another
-``--pixel-mm`` is computed afresh. Inputs that cannot be read are never cached: they are reported.
+``--pixel-mm`` is computed afresh. The folder's manifest (``compare.json``: input, number of
+textures, reference, engines) is written before its first result, so that the same command finds
+the same comparison there after an interruption and resumes it; another is refused. Inputs that
+cannot be read are never cached: they are reported.
 Textures run one at a time, every engine in turn, in one process: the times are single-core times.
 """
 from __future__ import annotations
@@ -147,11 +150,13 @@ class ResultCache:
 
     ``key`` is the texture's ``content_key``; ``identities`` maps each engine spec to what its results
     depend on (configuration digest, model file digest): entries made under another identity (a
-    retrained model, say) are ignored. The file is created with the first result.
+    retrained model, say) are ignored. The file is created with the first result, after the folder's
+    ``manifest`` (if given) is written.
     """
 
-    def __init__(self, folder: Path, identities: dict[str, str]) -> None:
+    def __init__(self, folder: Path, identities: dict[str, str], manifest: dict | None = None) -> None:
         self.identities = identities
+        self.folder, self.manifest = folder, manifest
         self.path = folder / RESULTS_FILE
         self.entries: dict[tuple[str, str], dict] = {}
         if self.path.exists():
@@ -174,6 +179,9 @@ class ResultCache:
     def put(self, engine: str, key: str, **fields) -> None:
         entry = {"engine": engine, "identity": self.identities[engine], "key": key, **fields}
         self.entries[(engine, key)] = entry
+        if self.manifest is not None:  # what these results belong to, before the first of them
+            write_manifest(self.folder, self.manifest)
+            self.manifest = None
         self.path.parent.mkdir(parents=True, exist_ok=True)
         with open(self.path, "a") as f:
             f.write(json.dumps(entry) + "\n")

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import threading
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
@@ -59,7 +60,10 @@ def fem_identity(simulation: dict) -> str:
 
 @dataclass
 class FemEngine:
-    """The FEM with a configuration (``roughness.simulate.config.SimConfig``), prepared on first use."""
+    """The FEM with a configuration (``roughness.simulate.config.SimConfig``), prepared on first use.
+
+    Thread-safe: threads share its one prepared ``Simulator`` and get the sequential answers bit for bit.
+    """
 
     spec: str
     config: object  # SimConfig
@@ -68,6 +72,7 @@ class FemEngine:
     kind: str = "fem"
     setup_seconds: float = 0.0
     _simulator: object = field(default=None, repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
 
     @classmethod
     def of(cls, fidelity: str, simulation: dict | None = None, centre_mm: tuple[float, float] | None = None,
@@ -86,14 +91,16 @@ class FemEngine:
         return fem_identity(self.config.as_dict())
 
     def simulate(self, heightmap: Heightmap):
-        """The FEM ``Result`` of one heightmap (the block is prepared on first use)."""
-        if self._simulator is None:
-            from roughness.simulate.model import Simulator
+        """The FEM ``Result`` of one heightmap (the block is prepared on first use, once)."""
+        with self._lock:
+            if self._simulator is None:
+                from roughness.simulate.model import Simulator
 
-            start = time.perf_counter()
-            self._simulator = Simulator(self.config)
-            self._simulator.block(self.config.resolved()).base(self.config.force_n, self.config.contact)
-            self.setup_seconds = time.perf_counter() - start
+                start = time.perf_counter()
+                simulator = Simulator(self.config)
+                simulator.block(self.config.resolved()).base(self.config.force_n, self.config.contact)
+                self.setup_seconds = time.perf_counter() - start
+                self._simulator = simulator
         return self._simulator.run(heightmap, self.centre_mm, self.tile)
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
@@ -153,6 +160,7 @@ class SurrogateEngine:
     kind: str = "surrogate"
     setup_seconds: float = 0.0
     _model: object = field(default=None, repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
 
     @property
     def path(self) -> Path:
@@ -168,13 +176,14 @@ class SurrogateEngine:
 
     @property
     def model(self):
-        """The loaded ``SurrogateModel``."""
+        """The loaded ``SurrogateModel`` (loaded once; its ONNX session may run in several threads)."""
         from roughness.surrogate.predictor import SurrogateModel
 
-        if self._model is None:
-            start = time.perf_counter()
-            self._model = SurrogateModel(self.path, threads=self.threads)
-            self.setup_seconds = time.perf_counter() - start
+        with self._lock:
+            if self._model is None:
+                start = time.perf_counter()
+                self._model = SurrogateModel(self.path, threads=self.threads)
+                self.setup_seconds = time.perf_counter() - start
         return self._model
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:

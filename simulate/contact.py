@@ -157,7 +157,7 @@ class ContactRound:
 @dataclass
 class ContactProblem:
     """Texture-independent parts of the contact problem: the block's stiffness (N/mm), the AMG
-    hierarchy its constrained systems share, the contact face (bottom) and the bone face (top),
+    state its contact loops start from (each on a fork of it), the contact face (bottom) and the bone face (top),
     and the CG tolerances (relative residual): ``rtol`` of the solve that confirms a contact set,
     ``settle_rtol`` of the rounds before the set settles."""
 
@@ -237,11 +237,14 @@ def solve_contact(
     max_rounds: int = 30,
     warm: tuple[np.ndarray, np.ndarray] | None = None,
     callback: Callable[[ContactRound], None] | None = None,
+    amg: AMGCache | None = None,
 ) -> ContactResult:
     """Primal-dual active-set solve with force control; see the module docstring.
 
     ``initial``: starting contact set (default: every node); ``warm``: a related result's
-    ``warm`` solutions; ``callback``: called with each round's ``ContactRound``.
+    ``warm`` solutions; ``callback``: called with each round's ``ContactRound``; ``amg``: the AMG
+    state the loop works on and leaves as it ended (e.g. a fork of a related solve's), default a fork
+    of ``problem.amg``. Nothing shared is changed: solves of one problem may run in any order, in threads.
     """
     nb = len(problem.bottom)
     contact = np.ones(nb, dtype=bool) if initial is None else initial.copy()
@@ -258,16 +261,17 @@ def solve_contact(
     history: list[int] = []
     cycled = damping = False
     damped_rounds = solves = cg_iterations = 0
-    setups_before = problem.amg.setups
+    amg = problem.amg.fork() if amg is None else amg
+    setups_before = amg.setups
     unit = np.zeros(problem.n_dofs)
     unit[3 * problem.top + 2] = -1.0
     u, plate = warm if warm is not None else (None, None)
     loose = problem.settle_rtol > problem.rtol
     for rounds in range(1, max_rounds + 1):
-        round_setups = problem.amg.setups
+        round_setups = amg.setups
         fixed = problem.constraints(contact, slides)
         if system is None or not np.array_equal(fixed, system.fixed):  # sliding rounds reuse the system
-            system = constrain(problem.stiffness, fixed, problem.amg, problem.rtol)
+            system = constrain(problem.stiffness, fixed, amg, problem.rtol)
         round_cg = 0
         if plate is None:  # the bone's unit motion, extended into the block by its free response
             first = system.solve(unit)
@@ -309,7 +313,7 @@ def solve_contact(
             damped_rounds += 1
         if callback is not None:
             callback(ContactRound(rounds, int(contact.sum()), int(release.sum()), int(add.sum()), round_cg,
-                                  problem.amg.setups - round_setups))
+                                  amg.setups - round_setups))
         if not (release.any() or add.any() or drift) and loose and rounds < max_rounds:
             loose = False  # settled on inexact solves: confirm with a solve to the full tolerance
             seen.discard(key)
@@ -345,7 +349,7 @@ def solve_contact(
         rounds=rounds,
         linear_solves=solves,
         cg_iterations=cg_iterations,
-        amg_setups=problem.amg.setups - setups_before,
+        amg_setups=amg.setups - setups_before,
         unresolved=check.violations,
         cycled=cycled,
         contact_history=history,

@@ -6,7 +6,10 @@ reactions come for free; a system for a contact set that differs in a few nodes 
 one updated in their rows and columns). The smoothed-aggregation hierarchy (pyamg) lives in an explicit
 ``AMGCache`` passed to every system of the same stiffness matrix: it is rebuilt only when the
 prescribed set has drifted or CG needed clearly more iterations than on a fresh hierarchy, so
-that a contact loop pays the set-up cost about once per texture.
+that a contact loop pays the set-up cost about once per texture. A contact loop works on its own
+``AMGCache.fork()`` of a starting state, so that what it rebuilds never reaches another solve: a
+texture's answer does not depend on which textures were solved before, or in other threads. A
+hierarchy is a function of its matrix alone (``_hierarchy`` seeds pyamg's random start vectors).
 
 ``solve_plate`` adds one unknown, the displacement of a rigid plate (the bone) loaded by a
 force: the contact loop's force control in one solve per round instead of two (texture gaps
@@ -24,7 +27,9 @@ residual, so the answers agree to the CG tolerance.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import copy
+import threading
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pyamg
@@ -36,6 +41,8 @@ CG_RTOL = 1e-6  # relative residual |b - A u| / |b| at which CG stops
 CG_MAXITER = 2000
 AMG_PRECISION = np.float32  # arithmetic of the preconditioner's V-cycle (CG itself is float64)
 SMOOTHER = ("block_gauss_seidel", {"sweep": "symmetric"})  # pyamg's default for smoothed aggregation
+AMG_SEED = 0  # numpy's global generator is seeded with this for every hierarchy set-up (see _hierarchy)
+_GLOBAL_RANDOM = threading.Lock()  # held while the global generator is seeded
 
 
 class SolverError(RuntimeError):
@@ -76,6 +83,24 @@ class VCycle:
         return x
 
 
+def _hierarchy(matrix: sp.csr_matrix, near_null: np.ndarray) -> pyamg.multilevel.MultilevelSolver:
+    """pyamg's smoothed-aggregation hierarchy of ``matrix``, the same every time for the same matrix.
+
+    pyamg starts the spectral-radius estimates of its prolongation smoothing from random vectors of
+    numpy's global generator, so a hierarchy (and, within the CG tolerance, every answer) depended
+    on how much of that stream earlier set-ups, or other threads, had drawn. The generator is seeded
+    with ``AMG_SEED`` for the set-up under a lock, and its state restored afterwards; code of other
+    threads that draws from the global generator meanwhile would still interfere (none here does).
+    """
+    with _GLOBAL_RANDOM:
+        state = np.random.get_state()
+        np.random.seed(AMG_SEED)
+        try:
+            return pyamg.smoothed_aggregation_solver(matrix, B=near_null, symmetry="symmetric")
+        finally:
+            np.random.set_state(state)
+
+
 def _cast(matrix: sp.csr_matrix | sp.bsr_matrix, dtype: type) -> sp.csr_matrix | sp.bsr_matrix:
     """``matrix`` with its values in ``dtype``, sharing its index arrays (scipy's ``astype`` first
     re-sums duplicate entries, which pyamg's products do not have, at the cost of a sort)."""
@@ -89,7 +114,7 @@ class AMGCache:
     Reuse policy: a new system rebuilds it when its prescribed set differs from the one the
     hierarchy was built for in more than ``rebuild_drift`` of the DOFs; a solve rebuilds it when
     CG took more than ``slow_factor`` x (iterations on the fresh hierarchy) + ``slow_margin``.
-    ``precision``: the V-cycle's float type.
+    ``precision``: the V-cycle's float type. Not thread-safe: each contact loop works on a ``fork``.
     """
 
     near_null: np.ndarray
@@ -103,6 +128,11 @@ class AMGCache:
     setups: int = 0
     layout: _Layout | None = field(default=None, repr=False)
 
+    def fork(self) -> AMGCache:
+        """An independent copy that starts from this state: it shares the built hierarchy and the matrix
+        layout (neither is changed once made) and replaces them on its own when it rebuilds."""
+        return replace(self, layout=copy.copy(self.layout))
+
     def fits(self, fixed: np.ndarray) -> bool:
         """True if the hierarchy exists and was built for a prescribed set close to ``fixed``."""
         if self.hierarchy is None:
@@ -112,8 +142,7 @@ class AMGCache:
     def build(self, matrix: sp.csr_matrix, fixed: np.ndarray) -> None:
         compact = matrix.copy()  # without the stored zeros of prescribed rows and columns (and own indices)
         compact.eliminate_zeros()
-        multilevel = pyamg.smoothed_aggregation_solver(compact, B=self.near_null, symmetry="symmetric")
-        self.hierarchy = VCycle(multilevel, self.precision)
+        self.hierarchy = VCycle(_hierarchy(compact, self.near_null), self.precision)
         self.built_for = fixed.copy()
         self.fresh_iterations = 0
         self.setups += 1

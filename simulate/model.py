@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import math
+import threading
 import time
 from collections import OrderedDict
 from collections.abc import Callable
@@ -122,11 +123,24 @@ def _undefined(value: float | None) -> bool:
     return value is not None and not math.isfinite(value)
 
 
+@dataclass(frozen=True)
+class BaseField:
+    """The untextured base under the block at one load: lambda3 on the sampling grid, the indentation
+    (mm), and what a texture's contact solve starts from: the warm-start solutions and AMG state."""
+
+    lambda3: np.ndarray
+    indentation_mm: float
+    warm: tuple[np.ndarray, np.ndarray]
+    amg: AMGCache
+
+
 class Block:
     """Texture-independent parts of one configuration, built once and reused.
 
     Mesh (cached on disk), stiffness, the contact problem with its reusable AMG hierarchy,
-    strain sampler and the untextured (flat) base field per load.
+    strain sampler and the untextured (flat) base field per load. Thread-safe: nothing a texture's
+    solve uses is changed by it (each contact loop works on a fork of its base field's AMG state),
+    and the base fields are made once, under a lock.
     """
 
     def __init__(self, spec: BlockSpec, cache: bool = True) -> None:
@@ -155,21 +169,31 @@ class Block:
         t = time.perf_counter()
         self.sampler = StrainSampler(self.mesh, spec.depth_mm, spec.window_mm, spec.grid_mm)
         self.seconds["sampler"] = time.perf_counter() - t
-        self._base: dict[tuple[BaseShape, float, str, int], tuple[np.ndarray, float, tuple]] = {}
+        self._base: dict[tuple[BaseShape, float, str, int], BaseField] = {}
+        self._lock = threading.Lock()
         self.runs = 0
 
+    def count_run(self) -> bool:
+        """Count one texture's solve; True for the block's first (whose stages include the block's set-up)."""
+        with self._lock:
+            self.runs += 1
+            return self.runs == 1
+
     def base(self, force_n: float, contact: str, max_rounds: int = SimConfig.max_rounds,
-             shape: BaseShape = FLAT) -> tuple[np.ndarray, float, tuple[np.ndarray, np.ndarray]]:
-        """lambda3 of the untextured base ``shape`` under the block, its indentation (mm) and warm-start solutions."""
+             shape: BaseShape = FLAT) -> BaseField:
+        """The untextured base ``shape`` under the block at ``force_n``, solved once (from the pristine AMG state)."""
         key = (shape, force_n, contact, max_rounds)
-        if key not in self._base:
-            surface = base_surface(shape, self.spec.mesh.width_mm)
-            # Start from the nodes within two tissue thicknesses of the base's top (not down a convex base's side).
-            initial = None if shape.flat else surface(*self.problem.bottom_xy.T) > -2 * self.spec.mesh.tissue_mm
-            solved = solve_contact(self.problem, surface, force_n, contact == "frictionless", max_rounds=max_rounds,
-                                   initial=initial)
-            self._base[key] = (self.sampler.max_compression(solved.u), solved.indentation_mm, solved.warm)
-        return self._base[key]
+        with self._lock:
+            if key not in self._base:
+                surface = base_surface(shape, self.spec.mesh.width_mm)
+                # Start from the nodes within two tissue thicknesses of the base's top (not down a convex base's side).
+                initial = None if shape.flat else surface(*self.problem.bottom_xy.T) > -2 * self.spec.mesh.tissue_mm
+                amg = self.problem.amg.fork()
+                solved = solve_contact(self.problem, surface, force_n, contact == "frictionless",
+                                       max_rounds=max_rounds, initial=initial, amg=amg)
+                self._base[key] = BaseField(self.sampler.max_compression(solved.u), solved.indentation_mm,
+                                            solved.warm, amg)
+            return self._base[key]
 
 
 def texture_surface(heightmap: Heightmap, centre_mm: tuple[float, float], z0: float, periodic: bool):
@@ -183,23 +207,29 @@ def texture_surface(heightmap: Heightmap, centre_mm: tuple[float, float], z0: fl
 
 
 class Simulator:
-    """Runs the FEM model for many textures, preparing each configuration once."""
+    """Runs the FEM model for many textures, preparing each configuration once.
+
+    Thread-safe, and a texture's result does not depend on what was solved before or beside it:
+    threads may share one simulator (and its prepared blocks) and get the sequential answers bit for bit.
+    """
 
     def __init__(self, config: SimConfig | None = None, cache: bool = True, max_blocks: int = 4) -> None:
         self.config = config or SimConfig()
         self.cache = cache
         self.max_blocks = max_blocks
         self._blocks: OrderedDict[BlockSpec, Block] = OrderedDict()
+        self._lock = threading.Lock()
 
     def block(self, config: SimConfig) -> Block:
         """The prepared block for a resolved configuration, keyed by its ``block_spec()``."""
         key = config.block_spec()
-        if key not in self._blocks:
-            self._blocks[key] = Block(key, cache=self.cache)
-            while len(self._blocks) > self.max_blocks:
-                self._blocks.popitem(last=False)
-        self._blocks.move_to_end(key)
-        return self._blocks[key]
+        with self._lock:
+            if key not in self._blocks:
+                self._blocks[key] = Block(key, cache=self.cache)
+                while len(self._blocks) > self.max_blocks:
+                    self._blocks.popitem(last=False)
+            self._blocks.move_to_end(key)
+            return self._blocks[key]
 
     def run(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False,
             callback: Callable[[ContactRound], None] | None = None, estimate_error: bool = True,
@@ -227,11 +257,10 @@ class Simulator:
         heightmap.require_footprint(config.width_mm, centre, tile)
         _require_resolved_footprint(heightmap, config)
         block = self.block(config)
-        stages = dict(block.seconds) if block.runs == 0 else {}
-        block.runs += 1
+        stages = dict(block.seconds) if block.count_run() else {}
         t = time.perf_counter()
         shape = config.base_shape()
-        base, base_indentation, warm = block.base(config.force_n, config.contact, config.max_rounds, shape)
+        base = block.base(config.force_n, config.contact, config.max_rounds, shape)
         stages["base_field"] = time.perf_counter() - t
         if shape.flat:
             z0 = heightmap.max_in_footprint(config.width_mm, centre, periodic=tile)
@@ -240,11 +269,12 @@ class Simulator:
             surface, _ = textured_surface(heightmap, centre, shape, config.texture_along, config.width_mm, tile)
         # Initial contact set: given, or what the untextured base's indentation at this force would touch.
         initial = (initial(block.problem.bottom_xy) if initial is not None
-                   else surface(*block.problem.bottom_xy.T) >= -base_indentation)
+                   else surface(*block.problem.bottom_xy.T) >= -base.indentation_mm)
         t = time.perf_counter()
         try:
             state = solve_contact(block.problem, surface, config.force_n, config.contact == "frictionless",
-                                     max_rounds=config.max_rounds, initial=initial, warm=warm, callback=callback)
+                                  max_rounds=config.max_rounds, initial=initial, warm=base.warm, callback=callback,
+                                  amg=base.amg.fork())
         except (ContactError, SolverError) as err:
             raise SimulationError(str(err)) from err
         stages["contact"] = time.perf_counter() - t
@@ -253,7 +283,7 @@ class Simulator:
         lam3 = block.sampler.max_compression(state.u)
         stages["strain"] = time.perf_counter() - t
         t = time.perf_counter()
-        fluct = lam3 - base
+        fluct = lam3 - base.lambda3
         pairs = PairSampling(config.window_mm, config.pair_distance_mm, config.disk_radius_mm,
                              config.pairs, config.seed)
         v, se = variation(fluct, block.sampler.axis, pairs)

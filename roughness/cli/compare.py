@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
     manifest = {"input": args.input, "n": args.n, "reference": args.reference, "engines": sorted(specs)}
     check_report_folder(out, manifest, args.overwrite)
     textures, stored = textures_of(args.input, args.n, args.pixel_mm, args.height_mm)
-    cache = ResultCache(out, {e.spec: e.identity for e in engines})
+    cache = ResultCache(out, {e.spec: e.identity for e in engines}, manifest)
     try:
         outcome = run(textures, engines, cache, stored, quiet=args.quiet)
     except KeyboardInterrupt:
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     if not outcome.keys:
         raise InputError(f"none of the {len(textures)} textures of {args.input} could be compared (reasons above)",
                          parameter="input")
-    write_manifest(out, manifest)
+    write_manifest(out, manifest)  # also when every result was cached
     cost = next((e.model.meta.cost_core_seconds for e in engines if e.kind == "surrogate"), None)
     table = write_report(textures, outcome, {e.spec: e.kind for e in engines}, args.reference, cache, out, cost,
                          args.input)

@@ -52,7 +52,7 @@ def build(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from roughness.core.files import check_distinct
-    from roughness.dataset.build import BUILD_CONFIG, build
+    from roughness.dataset.build import BUILD_CONFIG, Interrupted, build
     from roughness.dataset.recipe import Recipe, load_recipe
 
     check_distinct({"--out": args.out}, {"--recipe": args.recipe, "--labels": args.labels})
@@ -68,8 +68,8 @@ def build(args: argparse.Namespace) -> int:
     try:
         counts = build(args.out, args.n, recipe, config, workers=args.workers, scheduler=args.scheduler,
                        quiet=args.quiet, labels=labels)
-    except KeyboardInterrupt:
-        print(f"roughness: interrupted; the samples written so far are kept in {args.out}; "
+    except Interrupted as stop:
+        print(f"roughness: interrupted; {stop.stored} of {args.n} samples written to {args.out}; "
               "run the same command again to resume", file=sys.stderr)
         return 130
     write_stdout(json_text(counts))
