@@ -27,8 +27,8 @@ import numpy as np  # noqa: E402
 HERE = Path(__file__).parent
 OUT = HERE / "results" / "spectral_validation"
 PANEL = HERE / "results" / "convergence_panel.jsonl"
-VARIANTS = {"block": {"variant": "block"}, "layer": {"variant": "layer"},
-            "block_p1.2": {"variant": "block", "pressure_factor": 1.2}}  # 1.2: the FEM's pressure at the centre
+VARIANTS = {"block": {"flat_state": "block"}, "layer": {"flat_state": "layer"},
+            "block_p1.2": {"flat_state": "block", "pressure_factor": 1.2}}  # 1.2: the FEM's pressure at the centre
 WORST = 10
 
 

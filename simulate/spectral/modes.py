@@ -43,20 +43,21 @@ class Modes:
         k[0, 0] = 1.0  # placeholder: the uniform mode is set apart below
         self.c, self.s = kx / k, ky / k
         self.c[0, 0] = self.s[0, 0] = 0.0
-        response = mode_response(k.ravel(), key.tissue, key.depth_mm)
+        unique, where = np.unique(k, return_inverse=True)  # the response depends on |k| only
+        response = mode_response(unique, key.tissue, key.depth_mm)
         shape = k.shape
 
         def grid(values: np.ndarray) -> np.ndarray:
-            out = values.reshape(shape + values.shape[1:]).copy()
+            out = values[where.ravel()].reshape(shape + values.shape[1:])
             out[0, 0] = 0.0
             return out
 
         self.exx, self.ezz, self.exz = grid(response.exx), grid(response.ezz), grid(response.exz)
         self.exy, self.eyz = grid(response.exy), grid(response.eyz)
-        stiffness = response.traction.reshape(shape + (2, 2)).copy()
+        stiffness = grid(response.traction)
         thickness, mu = key.tissue.thickness_mm, key.tissue.shear_mpa
         stiffness[0, 0] = np.diag([mu, key.tissue.oedometric_mpa]) / thickness  # uniform shear and compression
-        antiplane = response.antiplane_traction.reshape(shape).copy()
+        antiplane = grid(response.antiplane_traction)
         antiplane[0, 0] = mu / thickness
         self.stiffness, self.antiplane = stiffness, antiplane
         self.compliance = np.linalg.inv(stiffness)
