@@ -23,6 +23,11 @@ CURVED_BASES = ("cylinder", "sphere")
 CHOICES = {"fidelity": FIDELITIES, "contact": CONTACT_MODES, "bone": BONE_MODELS, "element": ELEMENTS,
            "base": CURVED_BASES, "curvature_axis": AXES, "texture_along": TEXTURE_ALONG}
 
+# Where linear small-strain elasticity stops meaning anything (both engines refuse): the skin is pushed
+# further than this many tissue thicknesses (the paper's own regime reaches about 2 at 10 N on 1 mm bumps).
+MAX_INDENTATION_TISSUES = 4.0
+DEEP_INDENTATION_TISSUES = 2.0  # beyond this an indentation is unusual (a note on stderr)
+
 # SimConfig fields that do not shape the prepared skin block, so a Simulator reuses one block
 # for all of them: the load and contact law (force_n, contact, max_rounds: the contact solve per
 # texture) and the disk-pair sampling of V (pairs, pair_distance_mm, disk_radius_mm, seed), and the
