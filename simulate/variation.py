@@ -4,7 +4,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import map_coordinates
 
 
 @dataclass(frozen=True)
@@ -43,7 +42,18 @@ def variation(field: np.ndarray, axis: np.ndarray, sampling: PairSampling) -> tu
     step = axis[1] - axis[0]
 
     def at(p: np.ndarray) -> np.ndarray:
-        return map_coordinates(field, [(p[:, 1] - axis[0]) / step, (p[:, 0] - axis[0]) / step], order=1)
+        return bilinear(field, (p[:, 1] - axis[0]) / step, (p[:, 0] - axis[0]) / step)
 
     diff = np.abs(at(p1) - at(p2))
     return float(diff.mean()), float(diff.std(ddof=1) / np.sqrt(len(diff)))
+
+
+def bilinear(field: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """``field`` linearly interpolated at fractional (row, column) indices inside it (numpy only: no scipy
+    import on the spectral engine's path; the same values as scipy.ndimage.map_coordinates, order 1)."""
+    r0 = np.clip(np.floor(rows).astype(int), 0, field.shape[0] - 2)
+    c0 = np.clip(np.floor(cols).astype(int), 0, field.shape[1] - 2)
+    fr, fc = rows - r0, cols - c0
+    top = field[r0, c0] * (1 - fc) + field[r0, c0 + 1] * fc
+    bottom = field[r0 + 1, c0] * (1 - fc) + field[r0 + 1, c0 + 1] * fc
+    return top * (1 - fr) + bottom * fr
