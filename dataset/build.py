@@ -38,6 +38,8 @@ if TYPE_CHECKING:  # the texture generators load on first use (the CLI reads thi
     from .store import DatasetWriter
 
 BUILD_CONFIG = SimConfig(fidelity="coarse")  # how the project's training sets are simulated
+ENGINES = ("fem", "spectral")
+MESH_FIELDS = ("fidelity", "tolerance", "element", "h_contact_mm", "max_rounds")  # not in a spectral configuration
 WORKERS = 2  # local Dask worker processes
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration, shared by its threads
@@ -57,14 +59,33 @@ class Interrupted(KeyboardInterrupt):
         return sum(self.counts[k] for k in ("already_done", "written", "failed", "restored"))
 
 
-def simulator(config: dict):
-    """This process's prepared ``Simulator`` for ``config`` (SimConfig fields), made once."""
-    from roughness.simulate.model import Simulator
+def simulation_config(config: SimConfig, engine: str = "fem") -> dict:
+    """A dataset's ``simulation`` record: the FEM's ``SimConfig.as_dict()``; for the spectral engine the
+    fields it uses (no mesh fields) with ``engine`` and ``engine_version``."""
+    if engine not in ENGINES:
+        raise InputError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}", parameter="engine")
+    if engine == "fem":
+        return config.as_dict()
+    from roughness.simulate.spectral.engine import ENGINE_VERSION
 
+    fields = {k: v for k, v in config.as_dict().items() if k not in MESH_FIELDS}
+    return {**fields, "engine": "spectral", "engine_version": ENGINE_VERSION}
+
+
+def simulator(config: dict):
+    """This process's prepared simulator for a ``simulation_config`` record, made once."""
     key = json.dumps(config, sort_keys=True)
     with _SIMULATORS_LOCK:
         if key not in _SIMULATORS:
-            _SIMULATORS[key] = Simulator(SimConfig(**config))
+            if config.get("engine") == "spectral":
+                from roughness.simulate.spectral.engine import SpectralSimulator
+
+                fields = {k: v for k, v in config.items() if k not in ("engine", "engine_version")}
+                _SIMULATORS[key] = SpectralSimulator(SimConfig(**fields))
+            else:
+                from roughness.simulate.model import Simulator
+
+                _SIMULATORS[key] = Simulator(SimConfig(**config))
         return _SIMULATORS[key]
 
 
@@ -123,8 +144,10 @@ def _duration(seconds: float) -> str:
 
 
 def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, workers: int = WORKERS,
-          scheduler: str | None = None, quiet: bool = False, labels: LabelSet | None = None) -> dict:
-    """Simulate the first ``n`` samples of ``recipe`` into ``out``; returns counts.
+          scheduler: str | None = None, quiet: bool = False, labels: LabelSet | None = None,
+          engine: str = "fem") -> dict:
+    """Simulate the first ``n`` samples of ``recipe`` into ``out`` with ``engine`` (``fem``, or ``spectral``:
+    the spectral skin engine, which ignores the mesh fields of ``config``); returns counts.
 
     ``out`` is created, or added to if it is a dataset of the same configuration (resume).
     ``labels``: results of an earlier build of the same configuration (``labels.load_labels``),
@@ -139,7 +162,7 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
     ids = [sample_id(r) for r in records]
     if len(set(ids)) != len(ids):
         raise InputError("the recipe produced duplicate samples; change its seed or ranges")
-    file_config = DatasetConfig(config.as_dict(), json.loads(recipe.to_json()))
+    file_config = DatasetConfig(simulation_config(config, engine), json.loads(recipe.to_json()))
     if labels is not None and labels.config != file_config:
         raise InputError(f"the labels were made with another configuration ({labels.config.differences(file_config)})",
                          parameter="labels")
@@ -155,7 +178,7 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
                   file=sys.stderr, flush=True)
         if pending:
             try:
-                _run(writer, pending, config.as_dict(), workers, scheduler, counts, quiet)
+                _run(writer, pending, file_config.simulation, workers, scheduler, counts, quiet)
             except KeyboardInterrupt:
                 if not quiet and sys.stderr.isatty():
                     print(file=sys.stderr)  # end the progress line

@@ -225,3 +225,30 @@ def test_layer_flat_state_is_uniaxial():
     state = layer_flat_state(SimConfig())
     assert state[2, 2] == pytest.approx(-0.1 / TISSUE.oedometric_mpa)
     assert np.count_nonzero(state) == 1
+
+
+def test_variation_interpolates_as_map_coordinates():
+    from scipy.ndimage import map_coordinates
+
+    from roughness.simulate.variation import bilinear
+
+    rng = np.random.default_rng(0)
+    field = rng.random((161, 161))
+    rows, cols = rng.uniform(0, 160, 5000), rng.uniform(0, 160, 5000)
+    assert np.allclose(bilinear(field, rows, cols), map_coordinates(field, [rows, cols], order=1), rtol=0, atol=1e-14)
+
+
+def test_dataset_workers_label_with_the_spectral_engine():
+    """A spectral dataset's record names its engine (no mesh fields) and the workers' answer is the engine's."""
+    from roughness.dataset.build import BUILD_CONFIG, simulate_record, simulation_config
+    from roughness.dataset.recipe import Recipe, expand, realise
+
+    config = simulation_config(BUILD_CONFIG, "spectral")
+    assert config["engine"] == "spectral" and "fidelity" not in config and "h_contact_mm" not in config
+    record = expand(Recipe(), 1)[0]
+    out = simulate_record(record, config)
+    expected = SpectralSimulator(SimConfig(**{k: v for k, v in config.items() if not k.startswith("engine")}))
+    assert out["fields"]["roughness"] == expected.run(realise(record)).roughness
+    assert out["fields"]["discretization_error"] is None and out["fields"]["unresolved_nodes"] == 0
+    with pytest.raises(InputError, match="engine must be one of"):
+        simulation_config(BUILD_CONFIG, "magic")

@@ -8,7 +8,7 @@ from .common import COUNT, FRACTION, SEED, add_overwrite, finish, json_text, wri
 
 
 def add_parser(sub) -> None:
-    from roughness.dataset.build import BUILD_CONFIG, WORKERS
+    from roughness.dataset.build import BUILD_CONFIG, ENGINES, WORKERS
     from roughness.simulate.config import FIDELITIES
 
     data = sub.add_parser("dataset", help="build, inspect and verify HDF5 datasets of FEM results")
@@ -18,7 +18,10 @@ def add_parser(sub) -> None:
                    help="HDF5 dataset file: created, or resumed if it is a dataset of the same configuration")
     b.add_argument("--n", type=COUNT, required=True, help="number of samples (the first n of the recipe)")
     b.add_argument("--recipe", metavar="JSON", help="recipe file (default: the built-in recipe, bump textures only)")
-    b.add_argument("--fidelity", choices=FIDELITIES, default=BUILD_CONFIG.fidelity,
+    b.add_argument("--engine", choices=ENGINES, default="fem",
+                   help="what labels the samples: fem, or spectral (the skin as an infinite layer, no mesh: "
+                        "--fidelity and --tolerance do not apply) (default fem)")
+    b.add_argument("--fidelity", choices=FIDELITIES,
                    help=f"FEM mesh resolution of every sample; converged: refined until the estimated "
                         f"discretization error of V is below --tolerance (default {BUILD_CONFIG.fidelity})")
     b.add_argument("--tolerance", type=FRACTION, default=BUILD_CONFIG.tolerance,
@@ -59,7 +62,11 @@ def build(args: argparse.Namespace) -> int:
     recipe = load_recipe(args.recipe) if args.recipe else Recipe()
     if args.seed is not None:
         recipe = replace(recipe, seed=args.seed)
-    config = replace(BUILD_CONFIG, fidelity=args.fidelity, tolerance=args.tolerance)
+    if args.engine == "spectral" and args.fidelity is not None:
+        from roughness.core.errors import InputError
+
+        raise InputError("--fidelity sets the FEM's mesh; the spectral engine has none", parameter="fidelity")
+    config = replace(BUILD_CONFIG, fidelity=args.fidelity or BUILD_CONFIG.fidelity, tolerance=args.tolerance)
     labels = None
     if args.labels:
         from roughness.dataset.labels import load_labels
@@ -67,7 +74,7 @@ def build(args: argparse.Namespace) -> int:
         labels = load_labels(args.labels)
     try:
         counts = build(args.out, args.n, recipe, config, workers=args.workers, scheduler=args.scheduler,
-                       quiet=args.quiet, labels=labels)
+                       quiet=args.quiet, labels=labels, engine=args.engine)
     except Interrupted as stop:
         print(f"roughness: interrupted; {stop.stored} of {args.n} samples written to {args.out}; "
               "run the same command again to resume", file=sys.stderr)

@@ -19,9 +19,8 @@ import numpy as np
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
 
-from ..config import SimConfig
+from ..config import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES, SimConfig
 from ..heightmap import Heightmap
-from ..model import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES
 from ..variation import PairSampling, variation
 from .contact import ContactState, solve_contact
 from .layer import Tissue
@@ -55,6 +54,22 @@ class SpectralResult:
     flat_state: np.ndarray = field(repr=False)
     contact: ContactState = field(repr=False)
     notes: list[str] = field(default_factory=list)
+    # what a dataset stores of every result (dataset.schema.RESULT_ATTRS): no mesh, so no discretization
+    # error estimate, no nodes left unresolved by a converged solve and no ladder of levels
+    discretization_error: float | None = None
+    ladder: list = field(default_factory=list)
+
+    @property
+    def unresolved_nodes(self) -> int:
+        return 0 if self.converged else -1
+
+    @property
+    def cycled(self) -> bool:
+        return "cycled" in self.message
+
+    @property
+    def contact_history(self) -> list[int]:
+        return [int(self.contact.in_contact.sum())]
 
 
 def tissue_of(config: SimConfig) -> Tissue:
