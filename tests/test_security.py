@@ -19,7 +19,7 @@ import onnx
 import pytest
 import torch
 from onnx import TensorProto, helper
-from test_bad_inputs import _expect_refusal, _run, _snapshot, workdir  # noqa: F401 (a fixture)
+from test_bad_inputs import BASE, PARSERS, _expect_refusal, _run, _snapshot, workdir  # noqa: F401 (a fixture)
 from test_surrogate import tiny  # noqa: F401 (a fixture: a short real training and its export)
 
 from roughness.cli import main
@@ -108,15 +108,13 @@ BROKEN: dict[str, tuple[dict, str]] = {  # name: (how, what the message must say
     "bogus-fidelity": ({"meta": SHIPPED | {"label_fidelity": "bogus"}}, "label_fidelity must be one of"),
     "bad-simulation": ({"meta": SHIPPED | {"simulation": {**SHIPPED["simulation"], "force_n": -1}}}, "force_n"),
 }
-# Every command that takes a model; the model argument goes last.
-COMMANDS: dict[str, list[str]] = {
-    "predict": ["predict", "map.npy", "--pixel-mm", "0.05", "--engine", "surrogate", "--model"],
-    "jnd": ["jnd", "map.npy", "map.npy", "--pixel-mm", "0.05", "--engine", "surrogate", "--model"],
-    "tune": ["tune", "map.npy", "--pixel-mm", "0.05", "--target-lambda", "1.0", "--out", "new.npz", "--model"],
-    "homogeneity": ["homogeneity", "map.npy", "--pixel-mm", "0.05", "--n", "5", "--model"],
-    "palette": ["palette", "--k", "3", "--out", "pal", "--model"],
-    "tactile-image": ["tactile-image", "picture.png", "--out", "plate", "--model"],
-}
+# Every command that takes --model (from the parser), with its valid invocation from the bad-input sweep.
+COMMANDS = {" ".join(path): [*path, *BASE[path], "--model"] for path, parser in PARSERS.items()
+            if any("--model" in action.option_strings for action in parser._actions)}
+
+
+def test_the_model_sweep_covers_the_model_commands():
+    assert {"predict", "jnd", "tune", "homogeneity", "palette", "tactile-image"} <= set(COMMANDS)
 
 
 def _broken(folder: Path, name: str) -> Path:
