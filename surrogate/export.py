@@ -57,7 +57,8 @@ def load_checkpoint(path: str | Path) -> tuple[RoughnessNet, ModelMetadata]:
                              "dicts, lists, numbers and strings", parameter="checkpoint") from None
         raise InputError(f"{path} is not a plain checkpoint: it holds Python objects other than tensors, dicts, "
                          f"lists, numbers and strings ({named.group(1)}); they are not loaded, since loading them "
-                         "could run code (`roughness train` writes plain checkpoints)", parameter="checkpoint") from None
+                         "could run code (`roughness train` writes plain checkpoints)",
+                         parameter="checkpoint") from None
     except Exception as err:
         raise InputError(f"{path} is not a roughness training checkpoint: {err}", parameter="checkpoint") from None
     state = checkpoint.get("state_dict") if isinstance(checkpoint, dict) else None

@@ -106,10 +106,11 @@ class SurrogateModel:
         for name, shape in ((LOG_OUTPUT, (2,)), (EMBEDDING_OUTPUT, (2, len(self.domain.mean))),
                             *([(STD_OUTPUT, (2,))] if self.has_std else [])):
             value = np.asarray(out[name])
-            if value.shape != shape or not np.all(np.isfinite(value)):
+            negative = name == STD_OUTPUT and np.any(value < 0)
+            if value.shape != shape or not np.all(np.isfinite(value)) or negative:
                 got = value.tolist() if value.size < 5 else f"of shape {value.shape}"
                 raise self._refuse(f"its {name} for two flat patches is {got}, not {'x'.join(map(str, shape))} "
-                                   "finite numbers")
+                                   f"finite numbers{' >= 0' if name == STD_OUTPUT else ''}")
 
     def patch(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False) -> np.ndarray:
         """The model's input for a heightmap: footprint heights (mm, max 0) on its pixel grid."""
@@ -132,9 +133,12 @@ class SurrogateModel:
         out = dict(zip(self.outputs, self.session.run(None, {INPUT: patches[:, None]})))
         log_v = out[LOG_OUTPUT].astype(np.float64)
         relative = out[STD_OUTPUT].astype(np.float64) if self.has_std else None
-        bad = ~np.isfinite(log_v) if relative is None else ~(np.isfinite(log_v) & np.isfinite(relative))
+        bad = ~np.isfinite(log_v)
+        if relative is not None:
+            bad |= ~(np.isfinite(relative) & (relative >= 0))
         if bad.any():
-            raise self._refuse(f"it answered a non-finite V for {int(bad.sum())} of {len(bad)} patches")
+            raise self._refuse(f"it answered a non-finite V (or a negative or non-finite spread) for {int(bad.sum())} "
+                               f"of {len(bad)} patches")
         v = roughness_from_log(log_v, self.meta.log_offset)
         spread = None if relative is None else np.exp(log_v) * relative
         if descriptors is None:

@@ -64,9 +64,11 @@ def test_a_real_training_checkpoint_is_plain_and_exports(tiny, tmp_path, capsys)
 # ---------------------------------------------------------------- model files: checked whole on load
 
 def _graph(input_name: str = "heights", size: int = 100, embedding: int = 64,
-           outputs: tuple[str, ...] = ("log_roughness", "embedding"), nan: bool = False) -> onnx.ModelProto:
+           outputs: tuple[str, ...] = ("log_roughness", "embedding"), nan: bool = False,
+           spread: float | None = None) -> onnx.ModelProto:
     """A tiny stand-in network: embedding = mean height x ones(E), log V = mean of the embedding - 3
-    (divided by zero with ``nan``: 0 / 0 on a flat patch)."""
+    (divided by zero with ``nan``: 0 / 0 on a flat patch); with ``spread``, an ensemble's output
+    log_roughness_std = mean of the embedding + spread."""
     x = helper.make_tensor_value_info(input_name, TensorProto.FLOAT, ["batch", 1, size, size])
     nodes = [helper.make_node("ReduceMean", [input_name], ["m"], axes=[2, 3], keepdims=0),
              helper.make_node("Mul", ["m", "ones"], ["embedding"]),
@@ -74,7 +76,11 @@ def _graph(input_name: str = "heights", size: int = 100, embedding: int = 64,
              helper.make_node("Div" if nan else "Add", ["mean", "k"], ["log_roughness"])]
     init = [helper.make_tensor("ones", TensorProto.FLOAT, [1, embedding], [1.0] * embedding),
             helper.make_tensor("k", TensorProto.FLOAT, [], [0.0 if nan else -3.0])]
-    shapes = {"log_roughness": ["batch"], "embedding": ["batch", embedding]}
+    shapes = {"log_roughness": ["batch"], "embedding": ["batch", embedding], "log_roughness_std": ["batch"]}
+    if spread is not None:
+        nodes.append(helper.make_node("Add", ["mean", "s"], ["log_roughness_std"]))
+        init.append(helper.make_tensor("s", TensorProto.FLOAT, [], [spread]))
+        outputs = (*outputs, "log_roughness_std")
     graph = helper.make_graph(nodes, "stand-in", [x], [helper.make_tensor_value_info(o, TensorProto.FLOAT, shapes[o])
                                                        for o in outputs], init)
     return helper.make_model(graph, opset_imports=[helper.make_opsetid("", 13)], ir_version=8)
@@ -95,6 +101,7 @@ BROKEN: dict[str, tuple[dict, str]] = {  # name: (how, what the message must say
     "wrong-input": ({"graph": {"input_name": "x"}}, "not one input 'heights'"),
     "no-embedding": ({"graph": {"outputs": ("log_roughness",)}}, "lacks the output(s) embedding"),
     "nan-answer": ({"graph": {"nan": True}}, "not 2 finite numbers"),
+    "negative-spread": ({"graph": {"spread": -0.1}}, "not 2 finite numbers >= 0"),
     "other-size": ({"graph": {"size": 64}}, "P = 100"),
     "other-embedding": ({"graph": {"embedding": 32}}, "E = 64"),
     "footprint-0": ({"meta": SHIPPED | {"footprint_mm": 0}}, "footprint_mm must be a positive finite number"),
@@ -127,6 +134,9 @@ def test_the_stand_in_network_is_a_usable_model(tmp_path):
     model = SurrogateModel(_save(_graph(), tmp_path / "ok.onnx"))
     v, _ = model.run(np.zeros((3, 100, 100), np.float32))
     np.testing.assert_allclose(v, np.exp(-3.0) - SHIPPED["log_offset"], rtol=1e-6)
+    ensemble = SurrogateModel(_save(_graph(spread=0.1), tmp_path / "ensemble.onnx"))
+    estimate = ensemble.evaluate(np.zeros((3, 100, 100), np.float32))
+    assert ensemble.has_std and np.allclose(estimate.relative_std, 0.1)
 
 
 @pytest.mark.parametrize("command", COMMANDS)
@@ -155,7 +165,7 @@ def test_non_finite_answers_on_real_inputs_are_refused(tmp_path):
     model = SurrogateModel(_save(_graph(), tmp_path / "ok.onnx"))  # log V = mean height - 3: -inf for these
     patches = np.full((2, 100, 100), -np.finfo(np.float32).max, np.float32)
     patches[:, 0, 0] = 0
-    with pytest.raises(InputError, match="non-finite V for 2 of 2 patches") as caught:
+    with pytest.raises(InputError, match="non-finite V .* for 2 of 2 patches") as caught:
         model.run(patches)
     assert caught.value.parameter == "model"
 
