@@ -170,8 +170,7 @@ class SurrogateEngine:
 
     @property
     def identity(self) -> str:
-        if not self.path.is_file():
-            raise InputError(f"surrogate model not found: {self.path}", parameter="model")
+        self.model  # loads and checks the model file: a broken one is refused before any result is written
         return "model-" + file_sha256(self.path)[:16]
 
     @property

@@ -11,6 +11,9 @@ agrees with PyTorch on real textures (relative difference of V below ``RTOL``) f
 """
 from __future__ import annotations
 
+import pickle
+import re
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -36,18 +39,42 @@ class ExportError(RuntimeError):
 
 
 def load_checkpoint(path: str | Path) -> tuple[RoughnessNet, ModelMetadata]:
-    """The network (eval mode) and the checkpoint's metadata; InputError if it is not a training checkpoint."""
+    """The network (eval mode) and the checkpoint's metadata; InputError if it is not a training checkpoint.
+
+    Only plain data is loaded (``weights_only``: tensors, dicts, lists, numbers, strings), so a file
+    that carries other Python objects is refused without running anything in it.
+    """
     try:
-        checkpoint = torch.load(path, map_location="cpu", weights_only=False)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # torch's notes on pickle protocols: the error below says what matters
+            checkpoint = torch.load(path, map_location="cpu", weights_only=True)
     except FileNotFoundError:
         raise InputError(f"checkpoint not found: {path}", parameter="checkpoint") from None
+    except pickle.UnpicklingError as err:  # torch's text advises loading it unsafely: not passed on
+        named = re.search(r"GLOBAL (\S+)", str(err))
+        if named is None:
+            raise InputError(f"{path} is not a roughness training checkpoint: not a plain PyTorch file of tensors, "
+                             "dicts, lists, numbers and strings", parameter="checkpoint") from None
+        raise InputError(f"{path} is not a plain checkpoint: it holds Python objects other than tensors, dicts, "
+                         f"lists, numbers and strings ({named.group(1)}); they are not loaded, since loading them "
+                         "could run code (`roughness train` writes plain checkpoints)",
+                         parameter="checkpoint") from None
     except Exception as err:
         raise InputError(f"{path} is not a roughness training checkpoint: {err}", parameter="checkpoint") from None
-    if not isinstance(checkpoint, dict) or "state_dict" not in checkpoint:
-        raise InputError(f"{path} is not a roughness training checkpoint (no state_dict)", parameter="checkpoint")
-    meta = ModelMetadata.from_dict({k: v for k, v in checkpoint.items() if k != "state_dict"}, str(path))
-    model = RoughnessNet(meta.widths, meta.hidden, meta.query_h_mm)
-    model.load_state_dict(checkpoint["state_dict"])
+    state = checkpoint.get("state_dict") if isinstance(checkpoint, dict) else None
+    if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
+        raise InputError(f"{path} is not a roughness training checkpoint (no state_dict of tensors)",
+                         parameter="checkpoint")
+    meta = ModelMetadata.from_dict({k: v for k, v in checkpoint.items() if k != "state_dict"}, str(path),
+                                   parameter="checkpoint")
+    with torch.device("meta"):  # no memory until the weights are assigned: metadata cannot claim a huge network
+        model = RoughnessNet(meta.widths, meta.hidden, meta.query_h_mm)
+    try:
+        model.load_state_dict(state, assign=True)
+    except RuntimeError as err:
+        detail = " ".join(str(err).split())
+        raise InputError(f"{path}: the weights do not fit the network its metadata describes ("
+                         f"{detail[:300]}{'...' if len(detail) > 300 else ''})", parameter="checkpoint") from None
     return model.eval(), meta
 
 

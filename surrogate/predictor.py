@@ -42,6 +42,8 @@ class SurrogateModel:
     """An exported surrogate: onnxruntime session, input domain and metadata."""
 
     def __init__(self, path: str | Path = DEFAULT_MODEL, threads: int = 1) -> None:
+        """Load and check the model at ``path``: its metadata (``read_metadata``), its graph's inputs and
+        outputs, and one finite answer for a flat patch; InputError for ``model`` if any is wrong."""
         path = Path(path)
         if not path.is_file():
             raise InputError(f"surrogate model not found: {path}", parameter="model")
@@ -60,7 +62,55 @@ class SurrogateModel:
         self.fidelity = str(self.meta.label_fidelity)
         self.outputs = [o.name for o in self.session.get_outputs()]
         self.has_std = STD_OUTPUT in self.outputs  # an ensemble graph (ensemble.py)
-        self.run(self.patch(flat(self.footprint_mm + 1.0, self.pixel_mm / 2))[None])  # one-time set-up costs
+        self._check_signature()
+        self._check_answers()  # also pays the one-time set-up costs
+
+    def _refuse(self, problem: str) -> InputError:
+        return InputError(f"{self.path} is not a usable roughness model: {problem}", parameter="model")
+
+    def _check_signature(self) -> None:
+        """One input ``heights`` (batch, 1, P, P) float32 with P from the metadata; outputs ``log_roughness``
+        (batch,) and ``embedding`` (batch, E) with E the domain's size, ``log_roughness_std`` (batch,) optional."""
+        size, embedding = self.meta.patch_size, len(self.domain.mean)
+        inputs = self.session.get_inputs()
+        if [i.name for i in inputs] != [INPUT]:
+            raise self._refuse(f"its graph takes {', '.join(i.name for i in inputs) or 'no input'}, not one input "
+                               f"{INPUT!r}")
+        expected = {INPUT: ("(batch, 1, P, P)", [None, 1, size, size])}
+        expected[LOG_OUTPUT] = ("(batch,)", [None])
+        expected[EMBEDDING_OUTPUT] = ("(batch, E)", [None, embedding])
+        if self.has_std:
+            expected[STD_OUTPUT] = ("(batch,)", [None])
+        missing = [name for name in (LOG_OUTPUT, EMBEDDING_OUTPUT) if name not in self.outputs]
+        if missing:
+            raise self._refuse(f"its graph lacks the output(s) {', '.join(missing)} (has {', '.join(self.outputs)})")
+        for arg in (*inputs, *self.session.get_outputs()):
+            if arg.name not in expected:
+                continue
+            shape, dims = expected[arg.name]
+            fits = len(arg.shape) == len(dims) and all(
+                isinstance(got, int) == (want is not None) and (want is None or got == want)
+                for got, want in zip(arg.shape, dims))
+            if arg.type != "tensor(float)" or not fits:
+                raise self._refuse(f"{arg.name} is {arg.type} of shape {arg.shape}, expected float32 {shape} with a "
+                                   f"free batch axis, P = {size} (footprint_mm / patch_pixel_mm) and E = {embedding} "
+                                   "(the size of its domain's embedding)")
+
+    def _check_answers(self) -> None:
+        """Two flat patches give finite outputs of the declared shapes."""
+        flat_patch = self.patch(flat(self.footprint_mm + 1.0, self.pixel_mm / 2))
+        try:
+            out = dict(zip(self.outputs, self.session.run(None, {INPUT: np.stack([flat_patch] * 2)[:, None]})))
+        except Exception as err:
+            raise self._refuse(f"it fails on a flat patch: {err}") from None
+        for name, shape in ((LOG_OUTPUT, (2,)), (EMBEDDING_OUTPUT, (2, len(self.domain.mean))),
+                            *([(STD_OUTPUT, (2,))] if self.has_std else [])):
+            value = np.asarray(out[name])
+            negative = name == STD_OUTPUT and np.any(value < 0)
+            if value.shape != shape or not np.all(np.isfinite(value)) or negative:
+                got = value.tolist() if value.size < 5 else f"of shape {value.shape}"
+                raise self._refuse(f"its {name} for two flat patches is {got}, not {'x'.join(map(str, shape))} "
+                                   f"finite numbers{' >= 0' if name == STD_OUTPUT else ''}")
 
     def patch(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False) -> np.ndarray:
         """The model's input for a heightmap: footprint heights (mm, max 0) on its pixel grid."""
@@ -82,8 +132,14 @@ class SurrogateModel:
             raise InputError(f"patches must be a finite (n, P, P) array, got shape {patches.shape}")
         out = dict(zip(self.outputs, self.session.run(None, {INPUT: patches[:, None]})))
         log_v = out[LOG_OUTPUT].astype(np.float64)
-        v = roughness_from_log(log_v, self.meta.log_offset)
         relative = out[STD_OUTPUT].astype(np.float64) if self.has_std else None
+        bad = ~np.isfinite(log_v)
+        if relative is not None:
+            bad |= ~(np.isfinite(relative) & (relative >= 0))
+        if bad.any():
+            raise self._refuse(f"it answered a non-finite V (or a negative or non-finite spread) for {int(bad.sum())} "
+                               f"of {len(bad)} patches")
+        v = roughness_from_log(log_v, self.meta.log_offset)
         spread = None if relative is None else np.exp(log_v) * relative
         if descriptors is None:
             descriptors = batch_descriptors(patches, self.pixel_mm)

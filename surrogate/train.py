@@ -171,7 +171,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
 
     # evaluate the best model on every split (multi-fidelity: its answers against the labels at the
     # query spacing); fit its input domain on the training inputs (each texture once)
-    model.load_state_dict(torch.load(out / "best.pt"))
+    model.load_state_dict(torch.load(out / "best.pt", weights_only=True))
     ids, first = np.unique(samples.ids, return_index=True)  # rows of one texture share its patch
     answers, codes = infer(model, samples.patches[first])  # at the query spacing
     trained = samples.split[first] == "train"
@@ -203,7 +203,8 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         multi_fidelity={"query_h_mm": query, "rows_by_h_mm": _rows_by_level(samples),
                         "extra_data": [{"file": Path(p).name, "inputs_sha256": inputs_sha256(p)} for p in cfg.extra_data]}
         if multi else None)
-    save_torch({"state_dict": model.state_dict(), **meta.to_dict()}, out / "checkpoint.pt")
+    plain = json.loads(meta.to_json())  # plain types only (no numpy scalars): export loads it with weights_only
+    save_torch({"state_dict": model.state_dict(), **plain}, out / "checkpoint.pt")
     write_text(out / "metrics.json", json.dumps({k: v for k, v in meta.to_dict().items() if k != "domain"}, indent=1))
     write_text(out / "history.csv", "epoch,train_loss,val_loss,lr,minutes\n" + "".join(
         ",".join(f"{v:.6g}" for v in row) + "\n" for row in history))

@@ -4,6 +4,7 @@ from __future__ import annotations
 import csv
 import errno
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -148,18 +149,36 @@ def _why(err: OSError, folder: Path) -> str:
     return err.strerror.lower() if err.strerror else str(err)
 
 
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")  # a spreadsheet may run a cell starting so as a formula
+_PLAIN_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+
+
+def formula_like(text: str) -> bool:
+    """Whether a spreadsheet could read ``text`` as a formula: it starts with one of FORMULA_START and is
+    not a plain number (``-0.5``, ``+1e-3`` are numbers to a spreadsheet, and stay as they are)."""
+    return text.startswith(FORMULA_START) and not _PLAIN_NUMBER.fullmatch(text)
+
+
 def write_csv(path: str | Path, header: Sequence[str], rows: Iterable[Sequence[object]],
               overwrite: bool = True) -> Path:
-    """A UTF-8 CSV file (LF line ends) of a header and rows, written atomically (``atomic_write``)."""
-    rows = list(rows)
+    """A UTF-8 CSV file (LF line ends) of a header and rows, written atomically (``atomic_write``).
+
+    Text cells that a spreadsheet could run as a formula (``formula_like``) are written with a leading
+    ``'`` so they open as text; numbers, and text that is a plain number, are written unchanged.
+    """
+    rows = [[_cell(value) for value in row] for row in rows]
 
     def write(tmp: str) -> None:
         with open(tmp, "w", newline="", encoding="utf-8") as f:
             out = csv.writer(f, lineterminator="\n")
-            out.writerow(header)
+            out.writerow([_cell(name) for name in header])
             out.writerows(rows)
 
     return atomic_write(path, write, overwrite)
+
+
+def _cell(value: object) -> object:
+    return "'" + value if isinstance(value, str) and formula_like(value) else value
 
 
 def _umask() -> int:

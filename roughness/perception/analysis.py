@@ -26,7 +26,7 @@ from .bootstrap import PERCENTILES, Bootstrap, bootstrap, thurstone_bootstrap
 from .crossval import CrossValidation, cross_validate
 from .embed import EmbedResult, TripletSDP, oriented, triplet_error
 from .thurstone import DEFAULT_LAPSE, ThurstoneFit, thurstone_scale
-from .trials import Trials, disconnection_warning
+from .trials import Trials, disconnection_warning, id_problem, listed
 
 SCALES = ("sdp", "thurstone")
 EMBEDDING_COLUMNS = ("stimulus", "coordinate", "low", "high")
@@ -183,6 +183,9 @@ def _embedding_table(path: Path) -> EmbeddingTable:
             ids.append((row["stimulus"] or "").strip())
     if len(ids) < 3 or len(set(ids)) != len(ids) or "" in ids:
         raise InputError(f"{path}: need at least 3 rows with distinct, non-empty stimulus ids", parameter="embedding")
+    refused = [why for why in map(id_problem, ids) if why]
+    if refused:
+        raise InputError(listed(f"{path}: refused stimulus ids", refused), parameter="embedding")
     array = np.array(values, dtype=float)
     if not np.all(np.isfinite(array[:, 0])):
         raise InputError(f"{path}: coordinates must be finite", parameter="embedding")

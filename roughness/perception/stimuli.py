@@ -28,7 +28,7 @@ from pathlib import Path
 
 from roughness.core.errors import InputError
 
-from .trials import listed
+from .trials import id_problem, listed
 
 
 @dataclass(frozen=True)
@@ -116,6 +116,8 @@ def _stimulus(row: dict, folder: Path) -> Stimulus:
     ident = cell.get("stimulus")
     if not ident:
         raise InputError("empty stimulus id")
+    if id_problem(ident):
+        raise InputError(id_problem(ident))
     spread = _number(cell, "homogeneity")
     if spread is not None and not (math.isfinite(spread) and spread >= 0):
         raise InputError(f"stimulus {ident!r}: homogeneity (spread in JNDs) must be a finite number >= 0, "

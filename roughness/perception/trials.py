@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from roughness.core.errors import InputError
-from roughness.core.files import atomic_write
+from roughness.core.files import formula_like, write_csv
 
 COLUMNS = ("subject", "reference", "left", "right", "answer")
 ANSWERS = ("left", "right")
@@ -139,6 +139,15 @@ def _row_problem(row: dict, width: int) -> str | None:
     ref, left, right = (row[c].strip() for c in ("reference", "left", "right"))
     if len({ref, left, right}) < 3:
         return f"reference, left and right must be three different stimuli, got {ref!r}, {left!r}, {right!r}"
+    return next((id_problem(s) for s in (ref, left, right) if id_problem(s)), None)
+
+
+def id_problem(ident: str) -> str | None:
+    """Why a stimulus id is refused (None: it is fine): one that a spreadsheet could run as a formula
+    (``roughness.core.files.formula_like``), since ids are written into the CSV files the tools make."""
+    if formula_like(ident):
+        return (f"stimulus id {ident!r} starts with {ident[0]!r}, so a spreadsheet opening the results could run "
+                "it as a formula; rename it (ids that are plain numbers, such as -1, are fine)")
     return None
 
 
@@ -182,13 +191,6 @@ def listed(what: str, items: list[str]) -> str:
 
 def write_trials(path: str | Path, rows: Iterable[dict[str, object]], fieldnames: Sequence[str],
                  overwrite: bool = True) -> Path:
-    """Write rows (dicts with at least COLUMNS) as a trials CSV, atomically (replacing ``path`` only if ``overwrite``)."""
-    rows = list(rows)
-
-    def write(tmp: str) -> None:
-        with open(tmp, "w", newline="", encoding="utf-8") as f:
-            writer = csv.DictWriter(f, fieldnames=list(fieldnames), lineterminator="\n")
-            writer.writeheader()
-            writer.writerows(rows)
-
-    return atomic_write(path, write, overwrite)
+    """Write rows (dicts with at least COLUMNS) as a trials CSV, atomically (``write_csv``: text that a
+    spreadsheet could run as a formula is written as text; ``path`` is replaced only if ``overwrite``)."""
+    return write_csv(path, fieldnames, ([row.get(name, "") for name in fieldnames] for row in rows), overwrite)
