@@ -40,44 +40,68 @@ def _spectral(heightmap, variant: str) -> dict:
             "iterations": result.iterations, "seconds": result.seconds}
 
 
-def validation_rows(labels: Path) -> list[dict]:
+def _stored(jsonl: Path) -> dict[tuple[str, str], dict]:
+    """Rows already computed, by (set, id): the study resumes after an interruption."""
+    rows = [json.loads(line) for line in jsonl.read_text().splitlines()] if jsonl.exists() else []
+    return {(r["set"], r["id"]): r for r in rows}
+
+
+def _keep(jsonl: Path, row: dict) -> dict:
+    with jsonl.open("a") as f:
+        f.write(json.dumps(row, sort_keys=True) + "\n")
+    return row
+
+
+def validation_rows(labels: Path, jsonl: Path) -> list[dict]:
     from roughness.dataset.store import Dataset
 
-    rows = []
+    rows, done = [], _stored(jsonl)
     with Dataset(labels) as data:
         for sample in data.iter_samples():
+            if ("validation", sample.id) in done:
+                rows.append(done["validation", sample.id])
+                continue
             row = {"set": "validation", "id": sample.id, "family": sample.recipe.get("family", "?"),
                    "V_ref": sample.values["V"], "contact_fraction_ref": sample.values["contact_fraction"]}
             for variant in VARIANTS:
                 row[variant] = _spectral(sample.heightmap, variant)
-            rows.append(row)
+            rows.append(_keep(jsonl, row))
             print(f"{len(rows):4d} {row['family']:10s} ref {row['V_ref']:.4f} block {row['block']['V']:.4f} "
                   f"layer {row['layer']['V']:.4f} p1.2 {row['block_p1.2']['V']:.4f} cf {row['contact_fraction_ref']:.3f} "
                   f"{row['block']['contact_fraction']:.3f} {row['block_p1.2']['contact_fraction']:.3f}", file=sys.stderr, flush=True)
     return rows
 
 
-def panel_rows() -> list[dict]:
+def panel_rows(jsonl: Path) -> list[dict]:
     sys.path.insert(0, str(HERE))
     from convergence_panel import REFERENCE, _rows, panel
 
     textures = panel()
     reference = {r["texture"]: r for r in _rows(PANEL) if (r["element"], r["h_contact_mm"]) == REFERENCE}
-    rows = []
+    rows, done = [], _stored(jsonl)
     for name, make in textures.items():
         if name not in reference:
             continue
-        heightmap = make()
+        if ("panel", name) in done:
+            rows.append(done["panel", name])
+            continue
         row = {"set": "panel", "id": name, "family": name.split("-")[0], "V_ref": reference[name]["roughness"],
-               "contact_fraction_ref": reference[name]["contact_fraction"]}
+               "contact_fraction_ref": reference[name].get("contact_fraction")}
         for variant in VARIANTS:
-            row[variant] = _spectral(heightmap, variant)
-        rows.append(row)
+            row[variant] = _spectral(make(), variant)
+        rows.append(_keep(jsonl, row))
     return rows
 
 
+def _relative(value: float, reference: float) -> float:
+    """value / reference - 1; 0 where both are 0 (a flat texture), infinite where only the reference is."""
+    if value == reference:
+        return 0.0
+    return value / reference - 1 if reference else float("inf")
+
+
 def _errors(rows: list[dict], variant: str) -> np.ndarray:
-    return np.array([r[variant]["V"] / r["V_ref"] - 1 for r in rows])
+    return np.array([_relative(r[variant]["V"], r["V_ref"]) for r in rows])
 
 
 def _stats(rows: list[dict], variant: str) -> dict:
@@ -89,6 +113,10 @@ def _stats(rows: list[dict], variant: str) -> dict:
     return {"n": len(rows), "median_abs": float(np.median(np.abs(err))), "p95_abs": float(np.percentile(np.abs(err), 95)),
             "median_signed": float(np.median(err)), "spearman": float(spearmanr(ref, got).statistic),
             "seconds_median": float(np.median([r[variant]["seconds"] for r in rows]))}
+
+
+def _pct(value: float | None) -> str:
+    return "–" if value is None else f"{100 * value:.1f}%"
 
 
 def write_report(rows: list[dict], out: Path) -> str:
@@ -116,11 +144,11 @@ def write_report(rows: list[dict], out: Path) -> str:
         lines += ["", f"Worst {WORST} (flat state block):", "",
                   "| texture | family | V ref | V spectral | error | contact ref | contact spectral |",
                   "|---|---|---|---|---|---|---|"]
-        for r in sorted(subset, key=lambda r: -abs(r["block"]["V"] / r["V_ref"] - 1))[:WORST]:
+        for r in sorted(subset, key=lambda r: -abs(_relative(r["block"]["V"], r["V_ref"])))[:WORST]:
             lines.append(f"| {r['id'][:16]} | {r['family']} | {r['V_ref']:.4f} | {r['block']['V']:.4f} | "
-                         f"{100 * (r['block']['V'] / r['V_ref'] - 1):+.1f}% | {100 * r['contact_fraction_ref']:.1f}% | "
+                         f"{100 * _relative(r['block']['V'], r['V_ref']):+.1f}% | {_pct(r['contact_fraction_ref'])} | "
                          f"{100 * r['block']['contact_fraction']:.1f}% |")
-        partial = [r for r in subset if r["contact_fraction_ref"] < 0.98]
+        partial = [r for r in subset if (r["contact_fraction_ref"] or 1.0) < 0.98]
         if partial:
             gap = np.array([r["block"]["contact_fraction"] - r["contact_fraction_ref"] for r in partial])
             lines += ["", f"Contact fraction on the {len(partial)} textures below 98% contact in the FEM: spectral minus "
@@ -155,13 +183,15 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--labels", type=Path, help="validation set with converged FEM labels (.h5)")
     parser.add_argument("--report-only", action="store_true", help="rewrite the report from the stored JSONL")
+    parser.add_argument("--fresh", action="store_true", help="recompute every row (after a change to the engine)")
     args = parser.parse_args(argv)
     jsonl = OUT.with_suffix(".jsonl")
+    if args.fresh:
+        jsonl.unlink(missing_ok=True)
     if args.report_only:
         rows = [json.loads(line) for line in jsonl.read_text().splitlines()]
     else:
-        rows = (validation_rows(args.labels) if args.labels else []) + panel_rows()
-        jsonl.write_text("".join(json.dumps(r, sort_keys=True) + "\n" for r in rows))
+        rows = (validation_rows(args.labels, jsonl) if args.labels else []) + panel_rows(jsonl)
     print(write_report(rows, OUT))
     plot(rows, OUT)
     return 0
