@@ -73,7 +73,7 @@ LIBRARY_ONLY = {
     "lambda_mm": "texture parameter (--param)", "base_diameter_mm": "texture parameter (--param)",
     "top": "texture parameter (--param)", "top_diameter_mm": "texture parameter (--param)",
     "flat_state": "SpectralSimulator(flat_state): studies compare the flat states; the CLI uses the default",
-    "pressure_factor": "SpectralSimulator(pressure_factor): a study parameter; the CLI uses the footprint's pressure",
+    "pressure": "SpectralSimulator(pressure): a study parameter; the CLI uses the flat state's pressure",
 }
 CHECK_HELPERS = {"real": 0, "positive": 0, "non_negative": 0, "in_range": 0, "integer": 0,
                  "check_output": 2, "check_output_folder": 2}  # function -> position of its parameter-name argument

@@ -16,18 +16,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from roughness.core.checks import positive
 from roughness.core.errors import InputError
 
 from ..config import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES, SimConfig
 from ..heightmap import Heightmap
 from ..variation import PairSampling, variation
 from .contact import ContactState, solve_contact
+from .flat_state import FlatState, block_flat_state
 from .layer import Tissue
 from .modes import GridKey, modes
 
 ENGINE_VERSION = 1  # bump when a change alters results (keys cached spectral results)
 FLAT_STATES = ("layer", "block")
+PRESSURES = ("flat", "mean")
 MIN_FOOTPRINT_PIXELS = 10  # the footprint must span at least this many pixels across
 MAX_FOOTPRINT_PIXELS = 1024  # and at most this many (the mirrored period is twice as wide: 2048^2 FFTs)
 
@@ -51,7 +52,7 @@ class SpectralResult:
     fluctuation: np.ndarray = field(repr=False)
     lambda3: np.ndarray = field(repr=False)
     grid_axis_mm: np.ndarray = field(repr=False)
-    flat_state: np.ndarray = field(repr=False)
+    flat_state: FlatState = field(repr=False)
     contact: ContactState = field(repr=False)
     notes: list[str] = field(default_factory=list)
     # what a dataset stores of every result (dataset.schema.RESULT_ATTRS): no mesh, so no discretization
@@ -76,12 +77,12 @@ def tissue_of(config: SimConfig) -> Tissue:
     return Tissue(config.tissue_mm, config.young_mpa, config.poisson)
 
 
-def layer_flat_state(config: SimConfig) -> np.ndarray:
-    """The untextured infinite layer's strain (3, 3): uniaxial compression under the mean pressure."""
+def layer_flat_state(config: SimConfig) -> FlatState:
+    """The untextured infinite layer: uniaxial compression (3, 3) under the footprint's mean pressure (MPa)."""
     pressure = config.force_n / config.width_mm**2
-    flat = np.zeros((3, 3))
-    flat[2, 2] = -pressure / tissue_of(config).oedometric_mpa
-    return flat
+    strain = np.zeros((3, 3))
+    strain[2, 2] = -pressure / tissue_of(config).oedometric_mpa
+    return FlatState(strain, pressure)
 
 
 def footprint_heights(heightmap: Heightmap, width_mm: float, centre_mm: tuple[float, float],
@@ -131,26 +132,27 @@ def lambda3(strain: np.ndarray, flat: np.ndarray) -> np.ndarray:
 class SpectralSimulator:
     """Roughness V by the spectral engine for a ``SimConfig`` (its mesh fields are not used).
 
-    ``flat_state``: ``block`` (the FEM block's centre strain) or ``layer`` (the infinite layer's);
-    ``pressure_factor``: the layer's mean pressure over force / footprint area (1: the footprint's mean).
+    ``flat_state``: what the layer stands for (``flat_state`` module): ``block``, the FEM block's centre
+    (its strain and contact pressure; the default) or ``layer``, the infinite layer itself (uniaxial
+    strain under the footprint's mean pressure). ``pressure``: ``flat`` (the flat state's) or ``mean``
+    (force / footprint area, whatever the flat state), for studies.
     """
 
-    def __init__(self, config: SimConfig | None = None, flat_state: str = "block",
-                 pressure_factor: float = 1.0) -> None:
+    def __init__(self, config: SimConfig | None = None, flat_state: str = "block", pressure: str = "flat") -> None:
         if flat_state not in FLAT_STATES:
             raise InputError(f"flat_state must be one of {', '.join(FLAT_STATES)}, got {flat_state!r}",
                              parameter="flat_state")
+        if pressure not in PRESSURES:
+            raise InputError(f"pressure must be one of {', '.join(PRESSURES)}, got {pressure!r}", parameter="pressure")
         self.config = config or SimConfig()
-        self.flat_state = flat_state
-        self.pressure_factor = positive("pressure_factor", pressure_factor)
+        self.flat_state, self.pressure = flat_state, pressure
 
-    def flat(self, config: SimConfig) -> np.ndarray:
-        """The flat state's strain tensor (3, 3)."""
-        if self.flat_state == "layer":
-            return layer_flat_state(config)
-        from .flat_state import block_flat_state
-
-        return block_flat_state(config)
+    def flat(self, config: SimConfig) -> FlatState:
+        """The flat state: the strain the texture's is added to, and the mean pressure on the layer."""
+        state = layer_flat_state(config) if self.flat_state == "layer" else block_flat_state(config)
+        if self.pressure == "mean":
+            return FlatState(state.strain, config.force_n / config.width_mm**2)
+        return state
 
     def run(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False,
             **overrides) -> SpectralResult:
@@ -166,15 +168,13 @@ class SpectralSimulator:
         domain = mirrored(heights)
         key = GridKey(domain.shape, heightmap.pixel_mm, tissue_of(config), config.depth_mm)
         grid = modes(key)
-        pressure = self.pressure_factor * config.force_n / config.width_mm**2
-        frictionless = config.contact == "frictionless"
-        state = solve_contact(grid, domain, pressure, frictionless)
+        flat = self.flat(config)
+        state = solve_contact(grid, domain, flat.pressure_mpa, config.contact == "frictionless")
         n = heights.shape[0]
         inside = np.abs(axis) <= config.window_mm / 2 + heightmap.pixel_mm
         strain = grid.strain(state.face)[:, :n, :n][:, inside][:, :, inside]
-        flat = self.flat(config)
-        lam3 = lambda3(strain, flat)
-        fluct = lam3 - lambda3(np.zeros((6, 1, 1)), flat)
+        lam3 = lambda3(strain, flat.strain)
+        fluct = lam3 - lambda3(np.zeros((6, 1, 1)), flat.strain)
         window_axis = axis[inside]
         pairs = PairSampling(config.window_mm, config.pair_distance_mm, config.disk_radius_mm, config.pairs,
                              config.seed)

@@ -25,6 +25,7 @@ from ..heightmap import Heightmap
 from ..variation import PairSampling
 from .contact import solve_contact
 from .engine import lambda3, tissue_of
+from .flat_state import block_flat_state
 from .modes import GridKey, modes
 
 MARGIN_TISSUES = 2.0  # a non-periodic map is mirror-padded by this many tissue thicknesses on each side
@@ -41,12 +42,9 @@ def padded(heights: np.ndarray, margin: int) -> np.ndarray:
 
 
 def spectral_map(heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False, config: SimConfig | None = None,
-                 flat: np.ndarray | None = None,
                  progress: Callable[[int, int], None] | None = None) -> tuple[RoughnessMap, list[str]]:
-    """V at footprint centres ``step_mm`` apart over the whole map, and notes on how it was obtained.
-
-    ``flat``: the flat-state strain (3, 3) (default: ``flat_state.block_flat_state(config)``).
-    """
+    """V at footprint centres ``step_mm`` apart over the whole map, and notes on how it was obtained
+    (the flat state: ``flat_state.block_flat_state``, as the engine's default)."""
     config = config or SimConfig()
     step_mm = positive("step_mm", step_mm)
     heightmap.require_footprint(config.width_mm, None, tile)
@@ -64,17 +62,13 @@ def spectral_map(heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False,
                          f"{MAX_MAP_PIXELS:,}): resample it to a coarser pixel", parameter="pixel_mm")
     domain = heightmap.heights if tile else padded(heightmap.heights, margin)
     grid = modes(GridKey(domain.shape, pixel, tissue_of(config), config.depth_mm))
-    state = solve_contact(grid, domain, config.force_n / config.width_mm**2, config.contact == "frictionless")
-    if flat is None:
-        from .flat_state import block_flat_state
-
-        flat = block_flat_state(config)
+    flat = block_flat_state(config)
+    state = solve_contact(grid, domain, flat.pressure_mpa, config.contact == "frictionless")
     strain = grid.strain(state.face)[:, margin:margin + ny, margin:margin + nx]
-    field = lambda3(strain, flat) - lambda3(np.zeros((6, 1, 1)), flat)
+    field = lambda3(strain, flat.strain) - lambda3(np.zeros((6, 1, 1)), flat.strain)
     notes = [] if state.message == "full contact" else [
         f"partial contact ({100 * state.in_contact.mean():.1f}% of the map touches): the load is shared over the "
-        f"whole map at {config.force_n / config.width_mm**2:g} MPa, not {config.force_n:g} N per footprint; "
-        f"{state.message}"]
+        f"whole map at {flat.pressure_mpa:.3g} MPa, not {config.force_n:g} N per footprint; {state.message}"]
     p1, p2 = PairSampling(config.window_mm, config.pair_distance_mm, config.disk_radius_mm, config.pairs,
                           config.seed).points()
     positions = np.array([(x, y) for y in ys for x in xs])
