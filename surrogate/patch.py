@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
 from roughness.simulate.heightmap import Heightmap, bracket
 
 FOOTPRINT_MM = 10.0  # the skin block's width (simulate.config default)
@@ -40,7 +41,11 @@ def _average(values: np.ndarray, axis: int, start_mm: float, n: int, pixel_mm: f
     Works on rows (axis 1 through the transposed view: gathering rows and summing strided row slices is
     several times faster than np.take along the last axis and a reshaped mean). Samples that fall on
     pixel centres (a 0.05 mm map on the 0.1 mm grid, footprint on the pixel lattice) are read, not
-    interpolated."""
+    interpolated. The samples taken (n * sub rows of the other axis's length) are checked against
+    MAX_HEIGHTMAP_PIXELS first: a map pixel far finer than ``pixel_mm`` would take billions."""
+    check_size(f"samples of the {map_pixel_mm:g} mm map pixels to average into {n} patch pixels of {pixel_mm:g} mm "
+               f"({sub:,} per patch pixel, over {values.shape[1 - axis]:,} map pixels across)",
+               n * sub * values.shape[1 - axis], MAX_HEIGHTMAP_PIXELS, "pixel_mm")
     offsets = (np.arange(sub) + 0.5) / sub * pixel_mm
     u = ((start_mm + np.arange(n)[:, None] * pixel_mm + offsets) / map_pixel_mm - 0.5).ravel()
     lower, upper, frac = bracket(u, values.shape[axis], periodic)

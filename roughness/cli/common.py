@@ -9,14 +9,17 @@ import re
 import sys
 
 from roughness.core.errors import InputError, OutputExists
+from roughness.core.limits import MAX_CHANNELS
 
 
 def float_pair(text: str) -> tuple[float, float]:
-    """``X,Y`` in mm, for argparse."""
+    """``X,Y`` in mm, both finite, for argparse."""
     try:
         x, y = (float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected X,Y in mm, got {text!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise argparse.ArgumentTypeError(f"expected X,Y in mm, two finite numbers, got {text!r}")
     return x, y
 
 
@@ -28,6 +31,8 @@ def count_list(text: str) -> tuple[int, ...]:
         raise argparse.ArgumentTypeError(f"expected comma-separated positive integers, got {text!r}") from None
     if not values or min(values) < 1:
         raise argparse.ArgumentTypeError(f"expected comma-separated positive integers, got {text!r}")
+    if max(values) > MAX_CHANNELS:
+        raise argparse.ArgumentTypeError(f"{max(values):,} is above the limit of {MAX_CHANNELS:,} ({MAX_CHANNELS.name})")
     return values
 
 
@@ -135,6 +140,8 @@ def finish(p: argparse.ArgumentParser, run, **aliases: str) -> None:
     names lower layers use for the same value (``force_n="--force"``).
     """
     flags = {a.dest: a.option_strings[-1] for a in p._actions if a.option_strings and a.dest != "help"}
+    if "centre" in flags:  # the library's name for --centre's value, whichever command takes it
+        flags["centre_mm"] = flags["centre"]
     p.set_defaults(run=run, flags=flags | aliases)
 
 
