@@ -12,12 +12,14 @@ import os
 import sys
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from collections.abc import Iterable, Iterator
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 
 from roughness.core.checks import integer
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_DATASET_SAMPLES, check_size
 from roughness.core.version import package_version
 from roughness.simulate.config import SimConfig
 
@@ -32,6 +34,8 @@ BUILD_CONFIG = SimConfig(fidelity="coarse")  # how the project's training sets a
 WORKERS = 2  # local Dask worker processes
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration
+PREPARATION_PROGRESS_SECONDS = 5.0  # a line on stderr this often while records are made and submitted
+T = TypeVar("T")
 
 
 def simulate_record(record: dict, config: dict, label: Label | None = None) -> dict:
@@ -85,6 +89,16 @@ class Progress:
               f"failed {self.failed}{restored}", end=end, file=sys.stderr, flush=True)
 
 
+def _preparing(items: Iterable[T], total: int, what: str, quiet: bool) -> Iterator[T]:
+    """``items``, with a line "done/total what" on stderr every PREPARATION_PROGRESS_SECONDS (unless quiet)."""
+    last = time.perf_counter()
+    for done, item in enumerate(items):
+        if not quiet and time.perf_counter() - last >= PREPARATION_PROGRESS_SECONDS:
+            last = time.perf_counter()
+            print(f"  {done}/{total} {what}", file=sys.stderr, flush=True)
+        yield item
+
+
 def _duration(seconds: float) -> str:
     if not np.isfinite(seconds):
         return "?"
@@ -101,11 +115,12 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
     ``labels``: results of an earlier build of the same configuration (``labels.load_labels``),
     taken for the samples whose remade heightmap matches ("restored" in the counts).
     """
-    from .recipe import expand
+    from .recipe import sample_record
     from .store import DatasetWriter
 
+    n = check_size("samples of one build", integer("n", n, minimum=1), MAX_DATASET_SAMPLES, "n")
     integer("workers", workers, minimum=1)
-    records = expand(recipe, n)
+    records = [sample_record(recipe, i) for i in _preparing(range(n), n, "sample records made", quiet)]
     ids = [sample_id(r) for r in records]
     if len(set(ids)) != len(ids):
         raise InputError("the recipe produced duplicate samples; change its seed or ranges")
@@ -139,7 +154,8 @@ def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config
     client = Client(scheduler or cluster)
     progress = Progress(total=len(pending), start=time.perf_counter())
     try:
-        futures = [client.submit(simulate_record, r, config, label, pure=False) for r, label in pending]
+        futures = [client.submit(simulate_record, r, config, label, pure=False)
+                   for r, label in _preparing(pending, len(pending), "samples submitted to the workers", quiet)]
         for future in as_completed(futures):
             res = future.result()
             if "label" in res:

@@ -315,6 +315,7 @@ def run_design(args: argparse.Namespace) -> int:
     from roughness.perception.trials import write_trials
     from roughness.simulate.io import save_heightmap
 
+    _check_trials(args)
     stimuli = read_stimuli(args.stimuli)
     ids = [s.stimulus for s in stimuli]
     out = check_output(args.out, args.overwrite, "out")
@@ -337,6 +338,14 @@ def run_design(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_trials(args: argparse.Namespace) -> None:
+    """--trials x --subjects within MAX_TRIALS, before the subjects' list or any FEM run is made."""
+    from roughness.core.limits import MAX_TRIALS, check_size
+
+    check_size(f"trials of all subjects together ({args.trials:,} x {args.subjects:,} subjects)",
+               args.trials * args.subjects, MAX_TRIALS, "trials")
+
+
 def _file_name(stimulus: str) -> str:
     """A stimulus id as a file name: characters other than letters, digits, '.', '-' and '_' become '_'."""
     return re.sub(r"[^\w.-]", "_", stimulus)
@@ -351,6 +360,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     from roughness.perception.trials import write_trials
     from roughness.perception.values import stimulus_values
 
+    _check_trials(args)
     stimuli = read_stimuli(args.stimuli)
     ids = [s.stimulus for s in stimuli]
     observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
@@ -394,6 +404,9 @@ def run_plan(args: argparse.Namespace) -> int:
     from roughness.perception.stimuli import read_stimuli
     from roughness.perception.values import stimulus_values
 
+    from roughness.core.limits import MAX_TRIALS, check_size
+
+    check_size("trials of one simulated experiment", max(args.trials), MAX_TRIALS, "trials")
     require_cvxpy()
     stimuli = read_stimuli(args.stimuli)
     ids = [s.stimulus for s in stimuli]
