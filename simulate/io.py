@@ -241,7 +241,9 @@ def _read_npz(path: Path) -> _Raw:
             for member in archive.namelist():
                 if member.endswith(".npy"):
                     with archive.open(member) as f:
-                        _check_declared(path, *_npy_header(f), f"array {member[:-4]!r}")
+                        shape, dtype = _npy_header(f)
+                        _check_declared(path, shape, dtype, f"array {member[:-4]!r}",
+                                        real=member == f"{DEFAULT_DATASET}.npy")
         with np.load(path, allow_pickle=False) as archive:
             arrays = {name: archive[name] for name in archive.files}
     except InputError:
@@ -267,14 +269,14 @@ def _npy_header(f) -> tuple[tuple[int, ...], np.dtype]:
 
 
 def _check_declared(path: Path, shape: tuple[int, ...], dtype: np.dtype, what: str = "heightmap",
-                    limit: Limit = MAX_HEIGHTMAP_PIXELS) -> None:
-    """InputError unless the array a file declares is real numbers of at most ``limit`` pixels
-    (colour samples of one pixel count once); checked before the values are read."""
+                    real: bool = True) -> None:
+    """InputError unless the array a file declares has at most MAX_HEIGHTMAP_PIXELS pixels (colour
+    samples of one pixel count once) and, if ``real``, real numbers; checked before the values are read."""
     shape = tuple(int(n) for n in shape)
     colour = len(shape) == 3 and shape[-1] in (3, 4)
     check_size(f"{path}: pixels its {what} declares ({_shape_text(shape)})", math.prod(shape[:2] if colour else shape),
-               limit)
-    if dtype.kind not in "iuf":
+               MAX_HEIGHTMAP_PIXELS)
+    if real and dtype.kind not in "iuf":
         raise InputError(f"{path}: its {what} holds {dtype} values, not real numbers")
 
 
