@@ -192,6 +192,13 @@ def test_dataset_build_n_is_refused_before_preparing(tmp_path, capsys, monkeypat
     assert not list(tmp_path.iterdir())
 
 
+def test_compare_on_a_recipe_n_is_refused(workdir, capsys):
+    (workdir / "recipe.json").write_text('{"seed": 1}')
+    argv = ["compare", "recipe.json", *BASE[("compare",)][1:], "--n", "1000000000"]
+    _expect_refusal(argv, workdir, capsys, ("--n",))
+    assert "MAX_DATASET_SAMPLES" in _run(argv, capsys)[1]
+
+
 @pytest.mark.parametrize("path", [("predict",), ("simulate",)], ids=" ".join)
 def test_absurd_heights_are_an_input_error_about_heights(path, workdir, capsys):
     np.save(workdir / "tall.npy", np.full((240, 240), 1e300))
