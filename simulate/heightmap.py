@@ -12,7 +12,7 @@ import numpy as np
 
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
-from roughness.core.limits import MAX_COORDINATE_MM, MAX_HEIGHT_MM, MAX_HEIGHTMAP_PIXELS, check_size
+from roughness.core.limits import MAX_COORDINATE_MM, MAX_HEIGHT_MM, MAX_HEIGHTMAP_PIXELS, MIN_PIXEL_MM, check_size
 
 TOLERANCE_MM = 1e-9
 
@@ -29,7 +29,7 @@ class Heightmap:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "heights", _checked_heights(self.heights))
-        object.__setattr__(self, "pixel_mm", positive("pixel_mm", self.pixel_mm))
+        object.__setattr__(self, "pixel_mm", pixel_size(self.pixel_mm))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -114,11 +114,11 @@ class Heightmap:
 
     def resampled(self, pixel_mm: float) -> Heightmap:
         """Bilinear resampling to ``pixel_mm``; same origin, sides rounded to whole new pixels."""
-        pixel_mm = positive("pixel_mm", pixel_mm)
+        pixel_mm = pixel_size(pixel_mm)
         width, height = self.size_mm
-        check_size(f"pixels of the {width:g} mm x {height:g} mm map resampled to {pixel_mm:g} mm",
-                   round(width / pixel_mm) * round(height / pixel_mm), MAX_HEIGHTMAP_PIXELS, "pixel_mm")
         nx, ny = round(width / pixel_mm), round(height / pixel_mm)
+        check_size(f"pixels of the {width:g} mm x {height:g} mm map resampled to {pixel_mm:g} mm", nx * ny,
+                   MAX_HEIGHTMAP_PIXELS, "pixel_mm")
         x = (np.arange(nx) + 0.5) * pixel_mm
         y = (np.arange(ny) + 0.5) * pixel_mm
         return Heightmap(self.sample(x[None, :], y[:, None]), pixel_mm)
@@ -143,7 +143,7 @@ class Heightmap:
 
 def flat(size_mm: float = 12.0, pixel_mm: float = 0.05, height_mm: float = 0.0) -> Heightmap:
     """Square flat map of side ``size_mm`` (rounded to whole pixels) at ``height_mm``."""
-    n = round(positive("size_mm", size_mm) / positive("pixel_mm", pixel_mm))
+    n = round(positive("size_mm", size_mm) / pixel_size(pixel_mm))
     check_size(f"pixels of a flat {size_mm:g} mm map at {pixel_mm:g} mm", n * n, MAX_HEIGHTMAP_PIXELS, "pixel_mm")
     return Heightmap(np.full((n, n), float(height_mm)), pixel_mm)
 
@@ -173,6 +173,15 @@ def _checked_heights(heights: np.ndarray) -> np.ndarray:
                          "millimetres; check the file's unit (or --height-mm)")
     out.flags.writeable = False
     return out
+
+
+def pixel_size(pixel_mm: object) -> float:
+    """``pixel_mm`` as a float, or InputError unless it is a finite number >= MIN_PIXEL_MM."""
+    pixel_mm = positive("pixel_mm", pixel_mm)
+    if pixel_mm < MIN_PIXEL_MM:
+        raise InputError(f"the pixel size {pixel_mm:g} mm is below {MIN_PIXEL_MM:g} mm (MIN_PIXEL_MM): not a pixel "
+                         "of any instrument; check its unit (mm)", parameter="pixel_mm")
+    return pixel_mm
 
 
 def _check_centre(centre_mm: tuple[float, float], tile: bool) -> None:

@@ -187,7 +187,7 @@ def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: floa
     try:
         return Heightmap(values, pixel_mm)
     except InputError as err:
-        raise InputError(f"{path}: {err}") from None
+        raise InputError(f"{path}: {err}", parameter=err.parameter) from None
 
 
 def _unit(path: Path, name: str, stated: object, given: float | None) -> float | None:

@@ -75,7 +75,7 @@ def footprint_patches(heightmap: Heightmap, centres_mm: np.ndarray, tile: bool =
     for centre in dict.fromkeys(map(tuple, centres_mm.tolist())):  # distinct centres (np.unique of floats
         heightmap.require_footprint(width_mm, centre, tile)            # imports numpy.ma: 20 ms at start-up)
     n = round(width_mm / pixel_mm)
-    sub = max(1, math.ceil(pixel_mm / heightmap.pixel_mm - 1e-9))
+    sub = max(1, math.ceil(pixel_mm / heightmap.pixel_mm - 1e-9))  # finite: heightmap pixels >= MIN_PIXEL_MM
     origin = centres_mm.min(axis=0)
     steps = (centres_mm - origin) / pixel_mm
     out = np.empty((len(centres_mm), n, n), dtype=np.float32)

@@ -158,6 +158,9 @@ OPTION_CASES = [
     (("predict",), ["--pixel-mm", "1e-7", "--tile"], "--pixel-mm", "MAX_HEIGHTMAP_PIXELS"),
     (("predict",), ["--map", "m.npy", "--step-mm", "1e-5"], "--step-mm", "MAX_MAP_POSITIONS"),
     (("predict",), ["--map", "m.npy", "--step-mm", "1e-320", "--tile"], "--step-mm", "MAX_MAP_POSITIONS"),
+    (("predict",), ["--pixel-mm", "1e-320", "--tile"], "--pixel-mm", "MIN_PIXEL_MM"),
+    (("simulate",), ["--pixel-mm", "1e-320", "--tile"], "--pixel-mm", "MIN_PIXEL_MM"),
+    (("tactile-image",), ["--pixel-mm", "1e-320"], "--size-mm", "MAX_PLATE_PIXELS"),
     (("homogeneity",), ["--n", "1000000"], "--n", "MAX_WINDOWS"),
     (("homogeneity",), ["--pixel-mm", "0.01", "--tile", "--window-mm", "2", "--n", "10000"], "--n",
      "MAX_WORKING_VALUES"),
@@ -173,7 +176,8 @@ OPTION_CASES = [
 
 @pytest.mark.parametrize("path, extra, flag, limit", OPTION_CASES, ids=lambda v: str(v))
 def test_option_implied_size_is_refused(path, extra, flag, limit, workdir, capsys):
-    _expect_refusal([*path, *BASE[path], *extra], workdir, capsys, (flag,))
+    """predict reports a file's problem per file (others are still predicted): "pixel size" names the option."""
+    _expect_refusal([*path, *BASE[path], *extra], workdir, capsys, (flag, "pixel size"))
     assert limit in _run([*path, *BASE[path], *extra], capsys)[1]
 
 

@@ -44,6 +44,8 @@ MAX_CHANNELS = Limit(4096, "MAX_CHANNELS")
 """Channels of one surrogate layer (train --widths; the shipped networks have at most 96)."""
 MAX_HEIGHT_MM = 1000.0
 """|height| (mm) a heightmap may hold: a texture's relief is millimetres; 1 m is no texture."""
+MIN_PIXEL_MM = 1e-9
+"""Smallest pixel (mm) of a heightmap: 1 pm, below any instrument; coordinates / pixel stay within int64."""
 MAX_COORDINATE_MM = 1e6
 """|x|, |y| (mm) of a footprint centre: 1 km, far beyond any object (a tiled map repeats without end)."""
 

@@ -149,7 +149,9 @@ def plate_shape(picture_shape: tuple[int, ...], width_mm: float, pixel_mm: float
     from roughness.surrogate.roughness_map import centre_count
 
     h, w = picture_shape[:2]
-    nx = round(width_mm / pixel_mm)
+    across = width_mm / pixel_mm
+    check_size(f"pixels across a {width_mm:g} mm plate at {pixel_mm:g} mm", across, MAX_PLATE_PIXELS, "size_mm")
+    nx = round(across)
     ny = max(2, round(nx * h / w))
     check_size(f"pixels of a {width_mm:g} mm plate at {pixel_mm:g} mm (use larger pixels or a smaller plate)",
                nx * ny, MAX_PLATE_PIXELS, "size_mm")
