@@ -20,7 +20,7 @@ import numpy as np
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output
-from roughness.core.limits import MAX_MAP_POSITIONS, check_size
+from roughness.core.limits import MAX_BATCH, MAX_MAP_POSITIONS, check_size
 from roughness.simulate.heightmap import Heightmap
 
 from .patch import batch_descriptors, footprint_patches
@@ -75,6 +75,7 @@ def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 
                   batch_size: int = 256, progress: Callable[[int, int], None] | None = None) -> RoughnessMap:
     """V at footprint centres ``step_mm`` apart over the whole map; ``progress(done, total)`` after each batch."""
     step_mm = positive("step_mm", step_mm)
+    check_size("footprints per batch", batch_size, MAX_BATCH, "batch_size")
     heightmap.require_footprint(model.footprint_mm, None, tile)
     width, height = heightmap.size_mm
     footprint = model.footprint_mm

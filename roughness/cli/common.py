@@ -9,7 +9,7 @@ import re
 import sys
 
 from roughness.core.errors import InputError, OutputExists
-from roughness.core.limits import MAX_CHANNELS
+from roughness.core.limits import MAX_BATCH, MAX_CHANNELS, MAX_PARALLEL
 
 
 def float_pair(text: str) -> tuple[float, float]:
@@ -85,6 +85,8 @@ COUNT = Number(int, low=1)
 SEED = Number(int, low=0, high=2**32 - 1)
 POISSON = Number(float, low=-1, high=0.5, low_open=True, high_open=True)
 FRACTION = Number(float, low=0, high=1, low_open=True, high_open=True)
+BATCH = Number(int, low=1, high=MAX_BATCH)  # roughness.core.limits
+PARALLEL = Number(int, low=1, high=MAX_PARALLEL)  # threads or worker processes
 
 
 def add_heightmap_args(p: argparse.ArgumentParser) -> None:

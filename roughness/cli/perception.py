@@ -7,7 +7,7 @@ import os
 import re
 from pathlib import Path
 
-from .common import COUNT, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, log
+from .common import COUNT, PARALLEL, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, log
 
 NON_NEGATIVE = Number(float, low=0)
 PROBABILITY = Number(float, low=0, high=1)
@@ -49,7 +49,7 @@ def add_parser(sub) -> None:
     emb.add_argument("--folds", type=Number(int, low=2), default=10, help="cross-validation folds (default 10)")
     emb.add_argument("--resamples", type=Number(int, low=0), default=500,
                      help="bootstrap resamples for the 5-95%% intervals (default 500; 0: none)")
-    emb.add_argument("--workers", type=COUNT, default=os.cpu_count() or 1,
+    emb.add_argument("--workers", type=PARALLEL, default=min(os.cpu_count() or 1, PARALLEL.high),
                      help="processes for cross-validation and bootstrap (default: all cores)")
     emb.add_argument("--repeats", choices=("error", "keep"), default="error",
                      help="contradictory answers of one subject to the same trial: error (default) or keep both")

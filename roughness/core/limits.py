@@ -40,6 +40,10 @@ MAX_TRIALS = Limit(100_000, "MAX_TRIALS")
 """Trials of a perception design or simulation, all subjects together (an experiment has thousands)."""
 MAX_DATASET_SAMPLES = Limit(100_000, "MAX_DATASET_SAMPLES")
 """Samples of one dataset build (the shipped training sets have 3,000; each takes seconds of FEM)."""
+MAX_BATCH = Limit(16_384, "MAX_BATCH")
+"""Inputs or footprints per surrogate batch (predict --batch-size): 16,384 patches are 650 MB as float32."""
+MAX_PARALLEL = Limit(256, "MAX_PARALLEL")
+"""Threads or worker processes of one run (--threads, --workers); more start slowly or not at all."""
 MAX_CHANNELS = Limit(4096, "MAX_CHANNELS")
 """Channels of one surrogate layer (train --widths; the shipped networks have at most 96)."""
 MAX_HEIGHT_MM = 1000.0
