@@ -32,7 +32,8 @@ def count_list(text: str) -> tuple[int, ...]:
     if not values or min(values) < 1:
         raise argparse.ArgumentTypeError(f"expected comma-separated positive integers, got {text!r}")
     if max(values) > MAX_CHANNELS:
-        raise argparse.ArgumentTypeError(f"{max(values):,} is above the limit of {MAX_CHANNELS:,} ({MAX_CHANNELS.name})")
+        raise argparse.ArgumentTypeError(f"{max(values):,} is above the limit of {MAX_CHANNELS:,} "
+                                         f"({MAX_CHANNELS.name})")
     return values
 
 

@@ -7,8 +7,6 @@ the quantity, the limit and the parameter that implied it.
 """
 from __future__ import annotations
 
-import math
-
 from .errors import InputError
 
 
