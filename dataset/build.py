@@ -20,13 +20,15 @@ import signal
 import sys
 import threading
 import time
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 
 from roughness.core.checks import integer
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_DATASET_SAMPLES, check_size
 from roughness.core.version import package_version
 from roughness.simulate.config import SimConfig
 
@@ -44,6 +46,8 @@ WORKERS = 2  # local Dask worker processes
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration, shared by its threads
 _SIMULATORS_LOCK = threading.Lock()
+PREPARATION_PROGRESS_SECONDS = 5.0  # a line on stderr this often while records are made and submitted
+T = TypeVar("T")
 
 
 class Interrupted(KeyboardInterrupt):
@@ -135,6 +139,16 @@ class Progress:
               f"failed {self.failed}{restored}", end=end, file=sys.stderr, flush=True)
 
 
+def _preparing(items: Iterable[T], total: int, what: str, quiet: bool) -> Iterator[T]:
+    """``items``, with a line "done/total what" on stderr every PREPARATION_PROGRESS_SECONDS (unless quiet)."""
+    last = time.perf_counter()
+    for done, item in enumerate(items):
+        if not quiet and time.perf_counter() - last >= PREPARATION_PROGRESS_SECONDS:
+            last = time.perf_counter()
+            print(f"  {done}/{total} {what}", file=sys.stderr, flush=True)
+        yield item
+
+
 def _duration(seconds: float) -> str:
     if not np.isfinite(seconds):
         return "?"
@@ -154,11 +168,12 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
     taken for the samples whose remade heightmap matches ("restored" in the counts).
     ``Interrupted`` (a KeyboardInterrupt) on Ctrl-C, with the counts so far.
     """
-    from .recipe import expand
+    from .recipe import sample_record
     from .store import DatasetWriter
 
+    n = check_size("samples of one build", integer("n", n, minimum=1), MAX_DATASET_SAMPLES, "n")
     integer("workers", workers, minimum=1)
-    records = expand(recipe, n)
+    records = [sample_record(recipe, i) for i in _preparing(range(n), n, "sample records made", quiet)]
     ids = [sample_id(r) for r in records]
     if len(set(ids)) != len(ids):
         raise InputError("the recipe produced duplicate samples; change its seed or ranges")
@@ -195,7 +210,8 @@ def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config
     try:
         cluster = None if scheduler else _local_cluster(workers)
         client = Client(scheduler or cluster)
-        futures = [client.submit(simulate_record, r, config, label, pure=False) for r, label in pending]
+        futures = [client.submit(simulate_record, r, config, label, pure=False)
+                   for r, label in _preparing(pending, len(pending), "samples submitted to the workers", quiet)]
         for future in as_completed(futures):
             res = future.result()
             if "label" in res:

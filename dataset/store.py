@@ -37,6 +37,7 @@ from roughness.core.checks import positive
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write
 from roughness.core.hashing import canonical_json
+from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
 from roughness.simulate.heightmap import Heightmap
 
 from .schema import (
@@ -364,6 +365,8 @@ def _group_maps(group: h5py.Group) -> dict[str, np.ndarray]:
             data = group[name]
         except KeyError:
             continue
+        check_size(f"{group.file.filename}: values of {group.name}/{name} ({data.shape})", data.size,
+                   MAX_HEIGHTMAP_PIXELS)  # declared: checked before a compressed map is expanded
         maps[name] = data[()]
     if "fluctuation" in maps:
         maps["grid_axis_mm"] = data.attrs["grid_axis_mm"]

@@ -103,11 +103,13 @@ def folder_textures(path: Path, pixel_mm: float | None, height_mm: float | None)
 
 
 def recipe_textures(path: Path, n: int | None) -> list[Texture]:
+    from roughness.core.limits import MAX_DATASET_SAMPLES, check_size
     from roughness.dataset.recipe import expand, load_recipe, realise
     from roughness.dataset.store import sample_id
 
     if n is None:
         raise InputError("a recipe input needs --n, the number of its samples to compare on", parameter="n")
+    check_size("samples of a recipe to compare on", n, MAX_DATASET_SAMPLES, "n")
     return [Texture(sample_id(r), r["family"], lambda r=r: realise(r)) for r in expand(load_recipe(path), n)]
 
 

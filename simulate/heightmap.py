@@ -12,6 +12,7 @@ import numpy as np
 
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_COORDINATE_MM, MAX_HEIGHT_MM, MAX_HEIGHTMAP_PIXELS, MIN_PIXEL_MM, check_size
 
 TOLERANCE_MM = 1e-9
 
@@ -28,7 +29,7 @@ class Heightmap:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "heights", _checked_heights(self.heights))
-        object.__setattr__(self, "pixel_mm", positive("pixel_mm", self.pixel_mm))
+        object.__setattr__(self, "pixel_mm", pixel_size(self.pixel_mm))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -75,7 +76,12 @@ class Heightmap:
 
     def require_footprint(self, width_mm: float, centre_mm: tuple[float, float] | None = None,
                           tile: bool = False) -> None:
-        """Raise InputError unless the skin footprint (square, mm) fits on the map or ``tile`` is set."""
+        """Raise InputError unless the skin footprint (square, mm) fits on the map or ``tile`` is set.
+
+        A given centre must be finite and within MAX_COORDINATE_MM of the origin (tiled maps too).
+        """
+        if centre_mm is not None:
+            _check_centre(centre_mm, tile)
         if tile or self.covers(width_mm, centre_mm):
             return
         width, height = self.size_mm
@@ -88,7 +94,8 @@ class Heightmap:
         raise InputError(f"the {footprint} centred at ({cx:.2f}, {cy:.2f}) mm extends beyond the "
                          f"{width:.2f} mm x {height:.2f} mm heightmap; the centre must lie within "
                          f"x {half:.2f}..{width - half:.2f} mm, y {half:.2f}..{height - half:.2f} mm "
-                         "(or pass --tile to repeat it as a periodic texture)")
+                         "(or pass --tile to repeat it as a periodic texture)",
+                         parameter=None if centre_mm is None else "centre_mm")
 
     def max_in_footprint(self, width_mm: float, centre_mm: tuple[float, float] | None = None,
                          periodic: bool = False) -> float:
@@ -107,9 +114,11 @@ class Heightmap:
 
     def resampled(self, pixel_mm: float) -> Heightmap:
         """Bilinear resampling to ``pixel_mm``; same origin, sides rounded to whole new pixels."""
-        pixel_mm = positive("pixel_mm", pixel_mm)
+        pixel_mm = pixel_size(pixel_mm)
         width, height = self.size_mm
         nx, ny = round(width / pixel_mm), round(height / pixel_mm)
+        check_size(f"pixels of the {width:g} mm x {height:g} mm map resampled to {pixel_mm:g} mm", nx * ny,
+                   MAX_HEIGHTMAP_PIXELS, "pixel_mm")
         x = (np.arange(nx) + 0.5) * pixel_mm
         y = (np.arange(ny) + 0.5) * pixel_mm
         return Heightmap(self.sample(x[None, :], y[:, None]), pixel_mm)
@@ -127,12 +136,15 @@ class Heightmap:
         for name, reps in (("reps_y", reps_y), ("reps_x", reps_x)):
             if not (isinstance(reps, (int, np.integer)) and reps >= 1):
                 raise InputError(f"{name} must be a positive integer, got {reps!r}")
+        check_size(f"pixels of the {self.shape[0]} x {self.shape[1]} pixel map repeated {reps_y} x {reps_x} times",
+                   self.heights.size * int(reps_y) * int(reps_x), MAX_HEIGHTMAP_PIXELS)
         return Heightmap(np.tile(self.heights, (reps_y, reps_x)), self.pixel_mm)
 
 
 def flat(size_mm: float = 12.0, pixel_mm: float = 0.05, height_mm: float = 0.0) -> Heightmap:
     """Square flat map of side ``size_mm`` (rounded to whole pixels) at ``height_mm``."""
-    n = round(positive("size_mm", size_mm) / positive("pixel_mm", pixel_mm))
+    n = round(positive("size_mm", size_mm) / pixel_size(pixel_mm))
+    check_size(f"pixels of a flat {size_mm:g} mm map at {pixel_mm:g} mm", n * n, MAX_HEIGHTMAP_PIXELS, "pixel_mm")
     return Heightmap(np.full((n, n), float(height_mm)), pixel_mm)
 
 
@@ -147,13 +159,45 @@ def _checked_heights(heights: np.ndarray) -> np.ndarray:
         raise InputError(f"heightmap is empty (shape {raw.shape})")
     if min(raw.shape) < 2:
         raise InputError(f"heightmap needs at least 2 pixels along each axis, got shape {raw.shape}")
+    check_size(f"heightmap pixels ({raw.shape[0]:,} x {raw.shape[1]:,})", raw.size, MAX_HEIGHTMAP_PIXELS)
     out = np.array(raw, dtype=np.float64, order="C", copy=True)
     bad = ~np.isfinite(out)
     if bad.any():
         i, j = np.argwhere(bad)[0]
         raise InputError(f"heightmap has {int(bad.sum())} NaN/Inf pixel(s); first at row {i}, column {j}")
+    tall = np.abs(out) > MAX_HEIGHT_MM
+    if tall.any():
+        i, j = np.argwhere(tall)[0]
+        raise InputError(f"heightmap has {int(tall.sum())} pixel(s) higher or lower than {MAX_HEIGHT_MM:g} mm "
+                         f"(MAX_HEIGHT_MM), e.g. {out[i, j]:.6g} mm at row {i}, column {j}: heights are "
+                         "millimetres; check the file's unit (or --height-mm)")
     out.flags.writeable = False
     return out
+
+
+def pixel_size(pixel_mm: object) -> float:
+    """``pixel_mm`` as a float, or InputError unless it is a finite number >= MIN_PIXEL_MM."""
+    pixel_mm = positive("pixel_mm", pixel_mm)
+    if pixel_mm < MIN_PIXEL_MM:
+        raise InputError(f"the pixel size {pixel_mm:g} mm is below {MIN_PIXEL_MM:g} mm (MIN_PIXEL_MM): not a pixel "
+                         "of any instrument; check its unit (mm)", parameter="pixel_mm")
+    return pixel_mm
+
+
+def _check_centre(centre_mm: tuple[float, float], tile: bool) -> None:
+    """InputError (parameter centre_mm) unless the centre is two finite mm within MAX_COORDINATE_MM."""
+    try:
+        cx, cy = (float(c) for c in centre_mm)
+    except (TypeError, ValueError):
+        raise InputError(f"the footprint centre must be two numbers (x, y) in mm, got {centre_mm!r}",
+                         parameter="centre_mm") from None
+    if not (math.isfinite(cx) and math.isfinite(cy)):
+        raise InputError(f"the footprint centre must be two finite numbers (x, y) in mm, got ({cx}, {cy})",
+                         parameter="centre_mm")
+    if max(abs(cx), abs(cy)) > MAX_COORDINATE_MM:
+        raise InputError(f"the footprint centre ({cx:.6g}, {cy:.6g}) mm lies beyond {MAX_COORDINATE_MM:g} mm "
+                         "(MAX_COORDINATE_MM) of the origin" + ("; on a periodic texture the same point within the map "
+                         "is the same centre" if tile else ""), parameter="centre_mm")
 
 
 def bracket(u: np.ndarray, n: int, periodic: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -8,12 +8,15 @@ the pixel size (and for PNG the full-scale height and the base height) in a PNG 
 ImageDescription, an .npz array or an HDF5 attribute. Only .npy cannot: pass ``pixel_mm``.
 A stated unit that disagrees with an explicit argument is an error, never silently overridden.
 Every failure the user can cause is reported as an InputError naming the file and the problem.
+The size a file declares is checked against MAX_HEIGHTMAP_PIXELS before its values are read, so a
+small compressed file that would expand to gigabytes is refused without allocating them.
 """
 from __future__ import annotations
 
 import json
 import math
 import struct
+import warnings
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,6 +27,7 @@ from PIL import Image, PngImagePlugin
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write
+from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, Limit, check_size
 
 from .heightmap import Heightmap
 from .stl import DEFAULT_BASE_MM, plate, stl_bytes
@@ -184,7 +188,7 @@ def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: floa
     try:
         return Heightmap(values, pixel_mm)
     except InputError as err:
-        raise InputError(f"{path}: {err}") from None
+        raise InputError(f"{path}: {err}", parameter=err.parameter) from None
 
 
 def _unit(path: Path, name: str, stated: object, given: float | None) -> float | None:
@@ -211,7 +215,19 @@ def _stated(path: Path, name: str, value: object, positive_only: bool = True) ->
 
 def _read_npy(path: Path) -> _Raw:
     try:
+        with open(path, "rb") as f:
+            if f.read(6) == np.lib.format.MAGIC_PREFIX:  # else not .npy: np.load names the problem
+                f.seek(0)
+                shape, dtype = _npy_header(f)
+                _check_declared(path, shape, dtype)
+                needed = f.tell() + math.prod(shape) * dtype.itemsize
+                if path.stat().st_size < needed:
+                    raise InputError(f"cannot read {path} as NPY: it declares {_shape_text(shape)} values of "
+                                     f"{dtype} ({needed:,} bytes with its header) but holds "
+                                     f"{path.stat().st_size:,} bytes (truncated?)")
         values = np.load(path, allow_pickle=False)
+    except InputError:
+        raise
     except (OSError, ValueError, EOFError) as err:
         raise _unreadable(path, "NPY", err) from None
     if not isinstance(values, np.ndarray):
@@ -222,14 +238,51 @@ def _read_npy(path: Path) -> _Raw:
 
 def _read_npz(path: Path) -> _Raw:
     try:
+        with zipfile.ZipFile(path) as archive:  # each member's declared size, before any is decompressed
+            for member in archive.namelist():
+                if member.endswith(".npy"):
+                    with archive.open(member) as f:
+                        shape, dtype = _npy_header(f)
+                        _check_declared(path, shape, dtype, f"array {member[:-4]!r}",
+                                        real=member == f"{DEFAULT_DATASET}.npy")
         with np.load(path, allow_pickle=False) as archive:
             arrays = {name: archive[name] for name in archive.files}
+    except InputError:
+        raise
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as err:
         raise _unreadable(path, "NPZ", err) from None
     if DEFAULT_DATASET not in arrays:
         raise InputError(f"{path} has no array {DEFAULT_DATASET!r}; arrays in the file: {', '.join(arrays) or 'none'}")
     stated = arrays.get("pixel_mm")
     return _Raw(_float_mm(path, arrays[DEFAULT_DATASET]), ".npz", None, None if stated is None else _scalar(stated))
+
+
+def _npy_header(f) -> tuple[tuple[int, ...], np.dtype]:
+    """Shape and dtype an open .npy stream declares (ValueError if its header is not one); reads nothing more."""
+    version = np.lib.format.read_magic(f)
+    if version == (1, 0):
+        shape, _, dtype = np.lib.format.read_array_header_1_0(f)
+    elif version == (2, 0):
+        shape, _, dtype = np.lib.format.read_array_header_2_0(f)
+    else:
+        raise ValueError(f"unsupported .npy format version {version[0]}.{version[1]} (expected 1.0 or 2.0)")
+    return tuple(shape), dtype
+
+
+def _check_declared(path: Path, shape: tuple[int, ...], dtype: np.dtype, what: str = "heightmap",
+                    real: bool = True) -> None:
+    """InputError unless the array a file declares has at most MAX_HEIGHTMAP_PIXELS pixels (colour
+    samples of one pixel count once) and, if ``real``, real numbers; checked before the values are read."""
+    shape = tuple(int(n) for n in shape)
+    colour = len(shape) == 3 and shape[-1] in (3, 4)
+    check_size(f"{path}: pixels its {what} declares ({_shape_text(shape)})", math.prod(shape[:2] if colour else shape),
+               MAX_HEIGHTMAP_PIXELS)
+    if real and dtype.kind not in "iuf":
+        raise InputError(f"{path}: its {what} holds {dtype} values, not real numbers")
+
+
+def _shape_text(shape: tuple[int, ...]) -> str:
+    return " x ".join(f"{n:,}" for n in shape) or "1"
 
 
 def _float_mm(path: Path, values: np.ndarray) -> np.ndarray:
@@ -244,9 +297,11 @@ def _float_mm(path: Path, values: np.ndarray) -> np.ndarray:
 
 def _read_png(path: Path) -> _Raw:
     try:
-        with Image.open(path, formats=["PNG"]) as im:
+        with open_image(path, MAX_HEIGHTMAP_PIXELS, formats=["PNG"]) as im:
             im.load()
             mode, values, text = im.mode, np.asarray(im), dict(getattr(im, "text", {}))
+    except InputError:
+        raise
     except PNG_ERRORS as err:
         raise _unreadable(path, "PNG", err) from None
     units = _units(path, text.get(UNITS_KEY))
@@ -267,8 +322,12 @@ def _read_tiff(path: Path) -> _Raw:
 
     try:
         with tifffile.TiffFile(path) as tif:
+            if tif.series:
+                _check_declared(path, tif.series[0].shape, tif.series[0].dtype, "image")
             values = tif.asarray() if tif.pages else None
             description = tif.pages[0].description if tif.pages else ""
+    except InputError:
+        raise
     except (OSError, ValueError, struct.error) as err:
         raise _unreadable(path, "TIFF", err) from None
     if values is None:
@@ -294,12 +353,33 @@ def _read_h5(path: Path, name: str) -> _Raw:
             if not isinstance(node, h5py.Dataset):
                 raise InputError(f"{path} has no dataset {name!r}; datasets in the file: "
                                  f"{', '.join(_dataset_names(f)) or 'none'}")
+            _check_declared(path, node.shape, node.dtype, f"dataset {name!r}")
             stated = node.attrs.get("pixel_mm", f.attrs.get("pixel_mm"))
             return _Raw(_float_mm(path, np.asarray(node[()])), "HDF5", None, None if stated is None else _scalar(stated))
     except InputError:
         raise
     except (OSError, ValueError, KeyError) as err:
         raise _unreadable(path, "HDF5", err) from None
+
+
+def open_image(path: Path, limit: Limit, parameter: str | None = None, formats: list[str] | None = None):
+    """A PIL image opened lazily (pixels not decoded), or InputError if it declares more than ``limit`` pixels.
+
+    PIL's own decompression-bomb warning and error are replaced by this check and its message."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            image = Image.open(path, formats=formats)
+    except Image.DecompressionBombError:  # PIL refuses above twice its MAX_IMAGE_PIXELS: more than ours
+        raise InputError(f"{path} declares an image of more than {2 * Image.MAX_IMAGE_PIXELS:,} pixels: above the "
+                         f"limit of {limit:,} ({limit.name})", parameter=parameter) from None
+    width, height = image.size
+    try:
+        check_size(f"{path}: pixels it declares ({width:,} x {height:,})", width * height, limit, parameter)
+    except InputError:
+        image.close()
+        raise
+    return image
 
 
 def _dataset_names(f) -> list[str]:

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
 from roughness.simulate.heightmap import Heightmap, bracket
 
 FOOTPRINT_MM = 10.0  # the skin block's width (simulate.config default)
@@ -40,7 +41,11 @@ def _average(values: np.ndarray, axis: int, start_mm: float, n: int, pixel_mm: f
     Works on rows (axis 1 through the transposed view: gathering rows and summing strided row slices is
     several times faster than np.take along the last axis and a reshaped mean). Samples that fall on
     pixel centres (a 0.05 mm map on the 0.1 mm grid, footprint on the pixel lattice) are read, not
-    interpolated."""
+    interpolated. The samples taken (n * sub rows of the other axis's length) are checked against
+    MAX_HEIGHTMAP_PIXELS first: a map pixel far finer than ``pixel_mm`` would take billions."""
+    check_size(f"samples of the {map_pixel_mm:g} mm map pixels to average into {n} patch pixels of {pixel_mm:g} mm "
+               f"({sub:,} per patch pixel, over {values.shape[1 - axis]:,} map pixels across)",
+               n * sub * values.shape[1 - axis], MAX_HEIGHTMAP_PIXELS, "pixel_mm")
     offsets = (np.arange(sub) + 0.5) / sub * pixel_mm
     u = ((start_mm + np.arange(n)[:, None] * pixel_mm + offsets) / map_pixel_mm - 0.5).ravel()
     lower, upper, frac = bracket(u, values.shape[axis], periodic)
@@ -70,7 +75,7 @@ def footprint_patches(heightmap: Heightmap, centres_mm: np.ndarray, tile: bool =
     for centre in dict.fromkeys(map(tuple, centres_mm.tolist())):  # distinct centres (np.unique of floats
         heightmap.require_footprint(width_mm, centre, tile)            # imports numpy.ma: 20 ms at start-up)
     n = round(width_mm / pixel_mm)
-    sub = max(1, math.ceil(pixel_mm / heightmap.pixel_mm - 1e-9))
+    sub = max(1, math.ceil(pixel_mm / heightmap.pixel_mm - 1e-9))  # finite: heightmap pixels >= MIN_PIXEL_MM
     origin = centres_mm.min(axis=0)
     steps = (centres_mm - origin) / pixel_mm
     out = np.empty((len(centres_mm), n, n), dtype=np.float32)

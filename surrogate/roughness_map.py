@@ -10,6 +10,7 @@ the next batch while the network runs on the current one; the network is the cos
 from __future__ import annotations
 
 from collections.abc import Callable
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -19,6 +20,7 @@ import numpy as np
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output
+from roughness.core.limits import MAX_BATCH, MAX_MAP_POSITIONS, check_size
 from roughness.simulate.heightmap import Heightmap
 
 from .patch import batch_descriptors, footprint_patches
@@ -44,10 +46,18 @@ class RoughnessMap:
 
 
 def centres(size_mm: float, footprint_mm: float, step_mm: float, tile: bool) -> np.ndarray:
+    """Footprint centres (mm) along a side of ``size_mm``, ``step_mm`` apart (``centre_count`` of them)."""
     if tile:
         return np.arange(0.0, size_mm, step_mm) + step_mm / 2
     span = size_mm - footprint_mm
     return footprint_mm / 2 + np.arange(0.0, span + 1e-9, step_mm) + (span % step_mm) / 2
+
+
+def centre_count(size_mm: float, footprint_mm: float, step_mm: float, tile: bool) -> float:
+    """How many ``centres`` there are (np.arange's length; inf if the step is too small to count in floats),
+    computed without making them, to check the count first."""
+    steps = (size_mm if tile else size_mm - footprint_mm + 1e-9) / step_mm
+    return math.ceil(steps) if math.isfinite(steps) else math.inf
 
 
 MAP_SUFFIXES = (".npy", ".png")
@@ -65,12 +75,15 @@ def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 
                   batch_size: int = 256, progress: Callable[[int, int], None] | None = None) -> RoughnessMap:
     """V at footprint centres ``step_mm`` apart over the whole map; ``progress(done, total)`` after each batch."""
     step_mm = positive("step_mm", step_mm)
+    check_size("footprints per batch", batch_size, MAX_BATCH, "batch_size")
     heightmap.require_footprint(model.footprint_mm, None, tile)
     width, height = heightmap.size_mm
-    xs, ys = centres(width, model.footprint_mm, step_mm, tile), centres(height, model.footprint_mm, step_mm, tile)
+    footprint = model.footprint_mm
+    check_size(f"footprint positions on a {width:g} mm x {height:g} mm map in steps of {step_mm:g} mm",
+               centre_count(width, footprint, step_mm, tile) * centre_count(height, footprint, step_mm, tile),
+               MAX_MAP_POSITIONS, "step_mm")
+    xs, ys = centres(width, footprint, step_mm, tile), centres(height, footprint, step_mm, tile)
     grid = [(x, y) for y in ys for x in xs]
-    if len(grid) > 1_000_000:
-        raise InputError(f"{len(grid):,} footprint positions: choose a larger step", parameter="step_mm")
     values, spreads, flags = [], [], []
 
     def prepare(start: int) -> tuple[np.ndarray, np.ndarray]:

@@ -241,8 +241,8 @@ def test_grey_rgb_png_loads_like_greyscale(tmp_path) -> None:
 def test_16bit_png_keeps_16bit_precision(tmp_path) -> None:
     levels = np.array([[0, 1, 2, 255], [256, 257, 65534, 65535]], dtype=np.uint16)
     Image.fromarray(levels).save(tmp_path / "levels.png")
-    hm = load_heightmap(tmp_path / "levels.png", pixel_mm=0.1, height_mm=65535.0)
-    np.testing.assert_allclose(hm.heights, levels, atol=1e-9)
+    hm = load_heightmap(tmp_path / "levels.png", pixel_mm=0.1, height_mm=65.535)  # 1 um per level
+    np.testing.assert_allclose(hm.heights, levels / 1000, atol=1e-12)
 
 
 def test_16bit_png_round_trip(tmp_path) -> None:

@@ -10,14 +10,17 @@ import re
 import sys
 
 from roughness.core.errors import InputError, OutputExists
+from roughness.core.limits import MAX_BATCH, MAX_CHANNELS, MAX_PARALLEL
 
 
 def float_pair(text: str) -> tuple[float, float]:
-    """``X,Y`` in mm, for argparse."""
+    """``X,Y`` in mm, both finite, for argparse."""
     try:
         x, y = (float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected X,Y in mm, got {text!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise argparse.ArgumentTypeError(f"expected X,Y in mm, two finite numbers, got {text!r}")
     return x, y
 
 
@@ -29,6 +32,9 @@ def count_list(text: str) -> tuple[int, ...]:
         raise argparse.ArgumentTypeError(f"expected comma-separated positive integers, got {text!r}") from None
     if not values or min(values) < 1:
         raise argparse.ArgumentTypeError(f"expected comma-separated positive integers, got {text!r}")
+    if max(values) > MAX_CHANNELS:
+        raise argparse.ArgumentTypeError(f"{max(values):,} is above the limit of {MAX_CHANNELS:,} "
+                                         f"({MAX_CHANNELS.name})")
     return values
 
 
@@ -81,6 +87,8 @@ COUNT = Number(int, low=1)
 SEED = Number(int, low=0, high=2**32 - 1)
 POISSON = Number(float, low=-1, high=0.5, low_open=True, high_open=True)
 FRACTION = Number(float, low=0, high=1, low_open=True, high_open=True)
+BATCH = Number(int, low=1, high=MAX_BATCH)  # roughness.core.limits
+PARALLEL = Number(int, low=1, high=MAX_PARALLEL)  # threads or worker processes
 
 
 def add_heightmap_args(p: argparse.ArgumentParser) -> None:
@@ -136,6 +144,8 @@ def finish(p: argparse.ArgumentParser, run, **aliases: str) -> None:
     names lower layers use for the same value (``force_n="--force"``).
     """
     flags = {a.dest: a.option_strings[-1] for a in p._actions if a.option_strings and a.dest != "help"}
+    if "centre" in flags:  # the library's name for --centre's value, whichever command takes it
+        flags["centre_mm"] = flags["centre"]
     p.set_defaults(run=run, flags=flags | aliases)
 
 

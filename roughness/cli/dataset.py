@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import COUNT, FRACTION, SEED, add_overwrite, finish, json_text, write_stdout
+from .common import COUNT, FRACTION, PARALLEL, SEED, add_overwrite, finish, json_text, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -27,7 +27,7 @@ def add_parser(sub) -> None:
     b.add_argument("--tolerance", type=FRACTION, default=BUILD_CONFIG.tolerance,
                    help=f"--fidelity converged: target relative discretization error of V "
                         f"(default {BUILD_CONFIG.tolerance})")
-    b.add_argument("--workers", type=COUNT, default=WORKERS,
+    b.add_argument("--workers", type=PARALLEL, default=WORKERS,
                    help=f"local Dask worker processes, one thread each (default {WORKERS}; ignored with --scheduler)")
     b.add_argument("--scheduler", metavar="ADDRESS",
                    help="address of a running Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")

@@ -7,7 +7,7 @@ import re
 import sys
 from pathlib import Path
 
-from .common import COUNT, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, json_text, log
+from .common import COUNT, PARALLEL, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, json_text, log
 
 NON_NEGATIVE = Number(float, low=0)
 PROBABILITY = Number(float, low=0, high=1)
@@ -49,7 +49,7 @@ def add_parser(sub) -> None:
     emb.add_argument("--folds", type=Number(int, low=2), default=10, help="cross-validation folds (default 10)")
     emb.add_argument("--resamples", type=Number(int, low=0), default=500,
                      help="bootstrap resamples for the 5-95%% intervals (default 500; 0: none)")
-    emb.add_argument("--workers", type=COUNT, default=os.cpu_count() or 1,
+    emb.add_argument("--workers", type=PARALLEL, default=min(os.cpu_count() or 1, PARALLEL.high),
                      help="processes for cross-validation and bootstrap (default: all cores)")
     emb.add_argument("--repeats", choices=("keep", "error"), default="keep",
                      help="one subject's different answers to a repeated trial: keep both (default: normal in "
@@ -322,6 +322,7 @@ def run_design(args: argparse.Namespace) -> int:
     from roughness.simulate.io import save_heightmap
 
     check_distinct({"--out": args.out, "--plates": args.plates}, {"--stimuli": args.stimuli})
+    _check_trials(args)
     stimuli = read_stimuli(args.stimuli)
     ids = [s.stimulus for s in stimuli]
     out = check_output(args.out, args.overwrite, "out")
@@ -344,6 +345,14 @@ def run_design(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_trials(args: argparse.Namespace) -> None:
+    """--trials x --subjects within MAX_TRIALS, before the subjects' list or any FEM run is made."""
+    from roughness.core.limits import MAX_TRIALS, check_size
+
+    check_size(f"trials of all subjects together ({args.trials:,} x {args.subjects:,} subjects)",
+               args.trials * args.subjects, MAX_TRIALS, "trials")
+
+
 def _file_name(stimulus: str) -> str:
     """A stimulus id as a file name: characters other than letters, digits, '.', '-' and '_' become '_'."""
     return re.sub(r"[^\w.-]", "_", stimulus)
@@ -358,6 +367,7 @@ def run_simulate(args: argparse.Namespace) -> int:
     from roughness.perception.trials import write_trials
     from roughness.perception.values import stimulus_values
 
+    _check_trials(args)
     stimuli = read_stimuli(args.stimuli)
     ids = [s.stimulus for s in stimuli]
     observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
@@ -402,6 +412,9 @@ def run_plan(args: argparse.Namespace) -> int:
     from roughness.perception.stimuli import read_stimuli
     from roughness.perception.values import stimulus_values
 
+    from roughness.core.limits import MAX_TRIALS, check_size
+
+    check_size("trials of one simulated experiment", max(args.trials), MAX_TRIALS, "trials")
     require_cvxpy()
     stimuli = read_stimuli(args.stimuli)
     ids = [s.stimulus for s in stimuli]

@@ -7,7 +7,8 @@ import sys
 import time
 
 from .common import (
-    COUNT,
+    BATCH,
+    PARALLEL,
     FRACTION,
     POSITIVE,
     add_overwrite,
@@ -50,9 +51,9 @@ def add_parser(sub) -> None:
     pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures (default: off)")
     pr.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
     add_curvature_args(pr)
-    pr.add_argument("--batch-size", type=COUNT, default=given["batch_size"],
+    pr.add_argument("--batch-size", type=BATCH, default=given["batch_size"],
                     help=f"heightmaps per surrogate batch (default: {given['batch_size']})")
-    pr.add_argument("--threads", type=COUNT, default=threads, help=f"onnxruntime threads (default: {threads})")
+    pr.add_argument("--threads", type=PARALLEL, default=threads, help=f"onnxruntime threads (default: {threads})")
     pr.add_argument("--json", action="store_true", help="one JSON object per input and line (default: text)")
     pr.add_argument("--map", metavar="FILE", help="roughness map of a whole object (one input): the footprint slid "
                     "over the map, saved as .png (figure) or .npy (V per position); refused if FILE exists "

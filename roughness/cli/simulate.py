@@ -99,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
 
         hm, removed = detrend(hm, args.detrend)
         log(args, f"detrended: {removed.describe()}")
+    hm.require_footprint(config.width_mm, args.centre, args.tile)  # a bad --centre, before the skin block is made
     log(args, f"{args.heightmap}: {hm.shape[1]} x {hm.shape[0]} px of {hm.pixel_mm} mm; "
               f"{config.fidelity} fidelity, contact spacing {config.spacing_mm(hm)} mm, "
               f"{config.base_shape().describe()}; "

@@ -51,18 +51,27 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.files import atomic_write, check_distinct, check_output_folder
     from roughness.design.evaluation import Evaluator
     from roughness.design.palette import family_palette, load_palette, save_palette
-    from roughness.design.tactile_image import (describe_picture, flat_colours, hex_colour, read_image, save_figures,
-                                                tactile_image)
+    from roughness.design.tactile_image import (
+        describe_picture,
+        flat_colours,
+        hex_colour,
+        plate_shape,
+        read_image,
+        save_figures,
+        tactile_image,
+    )
     from roughness.simulate.io import save_heightmap
 
     check_distinct({"--out": args.out}, {"IMAGE": args.image, "--palette": args.palette, "--model": args.model})
     out = check_output_folder(args.out, args.overwrite, "out")
     rgb = read_image(args.image)
     colours, _ = flat_colours(rgb, source=describe_picture(args.image))
+    log(args, f"tactile-image: {args.image}: {rgb.shape[1]:,} x {rgb.shape[0]:,} pixels, {len(colours)} flat colours")
     if args.k is not None and args.k < len(colours):
         raise InputError(f"the picture has {len(colours)} flat colours: a palette of {args.k} textures cannot cover "
                          f"them (give at least {len(colours)})", "k")
     evaluator = Evaluator(args.model)
+    plate_shape(rgb.shape, args.size_mm, args.pixel_mm, args.step_mm, evaluator.footprint_mm)  # before any palette
     if args.palette:
         textures = [(name, hm, m.get("fem_roughness")) for name, hm, m in load_palette(args.palette)]
         if len(textures) < len(colours):
@@ -70,14 +79,17 @@ def run(args: argparse.Namespace) -> int:
                              "textures", "palette")
     else:
         k = args.k or len(colours)
-        log(args, f"tactile-image: {len(colours)} colours; making a palette of {k} textures {args.min_jnd:g} JND apart")
+        log(args, f"tactile-image: making a palette of {k} textures {args.min_jnd:g} JND apart")
         palette = family_palette(k, args.min_jnd, args.family, "height", evaluator,
                                  progress=lambda line: log(args, "  " + line))
         textures = [(m.name, m.heightmap, m.fem.roughness) for m in palette.members]
     log(args, "tactile-image: composing the plate and mapping its roughness (surrogate)"
         + ("; FEM strain image" if args.strain else ""))
-    def progress(stage: str, done: int, total: int) -> None:
-        if stage == "strain image" or done == total:
+    tenths: dict[str, int] = {}
+
+    def progress(stage: str, done: int, total: int) -> None:  # every FEM footprint; the map at each tenth
+        if stage == "strain image" or tenths.get(stage) != done * 10 // total:
+            tenths[stage] = done * 10 // total
             log(args, f"  {stage}: {done}/{total}" + (" FEM footprints" if stage == "strain image" else " positions"))
 
     plate = tactile_image(rgb, textures, args.size_mm, args.pixel_mm, args.outline_mm, args.outline_height_mm,

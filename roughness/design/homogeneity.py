@@ -35,6 +35,7 @@ import numpy as np
 
 from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_WINDOWS, MAX_WORKING_VALUES, check_size
 from roughness.simulate.heightmap import Heightmap
 
 from .evaluation import ENGINES, Evaluator
@@ -148,7 +149,7 @@ def homogeneity(heightmap: Heightmap, engine: str = "surrogate", window_mm: floa
     """
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}", parameter="engine")
-    n = integer("n", n, minimum=3)
+    n = check_size("windows", integer("n", n, minimum=3), MAX_WINDOWS, "n")
     seed = integer("seed", seed, minimum=0)
     evaluator = evaluator or Evaluator()
     footprint = evaluator.footprint_mm
@@ -160,6 +161,8 @@ def homogeneity(heightmap: Heightmap, engine: str = "surrogate", window_mm: floa
         heightmap.require_footprint(footprint)
     centres = window_centres(heightmap, window_mm, footprint, n, seed, tile)
     if window_mm < footprint:  # each window felt alone
+        side = 2 * round(window_mm / heightmap.pixel_mm)
+        check_size(f"values of {n} mirrored windows of {side} x {side} pixels", n * side**2, MAX_WORKING_VALUES, "n")
         maps = [mirrored_window(heightmap, tuple(c), window_mm, tile) for c in centres]
         places, periodic = [None] * n, True
     else:

@@ -17,6 +17,7 @@ import numpy as np
 
 from roughness.core.checks import integer
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_TRIALS, check_size
 
 
 @dataclass(frozen=True)
@@ -42,7 +43,8 @@ def balanced_design(stimuli: Sequence[str], trials: int, subjects: Sequence[str]
     stimuli = list(stimuli)
     if len(stimuli) < 3 or len(set(stimuli)) != len(stimuli):
         raise InputError(f"a design needs at least 3 distinct stimuli, got {len(stimuli)}", parameter="stimuli")
-    integer("trials", trials, minimum=1)
+    check_size("trials of all subjects together", integer("trials", trials, minimum=1) * len(subjects), MAX_TRIALS,
+               "trials")
     if not subjects:
         raise InputError("at least one subject", parameter="subjects")
     rng = np.random.default_rng(seed)
