@@ -10,12 +10,15 @@ reports the solve with its block prepared (mesh, assembly and base field are pai
 and reported as ``setup_seconds``); the surrogate and the measures are timed end to end from the
 heightmap.
 
-``predict`` engines: ``surrogate`` (milliseconds), ``fem`` (the reference; seconds) and ``auto``
-(the surrogate, falling back to FEM for inputs outside the model's domain and, with an ensemble model,
-for inputs whose relative spread roughness_std / (V + 0.001) exceeds ``max_std``: by default the
-threshold measured when the ensemble was exported, see surrogate/ensemble.py). The FEM runs with the
-model's simulation parameters at the fidelity of its training labels unless told otherwise, so the
-engines share one scale; equivalent wavelengths are read off the standard scale of that fidelity.
+``predict`` engines: ``surrogate`` (milliseconds), ``spectral`` (the skin as an infinite layer:
+tens of milliseconds, ``roughness.simulate.spectral``), ``fem`` (the reference; seconds) and ``auto``
+(the surrogate; for inputs outside the model's domain and, with an ensemble model, for inputs whose
+relative spread roughness_std / (V + 0.001) exceeds ``max_std`` (by default the threshold measured
+when the ensemble was exported, see surrogate/ensemble.py), the spectral engine on a flat base where
+its contact fraction is at least ``SPECTRAL_MIN_CONTACT``, else the FEM). The FEM runs with the
+model's simulation parameters at the fidelity of its training labels unless told otherwise (a given
+``fidelity`` also makes ``auto`` skip the spectral rung); each answer is placed on the standard scale
+of its own engine and fidelity.
 """
 from __future__ import annotations
 
@@ -40,6 +43,9 @@ from .classical import MEASURES, footprint
 
 FEM_FIDELITIES = ("coarse", "default", "fine", "converged")
 PREDICT_ENGINES = ("surrogate", "spectral", "fem", "auto")
+# auto's spectral rung answers where its contact fraction is at least this: against FEM converged to 1% on the
+# validation set, p95 error 6.6% there (6.0% in full contact), 13-16% below (studies/results/spectral_validation.md)
+SPECTRAL_MIN_CONTACT = 0.9
 CURVATURE_RANGE_PATH = MODELS_DIR / "curvature_range.json"
 
 
@@ -337,6 +343,10 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     fem = FemEngine.of(fidelity or model.fidelity, simulation, centre_mm, tile)
     off_base = [CurvatureRange.load().outside(curvature_mm, base)] if curved else []
     off_base = [why for why in off_base if why]
+    # auto climbs surrogate -> spectral -> FEM: the spectral engine answers for a flat base where its measured
+    # error allows (``SPECTRAL_MIN_CONTACT``), unless a FEM fidelity was asked for
+    spectral = SpectralEngine.of(simulation, centre_mm, tile) if engine == "auto" and not curved and fidelity is None \
+        else None
     # converged FEM answers are placed on the most accurate tabulated scale, ``fine``'s
     surrogate_scale = load_scale(model.fidelity)
     fem_scale = load_scale("fine" if fem.fidelity == "converged" else fem.fidelity)
@@ -355,7 +365,12 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
             notes = list(why)
             if max_std is not None and rel > max_std:
                 notes.append(f"uncertain: relative spread {rel:.3g} above the limit {max_std:.3g}")
-            if engine == "fem" or (engine == "auto" and notes):
+            climbed = _spectral_rung(spectral, hm, notes) if engine == "auto" and notes and spectral else None
+            if climbed is not None:
+                result = Prediction(source, climbed.roughness, "spectral", "spectral", not why, climbed.seconds,
+                                    load_scale("spectral").place(climbed.roughness), notes + climbed.notes,
+                                    climbed.roughness_stderr)
+            elif engine == "fem" or (engine == "auto" and notes):
                 r = fem.simulate(hm)
                 error = r.discretization_error
                 if error is not None and not math.isfinite(error):  # relative to V = 0: undefined, not Infinity
@@ -379,6 +394,20 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     if batch:
         flush()
     return results
+
+
+def _spectral_rung(spectral: SpectralEngine, hm: Heightmap, notes: list[str]):
+    """The spectral engine's answer for ``auto`` where its measured error allows, else None (and a note why)."""
+    try:
+        result = spectral.simulate(hm)
+    except InputError as err:
+        notes.append(f"spectral engine: {err}; FEM")
+        return None
+    if not result.converged or result.contact_fraction < SPECTRAL_MIN_CONTACT:
+        notes.append(f"spectral engine: contact fraction {result.contact_fraction:.2f} below {SPECTRAL_MIN_CONTACT}, "
+                     "where its error grows; FEM" if result.converged else f"spectral engine: {result.message}; FEM")
+        return None
+    return result
 
 
 def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tuple[float, float] | None, tile: bool,

@@ -24,8 +24,8 @@ def _other_value(name: str, value: object) -> object:
     """A different valid value for a SimConfig field."""
     if name in CHOICES:
         return next(o for o in CHOICES[name] if o != value and o != "auto")
-    if value is None:  # h_contact_mm
-        return 0.25
+    if value is None:  # h_contact_mm (mm) and curvature_mm (a radius: at least the receptor depth)
+        return 25.0 if name == "curvature_mm" else 0.25
     if isinstance(value, int):
         return value + 1
     return value * 0.9

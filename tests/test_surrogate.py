@@ -401,10 +401,13 @@ def test_extreme_inputs_give_finite_answers_or_are_flagged():
     # mesh refinement (coarse 1.8e-3, default 8.4e-4, fine 3.8e-4) toward a flat answer
     for name in ("near-flat", "single spike"):
         assert answers[name].roughness < 0.05 * answers["tiny pixels"].roughness, name
-    [fem] = predict(Heightmap(np.zeros((240, 240)), 0.05), engine="auto", model=model)
+    flat = Heightmap(np.zeros((240, 240)), 0.05)
+    [fem] = predict(flat, engine="fem", model=model)
     # a flat texture's strain field is uniform, so its V is the CG solve's error: strains of order 1 (10 N on
     # 0.042 MPa skin) to the relative tolerance CG_RTOL (3e-7 measured at fine; exactly 0 on some runs)
     assert fem.engine == "fem" and fem.roughness == pytest.approx(0.0, abs=10 * CG_RTOL)
+    [climbed] = predict(flat, engine="auto", model=model)  # out of domain: auto's spectral rung, in full contact
+    assert climbed.engine == "spectral" and climbed.roughness == 0.0 and not climbed.in_domain
 
 
 def test_roughness_map_matches_single_predictions(tmp_path, capsys):
@@ -706,15 +709,24 @@ def test_default_threshold_counts_out_of_domain_inputs_in_the_budget(outside_sha
     uncertain = (sigma * out["std_scale"] > out["max_std"]) & ~outside
     assert uncertain[split == "val"].mean() == pytest.approx(max(0.10 - outside[split == "val"].mean(), 0), abs=2e-3)
 
-def test_auto_sends_uncertain_inputs_to_fem(ensemble, tiny, monkeypatch):
-    from roughness.engines import FemEngine
+def test_auto_sends_uncertain_inputs_to_the_spectral_engine_then_fem(ensemble, tiny, monkeypatch):
+    """auto climbs surrogate -> spectral (where its contact fraction allows) -> FEM; a FEM fidelity skips spectral."""
+    from roughness.engines import SPECTRAL_MIN_CONTACT, FemEngine, SpectralEngine
 
     monkeypatch.setattr(FemEngine, "simulate", lambda self, hm: SimpleNamespace(
         roughness=0.123, seconds=0.0, roughness_stderr=1e-3, discretization_error=0.01))
+    contact = iter([1.0, SPECTRAL_MIN_CONTACT, SPECTRAL_MIN_CONTACT - 0.01, 0.5])
+    monkeypatch.setattr(SpectralEngine, "simulate", lambda self, hm: SimpleNamespace(
+        roughness=0.1, seconds=0.0, roughness_stderr=1e-3, converged=True, contact_fraction=next(contact), notes=[],
+        message="contact conditions hold"))
     maps = [realise(sample_record(Recipe(name="tiny", seed=9, families={"bumps": 1, "fbm": 1}), i)) for i in range(4)]
     model = SurrogateModel(ensemble.model)
     strict = predict(maps, engine="auto", model=model, max_std=1e-9)
-    assert all(p.engine == "fem" and any("uncertain" in n for n in p.domain_notes) for p in strict)
+    assert [p.engine for p in strict] == ["spectral", "spectral", "fem", "fem"]
+    assert all(any("uncertain" in n for n in p.domain_notes) for p in strict)
+    assert any("where its error grows" in n for n in strict[2].domain_notes)
+    asked = predict(maps, engine="auto", model=model, max_std=1e-9, fidelity="coarse")
+    assert all(p.engine == "fem" for p in asked)
     loose = predict(maps, engine="auto", model=model, max_std=1e9)
     assert all((p.engine == "surrogate") == p.in_domain for p in loose)
     assert all(p.roughness_std > 0 for p in loose if p.engine == "surrogate")

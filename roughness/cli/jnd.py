@@ -14,7 +14,8 @@ def add_parser(sub) -> None:
     p.add_argument("a", metavar="HEIGHTMAP_A", help="first texture (heightmap file)")
     p.add_argument("b", metavar="HEIGHTMAP_B", help="second texture (heightmap file)")
     p.add_argument("--engine", choices=PREDICT_ENGINES, default=given["engine"],
-                   help=f"surrogate, fem, or auto: the surrogate, FEM outside its domain (default: {given['engine']})")
+                   help=f"surrogate, spectral, fem, or auto: the surrogate, FEM outside its domain "
+                        f"(default: {given['engine']})")
     p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
     add_reading_args(p)
     p.add_argument("--json", action="store_true", help="one JSON object (default: text)")
