@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -263,3 +264,17 @@ def test_dataset_workers_label_with_the_spectral_engine():
     assert out["fields"]["discretization_error"] is None and out["fields"]["unresolved_nodes"] == 0
     with pytest.raises(InputError, match="engine must be one of"):
         simulation_config(BUILD_CONFIG, "magic")
+
+
+def test_a_cycling_stick_contact_takes_the_fems_tension_tolerance_and_holds():
+    """A validation texture whose contact edge chatters (a pixel slightly in tension, released, then slightly
+    penetrating): the solve takes the FEM's own tension tolerance, and every contact condition then holds."""
+    from roughness.dataset.recipe import expand, load_recipe, realise
+    from roughness.simulate.spectral.contact import LOOSE_TENSION_TOLERANCE
+
+    record = expand(load_recipe(Path(__file__).parents[1] / "datasets" / "validation.json"), 71)[70]  # cellular
+    result = SpectralSimulator().run(realise(record))
+    assert "cycled" in result.message and result.converged, result.message
+    state = result.contact
+    assert state.max_tension_mpa <= LOOSE_TENSION_TOLERANCE * result.flat_state.pressure_mpa
+    assert max(state.max_penetration_mm, state.max_slip_mm) <= GAP_TOLERANCE * 1.0
