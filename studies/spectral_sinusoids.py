@@ -10,6 +10,7 @@ table goes to results/spectral_sinusoids.md.
 """
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import sys
@@ -35,7 +36,8 @@ def sinusoid(wavelength: float):
     return Heightmap(np.tile(AMPLITUDE_MM * np.cos(2 * np.pi * x / wavelength), (n, 1)), PIXEL_MM)
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args(argv)
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator
     from roughness.simulate.spectral.engine import SpectralSimulator
