@@ -65,20 +65,47 @@ def fem_identity(simulation: dict) -> str:
 
 
 @dataclass
-class FemEngine:
-    """The FEM with a configuration (``roughness.simulate.config.SimConfig``), prepared on first use.
+class SimulatorEngine:
+    """An engine that runs a simulator of a configuration (``SimConfig``) on one footprint per texture.
 
-    Thread-safe: threads share its one prepared ``Simulator`` and get the sequential answers bit for bit.
+    The simulator is made on first use, once (its cost is ``setup_seconds``); threads share it.
     """
 
     spec: str
     config: object  # SimConfig
     centre_mm: tuple[float, float] | None = None
     tile: bool = False
-    kind: str = "fem"
+    kind: str = ""
     setup_seconds: float = 0.0
     _simulator: object = field(default=None, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
+
+    def _make(self) -> object:
+        """The prepared simulator (``run(heightmap, centre_mm, tile)``)."""
+        raise NotImplementedError
+
+    def simulate(self, heightmap: Heightmap):
+        """The simulator's result for one heightmap."""
+        with self._lock:
+            if self._simulator is None:
+                start = time.perf_counter()
+                self._simulator = self._make()
+                self.setup_seconds = time.perf_counter() - start
+        return self._simulator.run(heightmap, self.centre_mm, self.tile)
+
+    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
+        result = self.simulate(heightmap)
+        return result.roughness, result.seconds
+
+
+@dataclass
+class FemEngine(SimulatorEngine):
+    """The FEM with a configuration (``roughness.simulate.config.SimConfig``), prepared on first use.
+
+    Thread-safe: threads share its one prepared ``Simulator`` and get the sequential answers bit for bit.
+    """
+
+    kind: str = "fem"
 
     @classmethod
     def of(cls, fidelity: str, simulation: dict | None = None, centre_mm: tuple[float, float] | None = None,
@@ -96,35 +123,19 @@ class FemEngine:
     def identity(self) -> str:
         return fem_identity(self.config.as_dict())
 
-    def simulate(self, heightmap: Heightmap):
-        """The FEM ``Result`` of one heightmap (the block is prepared on first use, once)."""
-        with self._lock:
-            if self._simulator is None:
-                from roughness.simulate.model import Simulator
+    def _make(self) -> object:
+        from roughness.simulate.model import Simulator
 
-                start = time.perf_counter()
-                simulator = Simulator(self.config)
-                simulator.block(self.config.resolved()).base(self.config.force_n, self.config.contact)
-                self.setup_seconds = time.perf_counter() - start
-                self._simulator = simulator
-        return self._simulator.run(heightmap, self.centre_mm, self.tile)
-
-    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
-        result = self.simulate(heightmap)
-        return result.roughness, result.seconds
+        simulator = Simulator(self.config)
+        simulator.block(self.config.resolved()).base(self.config.force_n, self.config.contact)
+        return simulator
 
 
 @dataclass
-class SpectralEngine:
+class SpectralEngine(SimulatorEngine):
     """The spectral skin engine (``roughness.simulate.spectral``) with a configuration (``SimConfig``)."""
 
-    spec: str
-    config: object  # SimConfig
-    centre_mm: tuple[float, float] | None = None
-    tile: bool = False
     kind: str = "spectral"
-    setup_seconds: float = 0.0
-    _simulator: object = field(default=None, repr=False)
 
     @classmethod
     def of(cls, simulation: dict | None = None, centre_mm: tuple[float, float] | None = None,
@@ -143,17 +154,10 @@ class SpectralEngine:
 
         return "spectral-" + digest({**self.config.as_dict(), "engine_version": ENGINE_VERSION})
 
-    def simulate(self, heightmap: Heightmap):
-        """The ``SpectralResult`` of one heightmap."""
-        if self._simulator is None:
-            from roughness.simulate.spectral.engine import SpectralSimulator
+    def _make(self) -> object:
+        from roughness.simulate.spectral.engine import SpectralSimulator
 
-            self._simulator = SpectralSimulator(self.config)
-        return self._simulator.run(heightmap, self.centre_mm, self.tile)
-
-    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
-        result = self.simulate(heightmap)
-        return result.roughness, result.seconds
+        return SpectralSimulator(self.config)
 
 
 @dataclass

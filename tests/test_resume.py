@@ -21,12 +21,9 @@ REPORT_FILES = ("compare.json", "table.csv", "table.md", "report.md")
 
 
 def maps_folder(tmp_path: Path, n: int = 3) -> Path:
-    folder = tmp_path / "maps"
-    folder.mkdir()
-    rng = np.random.default_rng(0)
-    for i in range(n):
-        np.save(folder / f"ok{i}.npy", 0.3 * rng.random((240, 240)))
-    return folder
+    from test_compare import maps_folder as random_maps
+
+    return random_maps(tmp_path, n)
 
 
 @pytest.fixture
