@@ -7,7 +7,6 @@ import logging
 import signal
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from roughness.cli import main
