@@ -278,3 +278,21 @@ def test_a_cycling_stick_contact_takes_the_fems_tension_tolerance_and_holds():
     state = result.contact
     assert state.max_tension_mpa <= LOOSE_TENSION_TOLERANCE * result.flat_state.pressure_mpa
     assert max(state.max_penetration_mm, state.max_slip_mm) <= GAP_TOLERANCE * 1.0
+
+
+def test_a_map_from_one_solve_equals_single_footprints_where_they_touch_fully():
+    """Each footprint alone is in full contact; the whole map touches 99.9% (its tiling seams lift off): the
+    texture's response is local, so the one field gives each footprint's V (measured: within 1e-4)."""
+    from roughness.dataset.textures import standard_texture
+    from roughness.simulate.spectral.maps import spectral_map
+
+    big = standard_texture(1.5, seed=1).tiled(2, 2)  # 24 mm: 3 x 3 positions 7 mm apart
+    result, notes = spectral_map(big, step_mm=7.0)
+    assert result.roughness.shape == (3, 3) and all("partial contact" in n for n in notes)
+    single = SpectralSimulator()
+    for i, j in ((0, 0), (1, 2)):
+        alone = single.run(big, (result.x_mm[j], result.y_mm[i]))
+        assert alone.contact.message == "full contact"
+        assert result.roughness[i, j] == pytest.approx(alone.roughness, rel=1e-3)
+    with pytest.raises(InputError, match="footprint positions"):
+        spectral_map(big, step_mm=1e-6)

@@ -6,7 +6,7 @@ that one field with the FEM's disk pairs in the position's window. Where the ski
 contact (the usual case at 10 N) the texture's strain is a linear, local response (it decays over
 about a tissue thickness), so the one field is what each footprint would see on its own; in partial
 contact the pressure is shared over the whole map instead of 10 N per footprint, which the result
-notes. Positions follow ``surrogate.roughness_map.centres`` (the same grid as ``predict --map``).
+notes. Positions follow ``simulate.footprints.centres`` (the same grid as the surrogate's ``predict --map``).
 """
 from __future__ import annotations
 
@@ -18,9 +18,10 @@ from scipy.ndimage import map_coordinates
 
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
-from roughness.surrogate.roughness_map import RoughnessMap, centres
+from roughness.core.limits import MAX_MAP_POSITIONS, check_size
 
 from ..config import SimConfig
+from ..footprints import RoughnessMap, centre_count, centres
 from ..heightmap import Heightmap
 from ..variation import PairSampling
 from .contact import solve_contact
@@ -30,7 +31,6 @@ from .modes import GridKey, modes
 
 MARGIN_TISSUES = 2.0  # a non-periodic map is mirror-padded by this many tissue thicknesses on each side
 MAX_MAP_PIXELS = 4096 * 4096  # the padded map's pixels (about 3 GB of fields at the limit)
-MAX_POSITIONS = 1_000_000
 BATCH_POSITIONS = 256  # footprint positions sampled at once
 
 
@@ -50,11 +50,9 @@ def spectral_map(heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False,
     heightmap.require_footprint(config.width_mm, None, tile)
     pixel = heightmap.pixel_mm
     width, height = heightmap.size_mm
+    count = centre_count(width, config.width_mm, step_mm, tile) * centre_count(height, config.width_mm, step_mm, tile)
+    check_size("footprint positions", count, MAX_MAP_POSITIONS, "step_mm")  # before the positions are made
     xs, ys = centres(width, config.width_mm, step_mm, tile), centres(height, config.width_mm, step_mm, tile)
-    count = len(xs) * len(ys)
-    if count > MAX_POSITIONS:
-        raise InputError(f"{count:,} footprint positions (limit {MAX_POSITIONS:,}): choose a larger step",
-                         parameter="step_mm")
     margin = 0 if tile else int(np.ceil(MARGIN_TISSUES * config.tissue_mm / pixel))
     ny, nx = heightmap.shape
     if (ny + 2 * margin) * (nx + 2 * margin) > MAX_MAP_PIXELS:

@@ -1,0 +1,42 @@
+"""Footprint positions on a heightmap and the map of V over them, shared by every engine's roughness maps.
+
+Positions are footprint centres from half a footprint inside one edge to half a footprint inside
+the other (the whole map, wrapping, if ``tile``), ``step_mm`` apart.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class RoughnessMap:
+    x_mm: np.ndarray  # footprint centres along x (columns)
+    y_mm: np.ndarray  # footprint centres along y (rows)
+    roughness: np.ndarray  # (len(y_mm), len(x_mm)) V
+    in_domain: np.ndarray  # same shape, bool
+    roughness_std: np.ndarray | None = None  # same shape, spread of V (ensemble models; None: a single network)
+
+    def summary(self) -> dict:
+        v = self.roughness
+        return {"positions": int(v.size), "step_mm": float(self.x_mm[1] - self.x_mm[0]) if len(self.x_mm) > 1 else None,
+                "roughness_min": float(v.min()), "roughness_median": float(np.median(v)),
+                "roughness_max": float(v.max()), "in_domain_fraction": float(self.in_domain.mean()),
+                "roughness_std_median": None if self.roughness_std is None else float(np.median(self.roughness_std))}
+
+
+def centres(size_mm: float, footprint_mm: float, step_mm: float, tile: bool) -> np.ndarray:
+    """Footprint centres (mm) along a side of ``size_mm``, ``step_mm`` apart (``centre_count`` of them)."""
+    if tile:
+        return np.arange(0.0, size_mm, step_mm) + step_mm / 2
+    span = size_mm - footprint_mm
+    return footprint_mm / 2 + np.arange(0.0, span + 1e-9, step_mm) + (span % step_mm) / 2
+
+
+def centre_count(size_mm: float, footprint_mm: float, step_mm: float, tile: bool) -> float:
+    """How many ``centres`` there are (np.arange's length; inf if the step is too small to count in floats),
+    computed without making them, to check the count first."""
+    steps = (size_mm if tile else size_mm - footprint_mm + 1e-9) / step_mm
+    return math.ceil(steps) if math.isfinite(steps) else math.inf
