@@ -296,3 +296,21 @@ def test_a_map_from_one_solve_equals_single_footprints_where_they_touch_fully():
         assert result.roughness[i, j] == pytest.approx(alone.roughness, rel=1e-3)
     with pytest.raises(InputError, match="footprint positions"):
         spectral_map(big, step_mm=1e-6)
+
+
+def test_predict_and_jnd_answer_with_the_spectral_engine(capsys):
+    import json
+
+    from roughness.cli import main
+
+    example = str(Path(__file__).parents[1] / "examples" / "standard-1.0mm.png")
+    reading = ["--pixel-mm", "0.05", "--height-mm", "1"]
+    assert main(["predict", example, *reading, "--engine", "spectral", "--json"]) == 0
+    answer = json.loads(capsys.readouterr().out)
+    assert answer["engine"] == "spectral" and answer["fidelity"] == "spectral"
+    assert 0 < answer["roughness_stderr"] < 0.05 * answer["roughness"] and answer["on_scale"]
+    assert main(["jnd", example, example, *reading, "--engine", "spectral"]) == 0
+    assert "TOO CLOSE" in capsys.readouterr().out
+    for extra, flag in ((["--fidelity", "fine"], "--fidelity"), (["--curvature-mm", "20"], "--curvature-mm")):
+        assert main(["predict", example, *reading, "--engine", "spectral", *extra]) == 2
+        assert flag in capsys.readouterr().err
