@@ -338,7 +338,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
         raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(PREDICT_ENGINES)}", parameter="engine")
     integer("batch_size", batch_size, minimum=1)
     if engine == "spectral":
-        return _predict_spectral(heightmaps, centre_mm, tile, fidelity, sources, on_result, curvature_mm)
+        return _predict_spectral(heightmaps, centre_mm, tile, fidelity, tolerance, sources, on_result, curvature_mm)
     model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
     max_std = uncertainty_limit(model, max_std)
     curved = {"curvature_mm": curvature_mm, "base": base, "curvature_axis": curvature_axis,
@@ -415,13 +415,14 @@ def _spectral_rung(spectral: SpectralEngine, hm: Heightmap, notes: list[str]):
 
 
 def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tuple[float, float] | None, tile: bool,
-                      fidelity: str | None, sources: Iterable[str] | None,
+                      fidelity: str | None, tolerance: float | None, sources: Iterable[str] | None,
                       on_result: Callable[[Prediction], None] | None, curvature_mm: float | None) -> list[Prediction]:
     """``predict`` with the spectral engine: the paper's parameters, no surrogate loaded."""
     from roughness.surrogate.calibration import load_scale
 
-    if fidelity is not None:
-        raise InputError("the spectral engine has no mesh: --fidelity applies to the FEM", parameter="fidelity")
+    for name, value in (("fidelity", fidelity), ("tolerance", tolerance)):
+        if value is not None:
+            raise InputError("the spectral engine has no mesh: this option is the FEM's", parameter=name)
     if curvature_mm is not None:
         raise InputError("the spectral engine models a flat skin layer; curved bases need --engine fem",
                          parameter="curvature_mm")

@@ -311,6 +311,7 @@ def test_predict_and_jnd_answer_with_the_spectral_engine(capsys):
     assert 0 < answer["roughness_stderr"] < 0.05 * answer["roughness"] and answer["on_scale"]
     assert main(["jnd", example, example, *reading, "--engine", "spectral"]) == 0
     assert "TOO CLOSE" in capsys.readouterr().out
-    for extra, flag in ((["--fidelity", "fine"], "--fidelity"), (["--curvature-mm", "20"], "--curvature-mm")):
+    for extra, flag in ((["--fidelity", "fine"], "--fidelity"), (["--tolerance", "0.01"], "--tolerance"),
+                        (["--curvature-mm", "20"], "--curvature-mm")):
         assert main(["predict", example, *reading, "--engine", "spectral", *extra]) == 2
         assert flag in capsys.readouterr().err
