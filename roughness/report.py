@@ -122,8 +122,8 @@ def pareto_front(points: list[tuple[float, float]]) -> list[int]:
     return front
 
 
-MARKERS = {"fem": ("s", "FEM"), "surrogate": ("o", "surrogate (CNN)"),
-           "classical": ("^", "classical measure (power-law fit)")}
+MARKERS = {"fem": ("s", "FEM"), "spectral": ("D", "spectral (the skin as an infinite layer)"),
+           "surrogate": ("o", "surrogate (CNN)"), "classical": ("^", "classical measure (power-law fit)")}
 LABEL_OFFSETS = [(7, 7), (7, -13), (-7, 7), (-7, -13), (7, 19), (7, -25), (-7, 19), (-7, -25), (7, 31), (7, -37)]
 
 
@@ -306,7 +306,7 @@ def write_report(textures: list[Texture], outcome: Outcome, kinds: dict[str, str
                  *(f"- `{name}`: {message}" for name, message in outcome.input_errors), ""]
     text.append("## Textures that disagree most\n")
     for s in scores:
-        if s.kind in ("fem", "surrogate") and s.engine != reference and len(s.keys):
+        if s.kind in ("fem", "spectral", "surrogate") and s.engine != reference and len(s.keys):
             text.append(f"`{s.engine}`:\n\n| texture | family | {reference} V | estimate | ratio |\n|---|---|---|---|---|")
             text += [f"| {d['key']} | {d['family']} | {d['reference']:.4f} | {d['estimate']:.4f} | {d['ratio']:.2f} |"
                      for d in disagreements(s, families)]
