@@ -315,3 +315,25 @@ def test_predict_and_jnd_answer_with_the_spectral_engine(capsys):
                         (["--curvature-mm", "20"], "--curvature-mm")):
         assert main(["predict", example, *reading, "--engine", "spectral", *extra]) == 2
         assert flag in capsys.readouterr().err
+
+
+def test_design_tools_verify_with_the_spectral_engine(tmp_path, capsys):
+    """--verify spectral: tune checks its surrogate search with the spectral engine, on the spectral scale."""
+    import json
+
+    from roughness.cli import main
+    from roughness.dataset.textures import standard_texture
+
+    np.save(tmp_path / "t.npy", standard_texture(1.0, seed=4).heights)
+    code = main(["tune", str(tmp_path / "t.npy"), "--pixel-mm", "0.05", "--target-lambda", "0.9", "--verify",
+                 "spectral", "--out", str(tmp_path / "tuned.npz"), "--json", "--quiet"])
+    summary = json.loads(capsys.readouterr().out)
+    assert code in (0, 1) and summary["verifier"] == "spectral"
+    from roughness.simulate.io import load_heightmap
+    from roughness.surrogate.calibration import load_scale
+
+    achieved = SpectralSimulator().run(load_heightmap(tmp_path / "tuned.npz")).roughness
+    lam = load_scale("spectral").equivalent_lambda(achieved)[0]
+    assert summary["achieved_roughness"] == pytest.approx(achieved, rel=1e-9)
+    assert summary["achieved_lambda_mm"] == pytest.approx(lam, rel=1e-9)
+    assert abs(math.log(lam / 0.9) / math.log(1.19)) <= summary["tolerance_jnd"] or code == 1

@@ -130,8 +130,14 @@ def add_overwrite(p: argparse.ArgumentParser) -> None:
 
 
 def add_model_tail(p: argparse.ArgumentParser, json_help: str) -> None:
-    """The closing options of the surrogate-backed design commands: --model, --json, --quiet, --overwrite."""
+    """The closing options of the surrogate-backed design commands: --model, --verify, --json, --quiet, --overwrite."""
+    from roughness.design.evaluation import VERIFIERS
+
     p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
+    p.add_argument("--verify", choices=VERIFIERS,
+                   help="what checks the surrogate's answers: the FEM at a fidelity, or the spectral engine (tens of "
+                        "milliseconds instead of seconds; see README) (default: the FEM at the fidelity of the "
+                        "model's training labels)")
     p.add_argument("--json", action="store_true", help=json_help)
     add_quiet(p)
     add_overwrite(p)

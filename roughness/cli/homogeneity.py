@@ -32,8 +32,8 @@ def add_parser(sub) -> None:
     p.add_argument("--n", type=COUNT, default=given["n"], help=f"number of windows, >= 3 (default {given['n']})")
     p.add_argument("--seed", type=SEED, default=given["seed"], help="seed of the window placement (default 0)")
     p.add_argument("--engine", choices=ENGINES, default=given["engine"],
-                   help="surrogate (milliseconds) or fem (seconds per window; the reference) "
-                        f"(default: {given['engine']})")
+                   help="surrogate (milliseconds) or fem: the verifier of --verify, per window (the FEM: seconds, "
+                        f"the reference; spectral: tens of milliseconds) (default: {given['engine']})")
     p.add_argument("--tile", action="store_true", help="the map is a periodic tile: windows anywhere, wrapping")
     p.add_argument("--map", metavar="FILE.png", help="picture of the windows coloured by their V")
     add_model_tail(p, "one JSON object (default: text)")
@@ -55,13 +55,14 @@ def run(args: argparse.Namespace) -> int:
     if args.n < 3:
         raise InputError(f"needs at least 3 windows, got {args.n}", parameter="n")
     hm = load_heightmap(args.heightmap, args.pixel_mm, args.height_mm)
-    evaluator = Evaluator(args.model)
-    log(args, f"homogeneity: {args.n} windows with the {args.engine}")
+    evaluator = Evaluator(args.model, args.verify)
+    engine = evaluator.verifier if args.engine == "fem" else args.engine
+    log(args, f"homogeneity: {args.n} windows with the {engine}")
     result = homogeneity(hm, args.engine, args.window_mm, args.n, args.seed, args.tile, evaluator,
-                         progress=lambda done, total: log(args, f"  FEM window {done}/{total}"))
+                         progress=lambda done, total: log(args, f"  {engine} window {done}/{total}"))
     if args.map:
         save_map(result, hm, args.map, args.overwrite)
-    summary = {"input": args.heightmap, **result.summary()}
+    summary = {"input": args.heightmap, **result.summary(), "verifier": engine}
     if args.json:
         write_stdout(json_text(summary))
         return 0
@@ -75,6 +76,6 @@ def run(args: argparse.Namespace) -> int:
     note = f"; {result.note}" if result.note else ""
     write_stdout(
         f"{args.heightmap}: {summary['verdict'].upper()} - V over {summary['windows']} windows of "
-        f"{result.window_mm:g} mm ({args.engine}): mean {result.mean_roughness:.4f}{stats}{note}"
+        f"{result.window_mm:g} mm ({engine}): mean {result.mean_roughness:.4f}{stats}{note}"
         + (f"; map written to {args.map}" if args.map else ""))
     return 0

@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"a palette needs at least 2 textures, got {args.k}", "k")
     if args.base_mm is not None and not args.stl:
         raise InputError("applies only with --stl", "base_mm")
-    evaluator = Evaluator(args.model)
+    evaluator = Evaluator(args.model, args.verify)
     progress = lambda line: log(args, "  " + line)
     if args.candidates:
         from roughness.simulate.io import heightmap_files, load_heightmap
@@ -76,14 +76,14 @@ def run(args: argparse.Namespace) -> int:
         palette = family_palette(args.k, args.min_jnd, args.family, args.by, evaluator, args.tolerance_jnd,
                                  seed=args.seed, progress=progress)
     save_palette(palette, out, args.stl, args.base_mm, args.overwrite)
-    summary = palette.summary()
+    summary = {**palette.summary(), "verifier": evaluator.verifier}
     if args.json:
         write_stdout(json_text(summary))
     else:
-        lines = [f"{m.name}: V {m.fem.roughness:.4f} ± {m.fem.roughness_stderr:.4f} (FEM), lambda "
+        lines = [f"{m.name}: V {m.fem.roughness:.4f} ± {m.fem.roughness_stderr:.4f} ({evaluator.verifier}), lambda "
                  f"{m.fem.equivalent_lambda_mm:.3f} mm" + ("" if m.fem.on_scale else " (extrapolated off the scale)")
                  for m in palette.members]
-        lines.append(f"closest pair {palette.closest_jnd:.2f} JND (FEM): "
+        lines.append(f"closest pair {palette.closest_jnd:.2f} JND ({evaluator.verifier}): "
                      f"{'VERIFIED' if palette.verified else 'NOT VERIFIED'} >= {args.min_jnd:g} JND; written to {out}")
         write_stdout("\n".join(lines))
     return 0 if palette.verified else 1

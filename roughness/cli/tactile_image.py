@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     if args.k is not None and args.k < len(colours):
         raise InputError(f"the picture has {len(colours)} flat colours: a palette of {args.k} textures cannot cover "
                          f"them (give at least {len(colours)})", "k")
-    evaluator = Evaluator(args.model)
+    evaluator = Evaluator(args.model, args.verify)
     plate_shape(rgb.shape, args.size_mm, args.pixel_mm, args.step_mm, evaluator.footprint_mm)  # before any palette
     if args.palette:
         textures = [(name, hm, m.get("fem_roughness")) for name, hm, m in load_palette(args.palette)]
@@ -101,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     save_heightmap(plate.heightmap, out / "plate.stl", base_mm=args.base_mm, overwrite=args.overwrite)
     atomic_write(out / "roughness_map.npy", lambda tmp: np.save(tmp, plate.roughness_map), args.overwrite)
     save_figures(plate, out)
-    summary = {"image": args.image, "out": str(out), **plate.summary()}
+    summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier}
     atomic_write(out / "plate.json", lambda tmp: Path(tmp).write_text(json_text(summary, indent=1) + "\n"),
                  args.overwrite)
     if args.json:
@@ -111,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
              f"written to {out} (plate.npz, plate.stl, plate.json, relief.png, roughness_map.png"
              + (", strain.png)" if args.strain else ")")]
     for r in plate.regions:
-        fem = f"texture V {r.fem_roughness:.4f} (FEM)" if r.fem_roughness else "texture V not verified"
+        fem = f"texture V {r.fem_roughness:.4f} ({evaluator.verifier})" if r.fem_roughness else "texture V not verified"
         on_plate = (f"on the plate V {r.plate_roughness:.4f}, lambda {r.plate_lambda_mm:.3f} mm over {r.footprints} "
                     "footprints" if r.plate_roughness else "no footprint fits inside the region")
         lines.append(f"{hex_colour(r.colour)} -> {r.texture}: {fem}; {on_plate}")

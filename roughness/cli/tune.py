@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"the factor range must rise, got {factors[0]:g}..{factors[1]:g}", "min_factor")
     hm = load_heightmap(args.heightmap, args.pixel_mm, args.height_mm)
     reference = load_heightmap(args.like, args.pixel_mm, args.height_mm) if args.like else None
-    evaluator = Evaluator(args.model)
+    evaluator = Evaluator(args.model, args.verify)
     if reference is not None:
         log(args, f"tune: FEM of the reference {args.like}")
     target = target_of(evaluator, args.target_lambda, args.target_v, reference, args.like or "", args.tile)
@@ -67,14 +67,14 @@ def run(args: argparse.Namespace) -> int:
     result = tune(hm, target, args.by, evaluator, factors, args.tolerance_jnd, args.max_fem, args.tile,
                   progress=lambda line: log(args, "  " + line))
     save_heightmap(result.heightmap, out, base_mm=args.base_mm, overwrite=args.overwrite)
-    summary = {"input": args.heightmap, "out": str(out), **result.summary()}
+    summary = {"input": args.heightmap, "out": str(out), **result.summary(), "verifier": evaluator.verifier}
     if args.json:
         write_stdout(json_text(summary))
     else:
         a = result.achieved
         lines = [f"{args.heightmap} -> {out}: {args.by} x {result.factor:.4f}",
                  f"target: V {target.roughness:.4f}, lambda {target.lambda_mm:.3f} mm ({target.given_as})",
-                 (f"achieved (FEM {evaluator.fem.fidelity}): V {a.roughness:.4f} ± {a.roughness_stderr:.4f}, lambda "
+                 (f"achieved ({evaluator.verifier}): V {a.roughness:.4f} ± {a.roughness_stderr:.4f}, lambda "
                   f"{a.equivalent_lambda_mm:.3f} mm; error {result.jnd_error:+.2f} ± {result.jnd_stderr:.2f} JND "
                   f"({'within' if result.reached else 'NOT within'} {result.tolerance_jnd:g} JND after "
                   f"{len(result.steps)} FEM run(s)); surrogate V {result.surrogate_roughness:.4f}"),

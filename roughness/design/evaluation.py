@@ -1,9 +1,10 @@
-"""One evaluator for the design tools: the surrogate for searches, the FEM to verify, on one standard scale.
+"""One evaluator for the design tools: the surrogate for searches, a physics engine to verify, on one standard scale.
 
-The surrogate runs through ``roughness.engines.predict``; the FEM is the engines' ``FemEngine`` with
+The surrogate runs through ``roughness.engines.predict``. The verifier is the engines' ``FemEngine`` with
 the model's simulation parameters at the fidelity of its training labels (prepared once, reused for
-every verification), so both answers are placed on the same standard scale and their distances are
-JNDs of the equivalent wavelength (``roughness.surrogate.calibration``).
+every verification), or at another FEM fidelity, or the ``SpectralEngine`` (``VERIFIERS``); its answers
+are placed on its own standard scale, and distances are JNDs of the equivalent wavelength
+(``roughness.surrogate.calibration``).
 """
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ import numpy as np
 from roughness.simulate.heightmap import Heightmap
 
 ENGINES = ("surrogate", "fem")
+VERIFIERS = ("coarse", "default", "fine", "spectral")  # FEM fidelities, or the spectral engine
 
 
 @dataclass(frozen=True)
@@ -31,10 +33,11 @@ class Verified:
 
 @dataclass
 class Evaluator:
-    """The shipped (or a given) surrogate and the FEM at its label fidelity, loaded on first use."""
+    """The shipped (or a given) surrogate and the verifier (default: the FEM at the model's label fidelity),
+    loaded on first use."""
 
     model_path: str | None = None
-    fidelity: str | None = None  # FEM fidelity (default: the model's training labels')
+    fidelity: str | None = None  # the verifier: a FEM fidelity or "spectral" (default: the model's training labels')
     _model: object = field(default=None, repr=False)
     _fem: object = field(default=None, repr=False)
     fem_runs: int = 0  # FEM verifications so far
@@ -49,15 +52,24 @@ class Evaluator:
 
     @property
     def fem(self):
-        from roughness.engines import FemEngine
+        """The verifying engine (``FemEngine`` or ``SpectralEngine``), prepared on first use."""
+        from roughness.engines import FemEngine, SpectralEngine
 
         if self._fem is None:
-            self._fem = FemEngine.of(self.fidelity or self.model.fidelity, self.model.meta.simulation)
+            simulation = self.model.meta.simulation
+            self._fem = (SpectralEngine.of(simulation) if self.fidelity == "spectral" else
+                         FemEngine.of(self.fidelity or self.model.fidelity, simulation))
         return self._fem
 
     @property
+    def verifier(self) -> str:
+        """The verifier in words: ``FEM fine``, ``spectral``."""
+        fidelity = self.fidelity or self.model.fidelity
+        return "spectral" if fidelity == "spectral" else f"FEM {fidelity}"
+
+    @property
     def scale(self):
-        """The standard scale of the FEM fidelity (the surrogate's labels share it by default)."""
+        """The standard scale of the verifier (the surrogate's labels share the default one)."""
         from roughness.surrogate.calibration import load_scale
 
         return load_scale(self.fidelity or self.model.fidelity)
@@ -80,7 +92,7 @@ class Evaluator:
         return np.array([p.roughness for p in results]), np.array([p.in_domain for p in results])
 
     def verify(self, heightmap: Heightmap, tile: bool = False, centre_mm: tuple[float, float] | None = None) -> Verified:
-        """The FEM's V of one heightmap, placed on the standard scale."""
+        """The verifier's V of one heightmap, placed on its standard scale."""
         fem = self.fem
         fem.centre_mm, fem.tile = centre_mm, tile
         result = fem.simulate(heightmap)
