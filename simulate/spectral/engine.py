@@ -1,11 +1,11 @@
 """The spectral skin engine: the FEM's roughness model with the skin as an infinite elastic layer.
 
 A texture's footprint (``width_mm`` square, at the heightmap's own pixel size) is mirror-extended
-into one period of a periodic texture, the layer is pressed onto it at the footprint's mean
-pressure (force / footprint area), contact is solved on the pixel grid (``contact``), and the
-strain at the receptor depth follows per Fourier mode (``modes``). The texture's strain is added
-to the flat state (the strain of the untextured skin), lambda3 is taken, the flat lambda3
-subtracted, and V sampled as in the FEM (``simulate.variation``). No mesh: the only
+into one period of a periodic texture, the layer is pressed onto it at the flat state's pressure
+(``flat_state``: by default the FEM block's at its centre), contact is solved on the pixel grid
+(``contact``), and the strain at the receptor depth follows per Fourier mode (``modes``). The
+texture's strain is added to the flat state's strain (the untextured skin's), lambda3 is taken, the
+flat lambda3 subtracted, and V sampled as in the FEM (``simulate.variation``). No mesh: the only
 discretization is the pixel.
 """
 from __future__ import annotations
