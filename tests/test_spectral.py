@@ -337,3 +337,38 @@ def test_design_tools_verify_with_the_spectral_engine(tmp_path, capsys):
     assert summary["achieved_roughness"] == pytest.approx(achieved, rel=1e-9)
     assert summary["achieved_lambda_mm"] == pytest.approx(lam, rel=1e-9)
     assert abs(math.log(lam / 0.9) / math.log(1.19)) <= summary["tolerance_jnd"] or code == 1
+
+
+def test_the_layer_and_its_frictionless_contact_match_contactmechanics():
+    """The public peer (ContactMechanics, MIT: Carbone & Mangialardi's layer on a rigid base, Polonsky-Keer contact):
+    the same surface compliance per mode, and the same frictionless contact, pixel for pixel."""
+    from ContactMechanics import PeriodicFFTElasticHalfSpace
+    from ContactMechanics.Optimization.ConstrainedConjugateGradients import constrained_conjugate_gradients
+    from SurfaceTopography import Topography
+
+    n, size = 128, 8.0
+    pixel = size / n
+    peer = PeriodicFFTElasticHalfSpace((n, n), TISSUE.young_mpa, (size, size), thickness=TISSUE.thickness_mm,
+                                       poisson=TISSUE.poisson)  # with a thickness, 'young' is Young's modulus
+    grid = modes(GridKey((n, n), pixel, TISSUE, DEPTH))
+    x = (np.arange(n) + 0.5) * pixel
+    for wavelength in (0.25, 1.0, 4.0, 8.0):  # kT from 63 down to 2
+        pressure = 1e-3 * np.cos(2 * np.pi * x / wavelength)[:, None] * np.ones(n)
+        theirs = peer.evaluate_disp(pressure * pixel**2)
+        spectrum = np.zeros((3, n, n // 2 + 1), complex)
+        spectrum[2] = np.fft.rfft2(pressure)
+        ours = np.fft.irfft2(grid.displacement(spectrum, frictionless=True)[2], s=(n, n))
+        # theirs is the displacement into the body, ours the face's rise into the skin: the same, signed oppositely
+        assert np.abs(ours + theirs).max() <= 1e-9 * np.abs(theirs).max(), wavelength
+    xx, yy = np.meshgrid(x, x, indexing="ij")
+    heights = 0.15 * (np.cos(2 * np.pi * xx / 2.0) * np.cos(2 * np.pi * yy / 1.6) + 0.5 * np.cos(2 * np.pi * (xx + yy)))
+    mean_pressure = 0.02
+    peer_state = constrained_conjugate_gradients(peer, Topography(heights, (size, size), periodic=True),
+                                                 external_force=mean_pressure * size**2, pentol=1e-9, forcetol=1e-9)
+    assert peer_state.success
+    peer_pressure = np.abs(peer_state.jac) / pixel**2
+    state = solve_contact(grid, heights, mean_pressure, frictionless=True)
+    assert state.success and 0.5 < state.in_contact.mean() < 0.95
+    assert np.count_nonzero(state.in_contact != (peer_pressure > 0)) <= 2  # a pixel at an edge, at most
+    # both solve to a gap tolerance of ~1e-6 of the relief: the pressures agree to that order
+    assert np.abs(state.traction[2] - peer_pressure).max() <= 1e-4 * peer_pressure.max()
