@@ -371,9 +371,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
                 notes.append(f"uncertain: relative spread {rel:.3g} above the limit {max_std:.3g}")
             climbed = _spectral_rung(spectral, hm, notes) if engine == "auto" and notes and spectral else None
             if climbed is not None:
-                result = Prediction(source, climbed.roughness, "spectral", "spectral", not why, climbed.seconds,
-                                    load_scale("spectral").place(climbed.roughness), notes + climbed.notes,
-                                    climbed.roughness_stderr)
+                result = _spectral_prediction(source, climbed, not why, notes)
             elif engine == "fem" or (engine == "auto" and notes):
                 r = fem.simulate(hm)
                 error = r.discretization_error
@@ -414,12 +412,18 @@ def _spectral_rung(spectral: SpectralEngine, hm: Heightmap, notes: list[str]):
     return result
 
 
+def _spectral_prediction(source: str, result, in_domain: bool, notes: list[str]) -> Prediction:
+    """A ``SpectralResult`` as a prediction, placed on the spectral standard scale; ``notes`` come before its own."""
+    from roughness.surrogate.calibration import load_scale
+
+    return Prediction(source, result.roughness, "spectral", "spectral", in_domain, result.seconds,
+                      load_scale("spectral").place(result.roughness), notes + result.notes, result.roughness_stderr)
+
+
 def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tuple[float, float] | None, tile: bool,
                       fidelity: str | None, tolerance: float | None, sources: Iterable[str] | None,
                       on_result: Callable[[Prediction], None] | None, curvature_mm: float | None) -> list[Prediction]:
     """``predict`` with the spectral engine: the paper's parameters, no surrogate loaded."""
-    from roughness.surrogate.calibration import load_scale
-
     for name, value in (("fidelity", fidelity), ("tolerance", tolerance)):
         if value is not None:
             raise InputError("the spectral engine has no mesh: this option is the FEM's", parameter=name)
@@ -427,13 +431,10 @@ def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tu
         raise InputError("the spectral engine models a flat skin layer; curved bases need --engine fem",
                          parameter="curvature_mm")
     spectral = SpectralEngine.of(centre_mm=centre_mm, tile=tile)
-    scale = load_scale("spectral")
     names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
     results = []
     for hm in [heightmaps] if isinstance(heightmaps, Heightmap) else heightmaps:
-        r = spectral.simulate(hm)
-        result = Prediction(next(names), r.roughness, "spectral", "spectral", True, r.seconds, scale.place(r.roughness),
-                            list(r.notes), r.roughness_stderr)
+        result = _spectral_prediction(next(names), spectral.simulate(hm), True, [])
         results.append(result)
         if on_result:
             on_result(result)
