@@ -298,6 +298,16 @@ def test_a_map_from_one_solve_equals_single_footprints_where_they_touch_fully():
         spectral_map(big, step_mm=1e-6)
 
 
+def test_a_map_too_large_for_one_solve_is_refused_before_it_is_padded(monkeypatch):
+    from roughness.core.limits import Limit
+    from roughness.simulate.spectral import maps
+
+    monkeypatch.setattr(maps, "MAX_MAP_PIXELS", Limit(500 * 500, "MAX_MAP_PIXELS"))
+    monkeypatch.setattr(maps, "padded", lambda *a: pytest.fail("padded before the size was checked"))
+    with pytest.raises(InputError, match="MAX_MAP_PIXELS"):
+        maps.spectral_map(Heightmap(np.zeros((480, 480)), 0.05))
+
+
 def test_predict_and_jnd_answer_with_the_spectral_engine(capsys):
     import json
 

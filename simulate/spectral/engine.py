@@ -129,6 +129,11 @@ def lambda3(strain: np.ndarray, flat: np.ndarray) -> np.ndarray:
     return min_eigenvalue(*(strain[i] + flat[j] for i, j in enumerate(order)))
 
 
+def fluctuation(lam3: np.ndarray, flat: np.ndarray) -> np.ndarray:
+    """lambda3 less the flat state's (3, 3) own lambda3, by the same closed form (a flat texture: exactly 0)."""
+    return lam3 - lambda3(np.zeros((6, 1, 1)), flat)
+
+
 class SpectralSimulator:
     """Roughness V by the spectral engine for a ``SimConfig`` (its mesh fields are not used).
 
@@ -174,7 +179,7 @@ class SpectralSimulator:
         inside = np.abs(axis) <= config.window_mm / 2 + heightmap.pixel_mm
         strain = grid.strain(state.face)[:, :n, :n][:, inside][:, :, inside]
         lam3 = lambda3(strain, flat.strain)
-        fluct = lam3 - lambda3(np.zeros((6, 1, 1)), flat.strain)
+        fluct = fluctuation(lam3, flat.strain)
         window_axis = axis[inside]
         pairs = PairSampling(config.window_mm, config.pair_distance_mm, config.disk_radius_mm, config.pairs,
                              config.seed)

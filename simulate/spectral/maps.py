@@ -17,20 +17,19 @@ from scipy.fft import next_fast_len
 from scipy.ndimage import map_coordinates
 
 from roughness.core.checks import positive
-from roughness.core.errors import InputError
-from roughness.core.limits import MAX_MAP_POSITIONS, check_size
+from roughness.core.limits import MAX_MAP_POSITIONS, Limit, check_size
 
 from ..config import SimConfig
 from ..footprints import RoughnessMap, centre_count, centres
 from ..heightmap import Heightmap
 from ..variation import PairSampling
 from .contact import solve_contact
-from .engine import lambda3, tissue_of
+from .engine import fluctuation, lambda3, tissue_of
 from .flat_state import block_flat_state
 from .modes import GridKey, modes
 
 MARGIN_TISSUES = 2.0  # a non-periodic map is mirror-padded by this many tissue thicknesses on each side
-MAX_MAP_PIXELS = 4096 * 4096  # the padded map's pixels (about 3 GB of fields at the limit)
+MAX_MAP_PIXELS = Limit(4096 * 4096, "MAX_MAP_PIXELS")  # the padded map's pixels (about 3 GB of fields at the limit)
 BATCH_POSITIONS = 256  # footprint positions sampled at once
 
 
@@ -55,15 +54,14 @@ def spectral_map(heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False,
     xs, ys = centres(width, config.width_mm, step_mm, tile), centres(height, config.width_mm, step_mm, tile)
     margin = 0 if tile else int(np.ceil(MARGIN_TISSUES * config.tissue_mm / pixel))
     ny, nx = heightmap.shape
-    if (ny + 2 * margin) * (nx + 2 * margin) > MAX_MAP_PIXELS:
-        raise InputError(f"the map needs {(ny + 2 * margin) * (nx + 2 * margin):,} pixels with its margins (limit "
-                         f"{MAX_MAP_PIXELS:,}): resample it to a coarser pixel", parameter="pixel_mm")
+    check_size("pixels of the map with its margins (resample it to a coarser pixel)",
+               (ny + 2 * margin) * (nx + 2 * margin), MAX_MAP_PIXELS, "pixel_mm")
     domain = heightmap.heights if tile else padded(heightmap.heights, margin)
     grid = modes(GridKey(domain.shape, pixel, tissue_of(config), config.depth_mm))
     flat = block_flat_state(config)
     state = solve_contact(grid, domain, flat.pressure_mpa, config.contact == "frictionless")
     strain = grid.strain(state.face)[:, margin:margin + ny, margin:margin + nx]
-    field = lambda3(strain, flat.strain) - lambda3(np.zeros((6, 1, 1)), flat.strain)
+    field = fluctuation(lambda3(strain, flat.strain), flat.strain)
     notes = [] if state.message == "full contact" else [
         f"partial contact ({100 * state.in_contact.mean():.1f}% of the map touches): the load is shared over the "
         f"whole map at {flat.pressure_mpa:.3g} MPa, not {config.force_n:g} N per footprint; {state.message}"]
