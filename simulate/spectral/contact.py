@@ -5,9 +5,9 @@ stick contact, the tangential tractions, which are free where the skin touches a
 does not. The conditions, as in the FEM: no tension (p >= 0), no penetration (gap >= 0), gap = 0
 where p > 0, and for stick no lateral displacement of the touching face. The mean of p is the
 load. Full contact is tried first (the face takes the texture's shape: one linear response); if it
-would need tension somewhere, a constrained conjugate-gradient method of the Polonsky-Keer kind
-(Polonsky & Keer 1999, Wear 231) solves the partial contact, with the stick tractions as extra
-unconstrained unknowns on the contact set.
+would need tension somewhere, partial contact is solved: frictionless by Polonsky & Keer's
+constrained conjugate gradients (Wear 231, 1999), stick by an active set of touching pixels whose
+every set is solved exactly, both preconditioned by the layer's stiffness.
 """
 from __future__ import annotations
 
@@ -89,13 +89,14 @@ def solve_contact(modes: Modes, heights: np.ndarray, pressure_mpa: float, fricti
     if full.success:
         return full
     load = pressure_mpa * heights.size
-    tolerance = GAP_TOLERANCE * max(float(np.ptp(heights)), 1e-12)
+    relief = max(float(np.ptp(heights)), 1e-12)
+    tolerance = GAP_TOLERANCE * relief
     if frictionless:
         traction, iterations = _polonsky_keer(modes, heights, full.traction, load, tolerance, max_iterations)
-        return _checked(modes, heights, traction, traction[2] > 0, pressure_mpa, frictionless, iterations)
+        return _checked(modes, heights, traction, traction[2] > 0, pressure_mpa, frictionless, iterations, tolerance)
     traction, mask = full.traction, full.traction[2] > 0
     seen, iterations, message, tension_tolerance = set(), 0, "", TENSION_TOLERANCE
-    settling = SETTLE_TOLERANCE * max(float(np.ptp(heights)), 1e-12)
+    settling = SETTLE_TOLERANCE * relief
     precise = False  # rounds solve loosely until the set holds, then once to the full tolerance to confirm it
     for rounds in range(1, MAX_ROUNDS + 1):
         within = tolerance if precise else settling
@@ -120,7 +121,7 @@ def solve_contact(modes: Modes, heights: np.ndarray, pressure_mpa: float, fricti
             break
         mask = update
     state = _checked(modes, heights, np.where(mask, traction, 0.0), mask, pressure_mpa, frictionless, iterations,
-                     tension_tolerance)
+                     tolerance, tension_tolerance)
     if message:
         state.message = f"{message}; {state.message}"
     return state
@@ -201,20 +202,21 @@ def _polonsky_keer(modes: Modes, heights: np.ndarray, traction: np.ndarray, load
 
 
 def _checked(modes: Modes, heights: np.ndarray, traction: np.ndarray, touching: np.ndarray, pressure_mpa: float,
-             frictionless: bool, iterations: int, tension_tolerance: float = TENSION_TOLERANCE) -> ContactState:
-    """The state for ``traction`` with the pixels ``touching``, each contact condition measured."""
+             frictionless: bool, iterations: int, tolerance: float,
+             tension_tolerance: float = TENSION_TOLERANCE) -> ContactState:
+    """The state for ``traction`` with the pixels ``touching``, each contact condition measured against
+    ``tolerance`` (mm) and ``tension_tolerance`` (relative to the pressure)."""
     face = modes.displacement(_fft(traction), frictionless)
     u = _ifft(face, heights.shape)
     gap = u[2] - heights
     offset = float(gap[touching].mean())
     gap -= offset
-    scale = max(float(np.ptp(heights)), 1e-12)
     penetration = max(0.0, float(-gap[~touching].min())) if (~touching).any() else 0.0
     mismatch = float(np.abs(gap[touching]).max())
     slip = 0.0 if frictionless else float(np.abs(u[:2, touching]).max())
     tension = max(0.0, float(-traction[2].min()))
     worst = max(penetration, mismatch, slip)
-    success = worst <= GAP_TOLERANCE * scale and tension <= tension_tolerance * pressure_mpa
+    success = worst <= tolerance and tension <= tension_tolerance * pressure_mpa
     message = ("contact conditions hold" if success else
                f"contact conditions violated by up to {worst:.3g} mm after {iterations} iterations")
     return ContactState(face, traction, touching, offset, success, message, iterations,
