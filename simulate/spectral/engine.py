@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -163,7 +163,7 @@ class SpectralSimulator:
             **overrides) -> SpectralResult:
         """V of ``heightmap`` under the footprint centred at ``centre_mm`` (default: the map's centre)."""
         start = time.perf_counter()
-        config = SimConfig(**{**self.config.__dict__, **overrides})
+        config = replace(self.config, **overrides)
         if config.curvature_mm is not None:
             raise InputError("the spectral engine models a flat skin layer; curved bases need the FEM "
                              "(engine fem)", parameter="curvature_mm")
