@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from roughness.core.files import atomic_write
 from roughness.core.hashing import digest
 
 TISSUE, BONE = 0, 1
@@ -253,7 +254,7 @@ def build(spec: MeshSpec, cache: bool = True) -> Mesh:
             return Mesh(f["points"], f["tets"], f["region"], spec)
     mesh = tetrahedralize(spec)
     if path is not None:
-        tmp = path.with_suffix(".tmp.npz")
-        np.savez(tmp, points=mesh.points, tets=mesh.tets, region=mesh.region)
-        tmp.replace(path)
+        # a temporary file of its own per writer: workers meshing the same spec at once each publish
+        # a whole file (identical content), and none renames another's temporary file away
+        atomic_write(path, lambda tmp: np.savez(tmp, points=mesh.points, tets=mesh.tets, region=mesh.region))
     return mesh

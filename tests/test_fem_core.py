@@ -1,6 +1,9 @@
 """Exact properties of the mesh, the elasticity operators and the variation measure."""
 from __future__ import annotations
 
+import threading
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 import pytest
 from conftest import SMALL_MESH as SMALL
@@ -40,6 +43,25 @@ def test_surface_is_closed():
 def test_mesh_cache_returns_identical_mesh():
     a, b = build(SMALL), build(SMALL)
     assert np.array_equal(a.points, b.points) and np.array_equal(a.tets, b.tets)
+
+
+def test_two_workers_caching_the_same_mesh_at_once_both_succeed(tmp_path, monkeypatch):
+    """Dataset workers mesh the same block together: each writes its own temporary file, and
+    both have written before either publishes (a barrier), the interleaving that once failed one
+    of them with FileNotFoundError (they shared one temporary name)."""
+    monkeypatch.setenv("ROUGHNESS_CACHE", str(tmp_path))
+    both_written = threading.Barrier(2, timeout=60)
+    savez = np.savez
+
+    def savez_then_wait(*args, **kwargs):
+        savez(*args, **kwargs)
+        both_written.wait()
+
+    monkeypatch.setattr(np, "savez", savez_then_wait)
+    with ThreadPoolExecutor(2) as pool:
+        meshes = list(pool.map(lambda _: build(SMALL), range(2)))
+    assert np.array_equal(meshes[0].tets, meshes[1].tets)
+    assert [p.name for p in tmp_path.iterdir()] == [f"mesh-{SMALL.key()}.npz"]  # no temporary file left
 
 
 def test_rigid_body_modes_are_in_the_stiffness_null_space(mesh):
