@@ -80,7 +80,7 @@ def fresh_predict() -> float:
 def big_map(lambda_mm: float) -> dict:
     """One spectral solve over a 100 x 100 mm map of a standard texture tiled, V at 1 mm steps."""
     from roughness.dataset.textures import standard_texture
-    from roughness.simulate.heightmap import Heightmap
+    from roughness.surface.heightmap import Heightmap
     from roughness.simulate.spectral.maps import spectral_map
 
     tile = standard_texture(lambda_mm, seed=1)  # 240 x 240 at 0.05 mm

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import fields
 
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap, flat
+from roughness.surface.heightmap import Heightmap, flat
 
 from . import families, textures
 from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side

@@ -25,7 +25,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from . import natural
 from .fractal import fbm_surface

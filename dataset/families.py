@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from . import engineered, natural
 from .grid import PIXEL_MM, SIZE_MM

@@ -5,7 +5,7 @@ import numpy as np
 
 from roughness.core.checks import in_range, positive
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side
 

@@ -20,7 +20,7 @@ from scipy.spatial import cKDTree
 
 from roughness.core.checks import in_range
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from .fractal import fbm_surface
 from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side

@@ -17,7 +17,7 @@ from scipy import ndimage
 
 from roughness.core.checks import integer, non_negative, positive, real
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 LAYER_MM = 0.03  # FDM/SLA layer height used by quantise
 # Ranges drawn by random_pipeline: each step's parameters are uniform in these bounds (mm, degrees

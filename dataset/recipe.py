@@ -16,7 +16,7 @@ import numpy as np
 
 from roughness.core.checks import in_range, integer, positive, real
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from . import families
 from .catalogue import make_texture

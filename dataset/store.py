@@ -38,7 +38,7 @@ from roughness.core.errors import InputError
 from roughness.core.files import atomic_write
 from roughness.core.hashing import canonical_json
 from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from .schema import (
     ADDED_FIELDS,

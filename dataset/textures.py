@@ -16,7 +16,7 @@ from scipy.spatial import cKDTree
 
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap, flat
+from roughness.surface.heightmap import Heightmap, flat
 
 from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side
 

@@ -24,11 +24,11 @@ if (_SOURCE_ROOT / "pyproject.toml").is_file() and (_SOURCE_ROOT / "simulate" / 
     __path__.append(str(_SOURCE_ROOT))  # noqa: F821 (package __path__)
 
 _HOMES = {
-    "Heightmap": "roughness.simulate.heightmap",
+    "Heightmap": "roughness.surface.heightmap",
     "InputError": "roughness.core.errors",
     "SimulationError": "roughness.core.errors",
-    "load_heightmap": "roughness.simulate.io",
-    "save_heightmap": "roughness.simulate.io",
+    "load_heightmap": "roughness.surface.io",
+    "save_heightmap": "roughness.surface.io",
     "SimConfig": "roughness.simulate.config",
     "Simulator": "roughness.simulate.model",
     "Result": "roughness.simulate.model",

@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 from roughness.surrogate.patch import FOOTPRINT_MM, footprint_patch
 
 PIXEL_MM = 0.05

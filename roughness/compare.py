@@ -30,7 +30,7 @@ import numpy as np
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output_folder
 from roughness.core.hashing import array_digest
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from .engines import FEM_FIDELITIES, Engine, fem_identity, fem_spec
 
@@ -97,7 +97,7 @@ class _DatasetSamples:
 
 
 def folder_textures(path: Path, pixel_mm: float | None, height_mm: float | None) -> list[Texture]:
-    from roughness.simulate.io import heightmap_files, load_heightmap
+    from roughness.surface.io import heightmap_files, load_heightmap
 
     return [Texture(f.name, "file", lambda f=f: load_heightmap(f, pixel_mm, height_mm)) for f in heightmap_files(path)]
 

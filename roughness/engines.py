@@ -37,7 +37,7 @@ from roughness.core.checks import integer
 from roughness.core.errors import InputError
 from roughness.core.hashing import digest, file_sha256
 from roughness.models import MODELS_DIR
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from .classical import MEASURES, footprint
 

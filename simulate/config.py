@@ -9,7 +9,7 @@ from roughness.core.errors import InputError
 
 from .curved import AXES, TEXTURE_ALONG, BaseShape, require_restable
 from .discretization import LADDER_MM
-from .heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 from .mesh import MeshSpec
 
 # Contact-face spacing (mm) per fidelity; ``auto`` picks from this ladder; ``converged`` refines

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .discretization import LADDER_MM, V_FLOOR, coarser_spacing, richardson, within
-from .heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 if TYPE_CHECKING:
     from .contact import ContactRound

@@ -25,7 +25,7 @@ import numpy as np
 
 from roughness.core.errors import InputError
 
-from .heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 SHAPES = ("flat", "cylinder", "sphere")
 AXES = ("x", "y")

@@ -20,7 +20,7 @@ from .contact import ContactCheck, ContactError, ContactProblem, ContactResult, 
 from .curved import FLAT, BaseShape, base_surface, textured_surface
 from .elasticity import rigid_body_modes, stiffness
 from .face import ContactFace
-from .heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 from .linsolve import AMGCache, SolverError
 from .strain import StrainSampler
 from .variation import PairSampling, variation

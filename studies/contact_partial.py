@@ -47,7 +47,7 @@ CONTACTS = ("stick", "frictionless")
 
 def egg_crate(period_mm: float = 2.0, amplitude_mm: float = 0.1, size_mm: float = 12.0, pixel_mm: float = 0.05):
     """A periodic texture: h = amplitude (1 + sin(2 pi x / period) sin(2 pi y / period)) (mm)."""
-    from roughness.simulate.heightmap import Heightmap
+    from roughness.surface.heightmap import Heightmap
 
     x = (np.arange(round(size_mm / pixel_mm)) + 0.5) * pixel_mm
     k = 2 * np.pi / period_mm

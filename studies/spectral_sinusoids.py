@@ -29,7 +29,7 @@ SIZE_MM = 12.0
 
 
 def sinusoid(wavelength: float):
-    from roughness.simulate.heightmap import Heightmap
+    from roughness.surface.heightmap import Heightmap
 
     n = round(SIZE_MM / PIXEL_MM)
     x = (np.arange(n) + 0.5) * PIXEL_MM - SIZE_MM / 2

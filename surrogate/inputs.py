@@ -11,8 +11,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap
-from roughness.simulate.io import heightmap_files, load_heightmap
+from roughness.surface.heightmap import Heightmap
+from roughness.surface.io import heightmap_files, load_heightmap
 
 
 class InputReader:

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
-from roughness.simulate.heightmap import Heightmap, bracket
+from roughness.surface.heightmap import Heightmap, bracket
 
 FOOTPRINT_MM = 10.0  # the skin block's width (simulate.config default)
 PATCH_PIXEL_MM = 0.1  # model pixel size

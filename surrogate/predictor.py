@@ -16,7 +16,7 @@ import onnxruntime as ort
 
 from roughness.core.errors import InputError
 from roughness.models import MODELS_DIR
-from roughness.simulate.heightmap import Heightmap, flat
+from roughness.surface.heightmap import Heightmap, flat
 
 from .domain import Domain
 from .metadata import ModelMetadata, read_metadata

@@ -20,7 +20,7 @@ from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output
 from roughness.core.limits import MAX_BATCH, MAX_MAP_POSITIONS, check_size
 from roughness.simulate.footprints import RoughnessMap, centre_count, centres
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from .patch import batch_descriptors, footprint_patches
 

@@ -87,7 +87,7 @@ def test_cold_run_prints_only_json_on_stdout(tmp_path):
 @pytest.mark.parametrize("name, params", [("standard-0.75", []), ("flattop-0.3", []), ("grating", ["period_mm=1.5"]),
                                           ("bumps", ["lambda_mm=2.0", "top=flat", "top_diameter_mm=0.4"])])
 def test_texture_make_writes_heightmaps_in_mm(tmp_path, capsys, name, params):
-    from roughness.simulate.io import load_heightmap
+    from roughness.surface.io import load_heightmap
 
     out = tmp_path / "t.npy"
     args = ["texture", "make", name, "--out", str(out), "--seed", "2", "--pixel-mm", "0.04", "--size-mm", "11"]

@@ -18,7 +18,7 @@ from roughness.dataset.store import DatasetWriter
 from roughness.engines import make_engine
 from roughness.report import break_even, pareto_front
 from roughness.simulate.config import SimConfig
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 PNG = b"\x89PNG\r\n\x1a\n"
 ENGINES = ["surrogate", "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance"]

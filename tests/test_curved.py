@@ -13,8 +13,8 @@ from roughness.core.hashing import file_sha256
 from roughness.dataset.textures import standard_texture
 from roughness.simulate.config import SimConfig
 from roughness.simulate.curved import BaseShape, normal_relief, textured_surface
-from roughness.simulate.detrend import detrend, parse_detrend
-from roughness.simulate.heightmap import Heightmap, flat
+from roughness.surface.detrend import detrend, parse_detrend
+from roughness.surface.heightmap import Heightmap, flat
 from roughness.simulate.model import Simulator
 
 

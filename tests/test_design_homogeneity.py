@@ -10,8 +10,8 @@ from roughness.cli import main
 from roughness.dataset.textures import standard_texture
 from roughness.design.evaluation import Evaluator
 from roughness.design.homogeneity import Homogeneity, homogeneity, mirrored_window
-from roughness.simulate.heightmap import Heightmap
-from roughness.simulate.io import save_heightmap
+from roughness.surface.heightmap import Heightmap
+from roughness.surface.io import save_heightmap
 
 EVALUATOR = Evaluator()
 

@@ -63,7 +63,7 @@ def test_roughness_map_shows_the_three_regions(plate):
 
 def test_plate_is_a_watertight_printable_mesh(plate, tmp_path):
     trimesh = pytest.importorskip("trimesh")
-    from roughness.simulate.io import save_heightmap
+    from roughness.surface.io import save_heightmap
 
     save_heightmap(plate.heightmap, tmp_path / "plate.stl", base_mm=2.0)
     mesh = trimesh.load(tmp_path / "plate.stl")

@@ -12,7 +12,7 @@ from roughness.dataset.natural import grating
 from roughness.dataset.textures import standard_texture
 from roughness.design.evaluation import Evaluator, roughness_of_lambda
 from roughness.design.tune import scaled, target_of, tune
-from roughness.simulate.io import save_heightmap
+from roughness.surface.io import save_heightmap
 
 EVALUATOR = Evaluator()
 

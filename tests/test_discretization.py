@@ -10,7 +10,7 @@ from roughness.core.errors import InputError
 from roughness.simulate import converged
 from roughness.simulate.config import SimConfig
 from roughness.simulate.discretization import SAFETY, V_FLOOR, coarser_spacing, richardson, within
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 from roughness.simulate.model import Simulator
 
 # A 4 mm block (force scaled with its area) sampled in a 3 mm window: a sixth of the nodes.

@@ -11,8 +11,8 @@ import tifffile
 from PIL import Image
 
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap, flat
-from roughness.simulate.io import load_heightmap, save_heightmap
+from roughness.surface.heightmap import Heightmap, flat
+from roughness.surface.io import load_heightmap, save_heightmap
 
 RNG = np.random.default_rng(7)
 
@@ -401,3 +401,16 @@ def test_save_errors(tmp_path) -> None:
     with pytest.raises(InputError, match="would clip"):
         save_heightmap(hm, tmp_path / "map.png", height_mm=0.1)
     assert not list(tmp_path.iterdir())
+
+
+def test_the_old_import_paths_still_work_and_say_where_the_modules_went():
+    import importlib
+    import sys
+
+    import roughness.surface.io as surface_io
+
+    for name in ("heightmap", "io", "detrend", "stl"):
+        sys.modules.pop(f"roughness.simulate.{name}", None)
+        with pytest.warns(DeprecationWarning, match=f"roughness.surface.{name}"):
+            importlib.import_module(f"roughness.simulate.{name}")
+    assert sys.modules["roughness.simulate.io"].load_heightmap is surface_io.load_heightmap

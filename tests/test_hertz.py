@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from roughness.simulate.config import SimConfig
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 from roughness.simulate.model import Simulator
 
 E, NU, R = 0.042, 0.45, 5.0

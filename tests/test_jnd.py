@@ -9,7 +9,7 @@ import pytest
 
 from roughness.cli import main
 from roughness.dataset.textures import standard_texture
-from roughness.simulate.io import save_heightmap
+from roughness.surface.io import save_heightmap
 from roughness.surrogate.calibration import StandardScale, jnd_distance, load_scale
 
 SCALE = StandardScale((0.5, 1.0, 2.0), (0.025, 0.1, 0.4), "test")  # V = 0.1 lambda^2 exactly

@@ -20,7 +20,7 @@ from test_bad_inputs import BASE, PARSERS, _expect_refusal, _run, workdir  # noq
 from roughness.cli.common import float_pair
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, MAX_MAP_POSITIONS, Limit, check_size
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 PAIR_OPTIONS = [(path, action.option_strings[-1]) for path, parser in PARSERS.items()
                 for action in parser._actions if action.type is float_pair]

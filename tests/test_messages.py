@@ -22,7 +22,7 @@ from roughness.design.tune import Target, tune
 from roughness.perception.trials import parse_trials
 from roughness.simulate.config import SimConfig
 from roughness.simulate.curved import FLAT
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 from roughness.simulate.model import _require_small_strain_regime
 
 REPO = Path(__file__).resolve().parents[1]

@@ -340,7 +340,7 @@ def test_palette_from_a_folder_with_one_stem_twice_keeps_both_textures(workdir, 
 def test_tactile_image_refuses_a_palette_with_one_member_file_twice(workdir, capsys):
     """A palette folder written before the fix lists one name twice: refused, not printed as two textures."""
     from roughness.dataset.textures import standard_texture
-    from roughness.simulate.io import save_heightmap
+    from roughness.surface.io import save_heightmap
 
     (workdir / "old").mkdir()
     save_heightmap(standard_texture(1.0), workdir / "old" / "tex.npz")

@@ -315,7 +315,7 @@ class _FakeResult:
 
 def test_fem_values_are_cached_by_content_and_configuration(tmp_path, monkeypatch):
     import roughness
-    from roughness.simulate.heightmap import Heightmap
+    from roughness.surface.heightmap import Heightmap
 
     calls = []
 

@@ -26,7 +26,7 @@ from roughness.dataset.perturb import (
     rotate,
     shift,
 )
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 GRAINS = grains(size_mm=6.0, seed=1)
 RNG = np.random.default_rng(0)

@@ -9,7 +9,7 @@ import pytest
 from roughness.core.errors import InputError
 from roughness.dataset.textures import BumpRecipe, bump_texture, standard_texture
 from roughness.simulate.config import SimConfig
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 from roughness.simulate.model import SimulationError, Simulator
 
 

@@ -9,9 +9,9 @@ import trimesh
 
 from roughness.cli import main
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap
-from roughness.simulate.io import save_heightmap
-from roughness.simulate.stl import plate, stl_bytes
+from roughness.surface.heightmap import Heightmap
+from roughness.surface.io import save_heightmap
+from roughness.surface.stl import plate, stl_bytes
 
 RNG = np.random.default_rng(5)
 

@@ -20,8 +20,8 @@ from roughness.dataset.recipe import Recipe, realise, sample_record
 from roughness.dataset.store import DatasetWriter, open_dataset
 from roughness.dataset.textures import standard_texture
 from roughness.engines import predict
-from roughness.simulate.heightmap import Heightmap
-from roughness.simulate.io import save_heightmap
+from roughness.surface.heightmap import Heightmap
+from roughness.surface.io import save_heightmap
 from roughness.simulate.linsolve import CG_RTOL
 from roughness.surrogate.calibration import StandardScale, load_scale
 from roughness.surrogate.data import split_of
@@ -274,7 +274,7 @@ def test_auto_runs_fem_outside_the_domain():
 def test_shipped_model_agrees_with_fem_on_the_bundled_example(capsys):
     from roughness.cli import main
     from roughness.simulate.config import SimConfig
-    from roughness.simulate.io import load_heightmap
+    from roughness.surface.io import load_heightmap
     from roughness.simulate.model import Simulator
 
     assert main(["predict", str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--json"]) == 0

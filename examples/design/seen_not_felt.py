@@ -27,7 +27,7 @@ def main(argv: list[str] | None = None) -> None:
     from roughness.dataset.textures import standard_texture
     from roughness.design.evaluation import Evaluator, jnd_between
     from roughness.design.tune import target_of, tune
-    from roughness.simulate.heightmap import Heightmap
+    from roughness.surface.heightmap import Heightmap
 
     evaluator = Evaluator()
     hm = standard_texture(1.0, seed=0)

@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
     from roughness.design.evaluation import Evaluator
     from roughness.design.homogeneity import homogeneity, save_map
-    from roughness.simulate.io import load_heightmap
+    from roughness.surface.io import load_heightmap
 
     check_distinct({"--map": args.map}, {"HEIGHTMAP": args.heightmap, "--model": args.model})
     if args.map:

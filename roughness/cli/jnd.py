@@ -24,7 +24,7 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from roughness.engines import predict
-    from roughness.simulate.io import load_heightmap
+    from roughness.surface.io import load_heightmap
     from roughness.surrogate.calibration import jnd_distance, load_scale
 
     maps = [load_heightmap(path, args.pixel_mm, args.height_mm) for path in (args.a, args.b)]

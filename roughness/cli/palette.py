@@ -20,7 +20,7 @@ from .common import (
 def add_parser(sub) -> None:
     from roughness.design.palette import DEFAULT_FAMILY, family_palette
     from roughness.design.tune import KNOBS
-    from roughness.simulate.stl import DEFAULT_BASE_MM
+    from roughness.surface.stl import DEFAULT_BASE_MM
 
     given = defaults(family_palette)
     p = sub.add_parser("palette", help="K textures pairwise at least M JND apart (FEM-verified), with a preview sheet")
@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     evaluator = Evaluator(args.model, args.verify)
     progress = lambda line: log(args, "  " + line)
     if args.candidates:
-        from roughness.simulate.io import heightmap_files, load_heightmap
+        from roughness.surface.io import heightmap_files, load_heightmap
 
         files = heightmap_files(args.candidates)
         candidates = [(name, load_heightmap(f, args.pixel_mm, args.height_mm))

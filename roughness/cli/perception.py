@@ -319,7 +319,7 @@ def run_design(args: argparse.Namespace) -> int:
     from roughness.perception.design import FIELDNAMES, balanced_design
     from roughness.perception.stimuli import read_stimuli
     from roughness.perception.trials import write_trials
-    from roughness.simulate.io import save_heightmap
+    from roughness.surface.io import save_heightmap
 
     check_distinct({"--out": args.out, "--plates": args.plates}, {"--stimuli": args.stimuli})
     _check_trials(args)

@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _predict_map(args: argparse.Namespace, model) -> int:
     from roughness.core.errors import InputError
-    from roughness.simulate.io import load_heightmap
+    from roughness.surface.io import load_heightmap
     from roughness.surrogate.roughness_map import roughness_map, save_map
 
     if len(args.inputs) != 1 or os.path.isdir(args.inputs[0]):

@@ -72,7 +72,7 @@ def curvature_fields(args: argparse.Namespace) -> dict:
 
 def _detrend_spec(text: str):
     from roughness.core.errors import InputError
-    from roughness.simulate.detrend import parse_detrend
+    from roughness.surface.detrend import parse_detrend
 
     try:
         return parse_detrend(text)
@@ -83,7 +83,7 @@ def _detrend_spec(text: str):
 def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
     from roughness.simulate.config import SimConfig
-    from roughness.simulate.io import load_heightmap
+    from roughness.surface.io import load_heightmap
     from roughness.simulate.model import Simulator
 
     check_distinct({"--save-strain": args.save_strain, "--save-vtu": args.save_vtu}, {"HEIGHTMAP": args.heightmap})
@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
                        element=args.element, bone=args.bone, seed=args.seed,
                        tolerance=args.tolerance, **curvature_fields(args))
     if args.detrend:
-        from roughness.simulate.detrend import detrend
+        from roughness.surface.detrend import detrend
 
         hm, removed = detrend(hm, args.detrend)
         log(args, f"detrended: {removed.describe()}")

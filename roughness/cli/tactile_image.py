@@ -9,7 +9,7 @@ from .common import COUNT, POSITIVE, add_model_tail, defaults, finish, json_text
 def add_parser(sub) -> None:
     from roughness.design.palette import family_palette
     from roughness.design.tactile_image import tactile_image
-    from roughness.simulate.stl import DEFAULT_BASE_MM
+    from roughness.surface.stl import DEFAULT_BASE_MM
 
     given, pal = defaults(tactile_image), defaults(family_palette)
     p = sub.add_parser("tactile-image", help="a picture with a few flat colours as a plate whose regions carry "
@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
         save_figures,
         tactile_image,
     )
-    from roughness.simulate.io import save_heightmap
+    from roughness.surface.io import save_heightmap
 
     check_distinct({"--out": args.out}, {"IMAGE": args.image, "--palette": args.palette, "--model": args.model})
     out = check_output_folder(args.out, args.overwrite, "out")

@@ -8,7 +8,7 @@ from .common import POSITIVE, SEED, add_overwrite, finish, json_text, write_stdo
 
 def add_parser(sub) -> None:
     from roughness.dataset.grid import PIXEL_MM, SIZE_MM
-    from roughness.simulate.stl import DEFAULT_BASE_MM
+    from roughness.surface.stl import DEFAULT_BASE_MM
 
     tex = sub.add_parser("texture", help="make textures: standard bumps, flat tops, natural families")
     tex_sub = tex.add_subparsers(dest="texture_command", required=True)
@@ -38,7 +38,7 @@ def run_make(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
     from roughness.core.files import check_output
     from roughness.dataset.catalogue import make_texture, parse_params
-    from roughness.simulate.io import SAVE_SUFFIXES, save_heightmap
+    from roughness.surface.io import SAVE_SUFFIXES, save_heightmap
 
     out = check_output(args.out, args.overwrite, "out")
     suffix = out.suffix.lower()

@@ -8,7 +8,7 @@ from .common import COUNT, POSITIVE, add_model_tail, add_reading_args, defaults,
 
 def add_parser(sub) -> None:
     from roughness.design.tune import FACTOR_RANGE, KNOBS, tune
-    from roughness.simulate.stl import DEFAULT_BASE_MM
+    from roughness.surface.stl import DEFAULT_BASE_MM
 
     given = defaults(tune)
     p = sub.add_parser("tune", help="scale a texture's heights or lateral size to reach a target roughness "
@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
     from roughness.design.evaluation import Evaluator
     from roughness.design.tune import FACTOR_RANGE, target_of, tune
-    from roughness.simulate.io import SAVE_SUFFIXES, load_heightmap, save_heightmap
+    from roughness.surface.io import SAVE_SUFFIXES, load_heightmap, save_heightmap
 
     check_distinct({"--out": args.out}, {"HEIGHTMAP": args.heightmap, "--like": args.like, "--model": args.model})
     out = check_output(args.out, args.overwrite, "out")

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 ENGINES = ("surrogate", "fem")
 VERIFIERS = ("coarse", "default", "fine", "spectral")  # FEM fidelities, or the spectral engine

@@ -36,7 +36,7 @@ import numpy as np
 from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_WINDOWS, MAX_WORKING_VALUES, check_size
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from .evaluation import ENGINES, Evaluator
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator, Verified, jnd_between
 from .tune import FACTOR_RANGE, GRID, TOLERANCE_JND, scaled, target_of, tune
@@ -227,7 +227,7 @@ def save_palette(palette: Palette, folder, stl: bool = False, base_mm: float | N
     import json
 
     from roughness.core.files import atomic_write
-    from roughness.simulate.io import save_heightmap
+    from roughness.surface.io import save_heightmap
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -246,7 +246,7 @@ def load_palette(folder) -> list[tuple[str, Heightmap, dict]]:
     InputError if two members share a name (one file: a folder written before member names were unique)."""
     import json
 
-    from roughness.simulate.io import load_heightmap
+    from roughness.surface.io import load_heightmap
 
     folder = Path(folder)
     path = folder / PALETTE_FILE

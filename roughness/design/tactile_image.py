@@ -28,7 +28,7 @@ from scipy import ndimage
 from roughness.core.checks import non_negative, positive
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_IMAGE_PIXELS, MAX_MAP_POSITIONS, MAX_PLATE_PIXELS, check_size
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator, jnd_between
 
@@ -95,7 +95,7 @@ def read_image(path: str | Path) -> np.ndarray:
     more than MAX_IMAGE_PIXELS (checked from its header, before decoding)."""
     from PIL import UnidentifiedImageError
 
-    from roughness.simulate.io import open_image
+    from roughness.surface.io import open_image
 
     path = Path(path)
     if not path.is_file():

@@ -21,7 +21,7 @@ import numpy as np
 
 from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
-from roughness.simulate.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator, Verified, jnd_between, roughness_of_lambda
 

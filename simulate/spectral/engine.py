@@ -19,7 +19,7 @@ import numpy as np
 from roughness.core.errors import InputError
 
 from ..config import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES, SimConfig
-from ..heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 from ..variation import PairSampling, variation
 from .contact import ContactState, solve_contact
 from .flat_state import FlatState, block_flat_state

@@ -21,7 +21,7 @@ from roughness.core.limits import MAX_MAP_POSITIONS, Limit, check_size
 
 from ..config import SimConfig
 from ..footprints import RoughnessMap, centre_count, centres
-from ..heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap
 from ..variation import PairSampling
 from .contact import solve_contact
 from .engine import fluctuation, lambda3, tissue_of

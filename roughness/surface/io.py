@@ -1,0 +1,441 @@
+"""Reading and writing heightmap files (.npy, .npz, .png, .tif/.tiff, .h5/.hdf5).
+
+Integer images map grey value v to height v / full_scale * height_mm (full_scale 255 for 8-bit,
+65535 for 16-bit); .npy, .npz, .h5 and float TIFF files hold heights in mm. Image row i is y index i.
+
+Files this tool writes carry their units where the format allows, and the loader reads them back:
+the pixel size (and for PNG the full-scale height and the base height) in a PNG text chunk, a TIFF
+ImageDescription, an .npz array or an HDF5 attribute. Only .npy cannot: pass ``pixel_mm``.
+A stated unit that disagrees with an explicit argument is an error, never silently overridden.
+Every failure the user can cause is reported as an InputError naming the file and the problem.
+The size a file declares is checked against MAX_HEIGHTMAP_PIXELS before its values are read, so a
+small compressed file that would expand to gigabytes is refused without allocating them.
+"""
+from __future__ import annotations
+
+import json
+import math
+import struct
+import warnings
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from PIL import Image, PngImagePlugin
+
+from roughness.core.checks import positive
+from roughness.core.errors import InputError
+from roughness.core.files import atomic_write
+from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, Limit, check_size
+
+from .heightmap import Heightmap
+from .stl import DEFAULT_BASE_MM, plate, stl_bytes
+
+SUFFIXES = (".npy", ".npz", ".png", ".tif", ".tiff", ".h5", ".hdf5")
+SAVE_SUFFIXES = (".npy", ".npz", ".png", ".tif", ".tiff", ".h5", ".hdf5", ".stl")
+DEFAULT_DATASET = "heightmap"
+FULL_SCALE = {1: 255, 2: 65535}  # unsigned integer samples: bytes per sample -> white
+PNG_16BIT = ("I;16", "I;16B", "I;16L")
+PNG_ERRORS = (OSError, SyntaxError, ValueError, Image.DecompressionBombError)
+UNITS_KEY = "roughness"  # PNG text chunk / TIFF description holding {"pixel_mm": ..., ...}
+SAME_UNIT_RTOL = 1e-6  # a stated and a given unit this close are the same (float32 round trips)
+
+
+@dataclass(frozen=True)
+class _Raw:
+    """File contents before units: values in mm if ``full_scale`` is None, else grey levels.
+
+    ``pixel_mm``, ``height_mm`` and ``base_mm`` are what the file states (None if nothing).
+    """
+
+    values: np.ndarray
+    kind: str  # e.g. "16-bit PNG", for messages
+    full_scale: float | None = None
+    pixel_mm: object = None
+    height_mm: object = None
+    base_mm: object = None
+
+
+def load_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: float | None = None,
+                   dataset: str | None = None) -> Heightmap:
+    """Heightmap (mm) from a file.
+
+    ``pixel_mm`` (mm) is needed unless the file states it; ``height_mm`` is the height of
+    full-scale white in integer images (mm), needed unless the file states it; a value that
+    disagrees with the file's is an InputError. ``dataset`` names the HDF5 dataset (default
+    "heightmap").
+    """
+    path = _existing_file(Path(path))
+    suffix = path.suffix.lower()
+    if suffix not in SUFFIXES:
+        raise InputError(f"{path}: unsupported heightmap format {suffix or '(no suffix)'!r}; "
+                         f"supported: {', '.join(SUFFIXES)}")
+    if dataset is not None and suffix not in (".h5", ".hdf5"):
+        raise InputError(f"{path}: a dataset name applies only to .h5/.hdf5 files", parameter="dataset")
+    pixel_mm = None if pixel_mm is None else positive("pixel_mm", pixel_mm)
+    height_mm = None if height_mm is None else positive("height_mm", height_mm)
+    if suffix == ".npy":
+        raw = _read_npy(path)
+    elif suffix == ".npz":
+        raw = _read_npz(path)
+    elif suffix == ".png":
+        raw = _read_png(path)
+    elif suffix in (".tif", ".tiff"):
+        raw = _read_tiff(path)
+    else:
+        raw = _read_h5(path, dataset or DEFAULT_DATASET)
+    return _to_heightmap(path, raw, pixel_mm, height_mm)
+
+
+def heightmap_files(folder: str | Path) -> list[Path]:
+    """The heightmap files (by suffix) directly inside a folder, sorted by name; InputError if none."""
+    folder = Path(folder)
+    files = sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in SUFFIXES)
+    if not files:
+        raise InputError(f"{folder} holds no heightmap files ({', '.join(SUFFIXES)})")
+    return files
+
+
+def save_heightmap(hm: Heightmap, path: str | Path, height_mm: float | None = None,
+                   base_mm: float | None = None, overwrite: bool = True) -> None:
+    """Write ``hm`` atomically, with its pixel size wherever the format can hold it.
+
+    .npy: heights in mm (no room for the pixel size); .npz and .h5: heights in mm and
+    ``pixel_mm``; float32 .tif/.tiff: heights in mm, the pixel size in the ImageDescription
+    (and as resolution tags for other software); 16-bit .png: (H - min) / height_mm * 65535,
+    ``height_mm`` defaulting to the height range, with pixel size, full-scale height and the
+    minimum in a text chunk, so that the file loads back without flags; .stl: a watertight
+    printable plate in mm, the texture standing on ``base_mm`` of solid (default 2 mm; see
+    ``stl.plate``), written but not read back. Unless ``overwrite``, an existing file is never
+    replaced, not even by a concurrent writer (OutputExists).
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in SAVE_SUFFIXES:
+        raise InputError(f"cannot save {path}: unsupported format {suffix or '(no suffix)'!r}; "
+                         f"supported: {', '.join(SAVE_SUFFIXES)}", parameter="out")
+    if height_mm is not None and suffix != ".png":
+        raise InputError(f"cannot save {path}: height_mm applies only to PNG output", parameter="height_mm")
+    if base_mm is not None and suffix != ".stl":
+        raise InputError(f"cannot save {path}: base_mm applies only to STL output", parameter="base_mm")
+    if not path.parent.is_dir():
+        raise InputError(f"cannot write {path}: its folder does not exist", parameter="out")
+    units = {"pixel_mm": hm.pixel_mm}
+    if suffix == ".npy":
+        atomic_write(path, lambda tmp: np.save(tmp, hm.heights), overwrite)
+    elif suffix == ".npz":
+        atomic_write(path, lambda tmp: np.savez_compressed(tmp, heightmap=hm.heights, pixel_mm=hm.pixel_mm), overwrite)
+    elif suffix == ".png":
+        counts, full = _png_counts(hm.heights, height_mm)
+        info = PngImagePlugin.PngInfo()
+        info.add_text(UNITS_KEY, json.dumps(units | {"height_mm": full, "base_mm": float(hm.heights.min())}))
+        atomic_write(path, lambda tmp: Image.fromarray(counts).save(tmp, format="PNG", pnginfo=info), overwrite)
+    elif suffix == ".stl":
+        data = stl_bytes(plate(hm, DEFAULT_BASE_MM if base_mm is None else base_mm))
+        atomic_write(path, lambda tmp: Path(tmp).write_bytes(data), overwrite)
+    elif suffix in (".tif", ".tiff"):
+        import tifffile
+
+        per_cm = 10.0 / hm.pixel_mm
+        atomic_write(path, lambda tmp: tifffile.imwrite(
+            tmp, hm.heights.astype(np.float32), description=json.dumps({UNITS_KEY: units}),
+            resolution=(per_cm, per_cm), resolutionunit="CENTIMETER", metadata=None), overwrite)
+    else:
+        atomic_write(path, lambda tmp: _write_h5(tmp, hm), overwrite)
+
+
+def _write_h5(path: str, hm: Heightmap) -> None:
+    import h5py
+
+    with h5py.File(path, "w") as f:
+        f.create_dataset(DEFAULT_DATASET, data=hm.heights).attrs["pixel_mm"] = hm.pixel_mm
+
+
+def _existing_file(path: Path) -> Path:
+    if path.is_dir():
+        raise InputError(f"{path} is a directory, not a heightmap file")
+    if not path.exists():
+        raise InputError(f"heightmap file not found: {path}")
+    return path
+
+
+def _unreadable(path: Path, kind: str, err: BaseException) -> InputError:
+    return InputError(f"cannot read {path} as {kind}: {str(err) or type(err).__name__}")
+
+
+def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: float | None) -> Heightmap:
+    """Apply units to ``raw``; InputError names any missing, misplaced or contradicting unit."""
+    pixel_mm = _unit(path, "pixel_mm", raw.pixel_mm, pixel_mm)
+    if raw.full_scale is None and height_mm is not None:
+        raise InputError(f"{path}: heights in {raw.kind} files are already in mm; drop height_mm",
+                         parameter="height_mm")
+    if raw.full_scale is not None:
+        height_mm = _unit(path, "height_mm", raw.height_mm, height_mm)
+    missing = []
+    if pixel_mm is None:
+        missing.append("pixel_mm (pixel size in mm)")
+    if raw.full_scale is not None and height_mm is None:
+        missing.append("height_mm (height of full-scale white in mm)")
+    if missing:
+        raise InputError(f"{path}: {raw.kind} heightmaps need {' and '.join(missing)}; the file does not state it",
+                         parameter=missing[0].split()[0])
+    values = raw.values
+    if raw.full_scale is not None:
+        values = values / raw.full_scale * height_mm
+        if raw.base_mm is not None:
+            values = values + _stated(path, "base_mm", raw.base_mm, positive_only=False)
+    try:
+        return Heightmap(values, pixel_mm)
+    except InputError as err:
+        raise InputError(f"{path}: {err}", parameter=err.parameter) from None
+
+
+def _unit(path: Path, name: str, stated: object, given: float | None) -> float | None:
+    """The unit to use: the given one, the stated one, or InputError if both are there and differ."""
+    if stated is None:
+        return given
+    stated = _stated(path, name, stated)
+    if given is not None and not math.isclose(given, stated, rel_tol=SAME_UNIT_RTOL):
+        raise InputError(f"{path} states {name} = {stated:g} mm, but {name} = {given:g} mm was given; "
+                         "drop the argument or fix the file", parameter=name)
+    return stated
+
+
+def _stated(path: Path, name: str, value: object, positive_only: bool = True) -> float:
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if not math.isfinite(number) or (positive_only and number <= 0):
+        raise InputError(f"{path}: the {name} it states is not a {'positive ' if positive_only else ''}"
+                         f"finite number: {value!r}")
+    return number
+
+
+def _read_npy(path: Path) -> _Raw:
+    try:
+        with open(path, "rb") as f:
+            if f.read(6) == np.lib.format.MAGIC_PREFIX:  # else not .npy: np.load names the problem
+                f.seek(0)
+                shape, dtype = _npy_header(f)
+                _check_declared(path, shape, dtype)
+                needed = f.tell() + math.prod(shape) * dtype.itemsize
+                if path.stat().st_size < needed:
+                    raise InputError(f"cannot read {path} as NPY: it declares {_shape_text(shape)} values of "
+                                     f"{dtype} ({needed:,} bytes with its header) but holds "
+                                     f"{path.stat().st_size:,} bytes (truncated?)")
+        values = np.load(path, allow_pickle=False)
+    except InputError:
+        raise
+    except (OSError, ValueError, EOFError) as err:
+        raise _unreadable(path, "NPY", err) from None
+    if not isinstance(values, np.ndarray):
+        values.close()
+        raise InputError(f"cannot read {path} as NPY: it is an .npz archive (rename it to .npz)")
+    return _Raw(_float_mm(path, values), ".npy")
+
+
+def _read_npz(path: Path) -> _Raw:
+    try:
+        with zipfile.ZipFile(path) as archive:  # each member's declared size, before any is decompressed
+            for member in archive.namelist():
+                if member.endswith(".npy"):
+                    with archive.open(member) as f:
+                        shape, dtype = _npy_header(f)
+                        _check_declared(path, shape, dtype, f"array {member[:-4]!r}",
+                                        real=member == f"{DEFAULT_DATASET}.npy")
+        with np.load(path, allow_pickle=False) as archive:
+            arrays = {name: archive[name] for name in archive.files}
+    except InputError:
+        raise
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as err:
+        raise _unreadable(path, "NPZ", err) from None
+    if DEFAULT_DATASET not in arrays:
+        raise InputError(f"{path} has no array {DEFAULT_DATASET!r}; arrays in the file: {', '.join(arrays) or 'none'}")
+    stated = arrays.get("pixel_mm")
+    return _Raw(_float_mm(path, arrays[DEFAULT_DATASET]), ".npz", None, None if stated is None else _scalar(stated))
+
+
+def _npy_header(f) -> tuple[tuple[int, ...], np.dtype]:
+    """Shape and dtype an open .npy stream declares (ValueError if its header is not one); reads nothing more."""
+    version = np.lib.format.read_magic(f)
+    if version == (1, 0):
+        shape, _, dtype = np.lib.format.read_array_header_1_0(f)
+    elif version == (2, 0):
+        shape, _, dtype = np.lib.format.read_array_header_2_0(f)
+    else:
+        raise ValueError(f"unsupported .npy format version {version[0]}.{version[1]} (expected 1.0 or 2.0)")
+    return tuple(shape), dtype
+
+
+def _check_declared(path: Path, shape: tuple[int, ...], dtype: np.dtype, what: str = "heightmap",
+                    real: bool = True) -> None:
+    """InputError unless the array a file declares has at most MAX_HEIGHTMAP_PIXELS pixels (colour
+    samples of one pixel count once) and, if ``real``, real numbers; checked before the values are read."""
+    shape = tuple(int(n) for n in shape)
+    colour = len(shape) == 3 and shape[-1] in (3, 4)
+    check_size(f"{path}: pixels its {what} declares ({_shape_text(shape)})", math.prod(shape[:2] if colour else shape),
+               MAX_HEIGHTMAP_PIXELS)
+    if real and dtype.kind not in "iuf":
+        raise InputError(f"{path}: its {what} holds {dtype} values, not real numbers")
+
+
+def _shape_text(shape: tuple[int, ...]) -> str:
+    return " x ".join(f"{n:,}" for n in shape) or "1"
+
+
+def _float_mm(path: Path, values: np.ndarray) -> np.ndarray:
+    """Heights of a file that holds millimetres: integers are refused (their unit is a guess)."""
+    if values.dtype.kind in "iu":
+        raise InputError(f"{path} holds integers ({values.dtype}, {values.min()} to {values.max()}); "
+                         f"{path.suffix} heights are millimetres as floating-point numbers: convert them to mm "
+                         "(e.g. micrometres / 1000) and save as float, or save grey levels as a 16-bit PNG "
+                         "with its full-scale height")
+    return values
+
+
+def _read_png(path: Path) -> _Raw:
+    try:
+        with open_image(path, MAX_HEIGHTMAP_PIXELS, formats=["PNG"]) as im:
+            im.load()
+            mode, values, text = im.mode, np.asarray(im), dict(getattr(im, "text", {}))
+    except InputError:
+        raise
+    except PNG_ERRORS as err:
+        raise _unreadable(path, "PNG", err) from None
+    units = _units(path, text.get(UNITS_KEY))
+    stated = {k: units.get(k) for k in ("pixel_mm", "height_mm", "base_mm")}
+    if mode in ("L", "LA"):
+        return _Raw(values if mode == "L" else values[..., 0], "8-bit PNG", 255, **stated)
+    if mode in PNG_16BIT or (mode == "I" and values.min() >= 0 and values.max() <= 65535):
+        return _Raw(values, "16-bit PNG", 65535, **stated)
+    if mode in ("RGB", "RGBA"):
+        return _Raw(_grey(path, values), "8-bit PNG", 255, **stated)
+    if mode in ("P", "PA"):
+        raise InputError(f"{path} is a palette (indexed-colour) PNG; save it as 8- or 16-bit greyscale")
+    raise InputError(f"{path} has PNG image mode {mode!r}; expected 8- or 16-bit greyscale or RGB")
+
+
+def _read_tiff(path: Path) -> _Raw:
+    import tifffile  # loaded only for TIFF files (as h5py for HDF5): predict on a PNG stays quick to start
+
+    try:
+        with tifffile.TiffFile(path) as tif:
+            if tif.series:
+                _check_declared(path, tif.series[0].shape, tif.series[0].dtype, "image")
+            values = tif.asarray() if tif.pages else None
+            description = tif.pages[0].description if tif.pages else ""
+    except InputError:
+        raise
+    except (OSError, ValueError, struct.error) as err:
+        raise _unreadable(path, "TIFF", err) from None
+    if values is None:
+        raise InputError(f"cannot read {path} as TIFF: it holds no image")
+    colour = values.ndim == 3 and values.shape[-1] in (3, 4)
+    stated = _units(path, _json_object(description).get(UNITS_KEY)).get("pixel_mm")
+    if values.dtype.kind == "f" and not colour:
+        return _Raw(values, "float TIFF", None, stated)
+    if values.dtype.kind != "u" or values.dtype.itemsize not in FULL_SCALE:
+        raise InputError(f"{path} has TIFF samples of type {values.dtype}, shape {values.shape}; expected "
+                         "8- or 16-bit unsigned greyscale (or RGB), or float greyscale heights in mm")
+    bits = 8 * values.dtype.itemsize
+    return _Raw(_grey(path, values) if colour else values, f"{bits}-bit TIFF", FULL_SCALE[values.dtype.itemsize],
+                stated)
+
+
+def _read_h5(path: Path, name: str) -> _Raw:
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            node = f.get(name)
+            if not isinstance(node, h5py.Dataset):
+                raise InputError(f"{path} has no dataset {name!r}; datasets in the file: "
+                                 f"{', '.join(_dataset_names(f)) or 'none'}")
+            _check_declared(path, node.shape, node.dtype, f"dataset {name!r}")
+            stated = node.attrs.get("pixel_mm", f.attrs.get("pixel_mm"))
+            return _Raw(_float_mm(path, np.asarray(node[()])), "HDF5", None, None if stated is None else _scalar(stated))
+    except InputError:
+        raise
+    except (OSError, ValueError, KeyError) as err:
+        raise _unreadable(path, "HDF5", err) from None
+
+
+def open_image(path: Path, limit: Limit, parameter: str | None = None, formats: list[str] | None = None):
+    """A PIL image opened lazily (pixels not decoded), or InputError if it declares more than ``limit`` pixels.
+
+    PIL's own decompression-bomb warning and error are replaced by this check and its message."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            image = Image.open(path, formats=formats)
+    except Image.DecompressionBombError:  # PIL refuses above twice its MAX_IMAGE_PIXELS: more than ours
+        raise InputError(f"{path} declares an image of more than {2 * Image.MAX_IMAGE_PIXELS:,} pixels: above the "
+                         f"limit of {limit:,} ({limit.name})", parameter=parameter) from None
+    width, height = image.size
+    try:
+        check_size(f"{path}: pixels it declares ({width:,} x {height:,})", width * height, limit, parameter)
+    except InputError:
+        image.close()
+        raise
+    return image
+
+
+def _dataset_names(f) -> list[str]:
+    """Paths of the datasets in an open h5py file."""
+    import h5py
+
+    names: list[str] = []
+    f.visititems(lambda name, node: names.append(name) if isinstance(node, h5py.Dataset) else None)
+    return names
+
+
+def _scalar(value: object) -> object:
+    """A one-element attribute as a Python scalar; anything else unchanged (rejected later)."""
+    array = np.asarray(value)
+    return array.item() if array.size == 1 else value
+
+
+def _grey(path: Path, rgb: np.ndarray) -> np.ndarray:
+    """Grey levels of an (ny, nx, 3|4) image whose R = G = B; a colour image is an InputError."""
+    colour = rgb[..., :3]
+    if np.array_equal(colour[..., 0], colour[..., 1]) and np.array_equal(colour[..., 0], colour[..., 2]):
+        return colour[..., 0]
+    raise InputError(f"{path} is a colour image (its red, green and blue differ), not a greyscale heightmap; "
+                     "heights are read from grey levels: convert it to greyscale if its brightness really "
+                     "encodes height")
+
+
+def _units(path: Path, text: object) -> dict:
+    """The units a file states in its ``roughness`` metadata (a JSON object), or {}."""
+    if text is None:
+        return {}
+    units = _json_object(text) if isinstance(text, str) else text
+    if not isinstance(units, dict):
+        raise InputError(f"{path}: its {UNITS_KEY!r} metadata is not a JSON object: {text!r}")
+    return units
+
+
+def _json_object(text: str) -> dict:
+    try:
+        value = json.loads(text)
+    except (TypeError, ValueError):
+        return {}
+    return value if isinstance(value, dict) else {}
+
+
+def _png_counts(heights: np.ndarray, height_mm: float | None) -> tuple[np.ndarray, float]:
+    """16-bit grey levels of (heights - min) over the full-scale height (default: the range, mm), and that height."""
+    low = float(heights.min())
+    span = float(heights.max()) - low
+    scale = span if height_mm is None else positive("height_mm", height_mm)
+    if span > scale:
+        raise InputError(f"height_mm={height_mm} is below the map's height range {span:.6g} mm; the PNG would clip",
+                         parameter="height_mm")
+    if scale == 0:
+        return np.zeros(heights.shape, dtype=np.uint16), 1.0
+    return np.clip(np.rint((heights - low) / scale * 65535), 0, 65535).astype(np.uint16), scale
+
+
+
