@@ -65,6 +65,19 @@ def test_closed_forms_solve_the_mode_equations(wavelength, poisson):
         assert np.allclose(got, expected, rtol=0, atol=1e-6 * scale), (column, got, expected)
 
 
+def test_the_response_solved_in_chunks_is_the_response_solved_at_once(monkeypatch):
+    from dataclasses import fields
+
+    from roughness.simulate.spectral import layer
+
+    k = np.linspace(0.01, 80.0, 1000)
+    whole = mode_response(k, TISSUE, DEPTH)
+    monkeypatch.setattr(layer, "CHUNK", 64)
+    chunked = mode_response(k, TISSUE, DEPTH)
+    for f in fields(whole):
+        assert np.array_equal(getattr(whole, f.name), getattr(chunked, f.name)), f.name
+
+
 def test_layer_limits():
     """k -> 0: uniform compression and shear of the layer (M/T, mu/T); k -> inf: the half-space (E* k / 2)."""
     grid = modes(GridKey((64, 64), 0.05, TISSUE, DEPTH))
@@ -96,8 +109,8 @@ def test_engine_strain_of_a_sinusoid_is_the_closed_form(wavelength):
     assert result.contact.message == "full contact"
     k = 2 * math.pi / wavelength
     a, da, b, db = _ode_mode(k, 1)
-    strain = modes(GridKey((400, 400), 0.05, TISSUE, DEPTH)).strain(result.contact.face)
-    x = (np.arange(400) + 0.5) * 0.05
+    strain = modes(GridKey((200, 200), 0.05, TISSUE, DEPTH, "mirror")).strain(result.contact.face)
+    x = (np.arange(200) + 0.5) * 0.05
     expected = {0: -k * a * np.cos(k * x), 2: db * np.cos(k * x), 4: -(da + k * b) / 2 * np.sin(k * x)}
     expected = {c: amplitude * f for c, f in expected.items()}
     for component, field in expected.items():
@@ -120,6 +133,37 @@ def test_lambda3_closed_form_equals_eigvalsh():
             tensors[:, c, r] = tensors[:, r, c]
     assert np.allclose(got, np.linalg.eigvalsh(tensors)[:, 0], rtol=0, atol=1e-12)
     assert lambda3(np.zeros((6, 1)), flat_state)[0] == pytest.approx(-1.2, abs=1e-15)
+
+
+@pytest.mark.parametrize("parity", [(0, 0), (1, 0), (0, 1), (1, 1)])
+def test_the_mirror_basis_round_trips_fields_of_every_parity(parity):
+    grid = modes(GridKey((24, 30), 0.05, TISSUE, DEPTH, "mirror"))
+    field = np.random.default_rng(1).normal(size=(1, 24, 30))
+    back = grid.inverse(grid.forward(field, (parity,)), (parity,))
+    assert np.abs(back - field).max() <= 1e-12
+
+
+def _mirrored(heights: np.ndarray) -> np.ndarray:
+    top = np.concatenate([heights, heights[:, ::-1]], axis=1)
+    return np.concatenate([top, top[::-1]], axis=0)
+
+
+@pytest.mark.parametrize("frictionless", [False, True])
+def test_the_mirror_basis_is_the_periodic_basis_on_the_mirrored_grid(frictionless):
+    """The engine's footprint in the mirror basis (n x m) against one period of the footprint mirrored
+    across its edges (2n x 2m) in the periodic basis: the same contact set, and the same strain to the
+    contact solver's tolerance (the two take different round-off paths through the active set)."""
+    y, x = np.mgrid[0:48, 0:40] * 0.05
+    heights = 0.4 * np.exp(-((x - 0.7) ** 2 + (y - 1.6) ** 2) / 0.05) + 0.02 * np.cos(2 * np.pi * x / 0.9)
+    pressure = 0.005  # low: the bump lifts the skin off around it (about 82% in contact)
+    mirror = modes(GridKey(heights.shape, 0.05, TISSUE, DEPTH, "mirror"))
+    periodic = modes(GridKey((96, 80), 0.05, TISSUE, DEPTH))
+    ours = solve_contact(mirror, heights, pressure, frictionless)
+    theirs = solve_contact(periodic, _mirrored(heights), pressure, frictionless)
+    assert ours.success and theirs.success and 0.2 < ours.in_contact.mean() < 0.99
+    assert np.array_equal(ours.in_contact, theirs.in_contact[:48, :40])
+    strain, expected = mirror.strain(ours.face), periodic.strain(theirs.face)[:, :48, :40]
+    assert np.abs(strain - expected).max() <= 1e-4 * np.abs(expected).max()
 
 
 def test_frictionless_partial_contact_matches_westergaard():
@@ -206,7 +250,7 @@ def test_near_incompressible_tissue_is_finite():
     hm = _sinusoid(1.0, 0.05)
     runs = [SpectralSimulator(SimConfig(poisson=nu), flat_state="layer").run(hm) for nu in (0.499, 0.4999)]
     assert all(math.isfinite(r.roughness) and r.converged for r in runs)
-    fields = [modes(GridKey((400, 400), 0.05, Tissue(poisson=nu), DEPTH)).strain(r.contact.face)[2]
+    fields = [modes(GridKey((200, 200), 0.05, Tissue(poisson=nu), DEPTH, "mirror")).strain(r.contact.face)[2]
               for nu, r in zip((0.499, 0.4999), runs)]
     assert np.abs(fields[1] - fields[0]).max() <= 0.01 * np.abs(fields[0]).max()
 
@@ -298,12 +342,30 @@ def test_a_map_from_one_solve_equals_single_footprints_where_they_touch_fully():
         spectral_map(big, step_mm=1e-6)
 
 
-def test_a_map_too_large_for_one_solve_is_refused_before_it_is_padded(monkeypatch):
+@pytest.mark.parametrize("wrap", [False, True])
+def test_the_maps_separable_sampler_is_map_coordinates_bilinear(wrap):
+    from scipy.ndimage import map_coordinates
+
+    from roughness.simulate.spectral.maps import _axis, sample_grid
+
+    rng = np.random.default_rng(3)
+    field, pixel = rng.normal(size=(30, 40)), 0.05
+    xs, ys = np.array([0.0, 0.5, 1.37, 1.999]), np.array([0.01, 0.8, 1.49])
+    offsets = rng.uniform(-0.3, 0.3, (5, 2))
+    got = sample_grid(field, _axis(ys, offsets[:, 1], pixel, 30, wrap), _axis(xs, offsets[:, 0], pixel, 40, wrap))
+    y = ys[None, :, None] + offsets[:, 1, None, None] + 0 * xs[None, None, :]
+    x = xs[None, None, :] + offsets[:, 0, None, None] + 0 * ys[None, :, None]
+    expected = map_coordinates(field, [y.ravel() / pixel - 0.5, x.ravel() / pixel - 0.5], order=1,
+                               mode="grid-wrap" if wrap else "nearest").reshape(got.shape)
+    assert np.abs(got - expected).max() <= 1e-12
+
+
+def test_a_map_too_large_for_one_solve_is_refused_before_its_transfer_functions_are_built(monkeypatch):
     from roughness.core.limits import Limit
     from roughness.simulate.spectral import maps
 
-    monkeypatch.setattr(maps, "MAX_MAP_PIXELS", Limit(500 * 500, "MAX_MAP_PIXELS"))
-    monkeypatch.setattr(maps, "padded", lambda *a: pytest.fail("padded before the size was checked"))
+    monkeypatch.setattr(maps, "MAX_MAP_PIXELS", Limit(400 * 400, "MAX_MAP_PIXELS"))
+    monkeypatch.setattr(maps, "modes", lambda *a: pytest.fail("transfer functions built before the size was checked"))
     with pytest.raises(InputError, match="MAX_MAP_PIXELS"):
         maps.spectral_map(Heightmap(np.zeros((480, 480)), 0.05))
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .modes import Modes
+from .modes import EVEN, Modes
 
 GAP_TOLERANCE = 1e-6  # relative to the texture's height range: largest penetration, mismatch and stick slip
 TENSION_TOLERANCE = 1e-3  # relative to the mean pressure: largest tension of a touching pixel
@@ -47,30 +47,23 @@ class ContactState:
     max_slip_mm: float
 
 
-def _fft(fields: np.ndarray) -> np.ndarray:
-    return np.fft.rfft2(fields)
-
-
-def _ifft(spectra: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    return np.fft.irfft2(spectra, s=shape)
-
-
-def _uniform_face(modes: Modes, pressure_mpa: float, frictionless: bool) -> np.ndarray:
-    """Fourier face displacements (3, ...) of the uniform load alone."""
-    traction = np.zeros((3,) + modes.stiffness.shape[:2], dtype=complex)
-    traction[2, 0, 0] = pressure_mpa * np.prod(modes.shape)
-    return modes.displacement(traction, frictionless)
+def _uniform_face(modes: Modes, pressure_mpa: float) -> np.ndarray:
+    """Fourier face displacements (3, ...) of the uniform load alone: the layer's uniform compression
+    (the uniform mode's stiffness is diagonal, so the face does not slide, with friction or without)."""
+    face = np.zeros((3,) + modes.stiffness.shape[:2], dtype=complex)
+    face[2, 0, 0] = pressure_mpa * modes.uniform / modes.normal_stiffness[0, 0]
+    return face
 
 
 def full_contact(modes: Modes, heights: np.ndarray, pressure_mpa: float, frictionless: bool) -> ContactState:
     """The face in contact everywhere: it takes the shape of ``heights`` (mm)."""
-    spectrum = _fft(heights)
+    spectrum = modes.forward(heights[None], EVEN)[0]
     spectrum[0, 0] = 0.0
     face = modes.slid(spectrum) if frictionless else np.stack([np.zeros_like(spectrum)] * 2 + [spectrum])
-    traction = _ifft(modes.traction(face), modes.shape)
+    traction = modes.inverse(modes.traction(face))
     traction[2] += pressure_mpa
-    face = face + _uniform_face(modes, pressure_mpa, frictionless)
-    offset = float(face[2, 0, 0].real / heights.size - heights.mean())
+    face = face + _uniform_face(modes, pressure_mpa)
+    offset = float(face[2, 0, 0].real / modes.uniform - heights.mean())
     tension = max(0.0, float(-traction[2].min()))
     holds = tension <= TENSION_TOLERANCE * pressure_mpa
     return ContactState(face, traction, np.ones(heights.shape, bool), offset, holds,
@@ -133,12 +126,12 @@ def _fixed_set(modes: Modes, heights: np.ndarray, mask: np.ndarray, traction: np
     tractions summing to ``load``, zero elsewhere. Conjugate gradients preconditioned by the stiffness
     (exact for full contact), projected on the load constraint. Returns the tractions, the gap u_z - H
     less its mean on the set (mm) and the iterations."""
-    shape, m = heights.shape, mask.astype(float)
+    m = mask.astype(float)
     count = m.sum()
     t = traction * m
     t[2] = t[2] + (load - t[2].sum()) / count * m
     direction, g_old = np.zeros_like(t), 0.0
-    u = _ifft(modes.displacement(_fft(t), False), shape)  # updated with each step, not recomputed
+    u = modes.inverse(modes.displacement(modes.forward(t), False))  # updated with each step, not recomputed
     for iteration in range(1, max_iterations + 1):
         residual = u.copy()
         residual[2] -= heights
@@ -146,12 +139,12 @@ def _fixed_set(modes: Modes, heights: np.ndarray, mask: np.ndarray, traction: np
         residual[2] -= residual[2].sum() / count * m
         if np.abs(residual).max() <= tolerance:
             break
-        precond = _ifft(modes.traction(_fft(residual)), shape) * m
+        precond = modes.inverse(modes.traction(modes.forward(residual))) * m
         precond[2] -= precond[2].sum() / count * m
         norm = float(np.vdot(residual, precond))
         direction = precond + (norm / g_old if g_old else 0.0) * direction
         g_old = norm
-        moved = _ifft(modes.displacement(_fft(direction), False), shape)
+        moved = modes.inverse(modes.displacement(modes.forward(direction), False))
         response = moved * m
         response[2] -= response[2].sum() / count * m
         step = float(np.vdot(residual, direction)) / float(np.vdot(response, direction))
@@ -164,15 +157,14 @@ def _fixed_set(modes: Modes, heights: np.ndarray, mask: np.ndarray, traction: np
 def _polonsky_keer(modes: Modes, heights: np.ndarray, traction: np.ndarray, load: float, tolerance: float,
                    max_iterations: int) -> tuple[np.ndarray, int]:
     """Frictionless normal contact by Polonsky & Keer's constrained CG, preconditioned by the stiffness."""
-    shape = heights.shape
     p = np.where(traction[2] > 0, traction[2], 0.0)
     p *= load / p.sum()
     direction, g_old, restart = np.zeros_like(p), 1.0, True
 
     def normal(field: np.ndarray) -> np.ndarray:
         spectrum = np.zeros((3,) + modes.stiffness.shape[:2], dtype=complex)
-        spectrum[2] = _fft(field)
-        return _ifft(modes.displacement(spectrum, True)[2], shape)
+        spectrum[2] = modes.forward(field[None], EVEN)[0]
+        return modes.inverse(modes.displacement(spectrum, True)[2:], EVEN)[0]
 
     for iteration in range(1, max_iterations + 1):
         mask = (p > 0).astype(float)
@@ -182,7 +174,7 @@ def _polonsky_keer(modes: Modes, heights: np.ndarray, traction: np.ndarray, load
         residual, outside = gap * mask, gap * (1 - mask)
         if max(float(np.abs(residual).max()), float(-outside.min())) <= tolerance:
             break
-        precond = _ifft(modes.normal_stiffness * _fft(residual), shape) * mask
+        precond = modes.inverse(modes.normal_stiffness * modes.forward(residual[None], EVEN), EVEN)[0] * mask
         precond -= precond.sum() / count * mask
         norm = float(np.vdot(residual, precond))
         direction = precond + (0.0 if restart else norm / g_old) * direction
@@ -206,8 +198,8 @@ def _checked(modes: Modes, heights: np.ndarray, traction: np.ndarray, touching: 
              tension_tolerance: float = TENSION_TOLERANCE) -> ContactState:
     """The state for ``traction`` with the pixels ``touching``, each contact condition measured against
     ``tolerance`` (mm) and ``tension_tolerance`` (relative to the pressure)."""
-    face = modes.displacement(_fft(traction), frictionless)
-    u = _ifft(face, heights.shape)
+    face = modes.displacement(modes.forward(traction), frictionless)
+    u = modes.inverse(face)
     gap = u[2] - heights
     offset = float(gap[touching].mean())
     gap -= offset

@@ -1,7 +1,7 @@
 """The spectral skin engine: the FEM's roughness model with the skin as an infinite elastic layer.
 
 A texture's footprint (``width_mm`` square, at the heightmap's own pixel size) is mirror-extended
-into one period of a periodic texture, the layer is pressed onto it at the flat state's pressure
+across its edges (the ``mirror`` basis of ``modes``: no jump at the seams), the layer is pressed onto it at the flat state's pressure
 (``flat_state``: by default the FEM block's at its centre), contact is solved on the pixel grid
 (``contact``), and the strain at the receptor depth follows per Fourier mode (``modes``). The
 texture's strain is added to the flat state's strain (the untextured skin's), lambda3 is taken, the
@@ -26,11 +26,11 @@ from .flat_state import FlatState, block_flat_state
 from .layer import Tissue
 from .modes import GridKey, modes
 
-ENGINE_VERSION = 1  # bump when a change alters results (keys cached spectral results)
+ENGINE_VERSION = 2  # bump when a change alters results (keys cached spectral results)
 FLAT_STATES = ("layer", "block")
 PRESSURES = ("flat", "mean")
 MIN_FOOTPRINT_PIXELS = 10  # the footprint must span at least this many pixels across
-MAX_FOOTPRINT_PIXELS = 1024  # and at most this many (the mirrored period is twice as wide: 2048^2 FFTs)
+MAX_FOOTPRINT_PIXELS = 1024  # and at most this many
 
 
 @dataclass
@@ -102,12 +102,6 @@ def footprint_heights(heightmap: Heightmap, width_mm: float, centre_mm: tuple[fl
     return heightmap.sample(cx + axis[None, :], cy + axis[:, None], periodic=tile), axis
 
 
-def mirrored(heights: np.ndarray) -> np.ndarray:
-    """One period (2n, 2m) of the texture mirrored across the footprint's edges (no jump at the seams)."""
-    top = np.concatenate([heights, heights[:, ::-1]], axis=1)
-    return np.concatenate([top, top[::-1]], axis=0)
-
-
 def min_eigenvalue(xx: np.ndarray, yy: np.ndarray, zz: np.ndarray, xy: np.ndarray, xz: np.ndarray,
                    yz: np.ndarray) -> np.ndarray:
     """The smallest eigenvalue of symmetric 3 x 3 tensors given by their components (closed form,
@@ -170,14 +164,11 @@ class SpectralSimulator:
         centre = centre_mm or heightmap.centre_mm
         heightmap.require_footprint(config.width_mm, centre, tile)
         heights, axis = footprint_heights(heightmap, config.width_mm, centre, tile)
-        domain = mirrored(heights)
-        key = GridKey(domain.shape, heightmap.pixel_mm, tissue_of(config), config.depth_mm)
-        grid = modes(key)
+        grid = modes(GridKey(heights.shape, heightmap.pixel_mm, tissue_of(config), config.depth_mm, "mirror"))
         flat = self.flat(config)
-        state = solve_contact(grid, domain, flat.pressure_mpa, config.contact == "frictionless")
-        n = heights.shape[0]
+        state = solve_contact(grid, heights, flat.pressure_mpa, config.contact == "frictionless")
         inside = np.abs(axis) <= config.window_mm / 2 + heightmap.pixel_mm
-        strain = grid.strain(state.face)[:, :n, :n][:, inside][:, :, inside]
+        strain = grid.strain(state.face)[:, inside][:, :, inside]
         lam3 = lambda3(strain, flat.strain)
         fluct = fluctuation(lam3, flat.strain)
         window_axis = axis[inside]
@@ -186,7 +177,7 @@ class SpectralSimulator:
         v, se = variation(fluct, window_axis, pairs)
         if not (math.isfinite(v) and np.all(np.isfinite(fluct))):
             raise InputError("the strain field is not finite", parameter="heightmap")
-        contact_fraction = float(state.in_contact[:n, :n].mean())
+        contact_fraction = float(state.in_contact.mean())
         indentation = float(heights.max() + state.offset_mm)
         notes = _notes(config, indentation, state.success, state.message)
         return SpectralResult(v, se, contact_fraction, indentation, state.success, state.message, state.iterations,

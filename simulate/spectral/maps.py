@@ -1,6 +1,7 @@
 """Roughness maps of whole objects from one spectral solve.
 
-The whole heightmap is pressed at the footprint's mean pressure in one contact solve, the strain
+The whole heightmap, mirrored across its edges (or periodic with ``tile``), is pressed at the
+footprint's mean pressure in one contact solve, the strain
 fluctuation is computed once over the whole map, and every footprint position's V is sampled from
 that one field with the FEM's disk pairs in the position's window. Where the skin is in full
 contact (the usual case at 10 N) the texture's strain is a linear, local response (it decays over
@@ -13,9 +14,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy.fft import next_fast_len
-from scipy.ndimage import map_coordinates
-
 from roughness.core.checks import positive
 from roughness.core.limits import MAX_MAP_POSITIONS, Limit, check_size
 
@@ -28,16 +26,9 @@ from .engine import fluctuation, lambda3, tissue_of
 from .flat_state import block_flat_state
 from .modes import GridKey, modes
 
-MARGIN_TISSUES = 2.0  # a non-periodic map is mirror-padded by this many tissue thicknesses on each side
-MAX_MAP_PIXELS = Limit(4096 * 4096, "MAX_MAP_PIXELS")  # the padded map's pixels (about 3 GB of fields at the limit)
-BATCH_POSITIONS = 256  # footprint positions sampled at once
-
-
-def padded(heights: np.ndarray, margin: int) -> np.ndarray:
-    """``heights`` mirrored outward by ``margin`` pixels, then to FFT-friendly sides (edge values)."""
-    out = np.pad(heights, margin, mode="symmetric")
-    ny, nx = out.shape
-    return np.pad(out, ((0, next_fast_len(ny, real=True) - ny), (0, next_fast_len(nx, real=True) - nx)), mode="edge")
+MAX_MAP_PIXELS = Limit(4096 * 4096, "MAX_MAP_PIXELS")  # the map's pixels (about 3 GB of fields at the limit)
+SAMPLE_CHUNK = 1 << 21  # values interpolated at once (16 MB per float64 array)
+MIN_PAIRS_PER_CHUNK = 256  # position rows per chunk are chosen to leave at least this many pairs
 
 
 def spectral_map(heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False, config: SimConfig | None = None,
@@ -52,34 +43,102 @@ def spectral_map(heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False,
     count = centre_count(width, config.width_mm, step_mm, tile) * centre_count(height, config.width_mm, step_mm, tile)
     check_size("footprint positions", count, MAX_MAP_POSITIONS, "step_mm")  # before the positions are made
     xs, ys = centres(width, config.width_mm, step_mm, tile), centres(height, config.width_mm, step_mm, tile)
-    margin = 0 if tile else int(np.ceil(MARGIN_TISSUES * config.tissue_mm / pixel))
-    ny, nx = heightmap.shape
-    check_size("pixels of the map with its margins (resample it to a coarser pixel)",
-               (ny + 2 * margin) * (nx + 2 * margin), MAX_MAP_PIXELS, "pixel_mm")
-    domain = heightmap.heights if tile else padded(heightmap.heights, margin)
-    grid = modes(GridKey(domain.shape, pixel, tissue_of(config), config.depth_mm))
+    check_size("pixels of the map (resample it to a coarser pixel)", heightmap.heights.size, MAX_MAP_PIXELS,
+               "pixel_mm")
+    grid = modes(GridKey(heightmap.shape, pixel, tissue_of(config), config.depth_mm, "periodic" if tile else "mirror"))
     flat = block_flat_state(config)
-    state = solve_contact(grid, domain, flat.pressure_mpa, config.contact == "frictionless")
-    strain = grid.strain(state.face)[:, margin:margin + ny, margin:margin + nx]
+    state = solve_contact(grid, heightmap.heights, flat.pressure_mpa, config.contact == "frictionless")
+    strain = grid.strain(state.face)
     field = fluctuation(lambda3(strain, flat.strain), flat.strain)
     notes = [] if state.message == "full contact" else [
         f"partial contact ({100 * state.in_contact.mean():.1f}% of the map touches): the load is shared over the "
         f"whole map at {flat.pressure_mpa:.3g} MPa, not {config.force_n:g} N per footprint; {state.message}"]
     p1, p2 = PairSampling(config.window_mm, config.pair_distance_mm, config.disk_radius_mm, config.pairs,
                           config.seed).points()
-    positions = np.array([(x, y) for y in ys for x in xs])
-    values = np.empty(len(positions))
-    mode = "grid-wrap" if tile else "nearest"
-    for start in range(0, len(positions), BATCH_POSITIONS):
-        batch = positions[start:start + BATCH_POSITIONS]
+    total = _sum_of_differences(field, xs, ys, p1, p2, pixel, tile, progress)
+    return RoughnessMap(xs, ys, total / len(p1), np.ones(total.shape, bool)), notes
 
-        def at(points: np.ndarray) -> np.ndarray:
-            where = batch[:, None, :] + points[None]  # (positions, pairs, 2) in mm
-            coords = [where[..., 1].ravel() / pixel - 0.5, where[..., 0].ravel() / pixel - 0.5]
-            return map_coordinates(field, coords, order=1, mode=mode).reshape(len(batch), -1)
 
-        values[start:start + len(batch)] = np.abs(at(p1) - at(p2)).mean(axis=1)
+def _sum_of_differences(field: np.ndarray, xs: np.ndarray, ys: np.ndarray, p1: np.ndarray, p2: np.ndarray,
+                        pixel: float, wrap: bool, progress: Callable[[int, int], None] | None) -> np.ndarray:
+    """Sum over pairs of |field(centre + p1) - field(centre + p2)| at every (ys, xs) centre (mm)."""
+    lattice = _lattice(xs, pixel), _lattice(ys, pixel)
+    if None not in lattice:
+        total = _on_lattice(field, lattice, len(xs), len(ys), p1, p2, pixel, wrap)
         if progress:
-            progress(start + len(batch), len(positions))
-    shape = (len(ys), len(xs))
-    return RoughnessMap(xs, ys, values.reshape(shape), np.ones(shape, bool)), notes
+            progress(total.size, total.size)
+        return total
+    ny, nx = field.shape
+    total = np.zeros((len(ys), len(xs)))
+    rows = max(1, min(len(ys), SAMPLE_CHUNK // (len(xs) * MIN_PAIRS_PER_CHUNK)))
+    per_chunk = max(1, SAMPLE_CHUNK // (rows * len(xs)))
+    for start in range(0, len(ys), rows):
+        part = ys[start:start + rows]
+        for first in range(0, len(p1), per_chunk):
+            a, b = p1[first:first + per_chunk], p2[first:first + per_chunk]
+            at_a = sample_grid(field, _axis(part, a[:, 1], pixel, ny, wrap), _axis(xs, a[:, 0], pixel, nx, wrap))
+            at_b = sample_grid(field, _axis(part, b[:, 1], pixel, ny, wrap), _axis(xs, b[:, 0], pixel, nx, wrap))
+            total[start:start + len(part)] += np.abs(at_a - at_b).sum(axis=0)
+        if progress:
+            progress((start + len(part)) * len(xs), total.size)
+    return total
+
+
+def _lattice(centres_mm: np.ndarray, pixel_mm: float) -> tuple[float, int] | None:
+    """(the first centre in pixels, the step in whole pixels) if the centres lie whole pixels apart."""
+    at = centres_mm / pixel_mm
+    step = round(at[1] - at[0]) if len(at) > 1 else 1
+    if step >= 1 and np.allclose(at - at[0], step * np.arange(len(at)), rtol=0, atol=1e-9):
+        return float(at[0]), step
+    return None
+
+
+def _on_lattice(field: np.ndarray, lattice: tuple[tuple[float, int], tuple[float, int]], count_x: int, count_y: int,
+                p1: np.ndarray, p2: np.ndarray, pixel: float, wrap: bool) -> np.ndarray:
+    """``_sum_of_differences`` for centres whole pixels apart: every centre sees a point at the same
+    fraction of a pixel, so its bilinear value is four strided slices of the field, with one weight each."""
+    (x0, step_x), (y0, step_y) = lattice
+    reach = int(np.ceil(max(np.abs(p1).max(), np.abs(p2).max()) / pixel)) + 2
+    padded = np.pad(field, reach, mode="wrap" if wrap else "edge")
+
+    def at(point: np.ndarray) -> np.ndarray:
+        cx, cy = x0 + point[0] / pixel - 0.5, y0 + point[1] / pixel - 0.5
+        ix, iy = int(np.floor(cx)), int(np.floor(cy))
+        wx, wy = cx - ix, cy - iy
+        ix, iy = ix + reach, iy + reach
+        rows = [slice(i, i + step_y * (count_y - 1) + 1, step_y) for i in (iy, iy + 1)]
+        cols = [slice(i, i + step_x * (count_x - 1) + 1, step_x) for i in (ix, ix + 1)]
+        top = padded[rows[0], cols[0]] * (1 - wx) + padded[rows[0], cols[1]] * wx
+        bottom = padded[rows[1], cols[0]] * (1 - wx) + padded[rows[1], cols[1]] * wx
+        return top * (1 - wy) + bottom * wy
+
+    total = np.zeros((count_y, count_x))
+    for a, b in zip(p1, p2, strict=True):
+        total += np.abs(at(a) - at(b))
+    return total
+
+
+AxisWeights = tuple[np.ndarray, np.ndarray, np.ndarray]  # lower and upper pixel index, upper weight: (points, positions)
+
+
+def _axis(centres_mm: np.ndarray, offsets_mm: np.ndarray, pixel_mm: float, n: int, wrap: bool) -> AxisWeights:
+    """Linear interpolation along an axis of ``n`` pixels (centres at (i + 1/2) pixel) at every
+    centre + offset: past the outer pixel centres the edge value (map_coordinates' ``nearest``) or,
+    with ``wrap``, the other side's (``grid-wrap``)."""
+    coord = (centres_mm[None, :] + offsets_mm[:, None]) / pixel_mm - 0.5
+    low = np.floor(coord)
+    weight = coord - low
+    low = low.astype(np.intp)
+    if wrap:
+        return low % n, (low + 1) % n, weight
+    return np.clip(low, 0, n - 1), np.clip(low + 1, 0, n - 1), weight
+
+
+def sample_grid(field: np.ndarray, rows: AxisWeights, cols: AxisWeights) -> np.ndarray:
+    """``field`` bilinearly at point j of every (row position, column position): (points, rows, columns).
+    Bilinear interpolation is separable, so a grid of positions needs only each axis's weights."""
+    r0, r1, wr = (v[:, :, None] for v in rows)
+    c0, c1, wc = (v[:, None, :] for v in cols)
+    top = field[r0, c0] * (1 - wc) + field[r0, c1] * wc
+    bottom = field[r1, c0] * (1 - wc) + field[r1, c1] * wc
+    return top * (1 - wr) + bottom * wr

@@ -1,10 +1,19 @@
-"""The layer's transfer functions on a periodic pixel grid, and the fields they make.
+"""The layer's transfer functions on a pixel grid, and the fields they make.
 
-A ``Modes`` object holds, for every wave vector of an (ny, nx) grid of ``pixel_mm`` pixels (rfft2
-layout), the layer's response (``layer.mode_response``) and the direction cosines of the mode's
-axis. With it a face displacement (u_x, u_y, u_z) becomes the strain tensor field at the receptor
-depth, and face tractions become face displacements (the compliance, for the contact solver).
-The uniform mode (k = 0) carries no texture: the engine adds the flat state for it. Units: mm, MPa.
+A ``Modes`` object holds, for every wave vector of an (ny, nx) grid of ``pixel_mm`` pixels, the
+layer's response (``layer.mode_response``) and the direction cosines of the mode's axis. With it a
+face displacement (u_x, u_y, u_z) becomes the strain tensor field at the receptor depth, and face
+tractions become face displacements (the compliance, for the contact solver). The uniform mode
+(k = 0) carries no texture: the engine adds the flat state for it. Units: mm, MPa.
+
+Two bases. ``periodic``: the grid is one period (rfft2 layout). ``mirror``: the grid is mirrored
+across each of its edges (the texture extended without a jump), which is the periodic basis on the
+doubled (2ny, 2nx) grid at a quarter of its cost: by the mirror symmetry every field is even or odd
+across the edges (u_z, p and the normal strains even-even; u_x, t_x, e_xz odd in x; e_xy odd-odd),
+so it is a sum of cosines and sines (DCT-II / DST-II per axis) at the wave numbers pi m / (n pixel),
+m = 0..n. A real coefficient R of a field odd along ``q`` axes is the complex amplitude
+R (-i)^q of the mode's positive wave vector, and back: the isotropic layer maps the four mirrored
+exponentials of a mode alike, so the complex transfer functions apply unchanged.
 """
 from __future__ import annotations
 
@@ -13,31 +22,53 @@ from dataclasses import dataclass
 from threading import Lock
 
 import numpy as np
+from scipy import fft
 
 from .layer import Tissue, mode_response
 
 FACE_COMPONENTS = 3  # u_x, u_y, u_z
 STRAIN_COMPONENTS = ("xx", "yy", "zz", "xy", "xz", "yz")
+BASES = ("periodic", "mirror")
+Parity = tuple[int, int]  # (along x, along y): 0 even, 1 odd across the mirrored edges
+FACE_PARITY: tuple[Parity, ...] = ((1, 0), (0, 1), (0, 0))  # u_x, u_y, u_z (and the tractions)
+STRAIN_PARITY: tuple[Parity, ...] = ((0, 0), (0, 0), (0, 0), (1, 1), (1, 0), (0, 1))
+EVEN: tuple[Parity, ...] = ((0, 0),)
 
 
 @dataclass(frozen=True)
 class GridKey:
-    """What the transfer functions depend on: grid shape (pixels), pixel (mm), tissue, depth (mm)."""
+    """What the transfer functions depend on: grid shape (pixels), pixel (mm), tissue, depth (mm),
+    and the basis (``BASES``)."""
 
     shape: tuple[int, int]
     pixel_mm: float
     tissue: Tissue
     depth_mm: float
+    basis: str = "periodic"
+
+
+def _mirror_transform(field: np.ndarray, parity: Parity, inverse: bool) -> np.ndarray:
+    """DCT-II (even) or DST-II (odd) of ``field`` along x then y, or their inverses."""
+    for axis, odd in ((-1, parity[0]), (-2, parity[1])):
+        if inverse:
+            field = (fft.idst if odd else fft.idct)(field, type=2, axis=axis)
+        else:
+            field = (fft.dst if odd else fft.dct)(field, type=2, axis=axis)
+    return field
 
 
 class Modes:
-    """Transfer functions of one ``GridKey`` (arrays of the rfft2 shape (ny, nx // 2 + 1))."""
+    """Transfer functions of one ``GridKey``, on its spectral grid: (ny, nx // 2 + 1) (periodic, rfft2
+    layout) or (ny + 1, nx + 1) (mirror: wave numbers pi m / (n pixel), m = 0..n per axis)."""
 
     def __init__(self, key: GridKey) -> None:
         self.key = key
         ny, nx = key.shape
-        kx = 2 * np.pi * np.fft.rfftfreq(nx, key.pixel_mm)
-        ky = 2 * np.pi * np.fft.fftfreq(ny, key.pixel_mm)
+        if key.basis == "mirror":
+            kx, ky = np.pi * np.arange(nx + 1) / (nx * key.pixel_mm), np.pi * np.arange(ny + 1) / (ny * key.pixel_mm)
+        else:
+            kx = 2 * np.pi * np.fft.rfftfreq(nx, key.pixel_mm)
+            ky = 2 * np.pi * np.fft.fftfreq(ny, key.pixel_mm)
         kx, ky = np.meshgrid(kx, ky)
         k = np.hypot(kx, ky)
         k[0, 0] = 1.0  # placeholder: the uniform mode is set apart below
@@ -48,7 +79,7 @@ class Modes:
         shape = k.shape
 
         def grid(values: np.ndarray) -> np.ndarray:
-            out = values[where.ravel()].reshape(shape + values.shape[1:])
+            out = np.take(values, where.ravel(), axis=0).reshape(shape + values.shape[1:])
             out[0, 0] = 0.0
             return out
 
@@ -60,7 +91,9 @@ class Modes:
         antiplane = grid(response.antiplane_traction)
         antiplane[0, 0] = mu / thickness
         self.stiffness, self.antiplane = stiffness, antiplane
-        self.compliance = np.linalg.inv(stiffness)
+        det = stiffness[..., 0, 0] * stiffness[..., 1, 1] - stiffness[..., 0, 1] * stiffness[..., 1, 0]
+        self.compliance = np.stack([np.stack([stiffness[..., 1, 1], -stiffness[..., 0, 1]], -1),
+                                    np.stack([-stiffness[..., 1, 0], stiffness[..., 0, 0]], -1)], -2) / det[..., None, None]
         # Frictionless face (no shear traction): A = -K_SB / K_SS B, and the normal stiffness left.
         self.slide = -stiffness[..., 0, 1] / stiffness[..., 0, 0]
         self.normal_stiffness = stiffness[..., 1, 1] - stiffness[..., 0, 1] ** 2 / stiffness[..., 0, 0]
@@ -68,6 +101,37 @@ class Modes:
     @property
     def shape(self) -> tuple[int, int]:
         return self.key.shape
+
+    @property
+    def mirror(self) -> bool:
+        return self.key.basis == "mirror"
+
+    @property
+    def uniform(self) -> float:
+        """The uniform mode's coefficient of a field equal to 1 everywhere."""
+        return float(np.prod(self.shape)) * (4.0 if self.mirror else 1.0)
+
+    def forward(self, fields: np.ndarray, parity: tuple[Parity, ...] = FACE_PARITY) -> np.ndarray:
+        """Spectra (c, ...) of real fields (c, ny, nx) with the given parities (mirror basis only)."""
+        if not self.mirror:
+            return np.fft.rfft2(fields)
+        ny, nx = self.shape
+        out = np.zeros((len(fields), ny + 1, nx + 1), dtype=complex)
+        for i, (field, (px, py)) in enumerate(zip(fields, parity, strict=True)):
+            out[i, py:py + ny, px:px + nx] = _mirror_transform(field, (px, py), inverse=False)
+            out[i] *= (-1j) ** (px + py)
+        return out
+
+    def inverse(self, spectra: np.ndarray, parity: tuple[Parity, ...] = FACE_PARITY) -> np.ndarray:
+        """Real fields (c, ny, nx) of spectra (c, ...) with the given parities (mirror basis only)."""
+        if not self.mirror:
+            return np.fft.irfft2(spectra, s=self.shape)
+        ny, nx = self.shape
+        out = np.empty((len(spectra),) + self.shape)
+        for i, (spectrum, (px, py)) in enumerate(zip(spectra, parity, strict=True)):
+            real = (spectrum[py:py + ny, px:px + nx] * 1j ** (px + py)).real
+            out[i] = _mirror_transform(real, (px, py), inverse=True)
+        return out
 
     def to_mode_frame(self, ux: np.ndarray, uy: np.ndarray, uz: np.ndarray) -> tuple[np.ndarray, ...]:
         """Fourier face displacements (x, y, z) -> (A, B, C): u_x' = i A, u_z = B, u_y' = C."""
@@ -92,7 +156,7 @@ class Modes:
         xz, yz = self.from_mode_frame(e_az, e_bz)
         spectra = np.stack([cc * e_aa - 2 * cs * e_ab, ss * e_aa + 2 * cs * e_ab, e_zz,
                             cs * e_aa + (cc - ss) * e_ab, xz, yz])
-        return np.fft.irfft2(spectra, s=self.shape)
+        return self.inverse(spectra, STRAIN_PARITY)
 
     def slid(self, uz: np.ndarray) -> np.ndarray:
         """Fourier face displacements (3, ...) of a frictionless face whose normal displacement is ``uz``."""
