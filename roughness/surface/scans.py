@@ -24,12 +24,10 @@ from roughness.core.errors import InputError
 from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
 
 EXTRA = 'pip install "roughness[scans]"'
-FORMATS = {  # suffix -> SurfaceTopography format id (all state their length units)
-    ".x3p": "x3p", ".sur": "sur", ".plu": "plu", ".plux": "plux", ".datx": "datx", ".gwy": "gwy",
-    ".sdf": "sdf", ".nc": "nc", ".al3d": "al3d", ".opd": "opd", ".opdx": "opdx", ".vk3": "vk", ".vk4": "vk",
-    ".vk6": "vk", ".vk7": "vk", ".zon": "zon", ".mnt": "mnt", ".tmd": "tmd", ".frt": "frt", ".lext": "lext",
-    ".os3d": "os3d", ".zmg": "zmg", ".nms": "nms", ".mdt": "mdt", ".ibw": "ibw", ".mi": "mi", ".spm": "di",
-    ".nid": "ezd", ".ezd": "ezd", ".jpk": "jpk", ".oir": "oir", ".poir": "poir", ".bcrf": "bcr", ".bcr": "bcr",
+FORMATS = {  # suffix -> SurfaceTopography format id; each states its length units and was read cleanly (see README)
+    ".x3p": "x3p", ".sur": "sur", ".plu": "plu", ".datx": "datx", ".gwy": "gwy", ".sdf": "sdf", ".nc": "nc",
+    ".al3d": "al3d", ".opd": "opd", ".opdx": "opdx", ".frt": "frt", ".mnt": "mnt", ".tmd": "tmd", ".mi": "mi",
+    ".nid": "ezd", ".bcrf": "bcr",
 }
 SUFFIXES = tuple(FORMATS)
 MM_PER = {"m": 1e3, "mm": 1.0, "µm": 1e-3, "um": 1e-3, "nm": 1e-6, "Å": 1e-7, "pm": 1e-9, "km": 1e6}
@@ -55,10 +53,9 @@ def read_scan(path: Path) -> Scan:
     except ImportError:
         raise InputError(f"{path}: {path.suffix} scans are read by SurfaceTopography, which is not installed; "
                          f"{EXTRA}") from None
-    kind = path.suffix.lower()
+    kind = _format_name(fmt, path.suffix)
     try:
         reader = SurfaceTopography.open_topography(str(path), format=fmt)
-        kind = reader.name() if callable(getattr(reader, "name", None)) else kind
         channel = reader.default_channel
         grid = tuple(int(n) for n in channel.nb_grid_pts)  # (nx, ny)
     except InputError:
@@ -90,6 +87,14 @@ def read_scan(path: Path) -> Scan:
     nx, ny = heights.shape  # SurfaceTopography: [x, y]
     return Scan(heights.T * scale, float(sizes[0]) * scale / nx, float(sizes[1]) * scale / ny, kind, unit,
                 str(channel.name))
+
+
+def _format_name(fmt: str, suffix: str) -> str:
+    """The reader's name for messages (e.g. "Digital Surf SUR"), or the suffix."""
+    from SurfaceTopography.IO import lookup_reader_by_format
+
+    reader = lookup_reader_by_format.get(fmt)  # a dict: format id -> reader class
+    return str(reader.name()) if reader is not None else suffix
 
 
 def _mm_per(path: Path, unit: object) -> float:
