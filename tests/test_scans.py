@@ -21,7 +21,7 @@ import tifffile
 from roughness.core.errors import InputError
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import load_heightmap, read_heightmap, save_heightmap
-from tests.test_bad_inputs import _expect_refusal, _run, workdir  # noqa: F401  (workdir is a fixture)
+from tests.test_bad_inputs import _expect_refusal, workdir  # noqa: F401  (workdir is a fixture)
 
 MM = {"m": 1e-3, "um": 1e3, "mm": 1.0}  # file units per mm
 NY, NX = 5, 7
@@ -226,7 +226,8 @@ def test_a_missing_extra_says_how_to_install_it(tmp_path, monkeypatch):
 
     monkeypatch.delitem(sys.modules, "SurfaceTopography", raising=False)
     monkeypatch.setattr(builtins, "__import__", no_surfacetopography)
-    with pytest.raises(InputError, match=r'SurfaceTopography, which is not installed; pip install "roughness\[scans\]"'):
+    installed = r'SurfaceTopography, which is not installed; pip install "roughness\[scans\]"'
+    with pytest.raises(InputError, match=installed):
         load_heightmap(path)
 
 

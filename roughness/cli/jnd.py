@@ -31,7 +31,8 @@ def run(args: argparse.Namespace) -> int:
     scale = load_scale(pa.fidelity)
     distance = jnd_distance(scale, pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
     if args.json:
-        write_stdout(json_text({"a": pa.as_dict(), "b": pb.as_dict(), **distance.as_dict(), "readings": readings(args)}))
+        write_stdout(json_text({"a": pa.as_dict(), "b": pb.as_dict(), **distance.as_dict(),
+                                "readings": readings(args)}))
         return 0
     lines = [_line(p) for p in (pa, pb)]
     kinds = " and ".join(dict.fromkeys("Monte Carlo of V" if p.roughness_stderr is not None else "ensemble spread"

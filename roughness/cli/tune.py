@@ -3,7 +3,19 @@ from __future__ import annotations
 
 import argparse
 
-from .common import COUNT, POSITIVE, add_model_tail, add_reading_args, defaults, finish, json_text, log, read_input, readings, write_stdout
+from .common import (
+    COUNT,
+    POSITIVE,
+    add_model_tail,
+    add_reading_args,
+    defaults,
+    finish,
+    json_text,
+    log,
+    read_input,
+    readings,
+    write_stdout,
+)
 
 
 def add_parser(sub) -> None:

@@ -243,9 +243,10 @@ def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: floa
     resampling = None
     if not math.isclose(pixel_x, pixel_y, rel_tol=SAME_UNIT_RTOL):
         if not resample_square:
+            source = "as the file states them" if pixel_from == "file" else f"from its {pixel_from}"
             raise InputError(f"{path}: its pixels are not square: {pixel_x:.6g} mm (x) by {pixel_y:.6g} mm (y), "
-                             f"{'as the file states them' if pixel_from == 'file' else 'from its ' + pixel_from}; the engines need square pixels: pass resample_square to resample "
-                             f"it (bilinear) to square pixels of {min(pixel_x, pixel_y):.6g} mm",
+                             f"{source}; the engines need square pixels: pass resample_square to resample it "
+                             f"(bilinear) to square pixels of {min(pixel_x, pixel_y):.6g} mm",
                              parameter="resample_square")
         values, resampling = square(np.asarray(values, dtype=float), pixel_x, pixel_y)
         notes.append(f"{path}: {resampling.describe()}")
