@@ -3,14 +3,15 @@
 SurfaceTopography (MIT, the optional extra ``roughness[scans]``) reads the instrument formats with
 the units and pixel sizes they state; here they become millimetres, per axis, with the image
 convention of this package (row i is y index i; SurfaceTopography indexes [x, y]). Only formats
-that state their length units are routed here; the reader is chosen by suffix, not by sniffing.
-The size a file declares is checked against MAX_HEIGHTMAP_PIXELS before its heights are read.
+that state their length units and were read cleanly are routed here (``FORMATS``); the reader is
+chosen by suffix, not by sniffing. The size a file declares is checked against
+MAX_HEIGHTMAP_PIXELS before its heights are read.
 
-None of these readers executes anything from a file: they parse binary headers, XML (x3p, with
-the standard library's parser), HDF5 (datx, through h5py) and NetCDF 3 (scipy), and never unpickle
-(checked for SurfaceTopography 1.27: no pickle, no eval; its .npy/.npz readers refuse object arrays,
-but those suffixes are read by roughness.surface.io, as are .h5, .tif and .txt-like text, .mat and
-.xlsx are not routed here at all).
+None of these readers executes anything from a file (checked in SurfaceTopography 1.27): they
+parse binary headers, XML (x3p, with the standard library's parser), HDF5 (datx, through h5py) and
+NetCDF 3 (scipy), with no pickle and no eval. .npy, .npz, .h5 and .tif are read by
+roughness.surface.io; text, .mat and .xlsx (no units) and .nms (its sample reads 160 m wide) are
+not routed here.
 """
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
 EXTRA = 'pip install "roughness[scans]"'
 FORMATS = {  # suffix -> SurfaceTopography format id; each states its length units and was read cleanly (see README)
     ".x3p": "x3p", ".sur": "sur", ".plu": "plu", ".datx": "datx", ".gwy": "gwy", ".sdf": "sdf", ".nc": "nc",
-    ".al3d": "al3d", ".opd": "opd", ".opdx": "opdx", ".frt": "frt", ".mnt": "mnt", ".tmd": "tmd", ".mi": "mi",
+    ".al3d": "al3d", ".opd": "opd", ".frt": "frt", ".mnt": "mnt", ".tmd": "tmd", ".mi": "mi",
     ".nid": "ezd", ".bcrf": "bcr",
 }
 SUFFIXES = tuple(FORMATS)
