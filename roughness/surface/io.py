@@ -254,8 +254,7 @@ def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: floa
         hm = Heightmap(values, min(pixel_x, pixel_y))
     except InputError as err:
         raise InputError(f"{path}: {err}", parameter=err.parameter) from None
-    stated = None if raw.pixel_mm is None else (_stated(path, "pixel_mm", raw.pixel_mm),
-                                                _stated(path, "pixel_mm", raw.pixel_y_mm or raw.pixel_mm))
+    stated = None if raw.pixel_mm is None else (float(raw.pixel_mm), float(raw.pixel_y_mm or raw.pixel_mm))
     return Reading(hm, str(path), raw.kind, raw.unit, stated, pixel_from, resampling, tuple(notes))
 
 
@@ -266,8 +265,9 @@ def _pixels(path: Path, raw: _Raw, given: float | None, notes: list[str]) -> tup
     if raw.pixel_mm is None:
         return given, given, "given"
     if raw.pixel_from == "TIFF resolution tags":
-        x, y = _stated(path, "pixel_mm", raw.pixel_mm), _stated(path, "pixel_mm", raw.pixel_y_mm)
+        x, y = float(raw.pixel_mm), float(raw.pixel_y_mm)  # nan if a tag is unusable
         if given is None:
+            x, y = _stated(path, "pixel_mm", x), _stated(path, "pixel_mm", y)
             notes.append(f"{path}: pixel size {x:.6g} mm (x) by {y:.6g} mm (y) from its TIFF resolution tags")
             return x, y, "TIFF resolution tags"
         if not (math.isclose(given, x, rel_tol=SAME_UNIT_RTOL) and math.isclose(given, y, rel_tol=SAME_UNIT_RTOL)):
