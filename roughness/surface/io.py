@@ -105,7 +105,7 @@ def load_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: f
     on request and says so.
     """
     reading = read_heightmap(path, pixel_mm, height_mm, dataset)
-    if reading.notes:  # only a given pixel_mm replacing TIFF resolution tags: the caller asked for it
+    if reading.notes:  # the pixel size taken from, or given over, TIFF resolution tags: said, not silent
         warnings.warn("; ".join(reading.notes), stacklevel=2)
     return reading.heightmap
 
