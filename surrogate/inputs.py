@@ -12,17 +12,18 @@ from pathlib import Path
 
 from roughness.core.errors import InputError
 from roughness.surface.heightmap import Heightmap
-from roughness.surface.io import heightmap_files, load_heightmap
+from roughness.surface.io import Reading, heightmap_files, read_heightmap
 
 
 class InputReader:
     """Heightmaps named by the paths given, in order; folders sorted by file name."""
 
     def __init__(self, paths: list[str], pixel_mm: float | None, height_mm: float | None, footprint_mm: float,
-                 centre_mm: tuple[float, float] | None, tile: bool) -> None:
-        self.pixel_mm, self.height_mm = pixel_mm, height_mm
+                 centre_mm: tuple[float, float] | None, tile: bool, resample_square: bool = False) -> None:
+        self.pixel_mm, self.height_mm, self.resample_square = pixel_mm, height_mm, resample_square
+        self.readings: dict[str, Reading] = {}  # how each file was read, by its name (for the reports)
         self.footprint_mm, self.centre_mm, self.tile = footprint_mm, centre_mm, tile
-        self.errors: list[tuple[str, str]] = []
+        self.errors: list[tuple[str, InputError]] = []  # (input, its error, whose message names the input)
         self._items: list[tuple[str, Path, str | None]] = []  # (name, file, sample id in a dataset)
         for path in map(Path, paths):
             self._items += self._expand(path)
@@ -46,10 +47,11 @@ class InputReader:
         try:
             for name, path, sid in self._items:
                 try:
-                    hm = self._load(path, sid, datasets)
+                    hm = self._load(name, path, sid, datasets)
                     hm.require_footprint(self.footprint_mm, self.centre_mm, self.tile)
                 except InputError as err:
-                    self.errors.append((name, str(err) if str(path) in str(err) else f"{name}: {err}"))
+                    named = err if str(path) in str(err) else InputError(f"{name}: {err}", err.parameter)
+                    self.errors.append((name, named))
                     continue
                 self._names.append(name)
                 yield hm
@@ -62,9 +64,11 @@ class InputReader:
         while True:
             yield self._names.popleft()
 
-    def _load(self, path: Path, sid: str | None, datasets: dict) -> Heightmap:
+    def _load(self, name: str, path: Path, sid: str | None, datasets: dict) -> Heightmap:
         if sid is None:
-            return load_heightmap(path, self.pixel_mm, self.height_mm)
+            reading = read_heightmap(path, self.pixel_mm, self.height_mm, resample_square=self.resample_square)
+            self.readings[name] = reading
+            return reading.heightmap
         if path not in datasets:
             from roughness.dataset.store import open_dataset
 

@@ -8,9 +8,13 @@ import math
 import os
 import re
 import sys
+from typing import TYPE_CHECKING
 
 from roughness.core.errors import InputError, OutputExists
 from roughness.core.limits import MAX_BATCH, MAX_CHANNELS, MAX_PARALLEL
+
+if TYPE_CHECKING:
+    from roughness.surface.heightmap import Heightmap
 
 
 def float_pair(text: str) -> tuple[float, float]:
@@ -93,18 +97,40 @@ PARALLEL = Number(int, low=1, high=MAX_PARALLEL)  # threads or worker processes
 
 def add_heightmap_args(p: argparse.ArgumentParser) -> None:
     """The heightmap input and how to read it (one file)."""
-    p.add_argument("heightmap", metavar="HEIGHTMAP", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .h5")
+    p.add_argument("heightmap", metavar="HEIGHTMAP", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .h5, "
+                   "or a measured scan (.x3p, .sur, .plu, .datx, .gwy, .sdf, ...: see README)")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="repeat a small heightmap as a periodic texture")
     p.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
 
 
 def add_reading_args(p: argparse.ArgumentParser) -> None:
-    """--pixel-mm and --height-mm."""
+    """--pixel-mm, --height-mm and --resample-square."""
     p.add_argument("--pixel-mm", type=POSITIVE, metavar="MM",
-                   help="pixel size in mm (required unless the file states it)")
+                   help="pixel size in mm (required unless the file states it; refused if it differs from what a "
+                        "scan states; replaces TIFF resolution tags, with a note)")
     p.add_argument("--height-mm", type=POSITIVE, metavar="MM",
                    help="height of full-scale white in mm (8/16-bit PNG/TIFF; unless the file states it)")
+    p.add_argument("--resample-square", action="store_true",
+                   help="resample non-square pixels (e.g. a scan's 10 x 12 um) bilinearly to square pixels of the "
+                        "finer size, reported and recorded in the JSON (default: refuse them)")
+
+
+def read_input(args: argparse.Namespace, path) -> Heightmap:
+    """A heightmap read with the command's reading options; what reading did (resampling, the pixel size's source)
+    is printed as notes on stderr, even with --quiet, and kept in ``args.readings`` for the JSON output."""
+    from roughness.surface.io import read_heightmap
+
+    reading = read_heightmap(path, args.pixel_mm, args.height_mm, resample_square=args.resample_square)
+    for note in reading.notes:
+        print(f"note: {note}", file=sys.stderr, flush=True)
+    args.readings = [*getattr(args, "readings", []), reading]
+    return reading.heightmap
+
+
+def readings(args: argparse.Namespace) -> list[dict]:
+    """The records of the heightmaps ``read_input`` read, for the JSON output."""
+    return [reading.as_dict() for reading in getattr(args, "readings", [])]
 
 
 def add_quiet(p: argparse.ArgumentParser) -> None:

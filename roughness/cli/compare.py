@@ -38,6 +38,9 @@ def run(args: argparse.Namespace) -> int:
     from roughness.engines import make_engine
     from roughness.report import write_report
 
+    if args.resample_square:
+        raise InputError("compare does not resample textures; resample scans with non-square pixels first (e.g. "
+                         "tune or predict read them with --resample-square)", parameter="resample_square")
     specs = list(dict.fromkeys([args.reference, *args.engines]))
     engines = [make_engine(spec, "reference" if spec == args.reference else "engines") for spec in specs]
     out = Path(args.out)

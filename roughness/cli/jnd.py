@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import add_reading_args, defaults, finish, json_text, write_stdout
+from .common import add_reading_args, defaults, finish, json_text, read_input, readings, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -24,15 +24,15 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from roughness.engines import predict
-    from roughness.surface.io import load_heightmap
     from roughness.surrogate.calibration import jnd_distance, load_scale
 
-    maps = [load_heightmap(path, args.pixel_mm, args.height_mm) for path in (args.a, args.b)]
+    maps = [read_input(args, path) for path in (args.a, args.b)]
     pa, pb = predict(maps, engine=args.engine, model=args.model, sources=[args.a, args.b])
     scale = load_scale(pa.fidelity)
     distance = jnd_distance(scale, pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
     if args.json:
-        write_stdout(json_text({"a": pa.as_dict(), "b": pb.as_dict(), **distance.as_dict()}))
+        write_stdout(json_text({"a": pa.as_dict(), "b": pb.as_dict(), **distance.as_dict(),
+                                "readings": readings(args)}))
         return 0
     lines = [_line(p) for p in (pa, pb)]
     kinds = " and ".join(dict.fromkeys("Monte Carlo of V" if p.roughness_stderr is not None else "ensemble spread"

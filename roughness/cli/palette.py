@@ -13,6 +13,8 @@ from .common import (
     finish,
     json_text,
     log,
+    read_input,
+    readings,
     write_stdout,
 )
 
@@ -64,10 +66,10 @@ def run(args: argparse.Namespace) -> int:
     evaluator = Evaluator(args.model, args.verify)
     progress = lambda line: log(args, "  " + line)
     if args.candidates:
-        from roughness.surface.io import heightmap_files, load_heightmap
+        from roughness.surface.io import heightmap_files
 
         files = heightmap_files(args.candidates)
-        candidates = [(name, load_heightmap(f, args.pixel_mm, args.height_mm))
+        candidates = [(name, read_input(args, f))
                       for name, f in zip(candidate_names(files), files)]
         log(args, f"palette: choosing {args.k} of {len(candidates)} textures, {args.min_jnd:g} JND apart")
         palette = folder_palette(candidates, args.k, args.min_jnd, evaluator, args.tile, progress)
@@ -76,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
         palette = family_palette(args.k, args.min_jnd, args.family, args.by, evaluator, args.tolerance_jnd,
                                  seed=args.seed, progress=progress)
     save_palette(palette, out, args.stl, args.base_mm, args.overwrite)
-    summary = {**palette.summary(), "verifier": evaluator.verifier}
+    summary = {**palette.summary(), "verifier": evaluator.verifier, "readings": readings(args)}
     if args.json:
         write_stdout(json_text(summary))
     else:

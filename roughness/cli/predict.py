@@ -15,10 +15,12 @@ from .common import (
     add_quiet,
     add_reading_args,
     defaults,
+    error_message,
     finish,
     float_pair,
     json_text,
     log,
+    read_input,
 )
 from .simulate import add_curvature_args, curvature_fields
 
@@ -88,13 +90,18 @@ def run(args: argparse.Namespace) -> int:
         footprint_mm = model.footprint_mm
     if args.map:
         return _predict_map(args, model)
-    reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, footprint_mm, args.centre, args.tile)
+    reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, footprint_mm, args.centre, args.tile,
+                         args.resample_square)
     start, done = time.monotonic(), 0
 
     def show(p) -> None:
         nonlocal done
         done += 1
-        print(json_text(p.as_dict()) if args.json else _prediction_line(p), flush=True)
+        reading = reader.readings.get(p.source)
+        for note in reading.notes if reading else ():
+            print(f"note: {note}", file=sys.stderr, flush=True)
+        record = p.as_dict() | ({"reading": reading.as_dict()} if reading else {})
+        print(json_text(record) if args.json else _prediction_line(p), flush=True)
         if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 
@@ -102,15 +109,15 @@ def run(args: argparse.Namespace) -> int:
             fidelity=args.fidelity, tolerance=args.tolerance, batch_size=args.batch_size,
             sources=reader.sources(), on_result=show, max_std=args.max_std, **curvature_fields(args))
     for source, error in reader.errors:
-        print(f"roughness: error: {error}", file=sys.stderr)
+        message = error_message(error, args.flags)
+        print(f"roughness: error: {message}", file=sys.stderr)
         if args.json:
-            print(json_text({"input": source, "error": error}))
+            print(json_text({"input": source, "error": message}))
     return 2 if reader.errors else 0
 
 
 def _predict_map(args: argparse.Namespace, model) -> int:
     from roughness.core.errors import InputError
-    from roughness.surface.io import load_heightmap
     from roughness.surrogate.roughness_map import roughness_map, save_map
 
     if len(args.inputs) != 1 or os.path.isdir(args.inputs[0]):
@@ -118,7 +125,7 @@ def _predict_map(args: argparse.Namespace, model) -> int:
     if args.engine == "fem":
         raise InputError("--map needs thousands of footprints: use --engine spectral (one solve over the whole map), "
                          "surrogate or auto")
-    hm = load_heightmap(args.inputs[0], args.pixel_mm, args.height_mm)
+    hm = read_input(args, args.inputs[0])
     start = last = time.perf_counter()
 
     def progress(done: int, total: int) -> None:
@@ -138,6 +145,7 @@ def _predict_map(args: argparse.Namespace, model) -> int:
         result = roughness_map(model, hm, args.step_mm, args.tile, args.batch_size, progress=progress)
     save_map(result, args.map, args.overwrite)
     summary = {"input": args.inputs[0], "map": args.map, "engine": args.engine, **result.summary(), "notes": notes,
+               "reading": args.readings[0].as_dict(),
                "seconds": time.perf_counter() - start}
     print(json_text(summary) if args.json else
           f"{args.inputs[0]}: {summary['positions']} footprint positions, V {summary['roughness_min']:.4f} to "

@@ -3,7 +3,19 @@ from __future__ import annotations
 
 import argparse
 
-from .common import COUNT, POSITIVE, add_model_tail, add_reading_args, defaults, finish, json_text, log, write_stdout
+from .common import (
+    COUNT,
+    POSITIVE,
+    add_model_tail,
+    add_reading_args,
+    defaults,
+    finish,
+    json_text,
+    log,
+    read_input,
+    readings,
+    write_stdout,
+)
 
 
 def add_parser(sub) -> None:
@@ -43,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
     from roughness.design.evaluation import Evaluator
     from roughness.design.tune import FACTOR_RANGE, target_of, tune
-    from roughness.surface.io import SAVE_SUFFIXES, load_heightmap, save_heightmap
+    from roughness.surface.io import SAVE_SUFFIXES, save_heightmap
 
     check_distinct({"--out": args.out}, {"HEIGHTMAP": args.heightmap, "--like": args.like, "--model": args.model})
     out = check_output(args.out, args.overwrite, "out")
@@ -56,8 +68,8 @@ def run(args: argparse.Namespace) -> int:
     factors = (args.min_factor or lo, args.max_factor or hi)
     if not factors[0] < factors[1]:
         raise InputError(f"the factor range must rise, got {factors[0]:g}..{factors[1]:g}", "min_factor")
-    hm = load_heightmap(args.heightmap, args.pixel_mm, args.height_mm)
-    reference = load_heightmap(args.like, args.pixel_mm, args.height_mm) if args.like else None
+    hm = read_input(args, args.heightmap)
+    reference = read_input(args, args.like) if args.like else None
     evaluator = Evaluator(args.model, args.verify)
     if reference is not None:
         log(args, f"tune: FEM of the reference {args.like}")
@@ -67,7 +79,8 @@ def run(args: argparse.Namespace) -> int:
     result = tune(hm, target, args.by, evaluator, factors, args.tolerance_jnd, args.max_fem, args.tile,
                   progress=lambda line: log(args, "  " + line))
     save_heightmap(result.heightmap, out, base_mm=args.base_mm, overwrite=args.overwrite)
-    summary = {"input": args.heightmap, "out": str(out), **result.summary(), "verifier": evaluator.verifier}
+    summary = {"input": args.heightmap, "out": str(out), **result.summary(), "verifier": evaluator.verifier,
+               "readings": readings(args)}
     if args.json:
         write_stdout(json_text(summary))
     else:

@@ -2,11 +2,18 @@
 
 Integer images map grey value v to height v / full_scale * height_mm (full_scale 255 for 8-bit,
 65535 for 16-bit); .npy, .npz, .h5 and float TIFF files hold heights in mm. Image row i is y index i.
+Measured scans (.x3p, .sur, .plu, .datx, .gwy, .sdf, ...: ``scans.FORMATS``) are read through
+SurfaceTopography (the extra ``roughness[scans]``) with the units and per-axis pixel sizes they state.
 
 Files this tool writes carry their units where the format allows, and the loader reads them back:
 the pixel size (and for PNG the full-scale height and the base height) in a PNG text chunk, a TIFF
 ImageDescription, an .npz array or an HDF5 attribute. Only .npy cannot: pass ``pixel_mm``.
-A stated unit that disagrees with an explicit argument is an error, never silently overridden.
+A stated unit that disagrees with an explicit argument is an error, never silently overridden; the
+one exception is the standard TIFF resolution tags (XResolution, YResolution, ResolutionUnit), read
+as the pixel size when the file states nothing else, which picture software fills with 72 or 96 per
+inch by habit: a given ``pixel_mm`` replaces them, with a note.
+Pixels that are not square (a scan with 10 x 12 um pixels, or different TIFF X and Y resolutions)
+are refused unless ``resample_square`` asks for bilinear resampling to the finer of the two sizes.
 Every failure the user can cause is reported as an InputError naming the file and the problem.
 The size a file declares is checked against MAX_HEIGHTMAP_PIXELS before its values are read, so a
 small compressed file that would expand to gigabytes is refused without allocating them.
@@ -29,10 +36,13 @@ from roughness.core.errors import InputError
 from roughness.core.files import atomic_write
 from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, Limit, check_size
 
+from . import scans
 from .heightmap import Heightmap
+from .pixels import Resampling, square
 from .stl import DEFAULT_BASE_MM, plate, stl_bytes
 
-SUFFIXES = (".npy", ".npz", ".png", ".tif", ".tiff", ".h5", ".hdf5")
+OWN_SUFFIXES = (".npy", ".npz", ".png", ".tif", ".tiff", ".h5", ".hdf5")
+SUFFIXES = OWN_SUFFIXES + scans.SUFFIXES
 SAVE_SUFFIXES = (".npy", ".npz", ".png", ".tif", ".tiff", ".h5", ".hdf5", ".stl")
 DEFAULT_DATASET = "heightmap"
 FULL_SCALE = {1: 255, 2: 65535}  # unsigned integer samples: bytes per sample -> white
@@ -40,13 +50,16 @@ PNG_16BIT = ("I;16", "I;16B", "I;16L")
 PNG_ERRORS = (OSError, SyntaxError, ValueError, Image.DecompressionBombError)
 UNITS_KEY = "roughness"  # PNG text chunk / TIFF description holding {"pixel_mm": ..., ...}
 SAME_UNIT_RTOL = 1e-6  # a stated and a given unit this close are the same (float32 round trips)
+MM_PER_RESOLUTION_UNIT = {2: 25.4, 3: 10.0, 4: 1.0, 5: 1e-3}  # TIFF ResolutionUnit: inch, cm, (tifffile) mm, um
 
 
 @dataclass(frozen=True)
 class _Raw:
     """File contents before units: values in mm if ``full_scale`` is None, else grey levels.
 
-    ``pixel_mm``, ``height_mm`` and ``base_mm`` are what the file states (None if nothing).
+    ``pixel_mm``, ``height_mm`` and ``base_mm`` are what the file states (None if nothing);
+    ``pixel_y_mm`` the pixel size along y where the file states one per axis (else ``pixel_mm`` is both);
+    ``pixel_from`` where the stated pixel size comes from, if not the tool's own metadata.
     """
 
     values: np.ndarray
@@ -55,6 +68,30 @@ class _Raw:
     pixel_mm: object = None
     height_mm: object = None
     base_mm: object = None
+    pixel_y_mm: object = None
+    pixel_from: str | None = None  # "scan" (instrument units) or "TIFF resolution tags"
+    unit: str | None = None  # the length unit a scan states for its heights
+
+
+@dataclass(frozen=True)
+class Reading:
+    """A heightmap as read from a file, and how: its format, units and what was done to its values."""
+
+    heightmap: Heightmap
+    path: str
+    kind: str
+    unit: str | None  # the file's length unit (scans), None where heights are mm or grey levels
+    pixel_file_mm: tuple[float, float] | None  # (x, y) as the file states it, None if it states none
+    pixel_from: str  # "file", "TIFF resolution tags" or "given" (pixel_mm)
+    resampling: Resampling | None = None
+    notes: tuple[str, ...] = ()
+
+    def as_dict(self) -> dict:
+        """The record for JSON output."""
+        return {"file": self.path, "format": self.kind, "unit": self.unit,
+                "pixel_file_mm": None if self.pixel_file_mm is None else list(self.pixel_file_mm),
+                "pixel_from": self.pixel_from, "pixel_mm": self.heightmap.pixel_mm,
+                "resampled": None if self.resampling is None else self.resampling.as_dict(), "notes": list(self.notes)}
 
 
 def load_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: float | None = None,
@@ -64,7 +101,21 @@ def load_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: f
     ``pixel_mm`` (mm) is needed unless the file states it; ``height_mm`` is the height of
     full-scale white in integer images (mm), needed unless the file states it; a value that
     disagrees with the file's is an InputError. ``dataset`` names the HDF5 dataset (default
-    "heightmap").
+    "heightmap"). Non-square pixels are an InputError here: ``read_heightmap`` resamples them
+    on request and says so.
+    """
+    reading = read_heightmap(path, pixel_mm, height_mm, dataset)
+    if reading.notes:  # the pixel size taken from, or given over, TIFF resolution tags: said, not silent
+        warnings.warn("; ".join(reading.notes), stacklevel=2)
+    return reading.heightmap
+
+
+def read_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: float | None = None,
+                   dataset: str | None = None, resample_square: bool = False) -> Reading:
+    """``load_heightmap``, with the record of how the file was read (for the reports and the JSON).
+
+    ``resample_square``: resample non-square pixels bilinearly to square ones of the finer size
+    (recorded in ``resampling`` and ``notes``) instead of refusing them.
     """
     path = _existing_file(Path(path))
     suffix = path.suffix.lower()
@@ -83,9 +134,11 @@ def load_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: f
         raw = _read_png(path)
     elif suffix in (".tif", ".tiff"):
         raw = _read_tiff(path)
+    elif suffix in scans.FORMATS:
+        raw = _read_scan(path)
     else:
         raw = _read_h5(path, dataset or DEFAULT_DATASET)
-    return _to_heightmap(path, raw, pixel_mm, height_mm)
+    return _to_heightmap(path, raw, pixel_mm, height_mm, resample_square)
 
 
 def heightmap_files(folder: str | Path) -> list[Path]:
@@ -164,16 +217,18 @@ def _unreadable(path: Path, kind: str, err: BaseException) -> InputError:
     return InputError(f"cannot read {path} as {kind}: {str(err) or type(err).__name__}")
 
 
-def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: float | None) -> Heightmap:
+def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: float | None,
+                  resample_square: bool = False) -> Reading:
     """Apply units to ``raw``; InputError names any missing, misplaced or contradicting unit."""
-    pixel_mm = _unit(path, "pixel_mm", raw.pixel_mm, pixel_mm)
+    notes: list[str] = []
+    pixel_x, pixel_y, pixel_from = _pixels(path, raw, pixel_mm, notes)
     if raw.full_scale is None and height_mm is not None:
-        raise InputError(f"{path}: heights in {raw.kind} files are already in mm; drop height_mm",
-                         parameter="height_mm")
+        carried = f"carry their unit ({raw.unit}) and are converted to mm" if raw.unit else "are already in mm"
+        raise InputError(f"{path}: heights in {raw.kind} files {carried}; drop height_mm", parameter="height_mm")
     if raw.full_scale is not None:
         height_mm = _unit(path, "height_mm", raw.height_mm, height_mm)
     missing = []
-    if pixel_mm is None:
+    if pixel_x is None:
         missing.append("pixel_mm (pixel size in mm)")
     if raw.full_scale is not None and height_mm is None:
         missing.append("height_mm (height of full-scale white in mm)")
@@ -185,10 +240,50 @@ def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: floa
         values = values / raw.full_scale * height_mm
         if raw.base_mm is not None:
             values = values + _stated(path, "base_mm", raw.base_mm, positive_only=False)
+    resampling = None
+    if not math.isclose(pixel_x, pixel_y, rel_tol=SAME_UNIT_RTOL):
+        if not resample_square:
+            source = "as the file states them" if pixel_from == "file" else f"from its {pixel_from}"
+            raise InputError(f"{path}: its pixels are not square: {pixel_x:.6g} mm (x) by {pixel_y:.6g} mm (y), "
+                             f"{source}; the engines need square pixels: pass resample_square to resample it "
+                             f"(bilinear) to square pixels of {min(pixel_x, pixel_y):.6g} mm",
+                             parameter="resample_square")
+        values, resampling = square(np.asarray(values, dtype=float), pixel_x, pixel_y)
+        notes.append(f"{path}: {resampling.describe()}")
     try:
-        return Heightmap(values, pixel_mm)
+        hm = Heightmap(values, min(pixel_x, pixel_y))
     except InputError as err:
         raise InputError(f"{path}: {err}", parameter=err.parameter) from None
+    stated = None if raw.pixel_mm is None else (float(raw.pixel_mm), float(raw.pixel_y_mm or raw.pixel_mm))
+    return Reading(hm, str(path), raw.kind, raw.unit, stated, pixel_from, resampling, tuple(notes))
+
+
+def _pixels(path: Path, raw: _Raw, given: float | None, notes: list[str]) -> tuple[float | None, float | None, str]:
+    """Pixel size (x, y) in mm and where it comes from: the file, its TIFF resolution tags, or ``given``.
+
+    A given size must agree with what the file states, except TIFF resolution tags, which it replaces (noted)."""
+    if raw.pixel_mm is None:
+        return given, given, "given"
+    if raw.pixel_from == "TIFF resolution tags":
+        x, y = float(raw.pixel_mm), float(raw.pixel_y_mm)  # nan if a tag is unusable
+        if given is None:
+            x, y = _stated(path, "pixel_mm", x), _stated(path, "pixel_mm", y)
+            notes.append(f"{path}: pixel size {x:.6g} mm (x) by {y:.6g} mm (y) from its TIFF resolution tags")
+            return x, y, "TIFF resolution tags"
+        if not (math.isclose(given, x, rel_tol=SAME_UNIT_RTOL) and math.isclose(given, y, rel_tol=SAME_UNIT_RTOL)):
+            notes.append(f"{path}: its TIFF resolution tags say {x:.6g} mm (x) by {y:.6g} mm (y) pixels; "
+                         f"pixel_mm = {given:g} mm was given and is used")
+        return given, given, "given"
+    if raw.pixel_y_mm is None:
+        x = _unit(path, "pixel_mm", raw.pixel_mm, given)
+        return x, x, "file"
+    x, y = _stated(path, "pixel_mm", raw.pixel_mm), _stated(path, "pixel_mm", raw.pixel_y_mm)
+    if given is not None and not (math.isclose(given, x, rel_tol=SAME_UNIT_RTOL)
+                                  and math.isclose(given, y, rel_tol=SAME_UNIT_RTOL)):
+        raise InputError(f"{path} states its pixel size with its unit ({raw.unit or 'mm'}): {x:.6g} mm (x) by "
+                         f"{y:.6g} mm (y), but pixel_mm = {given:g} mm was given; drop the argument (the file's "
+                         "units are used) or fix the file", parameter="pixel_mm")
+    return x, y, "file"
 
 
 def _unit(path: Path, name: str, stated: object, given: float | None) -> float | None:
@@ -326,6 +421,7 @@ def _read_tiff(path: Path) -> _Raw:
                 _check_declared(path, tif.series[0].shape, tif.series[0].dtype, "image")
             values = tif.asarray() if tif.pages else None
             description = tif.pages[0].description if tif.pages else ""
+            resolution = _resolution_mm(tif.pages[0]) if tif.pages else None
     except InputError:
         raise
     except (OSError, ValueError, struct.error) as err:
@@ -334,14 +430,42 @@ def _read_tiff(path: Path) -> _Raw:
         raise InputError(f"cannot read {path} as TIFF: it holds no image")
     colour = values.ndim == 3 and values.shape[-1] in (3, 4)
     stated = _units(path, _json_object(description).get(UNITS_KEY)).get("pixel_mm")
+    tags = {"pixel_mm": stated}
+    if stated is None and resolution is not None:
+        tags = {"pixel_mm": resolution[0], "pixel_y_mm": resolution[1], "pixel_from": "TIFF resolution tags"}
     if values.dtype.kind == "f" and not colour:
-        return _Raw(values, "float TIFF", None, stated)
+        return _Raw(values, "float TIFF", None, **tags)
     if values.dtype.kind != "u" or values.dtype.itemsize not in FULL_SCALE:
         raise InputError(f"{path} has TIFF samples of type {values.dtype}, shape {values.shape}; expected "
                          "8- or 16-bit unsigned greyscale (or RGB), or float greyscale heights in mm")
     bits = 8 * values.dtype.itemsize
     return _Raw(_grey(path, values) if colour else values, f"{bits}-bit TIFF", FULL_SCALE[values.dtype.itemsize],
-                stated)
+                **tags)
+
+
+def _read_scan(path: Path) -> _Raw:
+    scan = scans.read_scan(path)
+    return _Raw(scan.heights, scan.kind, None, scan.pixel_x_mm, None, None, scan.pixel_y_mm, "scan", scan.unit)
+
+
+def _resolution_mm(page) -> tuple[float, float] | None:
+    """Pixel size (x, y) in mm from a TIFF page's XResolution, YResolution and ResolutionUnit (pixels per unit),
+    or None if it has none or no physical unit (ResolutionUnit NONE). A missing unit is an inch (TIFF 6.0)."""
+    tags = page.tags
+    if "XResolution" not in tags or "YResolution" not in tags:
+        return None
+    unit = int(tags["ResolutionUnit"].value) if "ResolutionUnit" in tags else 2
+    if unit not in MM_PER_RESOLUTION_UNIT:
+        return None
+    sizes = []
+    for name in ("XResolution", "YResolution"):
+        value = tags[name].value
+        try:
+            per_unit = value[0] / value[1] if isinstance(value, tuple) else float(value)
+        except (TypeError, ValueError, ZeroDivisionError, IndexError):
+            per_unit = math.nan
+        sizes.append(MM_PER_RESOLUTION_UNIT[unit] / per_unit if math.isfinite(per_unit) and per_unit > 0 else math.nan)
+    return sizes[0], sizes[1]
 
 
 def _read_h5(path: Path, name: str) -> _Raw:
