@@ -6,6 +6,7 @@ is tested directly (milliseconds) and the CLI once with the spectral verifier (s
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,12 @@ from PIL import Image
 
 from roughness.cli import main
 from roughness.core.errors import InputError
+from roughness.dataset.textures import standard_texture
 from roughness.design.colours import TOLERANCE, cluster_colours, lab
+from roughness.design.evaluation import Evaluator, jnd_between
+from roughness.design.tune import target_of, tune
+from roughness.surface.heightmap import Heightmap
+from roughness.surface.io import save_heightmap
 
 from test_bad_inputs import _expect_refusal, workdir  # noqa: F401  (workdir: a fixture)
 
@@ -136,3 +142,84 @@ def test_a_bad_colour_tolerance_is_refused(value, workdir, capsys):  # noqa: F81
 def test_noise_is_refused_naming_the_tolerance(workdir, capsys):  # noqa: F811
     Image.fromarray(np.random.default_rng(1).integers(0, 256, (120, 120, 3), dtype=np.uint8)).save(workdir / "p.png")
     _expect_refusal(["tactile-image", "p.png", "--out", "plate"], workdir, capsys, ("--colour-tolerance",))
+
+
+# --- tune: relative targets, and the factor that would reach a refused target ------------------------------------
+
+SPECTRAL = Evaluator(fidelity="spectral")  # tens of ms a texture (about 1 s for reliefs 3x the standard's)
+
+
+@pytest.fixture(scope="module")
+def standard():
+    return standard_texture(1.0, seed=0)
+
+
+@pytest.mark.parametrize("steps", [1.0, -0.5])
+def test_a_relative_target_counts_jnds_from_the_inputs_verified_lambda(steps, standard):
+    start = SPECTRAL.verify(standard)
+    target = target_of(SPECTRAL, jnd=steps, heightmap=standard)
+    assert target.lambda_mm == pytest.approx(start.equivalent_lambda_mm * 1.19**steps, rel=1e-12)
+    assert jnd_between(target.lambda_mm, start.equivalent_lambda_mm) == pytest.approx(steps, abs=1e-9)
+    assert target.reference.roughness == start.roughness and target.parameter == "jnd"
+    assert f"{steps:+g} JND from the input: V {start.roughness:.4f}" in target.describe()
+    assert (target.roughness > start.roughness) == (steps > 0)
+
+
+def test_a_relative_target_is_refused_when_ill_posed(standard):
+    for bad in (float("nan"), float("inf"), 31.0):
+        with pytest.raises(InputError, match="jnd") as err:
+            target_of(SPECTRAL, jnd=bad, heightmap=standard)
+        assert err.value.parameter == "jnd"
+    with pytest.raises(InputError, match="exactly one target"):
+        target_of(SPECTRAL, lambda_mm=1.0, jnd=1.0, heightmap=standard)
+    with pytest.raises(InputError, match="needs the texture"):
+        target_of(SPECTRAL, jnd=1.0)
+    flat = Heightmap(np.zeros((240, 240)), 0.05)
+    with pytest.raises(InputError, match="below the standard scale's floor"):
+        target_of(SPECTRAL, jnd=1.0, heightmap=flat)
+
+
+def test_tune_cli_one_jnd_rougher_says_the_input_and_the_target(tmp_path, capsys):
+    path = tmp_path / "standard.npz"
+    save_heightmap(standard_texture(1.0, seed=0), path)
+    code = main(["tune", str(path), "--jnd", "+1", "--out", str(tmp_path / "rougher.npz"), "--verify", "spectral",
+                 "--quiet", "--json"])
+    summary = json.loads(capsys.readouterr().out)
+    assert code == 0 and summary["reached"] and summary["target_given_as"] == "jnd" and summary["target_jnd"] == 1
+    assert summary["target_lambda_mm"] == pytest.approx(summary["input_lambda_mm"] * 1.19, rel=1e-9)
+    assert abs(jnd_between(summary["achieved_lambda_mm"], summary["input_lambda_mm"]) - 1) <= 0.1  # the tolerance
+    assert summary["factor"] > 1 and summary["input_roughness"] > 0 and summary["input_roughness_stderr"] > 0
+    code = main(["tune", str(path), "--jnd", "-0.5", "--out", str(tmp_path / "smoother.npz"), "--verify", "spectral",
+                 "--quiet"])
+    text = capsys.readouterr().out
+    assert code == 0 and "(-0.5 JND from the input: V " in text and "lambda" in text
+
+
+def test_a_target_beyond_the_surrogates_reach_within_the_range_is_searched_with_the_spectral_engine(standard):
+    """The shipped surrogate's V peaks near height x1.8 (lambda 1.35 mm, far out of its domain) and falls beyond;
+    the physics does not: lambda 1.6 mm is reached at about x2.4 (coarse FEM 1.76 mm at x3)."""
+    result = tune(standard, target_of(SPECTRAL, lambda_mm=1.6), "height", SPECTRAL)
+    assert result.search_engine == "spectral" and result.reached
+    assert 2.0 < result.factor < 3.0 and any("spectral engine searched instead" in n for n in result.notes)
+    assert result.summary()["steps"][0]["search_roughness"] != result.summary()["steps"][0]["surrogate_roughness"]
+
+
+def test_a_refused_target_names_the_factor_that_reaches_it(standard):
+    with pytest.raises(InputError, match=r"about (\d+\.\d+): widen the range \(--max-factor (\d+\.?\d*)\)") as err:
+        tune(standard, target_of(SPECTRAL, lambda_mm=1.85), "height", SPECTRAL)
+    about, flag = (float(x) for x in re.search(r"about (\d+\.\d+).*--max-factor (\d+\.?\d*)", str(err.value)).groups())
+    assert 3.0 < about < flag
+    result = tune(standard, target_of(SPECTRAL, lambda_mm=1.85), "height", SPECTRAL, factor_range=(0.1, flag))
+    assert result.reached and result.factor == pytest.approx(about, rel=0.05)
+    with pytest.raises(InputError, match=r"no height factor in 0\.0333\.\.9 reaches it"):
+        tune(standard, target_of(SPECTRAL, lambda_mm=4.0), "height", SPECTRAL)
+
+
+def test_tune_refuses_two_targets_and_bad_jnds(workdir, capsys):  # noqa: F811
+    base = ["tune", "map.npy", "--pixel-mm", "0.05", "--out", "new.npz"]
+    _expect_refusal(base + ["--jnd", "1", "--target-lambda", "1.0"], workdir, capsys, ("--jnd",))
+    for value in ("nan", "inf", "-31", "abc"):
+        _expect_refusal(base + ["--jnd", value], workdir, capsys, ("--jnd",))
+    np.save(workdir / "flat.npy", np.zeros((240, 240)))
+    _expect_refusal(["tune", "flat.npy", "--pixel-mm", "0.05", "--out", "new.npz", "--jnd", "1", "--verify",
+                     "spectral"], workdir, capsys, ("--jnd",))
