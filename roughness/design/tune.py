@@ -33,8 +33,6 @@ TOLERANCE_JND = 0.1
 MAX_FEM = 4
 WIDEN = 3.0  # out of the surrogate's reach: the spectral engine also looks this much beyond each end of the range
 SPECTRAL_GRID = 17  # spectral evaluations over that wider range (0.03 to 1 s each: tall reliefs take longest)
-BISECTIONS = {"surrogate": 12, "spectral": 6}  # refining a grid crossing: 2^-n of a grid step (spectral: ~1% of
-# the factor, a few hundredths of a JND)
 MAX_RELATIVE_JND = 30.0  # a relative target: at most this many JNDs from the input (a factor 184 in lambda)
 
 
@@ -197,9 +195,15 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
         inside = (wide >= lo) & (wide <= hi)
         v_wide = np.full(len(wide), np.nan)
         v_wide[inside] = spectral(wide[inside])
-        if not v_wide[inside].min() <= target.roughness <= v_wide[inside].max():
-            v_wide[~inside] = spectral(wide[~inside])  # only to say which factor would reach it
-            raise InputError(_out_of_reach(target, by, evaluator, (lo, hi), reachable, wide, v_wide),
+        if not v_wide[inside].min() <= target.roughness <= v_wide[inside].max():  # which factor would reach it?
+            above = target.roughness > v_wide[inside].max()
+            outward = np.nonzero(wide > hi)[0] if above else np.nonzero(wide < lo)[0][::-1]
+            for i in outward:  # one factor at a time, outwards from the range, until one reaches the target
+                v_wide[i] = spectral(wide[i:i + 1])[0]
+                if (v_wide[i] >= target.roughness) == above:
+                    break
+            seen = ~np.isnan(v_wide)
+            raise InputError(_out_of_reach(target, by, evaluator, (lo, hi), reachable, wide[seen], v_wide[seen]),
                              parameter=target.parameter)
         search, engine, grid, v_grid = spectral, "spectral", wide[inside], v_wide[inside]
         lam_lo, lam_hi = evaluator.lambda_of(reachable[0]), evaluator.lambda_of(reachable[1])
@@ -209,7 +213,8 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
         notes.append(f"the {engine if engine == 'surrogate' else 'spectral engine'}'s V does not rise monotonically with the {by} factor; the first crossing is used")
 
     def factor_for(v_wanted: float, bias: float) -> float:
-        """The factor where bias * search V = v_wanted: grid crossing, then bisection on the search engine."""
+        """The factor where bias * search V = v_wanted: grid crossing, then bisection on the surrogate (the spectral
+        engine: interpolation between the grid's points, 1.4x apart; the verifier's answers correct the rest)."""
         values = v_grid * bias
         above = np.nonzero(values >= v_wanted)[0]
         if len(above) == 0:
@@ -218,7 +223,10 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
         if k == 0:
             return lo
         a, b = math.log(grid[k - 1]), math.log(grid[k])
-        for _ in range(BISECTIONS[engine]):  # bisection in log factor: 2^-n of one grid step
+        if engine == "spectral":  # each evaluation up to a second: log V interpolated over log factor instead
+            va, vb = math.log(values[k - 1]), math.log(values[k])
+            return math.exp(a + (b - a) * (math.log(v_wanted) - va) / (vb - va)) if vb > va else math.exp(b)
+        for _ in range(12):  # bisection in log factor: 2^-12 of one grid step  # bisection in log factor: 2^-n of one grid step
             mid = (a + b) / 2
             if search([math.exp(mid)])[0] * bias >= v_wanted:
                 b = mid
@@ -298,14 +306,13 @@ def _out_of_reach(target: Target, by: str, evaluator: Evaluator, factors: tuple[
     k = int(crossings[0]) + 1  # interpolate the first crossing in log V over log factor
     t = (math.log(target.roughness) - math.log(v_wide[k - 1])) / (math.log(v_wide[k]) - math.log(v_wide[k - 1]))
     factor = math.exp(math.log(wide[k - 1]) + t * (math.log(wide[k]) - math.log(wide[k - 1])))
-    flag = f"--max-factor {_round_up(factor * 1.1)}" if factor > hi else f"--min-factor {_round_down(factor / 1.1)}"
+    flag = f"--max-factor {_two_digits(factor * 1.1, True)}" if factor > hi else \
+        f"--min-factor {_two_digits(factor / 1.1, False)}"
     return (f"{text}; the spectral engine reaches it at a {by} factor of about {factor:.2f}: widen the range "
             f"({flag}) to search there, the verifier checks the result")
 
 
-def _round_up(x: float) -> str:
-    return f"{math.ceil(x * 10) / 10:g}"
-
-
-def _round_down(x: float) -> str:
-    return f"{max(math.floor(x * 100) / 100, 0.01):g}"
+def _two_digits(x: float, up: bool) -> str:
+    """``x`` rounded up or down to two significant digits: a bound that still includes ``x``."""
+    unit = 10.0 ** (math.floor(math.log10(x)) - 1)
+    return f"{(math.ceil(x / unit) if up else math.floor(x / unit)) * unit:.2g}"
