@@ -6,8 +6,11 @@ the same pixels and map size). The target is an equivalent wavelength on the sta
 the FEM's V of a reference texture, or a number of JNDs from the texture itself (its FEM V's equivalent
 wavelength times 1.19 per JND); errors are counted in JNDs of the equivalent wavelength.
 
-Search: the surrogate's V on a grid of factors gives the reachable range (a target outside it is
-refused with that range) and the factor that meets the target. The FEM then verifies it. While the
+Search: the surrogate's V on a grid of factors gives the reachable range and the factor that meets
+the target. Where the surrogate cannot reach the target (outside its training domain its V may even
+fall as the relief grows), the spectral engine searches instead: its equivalent wavelength, on its
+own scale, put on the verifier's; a target that it reaches only outside the factor range is refused
+with the factor that would reach it (the spectral engine looks up to ``WIDEN`` times beyond the range). The FEM then verifies it. While the
 FEM answer misses the target by more than ``tolerance_jnd``, the factor is corrected: the first time
 by the surrogate's bias at that factor (V_fem / V_surrogate, assumed to vary slowly with the factor),
 then by the secant through the two FEM answers closest to the target in log V over log factor. The
