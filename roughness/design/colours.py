@@ -94,6 +94,11 @@ def cluster_colours(rgb: np.ndarray, tolerance: float = TOLERANCE, min_fraction:
         centres = np.array([np.average(colour_lab[nearest == i], axis=0, weights=weight[nearest == i])
                             if weight[nearest == i].sum() > 0 else centres[i] for i in range(len(centres))])
     nearest = _nearest(colour_lab, centres)
+    if len(np.unique(nearest)) < len(centres):  # two centres refined onto one: one colour
+        centres = centres[np.unique(nearest)]
+        nearest = _nearest(colour_lab, centres)
+        if len(centres) < 2:
+            _too_few(colours, counts[present], centres, weight.sum() / index.size, tolerance, min_fraction, source)
     members = [nearest == i for i in range(len(centres))]
     rgb_centres = np.array([np.round(np.average(colours[m].astype(float), axis=0,
                                                 weights=weight[m] if weight[m].sum() > 0 else counts[present][m]))
