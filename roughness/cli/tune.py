@@ -4,7 +4,18 @@ from __future__ import annotations
 
 import argparse
 
-from .common import COUNT, POSITIVE, Number, add_model_tail, add_reading_args, defaults, finish, json_text, log, write_stdout
+from .common import (
+    COUNT,
+    POSITIVE,
+    Number,
+    add_model_tail,
+    add_reading_args,
+    defaults,
+    finish,
+    json_text,
+    log,
+    write_stdout,
+)
 
 
 def add_parser(sub) -> None:

@@ -226,8 +226,8 @@ def footprint_labels(labels: np.ndarray, pixel_mm: float, xs: np.ndarray, ys: np
     return out
 
 
-def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str, Heightmap, float | None]], width_mm: float = WIDTH_MM,
-                  pixel_mm: float = PIXEL_MM, outline_mm: float | None = None,
+def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str, Heightmap, float | None]],
+                  width_mm: float = WIDTH_MM, pixel_mm: float = PIXEL_MM, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = STEP_MM, strain: bool = False,
                   evaluator: Evaluator | None = None, progress=None, tolerance: float = TOLERANCE) -> TactilePlate:
     """A plate from a picture (RGB pixels, or its colours already clustered) and textures ``(name, heightmap,

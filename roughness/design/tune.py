@@ -10,9 +10,10 @@ Search: the surrogate's V on a grid of factors gives the reachable range and the
 the target. Where the surrogate cannot reach the target (outside its training domain its V may even
 fall as the relief grows), the spectral engine searches instead: its equivalent wavelength, on its
 own scale, put on the verifier's; a target that it reaches only outside the factor range is refused
-with the factor that would reach it (the spectral engine looks up to ``WIDEN`` times beyond the range). The FEM then verifies it. While the
-FEM answer misses the target by more than ``tolerance_jnd``, the factor is corrected: the first time
-by the surrogate's bias at that factor (V_fem / V_surrogate, assumed to vary slowly with the factor),
+with the factor that would reach it (the spectral engine looks up to ``WIDEN`` times beyond the range).
+The FEM then verifies the factor. While the FEM answer misses the target by more than
+``tolerance_jnd``, the factor is corrected: the first time by the search engine's bias at that factor
+(V_fem / V_search, assumed to vary slowly with the factor),
 then by the secant through the two FEM answers closest to the target in log V over log factor. The
 result is the FEM-verified factor closest to the target.
 """
@@ -213,7 +214,8 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
         notes.append(f"the surrogate reaches only lambda {lam_lo:.3f}..{lam_hi:.3f} mm by {by} factors {lo:g}..{hi:g} "
                      "(outside its training domain it is not to be trusted): the spectral engine searched instead")
     if np.any(np.diff(v_grid) <= 0):
-        notes.append(f"the {engine if engine == 'surrogate' else 'spectral engine'}'s V does not rise monotonically with the {by} factor; the first crossing is used")
+        searcher = "surrogate" if engine == "surrogate" else "spectral engine"
+        notes.append(f"the {searcher}'s V does not rise monotonically with the {by} factor; the first crossing is used")
 
     def factor_for(v_wanted: float, bias: float) -> float:
         """The factor where bias * search V = v_wanted: grid crossing, then bisection on the surrogate (the spectral
@@ -229,7 +231,7 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
         if engine == "spectral":  # each evaluation up to a second: log V interpolated over log factor instead
             va, vb = math.log(values[k - 1]), math.log(values[k])
             return math.exp(a + (b - a) * (math.log(v_wanted) - va) / (vb - va)) if vb > va else math.exp(b)
-        for _ in range(12):  # bisection in log factor: 2^-12 of one grid step  # bisection in log factor: 2^-n of one grid step
+        for _ in range(12):  # bisection in log factor: 2^-12 of one grid step
             mid = (a + b) / 2
             if search([math.exp(mid)])[0] * bias >= v_wanted:
                 b = mid
