@@ -165,7 +165,11 @@ class _FlatSurrogate:
 
 @pytest.mark.parametrize("given_as, flag", [("like ref.npy", "--like"), ("roughness", "--target-v"),
                                             ("lambda", "--target-lambda")])
-def test_an_out_of_reach_target_names_the_option_it_came_from(given_as, flag):
+def test_an_out_of_reach_target_names_the_option_it_came_from(given_as, flag, monkeypatch):
+    import roughness.design.tune
+
+    flat = lambda factors: np.full(len(factors), 0.01)  # noqa: E731  (the spectral search, flat too)
+    monkeypatch.setattr(roughness.design.tune, "_spectral_search", lambda *args: flat)
     hm = Heightmap(np.random.default_rng(0).random((40, 40)) * 0.1, 0.25)
     with pytest.raises(InputError, match="out of reach") as err:
         tune(hm, Target(0.5, 2.0, given_as), "height", _FlatSurrogate(), tile=True)

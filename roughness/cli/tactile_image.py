@@ -7,6 +7,7 @@ from .common import COUNT, POSITIVE, add_model_tail, defaults, finish, json_text
 
 
 def add_parser(sub) -> None:
+    from roughness.design.colours import TOLERANCE
     from roughness.design.palette import family_palette
     from roughness.design.tactile_image import tactile_image
     from roughness.surface.stl import DEFAULT_BASE_MM
@@ -16,8 +17,8 @@ def add_parser(sub) -> None:
                                              "distinguishable textures (height map, STL, roughness map)")
     p.add_argument("image", metavar="IMAGE", help="picture (.png, .jpg, ...) with a few flat colours")
     p.add_argument("--out", required=True, metavar="DIR",
-                   help="new folder: plate.npz (mm), plate.stl, plate.json, relief.png, roughness_map.png/.npy, "
-                        "strain.png (with --strain)")
+                   help="new folder: plate.npz (mm), plate.stl, plate.json, clustered.png (the picture in its "
+                        "flat colours), relief.png, roughness_map.png/.npy, strain.png (with --strain)")
     p.add_argument("--size-mm", type=POSITIVE, default=given["width_mm"],
                    help=f"plate width in mm; the height follows the picture (default {given['width_mm']:g})")
     p.add_argument("--pixel-mm", type=POSITIVE, default=given["pixel_mm"],
@@ -26,6 +27,9 @@ def add_parser(sub) -> None:
     source.add_argument("--palette", metavar="DIR", help="textures from a `roughness palette` folder")
     source.add_argument("--k", type=COUNT,
                         help="make a palette of K textures first (default: as many as the picture has colours)")
+    p.add_argument("--colour-tolerance", type=POSITIVE, default=TOLERANCE, metavar="DELTA_E",
+                   help="colours closer than this (CIELAB Delta E) are one flat colour: JPEG noise and anti-aliased "
+                        f"edges join the nearest (default {TOLERANCE:g})")
     p.add_argument("--min-jnd", type=POSITIVE, default=pal["min_jnd"],
                    help=f"new palette: smallest pairwise distance in JND (default {pal['min_jnd']:g})")
     p.add_argument("--family", default="standard-1.0", help="new palette: the texture to scale (default standard-1.0)")
@@ -46,14 +50,15 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     import numpy as np
+    from PIL import Image
 
     from roughness.core.errors import InputError
     from roughness.core.files import atomic_write, check_distinct, check_output_folder
     from roughness.design.evaluation import Evaluator
     from roughness.design.palette import family_palette, load_palette, save_palette
+    from roughness.design.colours import cluster_colours
     from roughness.design.tactile_image import (
         describe_picture,
-        flat_colours,
         hex_colour,
         plate_shape,
         read_image,
@@ -65,11 +70,13 @@ def run(args: argparse.Namespace) -> int:
     check_distinct({"--out": args.out}, {"IMAGE": args.image, "--palette": args.palette, "--model": args.model})
     out = check_output_folder(args.out, args.overwrite, "out")
     rgb = read_image(args.image)
-    colours, _ = flat_colours(rgb, source=describe_picture(args.image))
-    log(args, f"tactile-image: {args.image}: {rgb.shape[1]:,} x {rgb.shape[0]:,} pixels, {len(colours)} flat colours")
+    found = cluster_colours(rgb, args.colour_tolerance, source=describe_picture(args.image))
+    colours = found.colours
+    log(args, f"tactile-image: {args.image}: {rgb.shape[1]:,} x {rgb.shape[0]:,} pixels, {found.describe()}")
     if args.k is not None and args.k < len(colours):
-        raise InputError(f"the picture has {len(colours)} flat colours: a palette of {args.k} textures cannot cover "
-                         f"them (give at least {len(colours)})", "k")
+        raise InputError(f"the picture has {len(colours)} flat colours ({', '.join(hex_colour(c) for c in colours)}; "
+                         f"colours within Delta E {found.tolerance:g} merged): a palette of {args.k} textures cannot "
+                         f"cover them (give at least {len(colours)}, or a larger --colour-tolerance)", "k")
     evaluator = Evaluator(args.model, args.verify)
     plate_shape(rgb.shape, args.size_mm, args.pixel_mm, args.step_mm, evaluator.footprint_mm)  # before any palette
     if args.palette:
@@ -92,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
             tenths[stage] = done * 10 // total
             log(args, f"  {stage}: {done}/{total}" + (" FEM footprints" if stage == "strain image" else " positions"))
 
-    plate = tactile_image(rgb, textures, args.size_mm, args.pixel_mm, args.outline_mm, args.outline_height_mm,
+    plate = tactile_image(found, textures, args.size_mm, args.pixel_mm, args.outline_mm, args.outline_height_mm,
                           args.step_mm, args.strain, evaluator, progress)
     out.mkdir(parents=True, exist_ok=True)
     if not args.palette:
@@ -101,6 +108,8 @@ def run(args: argparse.Namespace) -> int:
     save_heightmap(plate.heightmap, out / "plate.stl", base_mm=args.base_mm, overwrite=args.overwrite)
     atomic_write(out / "roughness_map.npy", lambda tmp: np.save(tmp, plate.roughness_map), args.overwrite)
     save_figures(plate, out)
+    atomic_write(out / "clustered.png", lambda tmp: Image.fromarray(found.clustered()).save(tmp, format="PNG"),
+                 args.overwrite)
     summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier}
     atomic_write(out / "plate.json", lambda tmp: Path(tmp).write_text(json_text(summary, indent=1) + "\n"),
                  args.overwrite)
@@ -108,8 +117,8 @@ def run(args: argparse.Namespace) -> int:
         write_stdout(json_text(summary))
         return 0
     lines = [f"plate {summary['width_mm']:.1f} x {summary['height_mm']:.1f} mm, relief {summary['relief_mm']:.2f} mm, "
-             f"written to {out} (plate.npz, plate.stl, plate.json, relief.png, roughness_map.png"
-             + (", strain.png)" if args.strain else ")")]
+             f"written to {out} (plate.npz, plate.stl, plate.json, clustered.png, relief.png, roughness_map.png"
+             + (", strain.png)" if args.strain else ")"), f"colours: {found.describe()}"]
     for r in plate.regions:
         fem = f"texture V {r.fem_roughness:.4f} ({evaluator.verifier})" if r.fem_roughness else "texture V not verified"
         on_plate = (f"on the plate V {r.plate_roughness:.4f}, lambda {r.plate_lambda_mm:.3f} mm over {r.footprints} "

@@ -1,4 +1,5 @@
-"""`roughness tune HEIGHTMAP --target-lambda L | --target-v V | --like REF --out OUT`: reach a target roughness."""
+"""`roughness tune HEIGHTMAP --target-lambda L | --target-v V | --like REF | --jnd N --out OUT`: reach a target
+roughness."""
 from __future__ import annotations
 
 import argparse
@@ -6,6 +7,7 @@ import argparse
 from .common import (
     COUNT,
     POSITIVE,
+    Number,
     add_model_tail,
     add_reading_args,
     defaults,
@@ -19,7 +21,7 @@ from .common import (
 
 
 def add_parser(sub) -> None:
-    from roughness.design.tune import FACTOR_RANGE, KNOBS, tune
+    from roughness.design.tune import FACTOR_RANGE, KNOBS, MAX_RELATIVE_JND, tune
     from roughness.surface.stl import DEFAULT_BASE_MM
 
     given = defaults(tune)
@@ -31,6 +33,9 @@ def add_parser(sub) -> None:
                         help="target equivalent wavelength on the standard scale (mm)")
     target.add_argument("--target-v", type=POSITIVE, metavar="V", help="target roughness V (FEM scale)")
     target.add_argument("--like", metavar="REF", help="feel like this texture (its FEM V is the target)")
+    target.add_argument("--jnd", type=Number(float, low=-MAX_RELATIVE_JND, high=MAX_RELATIVE_JND), metavar="N",
+                        help="N JNDs rougher than the input (negative: smoother), e.g. +1 or -0.5: the input's FEM "
+                             "V sets the start, one JND is a 19%% step in equivalent wavelength")
     p.add_argument("--by", choices=KNOBS, default=given["by"],
                    help=f"scale the heights or the lateral size (default: {given['by']})")
     p.add_argument("--out", required=True, metavar="FILE",
@@ -73,9 +78,12 @@ def run(args: argparse.Namespace) -> int:
     evaluator = Evaluator(args.model, args.verify)
     if reference is not None:
         log(args, f"tune: FEM of the reference {args.like}")
-    target = target_of(evaluator, args.target_lambda, args.target_v, reference, args.like or "", args.tile)
-    log(args, f"tune: target V {target.roughness:.4f} (lambda {target.lambda_mm:.3f} mm); surrogate search over "
-              f"{args.by} factors {factors[0]:g}..{factors[1]:g}")
+    if args.jnd is not None:
+        log(args, f"tune: {evaluator.verifier} of the input {args.heightmap}")
+    target = target_of(evaluator, args.target_lambda, args.target_v, reference, args.like or "", args.tile,
+                       args.jnd, hm)
+    log(args, f"tune: target {target.describe()}; surrogate search over {args.by} factors "
+              f"{factors[0]:g}..{factors[1]:g}")
     result = tune(hm, target, args.by, evaluator, factors, args.tolerance_jnd, args.max_fem, args.tile,
                   progress=lambda line: log(args, "  " + line))
     save_heightmap(result.heightmap, out, base_mm=args.base_mm, overwrite=args.overwrite)
@@ -86,11 +94,12 @@ def run(args: argparse.Namespace) -> int:
     else:
         a = result.achieved
         lines = [f"{args.heightmap} -> {out}: {args.by} x {result.factor:.4f}",
-                 f"target: V {target.roughness:.4f}, lambda {target.lambda_mm:.3f} mm ({target.given_as})",
+                 f"target: {target.describe()}",
                  (f"achieved ({evaluator.verifier}): V {a.roughness:.4f} ± {a.roughness_stderr:.4f}, lambda "
                   f"{a.equivalent_lambda_mm:.3f} mm; error {result.jnd_error:+.2f} ± {result.jnd_stderr:.2f} JND "
                   f"({'within' if result.reached else 'NOT within'} {result.tolerance_jnd:g} JND after "
-                  f"{len(result.steps)} FEM run(s)); surrogate V {result.surrogate_roughness:.4f}"),
+                  f"{len(result.steps)} {evaluator.verifier} run(s)); surrogate V {result.surrogate_roughness:.4f}"
+                  + (", searched with the spectral engine" if result.search_engine == "spectral" else "")),
                  *(f"note: {n}" for n in result.notes)]
         write_stdout("\n".join(lines))
     return 0 if result.reached else 1

@@ -1,7 +1,8 @@
 """Tactile images: a picture with a few flat colours becomes a plate whose regions carry distinguishable textures.
 
-Colours: the picture's colours covering at least ``MIN_COLOUR_FRACTION`` of its pixels are its
-regions; other pixels (anti-aliased edges) join the nearest of them in RGB. Colours are matched to
+Colours: the picture's flat colours are found with a colour tolerance (``roughness.design.colours``:
+CIELAB, JPEG noise merged, anti-aliased edge pixels joining the nearest), each covering at least
+0.5% of its pixels; they are its regions. Colours are matched to
 palette members by lightness: the lightest colour gets the smoothest texture, the darkest the
 roughest. The picture is scaled to ``width_mm`` (nearest neighbour) on ``pixel_mm`` pixels; each
 region carries its texture read periodically, every texture standing on the plate's floor (z = 0 at
@@ -30,9 +31,9 @@ from roughness.core.errors import InputError
 from roughness.core.limits import MAX_IMAGE_PIXELS, MAX_MAP_POSITIONS, MAX_PLATE_PIXELS, check_size
 from roughness.surface.heightmap import Heightmap
 
+from .colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
 from .evaluation import Evaluator, jnd_between
 
-MIN_COLOUR_FRACTION = 0.005
 WIDTH_MM = 60.0
 PIXEL_MM = 0.1
 STEP_MM = 1.0
@@ -59,6 +60,7 @@ class TactilePlate:
     map_y_mm: np.ndarray
     roughness_map: np.ndarray  # surrogate V per footprint position (rows = y)
     map_labels: np.ndarray  # region whose footprint it wholly lies in, -1 if mixed
+    colours: PictureColours  # the picture's flat colours and what their clustering did
     strain: np.ndarray | None = None  # fluctuation of lambda3 mosaic (FEM), on strain_axis_mm
     strain_extent_mm: tuple[float, float, float, float] | None = None
     notes: tuple[str, ...] = field(default=())
@@ -76,14 +78,9 @@ class TactilePlate:
                              "fem_roughness": r.fem_roughness, "fem_lambda_mm": r.fem_lambda_mm,
                              "plate_roughness": r.plate_roughness, "plate_lambda_mm": r.plate_lambda_mm,
                              "footprints_inside": r.footprints} for r in self.regions],
+                "colour_clustering": self.colours.summary(),
                 "plate_distances_jnd": _rounded(self.distances_jnd("plate")),
                 "texture_distances_jnd": _rounded(self.distances_jnd("fem")), "notes": list(self.notes)}
-
-
-def hex_colour(rgb) -> str:
-    """#rrggbb of an RGB triple."""
-    r, g, b = (int(c) for c in rgb)
-    return f"#{r:02x}{g:02x}{b:02x}"
 
 
 def _rounded(a: np.ndarray) -> list:
@@ -150,33 +147,11 @@ def describe_picture(path: str | Path) -> str:
         return f"{path} (a {width} x {height} {kinds.get(image.mode, 'picture')} picture, mode {image.mode})"
 
 
-def flat_colours(rgb: np.ndarray, min_fraction: float = MIN_COLOUR_FRACTION,
-                 source: str = "the picture") -> tuple[np.ndarray, np.ndarray]:
-    """The picture's main colours (n, 3), lightest first, and each pixel's region index (h, w).
-
-    ``source`` names the picture in the error when it has fewer than 2 main colours. Colours are counted
-    as 24-bit codes in one pass (np.bincount: a second for 50 Mpx, where np.unique over RGB rows took minutes).
-    """
-    flat = rgb.reshape(-1, 3)
-    codes = (flat[:, 0].astype(np.int32) << 16) | (flat[:, 1].astype(np.int32) << 8) | flat[:, 2]
-    counts = np.bincount(codes, minlength=1 << 24)
-    present = np.flatnonzero(counts)
-    colours = np.column_stack([present >> 16, (present >> 8) & 255, present & 255]).astype(np.uint8)
-    counts = counts[present]
-    main = colours[counts >= min_fraction * len(flat)]
-    if len(main) < 2:
-        raise InputError(
-            f"{source} has fewer than 2 flat colours: {len(colours)} distinct colour(s) "
-            f"({', '.join(hex_colour(c) for c in colours[:5])}{', ...' if len(colours) > 5 else ''}), "
-            f"{len(main)} covering >= {100 * min_fraction:g}% of its pixels; a tactile image needs a picture with "
-            "2 or more flat colours, one per region (e.g. an 8-bit RGB or greyscale PNG, or shapes on a "
-            "transparent background)", parameter="image")
-    lightness = main.astype(float) @ [0.299, 0.587, 0.114]
-    main = main[np.argsort(-lightness, kind="stable")]
-    nearest = np.argmin(((colours[:, None, :].astype(float) - main[None].astype(float)) ** 2).sum(-1), axis=1)
-    region = np.zeros(1 << 24, dtype=np.intp)  # colour code -> region
-    region[present] = nearest
-    return main, region[codes].reshape(rgb.shape[:2])
+def flat_colours(rgb: np.ndarray, tolerance: float = TOLERANCE, source: str = "the picture"
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The picture's flat colours (n, 3), lightest first, and each pixel's index (h, w): ``cluster_colours``."""
+    found = cluster_colours(rgb, tolerance, source=source)
+    return found.colours, found.labels
 
 
 def plate_labels(labels: np.ndarray, width_mm: float, pixel_mm: float) -> np.ndarray:
@@ -251,11 +226,12 @@ def footprint_labels(labels: np.ndarray, pixel_mm: float, xs: np.ndarray, ys: np
     return out
 
 
-def tactile_image(rgb: np.ndarray, textures: list[tuple[str, Heightmap, float | None]], width_mm: float = WIDTH_MM,
-                  pixel_mm: float = PIXEL_MM, outline_mm: float | None = None,
+def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str, Heightmap, float | None]],
+                  width_mm: float = WIDTH_MM, pixel_mm: float = PIXEL_MM, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = STEP_MM, strain: bool = False,
-                  evaluator: Evaluator | None = None, progress=None) -> TactilePlate:
-    """A plate from a picture and textures ``(name, heightmap, FEM V or None)`` ordered smoothest first (module docstring).
+                  evaluator: Evaluator | None = None, progress=None, tolerance: float = TOLERANCE) -> TactilePlate:
+    """A plate from a picture (RGB pixels, or its colours already clustered) and textures ``(name, heightmap,
+    FEM V or None)`` ordered smoothest first (module docstring); ``tolerance``: Delta E, for RGB pixels.
 
     ``progress(stage, done, total)``: after each batch of the roughness map (stage "roughness map") and each
     FEM footprint of the strain image (stage "strain image").
@@ -266,7 +242,8 @@ def tactile_image(rgb: np.ndarray, textures: list[tuple[str, Heightmap, float | 
     if outline_height_mm is not None:
         non_negative("outline_height_mm", outline_height_mm)
     evaluator = evaluator or Evaluator()
-    colours, picture_labels = flat_colours(rgb)
+    found = picture if isinstance(picture, PictureColours) else cluster_colours(picture, tolerance)
+    colours, picture_labels = found.colours, found.labels
     if len(colours) > len(textures):
         raise InputError(f"the picture has {len(colours)} flat colours but only {len(textures)} textures were given",
                          parameter="textures")
@@ -299,7 +276,7 @@ def tactile_image(rgb: np.ndarray, textures: list[tuple[str, Heightmap, float | 
                               evaluator.lambda_of(v) if v else None, int(inside.size)))
     strain_progress = (lambda done, total: progress("strain image", done, total)) if progress else None
     strain_mosaic, extent = (strain_image(plate, evaluator, strain_progress) if strain else (None, None))
-    return TactilePlate(plate, labels, tuple(regions), rmap.x_mm, rmap.y_mm, rmap.roughness, where,
+    return TactilePlate(plate, labels, tuple(regions), rmap.x_mm, rmap.y_mm, rmap.roughness, where, found,
                         strain_mosaic, extent, tuple(notes))
 
 

@@ -3,12 +3,17 @@
 The knob is the heights (``by="height"``: H - min(H) times the factor) or the lateral size
 (``by="lateral"``: the texture stretched about the map centre by the factor, read periodically, on
 the same pixels and map size). The target is an equivalent wavelength on the standard scale, a V,
-or the FEM's V of a reference texture; errors are counted in JNDs of the equivalent wavelength.
+the FEM's V of a reference texture, or a number of JNDs from the texture itself (its FEM V's equivalent
+wavelength times 1.19 per JND); errors are counted in JNDs of the equivalent wavelength.
 
-Search: the surrogate's V on a grid of factors gives the reachable range (a target outside it is
-refused with that range) and the factor that meets the target. The FEM then verifies it. While the
-FEM answer misses the target by more than ``tolerance_jnd``, the factor is corrected: the first time
-by the surrogate's bias at that factor (V_fem / V_surrogate, assumed to vary slowly with the factor),
+Search: the surrogate's V on a grid of factors gives the reachable range and the factor that meets
+the target. Where the surrogate cannot reach the target (outside its training domain its V may even
+fall as the relief grows), the spectral engine searches instead: its equivalent wavelength, on its
+own scale, put on the verifier's; a target that it reaches only outside the factor range is refused
+with the factor that would reach it (the spectral engine looks up to ``WIDEN`` times beyond the range).
+The FEM then verifies the factor. While the FEM answer misses the target by more than
+``tolerance_jnd``, the factor is corrected: the first time by the search engine's bias at that factor
+(V_fem / V_search, assumed to vary slowly with the factor),
 then by the secant through the two FEM answers closest to the target in log V over log factor. The
 result is the FEM-verified factor closest to the target.
 """
@@ -19,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from roughness.core.checks import integer, positive
+from roughness.core.checks import in_range, integer, positive
 from roughness.core.errors import InputError
 from roughness.surface.heightmap import Heightmap
 
@@ -30,6 +35,9 @@ FACTOR_RANGE = {"height": (0.1, 3.0), "lateral": (0.4, 2.5)}  # default search r
 GRID = 49  # surrogate evaluations over the factor range
 TOLERANCE_JND = 0.1
 MAX_FEM = 4
+WIDEN = 3.0  # out of the surrogate's reach: the spectral engine also looks this much beyond each end of the range
+SPECTRAL_GRID = 17  # spectral evaluations over that wider range (0.03 to 1 s each: tall reliefs take longest)
+MAX_RELATIVE_JND = 30.0  # a relative target: at most this many JNDs from the input (a factor 184 in lambda)
 
 
 @dataclass(frozen=True)
@@ -38,12 +46,23 @@ class Target:
 
     roughness: float
     lambda_mm: float
-    given_as: str  # "lambda", "roughness" or "like <source>"
+    given_as: str  # "lambda", "roughness", "like <source>" or "jnd"
+    reference: Verified | None = None  # the verifier's answer on the reference (--like) or on the input (jnd)
+    jnd: float | None = None  # a relative target: JNDs from the input (positive: rougher)
 
     @property
     def parameter(self) -> str:
         """The option the target came from (the CLI names it in errors about the target)."""
-        return {"lambda": "target_lambda", "roughness": "target_v"}.get(self.given_as, "like")
+        return {"lambda": "target_lambda", "roughness": "target_v", "jnd": "jnd"}.get(self.given_as, "like")
+
+    def describe(self) -> str:
+        """The target in words: ``V 0.0612, lambda 0.912 mm (+1 JND from the input: V 0.0501, lambda 0.800 mm)``."""
+        text = f"V {self.roughness:.4f}, lambda {self.lambda_mm:.3f} mm"
+        if self.jnd is not None:
+            r = self.reference
+            return (f"{text} ({self.jnd:+g} JND from the input: V {r.roughness:.4f} ± {r.roughness_stderr:.4f}, "
+                    f"lambda {r.equivalent_lambda_mm:.3f} mm)")
+        return f"{text} ({self.given_as})"
 
 
 @dataclass(frozen=True)
@@ -52,6 +71,7 @@ class Step:
 
     factor: float
     surrogate_roughness: float
+    search_roughness: float  # the search engine's V (the surrogate's, or the spectral engine's on the verifier's scale)
     fem: Verified
     jnd_error: float  # FEM's equivalent lambda against the target's: positive = rougher than the target
 
@@ -71,6 +91,7 @@ class TuneResult:
     reachable_roughness: tuple[float, float]  # surrogate V over the factor range
     factor_range: tuple[float, float]
     tolerance_jnd: float
+    search_engine: str  # "surrogate", or "spectral" where the surrogate cannot reach the target
     notes: tuple[str, ...] = field(default=())
 
     @property
@@ -78,14 +99,19 @@ class TuneResult:
         return abs(self.jnd_error) <= self.tolerance_jnd
 
     def summary(self) -> dict:
+        reference = self.target.reference
+        relative = {} if self.target.jnd is None else {
+            "target_jnd": self.target.jnd, "input_roughness": reference.roughness,
+            "input_roughness_stderr": reference.roughness_stderr, "input_lambda_mm": reference.equivalent_lambda_mm}
         return {"by": self.by, "factor": self.factor, "target_roughness": self.target.roughness,
-                "target_lambda_mm": self.target.lambda_mm, "target_given_as": self.target.given_as,
+                "target_lambda_mm": self.target.lambda_mm, "target_given_as": self.target.given_as, **relative,
                 "achieved_roughness": self.achieved.roughness, "achieved_roughness_stderr": self.achieved.roughness_stderr,
                 "achieved_lambda_mm": self.achieved.equivalent_lambda_mm, "achieved_on_scale": self.achieved.on_scale,
                 "surrogate_roughness": self.surrogate_roughness, "surrogate_in_domain": self.in_domain,
                 "jnd_error": self.jnd_error, "jnd_stderr": self.jnd_stderr, "tolerance_jnd": self.tolerance_jnd,
-                "reached": self.reached, "fem_runs": len(self.steps),
+                "reached": self.reached, "fem_runs": len(self.steps), "search_engine": self.search_engine,
                 "steps": [{"factor": s.factor, "surrogate_roughness": s.surrogate_roughness,
+                           "search_roughness": s.search_roughness,
                            "fem_roughness": s.fem.roughness, "jnd_error": s.jnd_error} for s in self.steps],
                 "reachable_roughness": list(self.reachable_roughness), "factor_range": list(self.factor_range),
                 "notes": list(self.notes)}
@@ -107,13 +133,29 @@ def scaled(heightmap: Heightmap, by: str, factor: float) -> Heightmap:
 
 
 def target_of(evaluator: Evaluator, lambda_mm: float | None = None, roughness: float | None = None,
-              like: Heightmap | None = None, like_name: str = "reference", tile: bool = False) -> Target:
-    """The target from exactly one of an equivalent wavelength (mm), a V, or a reference texture (its FEM V)."""
-    given = [name for name, v in (("target_lambda", lambda_mm), ("target_v", roughness), ("like", like))
-             if v is not None]
+              like: Heightmap | None = None, like_name: str = "reference", tile: bool = False,
+              jnd: float | None = None, heightmap: Heightmap | None = None) -> Target:
+    """The target from exactly one of an equivalent wavelength (mm), a V, a reference texture (its FEM V), or
+    ``jnd`` JNDs from ``heightmap`` (the texture to tune: its FEM V's equivalent wavelength times 1.19^jnd)."""
+    given = [name for name, v in (("target_lambda", lambda_mm), ("target_v", roughness), ("like", like),
+                                  ("jnd", jnd)) if v is not None]
     if len(given) != 1:
-        raise InputError("give exactly one target: an equivalent wavelength, a V, or a reference texture"
-                         + (f" (got {', '.join(given)})" if given else ""), parameter=given[-1] if given else None)
+        raise InputError("give exactly one target: an equivalent wavelength, a V, a reference texture, or JNDs "
+                         "from the input" + (f" (got {', '.join(given)})" if given else ""),
+                         parameter=given[-1] if given else None)
+    if jnd is not None:
+        from roughness.surrogate.calibration import WEBER_FRACTION
+
+        steps = in_range("jnd", jnd, -MAX_RELATIVE_JND, MAX_RELATIVE_JND)
+        if heightmap is None:
+            raise InputError("a relative target (jnd) needs the texture it is relative to", parameter="jnd")
+        fem = evaluator.verify(heightmap, tile=tile)
+        if fem.roughness < evaluator.scale.floor:
+            raise InputError(f"the input's V {fem.roughness:.4g} ({evaluator.verifier}) is below the standard scale's "
+                             f"floor {evaluator.scale.floor:.4g}: it has no equivalent wavelength to count JNDs from; "
+                             "give an absolute target (--target-lambda or --target-v)", parameter="jnd")
+        lam = fem.equivalent_lambda_mm * (1 + WEBER_FRACTION) ** steps
+        return Target(roughness_of_lambda(evaluator.scale, lam), lam, "jnd", fem, steps)
     if lambda_mm is not None:
         lam = positive("target_lambda", lambda_mm)
         return Target(roughness_of_lambda(evaluator.scale, lam), lam, "lambda")
@@ -121,7 +163,7 @@ def target_of(evaluator: Evaluator, lambda_mm: float | None = None, roughness: f
         v = positive("target_v", roughness)
         return Target(v, evaluator.lambda_of(v), "roughness")
     fem = evaluator.verify(like, tile=tile)
-    return Target(fem.roughness, fem.equivalent_lambda_mm, f"like {like_name}")
+    return Target(fem.roughness, fem.equivalent_lambda_mm, f"like {like_name}", fem)
 
 
 def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Evaluator | None = None,
@@ -149,18 +191,35 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
     grid = np.geomspace(lo, hi, GRID)
     v_grid, _ = surrogate(grid)
     reachable = (float(v_grid.min()), float(v_grid.max()))
-    lam_lo, lam_hi = evaluator.lambda_of(reachable[0]), evaluator.lambda_of(reachable[1])
-    if not reachable[0] <= target.roughness <= reachable[1]:
-        raise InputError(
-            f"target V {target.roughness:.4f} (equivalent lambda {target.lambda_mm:.3f} mm) is out of reach by "
-            f"{by} factors {lo:g}..{hi:g}: this texture reaches V {reachable[0]:.4f}..{reachable[1]:.4f} "
-            f"(lambda {lam_lo:.3f}..{lam_hi:.3f} mm) on the surrogate", parameter=target.parameter)
-    notes = []
+    search, engine, notes = (lambda factors: surrogate(factors)[0]), "surrogate", []
+    if not reachable[0] <= target.roughness <= reachable[1]:  # the spectral engine, over a wider bracket
+        spectral = _spectral_search(heightmap, by, evaluator, tile)
+        wide = np.geomspace(lo / WIDEN, hi * WIDEN, SPECTRAL_GRID)
+        wide = np.concatenate([wide[wide < lo], [lo], wide[(wide > lo) & (wide < hi)], [hi], wide[wide > hi]])
+        inside = (wide >= lo) & (wide <= hi)
+        v_wide = np.full(len(wide), np.nan)
+        v_wide[inside] = spectral(wide[inside])
+        if not v_wide[inside].min() <= target.roughness <= v_wide[inside].max():  # which factor would reach it?
+            above = target.roughness > v_wide[inside].max()
+            outward = np.nonzero(wide > hi)[0] if above else np.nonzero(wide < lo)[0][::-1]
+            for i in outward:  # one factor at a time, outwards from the range, until one reaches the target
+                v_wide[i] = spectral(wide[i:i + 1])[0]
+                if (v_wide[i] >= target.roughness) == above:
+                    break
+            seen = ~np.isnan(v_wide)
+            raise InputError(_out_of_reach(target, by, evaluator, (lo, hi), reachable, wide[seen], v_wide[seen]),
+                             parameter=target.parameter)
+        search, engine, grid, v_grid = spectral, "spectral", wide[inside], v_wide[inside]
+        lam_lo, lam_hi = evaluator.lambda_of(reachable[0]), evaluator.lambda_of(reachable[1])
+        notes.append(f"the surrogate reaches only lambda {lam_lo:.3f}..{lam_hi:.3f} mm by {by} factors {lo:g}..{hi:g} "
+                     "(outside its training domain it is not to be trusted): the spectral engine searched instead")
     if np.any(np.diff(v_grid) <= 0):
-        notes.append(f"the surrogate's V does not rise monotonically with the {by} factor; the first crossing is used")
+        searcher = "surrogate" if engine == "surrogate" else "spectral engine"
+        notes.append(f"the {searcher}'s V does not rise monotonically with the {by} factor; the first crossing is used")
 
     def factor_for(v_wanted: float, bias: float) -> float:
-        """The factor where bias * surrogate V = v_wanted: grid crossing, then bisection on the surrogate."""
+        """The factor where bias * search V = v_wanted: grid crossing, then bisection on the surrogate (the spectral
+        engine: interpolation between the grid's points, 1.4x apart; the verifier's answers correct the rest)."""
         values = v_grid * bias
         above = np.nonzero(values >= v_wanted)[0]
         if len(above) == 0:
@@ -169,9 +228,12 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
         if k == 0:
             return lo
         a, b = math.log(grid[k - 1]), math.log(grid[k])
+        if engine == "spectral":  # each evaluation up to a second: log V interpolated over log factor instead
+            va, vb = math.log(values[k - 1]), math.log(values[k])
+            return math.exp(a + (b - a) * (math.log(v_wanted) - va) / (vb - va)) if vb > va else math.exp(b)
         for _ in range(12):  # bisection in log factor: 2^-12 of one grid step
             mid = (a + b) / 2
-            if surrogate([math.exp(mid)])[0][0] * bias >= v_wanted:
+            if search([math.exp(mid)])[0] * bias >= v_wanted:
                 b = mid
             else:
                 a = mid
@@ -181,12 +243,14 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
     factor = factor_for(target.roughness, 1.0)
     for _ in range(max_fem):
         v_sur = float(surrogate([factor])[0][0])
+        v_search = v_sur if engine == "surrogate" else float(search([factor])[0])
         fem = evaluator.verify(scaled(heightmap, by, factor), tile=tile)
         error = jnd_between(fem.equivalent_lambda_mm, target.lambda_mm)
-        steps.append(Step(factor, v_sur, fem, error))
+        steps.append(Step(factor, v_sur, v_search, fem, error))
         if progress:
-            progress(f"FEM at {by} factor {factor:.4f}: V {fem.roughness:.4f} (surrogate {v_sur:.4f}), "
-                     f"{error:+.2f} JND from the target")
+            progress(f"{evaluator.verifier} at {by} factor {factor:.4f}: V {fem.roughness:.4f} (surrogate {v_sur:.4f}"
+                     + (f", spectral {v_search:.4f}" if engine == "spectral" else "")
+                     + f"), {error:+.2f} JND from the target")
         if abs(error) <= tolerance_jnd:
             break
         factor = _next_factor(steps, target, lo, hi, factor_for)
@@ -201,19 +265,59 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
     if not in_domain:
         notes.append("the scaled texture lies outside the surrogate's training domain (the FEM verified it)")
     return TuneResult(scaled(heightmap, by, best.factor), by, best.factor, target, best.fem, best.surrogate_roughness,
-                      in_domain, best.jnd_error, se, tuple(steps), reachable, (lo, hi), tolerance_jnd, tuple(notes))
+                      in_domain, best.jnd_error, se, tuple(steps), reachable, (lo, hi), tolerance_jnd, engine,
+                      tuple(notes))
 
 
 def _next_factor(steps: list[Step], target: Target, lo: float, hi: float, factor_for) -> float:
     """A corrected factor: the surrogate's bias at the last step, or the secant through the two closest FEM answers."""
     if len(steps) == 1:
         last = steps[0]
-        return factor_for(target.roughness, last.fem.roughness / last.surrogate_roughness)
+        return factor_for(target.roughness, last.fem.roughness / last.search_roughness)
     a, b = sorted(steps, key=lambda s: abs(s.jnd_error))[:2]
     if math.isclose(a.factor, b.factor) or math.isclose(a.fem.roughness, b.fem.roughness):
-        return factor_for(target.roughness, a.fem.roughness / a.surrogate_roughness)
+        return factor_for(target.roughness, a.fem.roughness / a.search_roughness)
     slope = (math.log(a.fem.roughness) - math.log(b.fem.roughness)) / (math.log(a.factor) - math.log(b.factor))
     if slope <= 0:  # not rising here: fall back on the surrogate's bias at the best step
-        return factor_for(target.roughness, a.fem.roughness / a.surrogate_roughness)
+        return factor_for(target.roughness, a.fem.roughness / a.search_roughness)
     step = (math.log(target.roughness) - math.log(a.fem.roughness)) / slope
     return float(np.clip(a.factor * math.exp(np.clip(step, -0.5, 0.5)), lo, hi))
+
+
+def _spectral_search(heightmap: Heightmap, by: str, evaluator: Evaluator, tile: bool):
+    """V of the scaled texture by the spectral engine, as V on the verifier's scale (same equivalent wavelength)."""
+    spectral = evaluator if evaluator.fidelity == "spectral" else Evaluator(evaluator.model_path, "spectral")
+
+    def search(factors) -> np.ndarray:
+        lams = [spectral.verify(scaled(heightmap, by, float(f)), tile=tile).equivalent_lambda_mm for f in factors]
+        return np.array([roughness_of_lambda(evaluator.scale, lam) for lam in lams])
+
+    return search
+
+
+def _out_of_reach(target: Target, by: str, evaluator: Evaluator, factors: tuple[float, float],
+                  reachable: tuple[float, float], wide: np.ndarray, v_wide: np.ndarray) -> str:
+    """Why the target is refused, and the factor that would reach it on the spectral engine, if any."""
+    (lo, hi), lams = factors, [evaluator.lambda_of(v) for v in reachable]
+    text = (f"target V {target.roughness:.4f} (equivalent lambda {target.lambda_mm:.3f} mm) is out of reach by {by} "
+            f"factors {lo:g}..{hi:g}: this texture reaches V {reachable[0]:.4f}..{reachable[1]:.4f} (lambda "
+            f"{lams[0]:.3f}..{lams[1]:.3f} mm) on the surrogate")
+    side = np.sign(np.log(np.maximum(v_wide, 1e-300)) - math.log(target.roughness))
+    crossings = np.nonzero(side[1:] != side[:-1])[0]
+    if len(crossings) == 0:
+        wide_lams = [evaluator.lambda_of(v) for v in (v_wide.min(), v_wide.max())]
+        return (f"{text}, and no {by} factor in {wide[0]:.3g}..{wide[-1]:.3g} reaches it on the spectral engine "
+                f"(lambda {wide_lams[0]:.3f}..{wide_lams[1]:.3f} mm)")
+    k = int(crossings[0]) + 1  # interpolate the first crossing in log V over log factor
+    t = (math.log(target.roughness) - math.log(v_wide[k - 1])) / (math.log(v_wide[k]) - math.log(v_wide[k - 1]))
+    factor = math.exp(math.log(wide[k - 1]) + t * (math.log(wide[k]) - math.log(wide[k - 1])))
+    flag = f"--max-factor {_two_digits(factor * 1.1, True)}" if factor > hi else \
+        f"--min-factor {_two_digits(factor / 1.1, False)}"
+    return (f"{text}; the spectral engine reaches it at a {by} factor of about {factor:.2f}: widen the range "
+            f"({flag}) to search there, the verifier checks the result")
+
+
+def _two_digits(x: float, up: bool) -> str:
+    """``x`` rounded up or down to two significant digits: a bound that still includes ``x``."""
+    unit = 10.0 ** (math.floor(math.log10(x)) - 1)
+    return f"{(math.ceil(x / unit) if up else math.floor(x / unit)) * unit:.2g}"
