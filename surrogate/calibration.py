@@ -3,12 +3,14 @@
 The table holds, per FEM fidelity, the mean FEM V of each standard texture (cap-topped bumps at
 the paper's lambdas) over several seeds. A roughness V is placed on the scale by its equivalent
 wavelength: log lambda interpolated in log V between the standard textures (V rises with lambda,
-about as lambda^2), and beyond either end the power law V = a lambda^b fitted to the whole table
-(the placement then says it is extrapolated). The paper measured its Weber fraction, 0.19, on
+about as lambda^2), and beyond either end the exponent b of the power law V = a lambda^b fitted to
+the whole table, from that end's standard (V = V_end (lambda / lambda_end)^b: continuous and rising
+across the ends, where the fitted law itself is not: it gave two wavelengths to one V just below the
+coarsest standard). The placement then says it is extrapolated. The paper measured its Weber fraction, 0.19, on
 lambda, so distances are counted in just-noticeable differences of the equivalent wavelength:
 ln(lambda_A / lambda_B) / ln(1.19). (A 19% step in V is only about half a JND.)
 
-The scale has a floor (``StandardScale.floor``): the V of the power law at ``FLOOR_LAMBDA_MM`` =
+The scale has a floor (``StandardScale.floor``): the V of that extrapolation at ``FLOOR_LAMBDA_MM`` =
 0.2 mm, the shortest bump wavelength the standard textures can be drawn with (``MIN_PIXELS_PER_LAMBDA``
 = 4 pixels of the scale's 0.05 mm pixels), about 6.5 JND below the finest standard (0.625 mm): V about
 0.0031 at every tabulated fidelity, a ninth of the finest standard's. Down to it the power law still
@@ -106,21 +108,29 @@ class StandardScale:
 
     @cached_property
     def floor(self) -> float:
-        """V below which a roughness is below the scale (module docstring): the power law at ``floor_lambda_mm``."""
-        a, b = self.power_law
-        return a * self.floor_lambda_mm**b
+        """V below which a roughness is below the scale (module docstring): the scale's V at ``floor_lambda_mm``."""
+        return self.roughness_at(self.floor_lambda_mm)
 
     def equivalent_lambda(self, roughness: float) -> tuple[float, bool]:
         """Equivalent wavelength (mm) of a roughness V, and whether it lies on the scale (not extrapolated).
 
         No floor: the design searches need a continuous map; what users see goes through ``place``."""
         _check(roughness)
-        log_v = np.log(self.roughness)
+        log_v, log_lambda = np.log(self.roughness), np.log(self.lambdas_mm)
         x = math.log(max(roughness, 1e-12))  # V = 0 (flat): the smallest V a float field resolves
         if log_v[0] <= x <= log_v[-1]:
-            return float(np.exp(np.interp(x, log_v, np.log(self.lambdas_mm)))), True
-        a, b = self.power_law
-        return float(math.exp((x - math.log(a)) / b)), False
+            return float(np.exp(np.interp(x, log_v, log_lambda))), True
+        end = 0 if x < log_v[0] else -1
+        return float(math.exp(log_lambda[end] + (x - log_v[end]) / self.power_law[1])), False
+
+    def roughness_at(self, lambda_mm: float) -> float:
+        """V at an equivalent wavelength (mm): the inverse of ``equivalent_lambda``."""
+        log_v, log_lambda = np.log(self.roughness), np.log(self.lambdas_mm)
+        x = math.log(lambda_mm)
+        if log_lambda[0] <= x <= log_lambda[-1]:
+            return float(np.exp(np.interp(x, log_lambda, log_v)))
+        end = 0 if x < log_lambda[0] else -1
+        return float(math.exp(log_v[end] + self.power_law[1] * (x - log_lambda[end])))
 
     def place(self, roughness: float) -> Placement:
         """Equivalent lambda (mm) and signed JND distance (on lambda) from the nearest standard texture;

@@ -47,13 +47,28 @@ def test_json_text_writes_null_where_a_number_is_not_finite():
 
 # ---- the floor -------------------------------------------------------------------------------------------------
 
+def test_the_scale_is_continuous_and_rising_across_its_ends():
+    """Beyond its ends the scale extrapolates from the end standards with the fitted exponent: no jump
+    (the fitted law itself gave V 0.20-0.22 at the coarsest standard, whose table V is 0.185)."""
+    for fidelity in ("coarse", "default", "fine", "spectral"):
+        scale = load_scale(fidelity)
+        for end in (0, -1):
+            v = scale.roughness[end]
+            for side in (1 - 1e-9, 1 + 1e-9):
+                assert scale.equivalent_lambda(v * side)[0] == pytest.approx(scale.lambdas_mm[end], rel=1e-8)
+        lams = np.geomspace(0.1, 5.0, 400)
+        vs = np.array([scale.roughness_at(lam) for lam in lams])
+        assert np.all(np.diff(vs) > 0)
+        assert np.allclose([scale.equivalent_lambda(v)[0] for v in vs], lams, rtol=1e-9)
+
+
 def test_floor_is_the_shortest_standard_bump_on_the_power_law():
     assert FLOOR_LAMBDA_MM == pytest.approx(MIN_PIXELS_PER_LAMBDA * PIXEL_MM)  # the texture generator's limit
     assert SCALE.floor == pytest.approx(0.004)
     for fidelity in ("coarse", "default", "fine"):
         scale = load_scale(fidelity)
-        a, b = scale.power_law
-        assert scale.floor == pytest.approx(a * 0.2**b)
+        b = scale.power_law[1]  # the fitted exponent, from the finest standard down
+        assert scale.floor == pytest.approx(scale.roughness[0] * (0.2 / scale.lambdas_mm[0]) ** b)
         # well below the finest standard (6.5 JND of lambda) and well above the engines' noise around zero
         assert 20 * FLAT_SPREAD < scale.floor < scale.roughness[0] / 5
 

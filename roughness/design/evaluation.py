@@ -107,12 +107,7 @@ class Evaluator:
 
 def roughness_of_lambda(scale, lambda_mm: float) -> float:
     """Inverse of ``StandardScale.equivalent_lambda``: V at an equivalent wavelength (mm)."""
-    lams, vs = np.log(scale.lambdas_mm), np.log(scale.roughness)
-    x = math.log(lambda_mm)
-    if lams[0] <= x <= lams[-1]:
-        return float(np.exp(np.interp(x, lams, vs)))
-    a, b = scale.power_law
-    return a * lambda_mm**b
+    return scale.roughness_at(lambda_mm)
 
 
 def jnd_between(lambda_a_mm: float, lambda_b_mm: float) -> float:
