@@ -8,7 +8,6 @@ are placed on its own standard scale, and distances are JNDs of the equivalent w
 """
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
