@@ -22,7 +22,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from roughness.cli import main
 from roughness.core.errors import InputError, OutputExists
 from roughness.core.files import atomic_write, check_distinct
 

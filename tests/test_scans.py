@@ -260,7 +260,7 @@ def test_a_scan_is_sized_before_its_heights_are_read(tmp_path, monkeypatch):
     import SurfaceTopography.IO.X3P as x3p
 
     monkeypatch.setattr(x3p.X3PReader, "topography", lambda *a, **k: pytest.fail("heights read before the check"))
-    with pytest.raises(InputError, match=rf"pixels its channel 'Default' declares \(7 x 5\): 35, above the limit"):
+    with pytest.raises(InputError, match=r"pixels its channel 'Default' declares \(7 x 5\): 35, above the limit"):
         load_heightmap(path)
 
 
