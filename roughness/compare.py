@@ -96,10 +96,12 @@ class _DatasetSamples:
         return self._data.heightmap(sid)
 
 
-def folder_textures(path: Path, pixel_mm: float | None, height_mm: float | None) -> list[Texture]:
+def folder_textures(path: Path, pixel_mm: float | None, height_mm: float | None, load=None) -> list[Texture]:
+    """The folder's heightmap files; ``load(path)`` reads one (default: ``load_heightmap`` with the units)."""
     from roughness.surface.io import heightmap_files, load_heightmap
 
-    return [Texture(f.name, "file", lambda f=f: load_heightmap(f, pixel_mm, height_mm)) for f in heightmap_files(path)]
+    load = load or (lambda f: load_heightmap(f, pixel_mm, height_mm))
+    return [Texture(f.name, "file", lambda f=f: load(f)) for f in heightmap_files(path)]
 
 
 def recipe_textures(path: Path, n: int | None) -> list[Texture]:
@@ -114,11 +116,12 @@ def recipe_textures(path: Path, n: int | None) -> list[Texture]:
 
 
 def textures_of(source: str, n: int | None = None, pixel_mm: float | None = None,
-                height_mm: float | None = None) -> tuple[list[Texture], dict[str, dict[str, dict]]]:
-    """The textures an INPUT names, and any stored results that come with it (by texture name)."""
+                height_mm: float | None = None, load=None) -> tuple[list[Texture], dict[str, dict[str, dict]]]:
+    """The textures an INPUT names, and any stored results that come with it (by texture name); ``load`` as
+    in folder_textures."""
     path = Path(source)
     if path.is_dir():
-        return folder_textures(path, pixel_mm, height_mm), {}
+        return folder_textures(path, pixel_mm, height_mm, load), {}
     if not path.is_file():
         raise InputError(f"compare input not found: {source}", parameter="input")
     if path.suffix.lower() == ".json":

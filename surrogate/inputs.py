@@ -7,25 +7,33 @@ recorded in ``errors`` with its reason and skipped; the others are still predict
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from roughness.core.errors import InputError
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import heightmap_files, load_heightmap
+from roughness.surface.units import split_input
 
 
 class InputReader:
     """Heightmaps named by the paths given, in order; folders sorted by file name."""
 
     def __init__(self, paths: list[str], pixel_mm: float | None, height_mm: float | None, footprint_mm: float,
-                 centre_mm: tuple[float, float] | None, tile: bool) -> None:
+                 centre_mm: tuple[float, float] | None, tile: bool,
+                 load: Callable[[str, bool], Heightmap] | None = None) -> None:
+        """``load(path, several)`` reads one heightmap file (default: ``load_heightmap`` with the units);
+        ``several``: other inputs come with it. A path may carry its own units (FILE:pixel-mm=..)."""
         self.pixel_mm, self.height_mm = pixel_mm, height_mm
+        self._load_file = load or (lambda path, several: load_heightmap(path, self.pixel_mm, self.height_mm))
         self.footprint_mm, self.centre_mm, self.tile = footprint_mm, centre_mm, tile
         self.errors: list[tuple[str, str]] = []
         self._items: list[tuple[str, Path, str | None]] = []  # (name, file, sample id in a dataset)
-        for path in map(Path, paths):
-            self._items += self._expand(path)
+        for text in paths:
+            path = split_input(text)[0] if load else text
+            tail = text[len(path):]  # FILE:pixel-mm=..: the units go with every file of a folder
+            self._items += [(name + tail if sid is None else name, Path(f"{f}{tail}") if sid is None else f, sid)
+                            for name, f, sid in self._expand(Path(path))]
         self.total = len(self._items)
         self._names: deque[str] = deque()
 
@@ -64,7 +72,7 @@ class InputReader:
 
     def _load(self, path: Path, sid: str | None, datasets: dict) -> Heightmap:
         if sid is None:
-            return load_heightmap(path, self.pixel_mm, self.height_mm)
+            return self._load_file(str(path), self.total > 1)
         if path not in datasets:
             from roughness.dataset.store import open_dataset
 

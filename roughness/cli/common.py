@@ -11,6 +11,7 @@ import sys
 
 from roughness.core.errors import InputError, OutputExists
 from roughness.core.limits import MAX_BATCH, MAX_CHANNELS, MAX_PARALLEL
+from roughness.surface.cleanup import LEVELS, MAX_FILL_FRACTION
 
 
 def float_pair(text: str) -> tuple[float, float]:
@@ -100,11 +101,49 @@ def add_heightmap_args(p: argparse.ArgumentParser) -> None:
 
 
 def add_reading_args(p: argparse.ArgumentParser) -> None:
-    """--pixel-mm and --height-mm."""
+    """--pixel-mm and --height-mm, the unit check's --units-ok, and the scan clean-up options."""
     p.add_argument("--pixel-mm", type=POSITIVE, metavar="MM",
-                   help="pixel size in mm (required unless the file states it)")
+                   help="pixel size in mm (required unless the file states it; FILE:pixel-mm=MM for one file)")
     p.add_argument("--height-mm", type=POSITIVE, metavar="MM",
-                   help="height of full-scale white in mm (8/16-bit PNG/TIFF; unless the file states it)")
+                   help="height of full-scale white in mm (8/16-bit PNG/TIFF; unless the file states it; with several "
+                        "inputs it applies to those that need it; FILE:height-mm=MM for one file)")
+    p.add_argument("--units-ok", action="store_true",
+                   help="the heights and pixel size are mm even though their relief, slope or pixel size look like "
+                        "metres or micrometres (default: refuse them)")
+    p.add_argument("--fill", action="store_true",
+                   help="interpolate missing points (NaN) of a scan, reported (default: refuse them)")
+    p.add_argument("--max-fill", type=FRACTION, default=MAX_FILL_FRACTION, metavar="FRACTION",
+                   help=f"--fill refuses maps with more missing than this fraction (default: {MAX_FILL_FRACTION:g})")
+    p.add_argument("--despike", type=POSITIVE, metavar="K",
+                   help="replace spikes: pixels further than K RMS height steps from their 3 x 3 median "
+                        "(5 leaves the product's textures untouched; default: off)")
+    p.add_argument("--level", choices=tuple(LEVELS),
+                   help="subtract the least-squares plane or polynomial of degree 2 or 3 (default: off)")
+
+
+def load_input(args: argparse.Namespace, text: str, several: bool = False, report: bool = True):
+    """One input file as the command's options say: units (FILE:pixel-mm=..,height-mm=.. over --pixel-mm and
+    --height-mm), clean-up steps (each reported on stderr if ``report``: else the command's output shows them),
+    unit check. Returns (Heightmap, Cleaned)."""
+    from roughness.surface.cleanup import read_surface
+    from roughness.surface.units import split_input
+
+    path, units = split_input(text)
+    try:
+        hm, done = read_surface(path, units.over(args.pixel_mm, args.height_mm), cleanup_of(args), args.units_ok,
+                                several)
+    except InputError as err:  # in the CLI's words also where a batch collects the message (predict FOLDER)
+        raise InputError(error_message(err, getattr(args, "flags", {})), parameter=err.parameter) from None
+    for line in done.lines() if report else ():
+        log(args, f"{path}: {line}")
+    return hm, done
+
+
+def cleanup_of(args: argparse.Namespace):
+    """The clean-up steps the options ask for."""
+    from roughness.surface.cleanup import Cleanup
+
+    return Cleanup(args.fill, args.max_fill, args.despike, args.level)
 
 
 def add_quiet(p: argparse.ArgumentParser) -> None:

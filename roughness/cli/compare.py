@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import COUNT, add_overwrite, add_quiet, add_reading_args, finish, log
+from .common import COUNT, add_overwrite, add_quiet, add_reading_args, finish, load_input, log
 
 COMPARE_ENGINES = ("fem:coarse", "fem:default", "surrogate", "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance")
 REFERENCE = "fem:fine"
@@ -44,7 +44,8 @@ def run(args: argparse.Namespace) -> int:
     check_distinct({"--out": out}, {"INPUT": args.input})
     manifest = {"input": args.input, "n": args.n, "reference": args.reference, "engines": sorted(specs)}
     check_report_folder(out, manifest, args.overwrite)
-    textures, stored = textures_of(args.input, args.n, args.pixel_mm, args.height_mm)
+    textures, stored = textures_of(args.input, args.n, args.pixel_mm, args.height_mm,
+                                   lambda f: load_input(args, str(f), several=True)[0])
     cache = ResultCache(out, {e.spec: e.identity for e in engines}, manifest)
     try:
         outcome = run(textures, engines, cache, stored, quiet=args.quiet)

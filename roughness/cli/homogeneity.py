@@ -9,6 +9,7 @@ from .common import (
     SEED,
     add_model_tail,
     add_reading_args,
+    load_input,
     defaults,
     finish,
     json_text,
@@ -45,7 +46,6 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
     from roughness.design.evaluation import Evaluator
     from roughness.design.homogeneity import homogeneity, save_map
-    from roughness.surface.io import load_heightmap
 
     check_distinct({"--map": args.map}, {"HEIGHTMAP": args.heightmap, "--model": args.model})
     if args.map:
@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
         check_output(args.map, args.overwrite, "map")
     if args.n < 3:
         raise InputError(f"needs at least 3 windows, got {args.n}", parameter="n")
-    hm = load_heightmap(args.heightmap, args.pixel_mm, args.height_mm)
+    hm, cleaned = load_input(args, args.heightmap)
     evaluator = Evaluator(args.model, args.verify)
     engine = evaluator.verifier if args.engine == "fem" else args.engine
     log(args, f"homogeneity: {args.n} windows with the {engine}")
@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
                          progress=lambda done, total: log(args, f"  {engine} window {done}/{total}"))
     if args.map:
         save_map(result, hm, args.map, args.overwrite)
-    summary = {"input": args.heightmap, **result.summary(), "verifier": engine}
+    summary = {"input": args.heightmap, **result.summary(), "verifier": engine, "cleanup": cleaned.as_dict()}
     if args.json:
         write_stdout(json_text(summary))
         return 0

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import add_reading_args, defaults, finish, json_text, write_stdout
+from .common import add_reading_args, defaults, finish, json_text, load_input, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -11,8 +11,9 @@ def add_parser(sub) -> None:
 
     given = defaults(predict)
     p = sub.add_parser("jnd", help="tell two textures apart? their V, equivalent lambda and distance in JNDs")
-    p.add_argument("a", metavar="HEIGHTMAP_A", help="first texture (heightmap file)")
-    p.add_argument("b", metavar="HEIGHTMAP_B", help="second texture (heightmap file)")
+    p.add_argument("a", metavar="HEIGHTMAP_A", help="first texture (heightmap file; FILE:height-mm=MM,pixel-mm=MM "
+                   "gives its own units)")
+    p.add_argument("b", metavar="HEIGHTMAP_B", help="second texture (heightmap file, as A)")
     p.add_argument("--engine", choices=PREDICT_ENGINES, default=given["engine"],
                    help=f"surrogate, spectral, fem, or auto: the surrogate, FEM outside its domain "
                         f"(default: {given['engine']})")
@@ -24,17 +25,17 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from roughness.engines import predict
-    from roughness.surface.io import load_heightmap
     from roughness.surrogate.calibration import jnd_distance, load_scale
 
-    maps = [load_heightmap(path, args.pixel_mm, args.height_mm) for path in (args.a, args.b)]
-    pa, pb = predict(maps, engine=args.engine, model=args.model, sources=[args.a, args.b])
+    (ha, ca), (hb, cb) = (load_input(args, path, several=True, report=False) for path in (args.a, args.b))
+    pa, pb = predict([ha, hb], engine=args.engine, model=args.model, sources=[args.a, args.b])
     scale = load_scale(pa.fidelity)
     distance = jnd_distance(scale, pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
     if args.json:
-        write_stdout(json_text({"a": pa.as_dict(), "b": pb.as_dict(), **distance.as_dict()}))
+        write_stdout(json_text({"a": pa.as_dict() | {"cleanup": ca.as_dict()},
+                                "b": pb.as_dict() | {"cleanup": cb.as_dict()}, **distance.as_dict()}))
         return 0
-    lines = [_line(p) for p in (pa, pb)]
+    lines = [_line(p) + "".join(f"\n  {line}" for line in c.lines()) for p, c in ((pa, ca), (pb, cb))]
     kinds = " and ".join(dict.fromkeys("Monte Carlo of V" if p.roughness_stderr is not None else "ensemble spread"
                                        for p in (pa, pb)))
     lines.append(_distance_line(distance, kinds))

@@ -9,6 +9,7 @@ from .common import (
     SEED,
     add_model_tail,
     add_reading_args,
+    load_input,
     defaults,
     finish,
     json_text,
@@ -63,12 +64,13 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("applies only with --stl", "base_mm")
     evaluator = Evaluator(args.model, args.verify)
     progress = lambda line: log(args, "  " + line)
+    loaded = {}
     if args.candidates:
-        from roughness.surface.io import heightmap_files, load_heightmap
+        from roughness.surface.io import heightmap_files
 
         files = heightmap_files(args.candidates)
-        candidates = [(name, load_heightmap(f, args.pixel_mm, args.height_mm))
-                      for name, f in zip(candidate_names(files), files)]
+        loaded = {name: load_input(args, str(f), several=True) for name, f in zip(candidate_names(files), files)}
+        candidates = [(name, hm) for name, (hm, _) in loaded.items()]
         log(args, f"palette: choosing {args.k} of {len(candidates)} textures, {args.min_jnd:g} JND apart")
         palette = folder_palette(candidates, args.k, args.min_jnd, evaluator, args.tile, progress)
     else:
@@ -76,7 +78,8 @@ def run(args: argparse.Namespace) -> int:
         palette = family_palette(args.k, args.min_jnd, args.family, args.by, evaluator, args.tolerance_jnd,
                                  seed=args.seed, progress=progress)
     save_palette(palette, out, args.stl, args.base_mm, args.overwrite)
-    summary = {**palette.summary(), "verifier": evaluator.verifier}
+    summary = {**palette.summary(), "verifier": evaluator.verifier,
+               "cleanup": {name: cleaned.as_dict() for name, (_, cleaned) in loaded.items()}}
     if args.json:
         write_stdout(json_text(summary))
     else:

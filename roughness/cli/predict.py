@@ -14,6 +14,7 @@ from .common import (
     add_overwrite,
     add_quiet,
     add_reading_args,
+    load_input,
     defaults,
     finish,
     float_pair,
@@ -88,13 +89,21 @@ def run(args: argparse.Namespace) -> int:
         footprint_mm = model.footprint_mm
     if args.map:
         return _predict_map(args, model)
-    reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, footprint_mm, args.centre, args.tile)
+    cleaned = {}  # input name -> what was done to it
+
+    def load(path: str, several: bool):
+        hm, cleaned[path] = load_input(args, path, several, report=False)
+        return hm
+
+    reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, footprint_mm, args.centre, args.tile, load)
     start, done = time.monotonic(), 0
 
     def show(p) -> None:
         nonlocal done
         done += 1
-        print(json_text(p.as_dict()) if args.json else _prediction_line(p), flush=True)
+        done_to = cleaned.pop(p.source, None)
+        print(json_text(p.as_dict() | ({"cleanup": done_to.as_dict()} if done_to else {})) if args.json else
+              _prediction_line(p) + "".join(f"\n  {line}" for line in (done_to.lines() if done_to else ())), flush=True)
         if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 
@@ -110,7 +119,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _predict_map(args: argparse.Namespace, model) -> int:
     from roughness.core.errors import InputError
-    from roughness.surface.io import load_heightmap
     from roughness.surrogate.roughness_map import roughness_map, save_map
 
     if len(args.inputs) != 1 or os.path.isdir(args.inputs[0]):
@@ -118,7 +126,7 @@ def _predict_map(args: argparse.Namespace, model) -> int:
     if args.engine == "fem":
         raise InputError("--map needs thousands of footprints: use --engine spectral (one solve over the whole map), "
                          "surrogate or auto")
-    hm = load_heightmap(args.inputs[0], args.pixel_mm, args.height_mm)
+    hm, cleaned = load_input(args, args.inputs[0])
     start = last = time.perf_counter()
 
     def progress(done: int, total: int) -> None:
@@ -138,7 +146,7 @@ def _predict_map(args: argparse.Namespace, model) -> int:
         result = roughness_map(model, hm, args.step_mm, args.tile, args.batch_size, progress=progress)
     save_map(result, args.map, args.overwrite)
     summary = {"input": args.inputs[0], "map": args.map, "engine": args.engine, **result.summary(), "notes": notes,
-               "seconds": time.perf_counter() - start}
+               "seconds": time.perf_counter() - start, "cleanup": cleaned.as_dict()}
     print(json_text(summary) if args.json else
           f"{args.inputs[0]}: {summary['positions']} footprint positions, V {summary['roughness_min']:.4f} to "
           f"{summary['roughness_max']:.4f} (median {summary['roughness_median']:.4f}), "

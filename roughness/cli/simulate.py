@@ -83,14 +83,13 @@ def _detrend_spec(text: str):
 def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
     from roughness.simulate.config import SimConfig
-    from roughness.surface.io import load_heightmap
     from roughness.simulate.model import Simulator
 
     check_distinct({"--save-strain": args.save_strain, "--save-vtu": args.save_vtu}, {"HEIGHTMAP": args.heightmap})
     for name in ("save_strain", "save_vtu"):
         if getattr(args, name):
             check_output(getattr(args, name), args.overwrite, name)
-    hm = load_heightmap(args.heightmap, pixel_mm=args.pixel_mm, height_mm=args.height_mm)
+    hm, cleaned = common.load_input(args, args.heightmap)
     config = SimConfig(fidelity=args.fidelity, force_n=args.force, poisson=args.poisson, contact=args.contact,
                        element=args.element, bone=args.bone, seed=args.seed,
                        tolerance=args.tolerance, **curvature_fields(args))
@@ -117,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
         save_vtu(result, sim.block(result.config), args.save_vtu, args.overwrite)
         log(args, f"deformed mesh written to {args.save_vtu}")
     if args.json:
-        print(json_text({"input": args.heightmap, **result.summary()}))
+        print(json_text({"input": args.heightmap, **result.summary(), "cleanup": cleaned.as_dict()}))
     else:
         _print_result(result)
     for note in result.unusual_notes:

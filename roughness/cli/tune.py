@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import argparse
 
-from .common import COUNT, POSITIVE, add_model_tail, add_reading_args, defaults, finish, json_text, log, write_stdout
+from .common import (COUNT, POSITIVE, add_model_tail, add_reading_args, defaults, finish, json_text, load_input, log,
+                     write_stdout)
 
 
 def add_parser(sub) -> None:
@@ -43,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
     from roughness.design.evaluation import Evaluator
     from roughness.design.tune import FACTOR_RANGE, target_of, tune
-    from roughness.surface.io import SAVE_SUFFIXES, load_heightmap, save_heightmap
+    from roughness.surface.io import SAVE_SUFFIXES, save_heightmap
 
     check_distinct({"--out": args.out}, {"HEIGHTMAP": args.heightmap, "--like": args.like, "--model": args.model})
     out = check_output(args.out, args.overwrite, "out")
@@ -56,8 +57,8 @@ def run(args: argparse.Namespace) -> int:
     factors = (args.min_factor or lo, args.max_factor or hi)
     if not factors[0] < factors[1]:
         raise InputError(f"the factor range must rise, got {factors[0]:g}..{factors[1]:g}", "min_factor")
-    hm = load_heightmap(args.heightmap, args.pixel_mm, args.height_mm)
-    reference = load_heightmap(args.like, args.pixel_mm, args.height_mm) if args.like else None
+    hm, cleaned = load_input(args, args.heightmap, several=bool(args.like))
+    reference, like_cleaned = load_input(args, args.like, several=True) if args.like else (None, None)
     evaluator = Evaluator(args.model, args.verify)
     if reference is not None:
         log(args, f"tune: FEM of the reference {args.like}")
@@ -67,7 +68,8 @@ def run(args: argparse.Namespace) -> int:
     result = tune(hm, target, args.by, evaluator, factors, args.tolerance_jnd, args.max_fem, args.tile,
                   progress=lambda line: log(args, "  " + line))
     save_heightmap(result.heightmap, out, base_mm=args.base_mm, overwrite=args.overwrite)
-    summary = {"input": args.heightmap, "out": str(out), **result.summary(), "verifier": evaluator.verifier}
+    summary = {"input": args.heightmap, "out": str(out), **result.summary(), "verifier": evaluator.verifier,
+               "cleanup": cleaned.as_dict()} | ({"like_cleanup": like_cleaned.as_dict()} if like_cleaned else {})
     if args.json:
         write_stdout(json_text(summary))
     else:
