@@ -129,9 +129,14 @@ def load_input(args: argparse.Namespace, text: str, several: bool = False, repor
     from roughness.surface.units import split_input
 
     path, units = split_input(text)
+    footprint = None
+    if getattr(args, "tile", False):
+        from roughness.simulate.config import SimConfig
+
+        footprint = SimConfig().width_mm
     try:
         hm, done = read_surface(path, units.over(args.pixel_mm, args.height_mm), cleanup_of(args), args.units_ok,
-                                several)
+                                several, tile_footprint_mm=footprint)
     except InputError as err:  # in the CLI's words also where a batch collects the message (predict FOLDER)
         raise InputError(error_message(err, getattr(args, "flags", {})), parameter=err.parameter) from None
     for line in done.lines() if report else ():

@@ -30,6 +30,7 @@ from roughness.core.limits import MAX_FILL_PIXELS, check_size
 
 from . import io as _io
 from .heightmap import Heightmap
+from .tiling import TileFit, check_tile
 from .units import FileUnits, Plausibility, check_units
 
 MAX_FILL_FRACTION = 0.2  # default limit of --fill (see README: the clean-up table)
@@ -105,27 +106,34 @@ class Cleaned:
     steps: tuple[Step, ...] = ()
     own_units: bool = False
     units: Plausibility | None = None  # what the unit check saw (after the steps)
+    tile: TileFit | None = None  # a patch smaller than the footprint, tiled: its measures
 
-    def lines(self) -> list[str]:
+    def lines(self, tile: bool = True) -> list[str]:
+        """The record in words; ``tile``: with the tiled patch's notes (else the caller shows them)."""
         out = [s.describe() for s in self.steps]
         if self.own_units:
             out.append("heights in mm as the file holds them (--height-mm applies to the other inputs)")
-        return out
+        return out + (self.tile.notes() if self.tile and tile else [])
 
     def as_dict(self) -> dict:
         return {"steps": [{"step": type(s).__name__.lower(), **asdict(s)} for s in self.steps],
-                "own_units": self.own_units, "units": None if self.units is None else asdict(self.units)}
+                "own_units": self.own_units, "units": None if self.units is None else asdict(self.units),
+                "tile": None if self.tile is None else asdict(self.tile) | {"notes": self.tile.notes()}}
 
 
 def read_surface(path: str | Path, units: FileUnits, spec: Cleanup = Cleanup(), units_ok: bool = False,
-                 several: bool = False, dataset: str | None = None) -> tuple[Heightmap, Cleaned]:
+                 several: bool = False, dataset: str | None = None,
+                 tile_footprint_mm: float | None = None) -> tuple[Heightmap, Cleaned]:
     """One input file read, cleaned by ``spec`` and checked for plausible mm (roughness.surface.units),
     before any engine sees it. ``several``: the command reads other inputs too, so ``units.height_mm``
-    applies only if this file's heights need it (grey levels); files that hold mm keep theirs."""
+    applies only if this file's heights need it (grey levels); files that hold mm keep theirs.
+    ``tile_footprint_mm``: the map will be tiled under a footprint of this side (mm), so a patch
+    smaller than it is measured as a tile (roughness.surface.tiling)."""
     heights, pixel_mm, own = load_values(path, units, dataset, height_for_others=several)
     hm, done = clean(heights, pixel_mm, spec, str(path))
     found = check_units(hm, str(path), units_ok)
-    return hm, replace(done, own_units=own, units=found)
+    tile = None if tile_footprint_mm is None else check_tile(hm, str(path), tile_footprint_mm)
+    return hm, replace(done, own_units=own, units=found, tile=tile)
 
 
 def load_values(path: str | Path, units: FileUnits, dataset: str | None = None,

@@ -46,23 +46,27 @@ class Plausibility:
     pixel_mm: float
 
     def problems(self) -> list[tuple[str, str]]:
-        """(what is implausible, the unit it suggests) for each bound the map falls outside."""
+        """(what is implausible, what it suggests) for each bound the map falls outside. A slope outside
+        its bounds is put down to the heights only when the pixel size is plausible (else to the pixel)."""
         out = []
-        if self.relief_mm > TOLERANCE_MM:  # a flat map says nothing about its unit
-            if self.relief_mm < MIN_RELIEF_MM:
-                out.append((f"relief {self.relief_mm:.3g} mm is below {MIN_RELIEF_MM:g} mm", "metres"))
-            if self.relief_mm > MAX_RELIEF_MM:
-                out.append((f"relief {self.relief_mm:.3g} mm is above {MAX_RELIEF_MM:g} mm", "micrometres"))
-            if self.rms_slope < MIN_RMS_SLOPE:
-                out.append((f"RMS slope {self.rms_slope:.3g} is below {MIN_RMS_SLOPE:g} (heights in metres or a pixel "
-                            "size in micrometres?)", "metres"))
-            if self.rms_slope > MAX_RMS_SLOPE:
-                out.append((f"RMS slope {self.rms_slope:.3g} is above {MAX_RMS_SLOPE:g} (heights in micrometres or a "
-                            "pixel size in metres?)", "micrometres"))
+        pixel_off = not MIN_PIXEL_MM <= self.pixel_mm <= MAX_PIXEL_MM
         if self.pixel_mm < MIN_PIXEL_MM:
-            out.append((f"pixel size {self.pixel_mm:.3g} mm is below {MIN_PIXEL_MM:g} mm", "metres"))
+            out.append((f"pixel size {self.pixel_mm:.3g} mm is below {MIN_PIXEL_MM:g} mm", "pixel size in metres"))
         if self.pixel_mm > MAX_PIXEL_MM:
-            out.append((f"pixel size {self.pixel_mm:.3g} mm is above {MAX_PIXEL_MM:g} mm", "micrometres"))
+            out.append((f"pixel size {self.pixel_mm:.3g} mm is above {MAX_PIXEL_MM:g} mm",
+                        "pixel size in micrometres"))
+        if self.relief_mm <= TOLERANCE_MM:  # a flat map says nothing about its heights' unit
+            return out
+        if self.relief_mm < MIN_RELIEF_MM:
+            out.append((f"relief {self.relief_mm:.3g} mm is below {MIN_RELIEF_MM:g} mm", "heights in metres"))
+        if self.relief_mm > MAX_RELIEF_MM:
+            out.append((f"relief {self.relief_mm:.3g} mm is above {MAX_RELIEF_MM:g} mm", "heights in micrometres"))
+        if self.rms_slope < MIN_RMS_SLOPE and not pixel_off:
+            out.append((f"RMS slope {self.rms_slope:.3g} is below {MIN_RMS_SLOPE:g}",
+                        "heights in metres (or a pixel size in micrometres)"))
+        if self.rms_slope > MAX_RMS_SLOPE and not pixel_off:
+            out.append((f"RMS slope {self.rms_slope:.3g} is above {MAX_RMS_SLOPE:g}",
+                        "heights in micrometres (or a pixel size in metres)"))
         return out
 
 
@@ -77,12 +81,12 @@ def check_units(hm: Heightmap, source: str, units_ok: bool = False) -> Plausibil
     found = plausibility(hm)
     problems = found.problems()
     if problems and not units_ok:
-        likely = " or ".join(dict.fromkeys(unit for _, unit in problems))
+        likely = "; ".join(dict.fromkeys(unit for _, unit in problems))
         raise InputError(
             f"{source}: {'; '.join(what for what, _ in problems)}: implausible for a touchable texture in mm "
-            f"(the bounds lie 10 times beyond the product's textures; see roughness.surface.units). The numbers "
-            f"look like {likely}: convert the file to mm (metres x 1000, micrometres / 1000; a pixel size can be "
-            f"given as FILE:pixel-mm=MM), or pass {CONFIRM} if they really are mm", parameter=CONFIRM)
+            f"(the bounds lie 10 times beyond the product's textures; see roughness.surface.units). It looks like "
+            f"{likely}: convert the file to mm (metres x 1000, micrometres / 1000; a pixel size can be given as "
+            f"--pixel-mm or FILE:pixel-mm=MM), or pass {CONFIRM} if the numbers really are mm", parameter=CONFIRM)
     return found
 
 
