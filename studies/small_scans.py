@@ -77,8 +77,8 @@ def measure() -> list[dict]:
 
 def table(rows: list[dict]) -> str:
     """Per kind and side: the patch measures and the |JND| error (median and worst)."""
-    lines = ["| patch | lambda (mm) | side (mm) | side / lambda | periods (median) | seam (median) | abs JND median | abs JND worst |"
-             " n |", "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    lines = ["| patch | lambda (mm) | side (mm) | side / lambda | periods (median) | seam (median) | abs JND median "
+             "| abs JND worst | n |", "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for kind in ("cut", "seamless"):
         for lam in LAMBDAS_MM:
             for side in SIDES_MM:

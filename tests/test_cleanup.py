@@ -44,7 +44,8 @@ def test_the_products_textures_pass_the_unit_check(hm):
     assert plausibility(hm).problems() == []
 
 
-@pytest.mark.parametrize("scale, pixel, unit", [(1e-3, 0.05, "heights in metres"), (1e3, 0.05, "heights in micrometres"),
+@pytest.mark.parametrize("scale, pixel, unit", [(1e-3, 0.05, "heights in metres"),
+                                                (1e3, 0.05, "heights in micrometres"),
                                                 (1.0, 5e-5, "pixel size in metres"),
                                                 (1.0, 2.0, "pixel size in micrometres")])
 def test_implausible_units_name_the_likely_unit(texture, scale, pixel, unit):
@@ -157,7 +158,8 @@ def test_level_plane_and_polynomial(texture):
     hm, done = clean(tilted, 0.05, Cleanup(level="plane"))
     own = polynomial_fit(texture.heights, 1)  # the texture's own best plane (0.02 mm over the map) goes too
     np.testing.assert_allclose(hm.heights, texture.heights - own, atol=1e-9)
-    assert isinstance(done.steps[0], Levelled) and done.steps[0].removed_relief_mm == pytest.approx(np.ptp(own + 0.2 * x - 0.1 * y))
+    assert isinstance(done.steps[0], Levelled)
+    assert done.steps[0].removed_relief_mm == pytest.approx(np.ptp(own + 0.2 * x - 0.1 * y))
     np.testing.assert_allclose(polynomial_fit(tilted, 2), quadratic_fit(tilted), atol=1e-9)  # detrend's own fit
     cubic = 0.05 * (x - 6) ** 3 / 36
     np.testing.assert_allclose(polynomial_fit(cubic, 3), cubic, atol=1e-9)

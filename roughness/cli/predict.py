@@ -105,8 +105,9 @@ def run(args: argparse.Namespace) -> int:
         done_to = cleaned.pop(p.source, None)
         if done_to and done_to.tile and done_to.tile.notes():  # a small or seamed patch: out of domain, and why
             p = dataclasses.replace(p, in_domain=False, domain_notes=[*p.domain_notes, *done_to.tile.notes()])
+        notes = done_to.lines(tile=False) if done_to else []
         print(json_text(p.as_dict() | ({"cleanup": done_to.as_dict()} if done_to else {})) if args.json else
-              _prediction_line(p) + "".join(f"\n  {line}" for line in (done_to.lines(tile=False) if done_to else ())), flush=True)
+              _prediction_line(p) + "".join(f"\n  {line}" for line in notes), flush=True)
         if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 

@@ -68,7 +68,8 @@ class Filled:
     fraction: float
 
     def describe(self) -> str:
-        return f"filled {self.pixels:,} missing points ({100 * self.fraction:.2f}% of the map) by harmonic interpolation"
+        return (f"filled {self.pixels:,} missing points ({100 * self.fraction:.2f}% of the map) by harmonic "
+                "interpolation")
 
 
 @dataclass(frozen=True)
@@ -176,7 +177,8 @@ def clean(heights: np.ndarray, pixel_mm: float, spec: Cleanup, source: str = "he
                              "map; pass --fill to interpolate them", parameter="fill")
         if fraction > spec.max_fill:
             raise InputError(f"{source}: {100 * fraction:.2f}% of the map is missing (NaN), more than --max-fill "
-                             f"{100 * spec.max_fill:g}%: filling would invent most of what is felt", parameter="max_fill")
+                             f"{100 * spec.max_fill:g}%: filling would invent most of what is felt",
+                             parameter="max_fill")
         heights = fill_holes(heights)
         steps.append(Filled(int(holes.sum()), fraction))
     if spec.despike is not None:

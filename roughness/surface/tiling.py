@@ -51,8 +51,8 @@ class TileFit:
                        "lengths; studies/results/small_scans.md)")
         if not self.seamless and self.periods >= MIN_PERIODS:
             out.append(f"tiled patch is not periodic (its heights jump across the wrap {self.seam:.1f} times the step "
-                       f"between pixels): seams every {self.side_mm:.2f} mm; at {MIN_PERIODS:g} feature lengths or more "
-                       "such patches read within 0.9 JND of their full maps (studies/results/small_scans.md)")
+                       f"between pixels): seams every {self.side_mm:.2f} mm; at {MIN_PERIODS:g} feature lengths or "
+                       "more such patches read within 0.9 JND of their full maps (studies/results/small_scans.md)")
         return out
 
 
