@@ -53,6 +53,7 @@ def test_implausible_units_name_the_likely_unit(texture, scale, pixel, unit):
     with pytest.raises(InputError, match=f"looks like {unit}(;|:)") as err:
         check_units(hm, "scan.npy")
     assert err.value.parameter == "units_ok"
+    assert str(err.value).count("looks like") == 1 and str(err.value).count(f"{unit}") == 1  # said once
     assert check_units(hm, "scan.npy", units_ok=True).relief_mm == pytest.approx(scale)
 
 
@@ -106,6 +107,21 @@ def test_jnd_of_a_picture_and_a_tuned_npz(texture, tmp_path, capsys):
     assert both["a"]["roughness"] == pytest.approx(float(out.split("V = ")[1].split()[0]), abs=1e-4)
     assert main(["predict", tuned, "--height-mm", "1", "--engine", "spectral"]) == 2  # one .npz: still refused
     assert "already in mm" in capsys.readouterr().err
+
+
+def test_a_folder_carries_its_units_to_each_file(texture, tmp_path, capsys):
+    from PIL import Image
+
+    from roughness.cli import main
+
+    folder = tmp_path / "scans"
+    folder.mkdir()
+    Image.fromarray(np.uint8(np.round(texture.heights * 255))).save(folder / "a.png")
+    np.save(folder / "b.npy", texture.heights)
+    assert main(["predict", f"{folder}:pixel-mm=0.05,height-mm=1", "--engine", "spectral", "--json"]) == 0
+    answers = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert [a["cleanup"]["own_units"] for a in answers] == [False, True]  # the .npy holds mm: its own heights
+    assert answers[0]["roughness"] == pytest.approx(answers[1]["roughness"], rel=0.02)  # 8-bit grey levels
 
 
 # Clean-up -----------------------------------------------------------------------------------------------------------

@@ -94,7 +94,8 @@ PARALLEL = Number(int, low=1, high=MAX_PARALLEL)  # threads or worker processes
 
 def add_heightmap_args(p: argparse.ArgumentParser) -> None:
     """The heightmap input and how to read it (one file)."""
-    p.add_argument("heightmap", metavar="HEIGHTMAP", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .h5")
+    p.add_argument("heightmap", metavar="HEIGHTMAP", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .h5 "
+                   "(FILE:pixel-mm=MM,height-mm=MM: its units)")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="repeat a small heightmap as a periodic texture")
     p.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")

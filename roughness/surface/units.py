@@ -81,7 +81,8 @@ def check_units(hm: Heightmap, source: str, units_ok: bool = False) -> Plausibil
     found = plausibility(hm)
     problems = found.problems()
     if problems and not units_ok:
-        likely = "; ".join(dict.fromkeys(unit for _, unit in problems))
+        units = list(dict.fromkeys(unit for _, unit in problems))
+        likely = "; ".join(u for u in units if not any(u != v and u.startswith(v) for v in units))  # one reading
         raise InputError(
             f"{source}: {'; '.join(what for what, _ in problems)}: implausible for a touchable texture in mm "
             f"(the bounds lie 10 times beyond the product's textures; see roughness.surface.units). It looks like "
