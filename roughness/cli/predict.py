@@ -34,8 +34,8 @@ def add_parser(sub) -> None:
     given, mapping, threads = defaults(predict), defaults(roughness_map), defaults(SurrogateEngine)["threads"]
     pr = sub.add_parser("predict", help="roughness in milliseconds (surrogate), FEM where out of domain")
     pr.add_argument("inputs", nargs="+", metavar="HEIGHTMAP",
-                    help="heightmap files, folders of them, or roughness dataset files (.h5); FILE:pixel-mm=MM,height-mm=MM "
-                         "gives a file (or every file of a folder) its own units")
+                    help="heightmap files, folders of them, or roughness dataset files (.h5); "
+                         "FILE:pixel-mm=MM,height-mm=MM gives a file (or every file of a folder) its own units")
     pr.add_argument("--model", help="ONNX surrogate (default: the shipped models/roughness-cnn.onnx)")
     pr.add_argument("--engine", choices=PREDICT_ENGINES, default=given["engine"],
                     help=f"surrogate (ms), spectral (the skin as an infinite layer: tens of ms, no mesh), fem "
