@@ -166,6 +166,10 @@ def test_despike_finds_spikes_and_leaves_clean_textures_alone(texture):
     out, step = despike(spiky, 5.0)
     assert isinstance(step, Despiked) and step.pixels == where.sum()
     assert np.abs(out - texture.heights).max() < 0.06  # a spike's median is within a pixel's step of the truth
+    plate = np.zeros((50, 50))
+    plate[[5, 20, 40], [7, 30, 2]] = [0.5, -0.2, 1.0]
+    out, step = despike(plate, 5.0)  # a flat plate: its step is 0 once the spikes are out
+    assert step.pixels == 3 and not out.any()
 
 
 def test_level_plane_and_polynomial(texture):

@@ -236,7 +236,7 @@ def despike(heights: np.ndarray, sigmas: float) -> tuple[np.ndarray, Despiked]:
     spikes = np.zeros(heights.shape, bool)
     for _ in range(2):
         step = _rms_step(np.where(spikes, median, heights))
-        spikes = residual > sigmas * step if step > 0 else np.zeros(heights.shape, bool)
+        spikes = residual > sigmas * step  # a step of 0 (flat once the spikes are out): any residual is one
     return np.where(spikes, median, heights), Despiked(int(spikes.sum()), sigmas, step)
 
 
