@@ -96,10 +96,11 @@ class _DatasetSamples:
         return self._data.heightmap(sid)
 
 
-def folder_textures(path: Path, pixel_mm: float | None, height_mm: float | None) -> list[Texture]:
-    from roughness.surface.io import heightmap_files, load_heightmap
+def folder_textures(path: Path, load: Callable[[Path], Heightmap]) -> list[Texture]:
+    """The folder's heightmap files; ``load(path)`` loads one (the CLI: units, clean-up and checks)."""
+    from roughness.surface.io import heightmap_files
 
-    return [Texture(f.name, "file", lambda f=f: load_heightmap(f, pixel_mm, height_mm)) for f in heightmap_files(path)]
+    return [Texture(f.name, "file", lambda f=f: load(f)) for f in heightmap_files(path)]
 
 
 def recipe_textures(path: Path, n: int | None) -> list[Texture]:
@@ -113,12 +114,13 @@ def recipe_textures(path: Path, n: int | None) -> list[Texture]:
     return [Texture(sample_id(r), r["family"], lambda r=r: realise(r)) for r in expand(load_recipe(path), n)]
 
 
-def textures_of(source: str, n: int | None = None, pixel_mm: float | None = None,
-                height_mm: float | None = None) -> tuple[list[Texture], dict[str, dict[str, dict]]]:
-    """The textures an INPUT names, and any stored results that come with it (by texture name)."""
+def textures_of(source: str, n: int | None, load: Callable[[Path], Heightmap]
+                ) -> tuple[list[Texture], dict[str, dict[str, dict]]]:
+    """The textures an INPUT names, and any stored results that come with it (by texture name); ``load`` loads
+    a folder's files (folder_textures)."""
     path = Path(source)
     if path.is_dir():
-        return folder_textures(path, pixel_mm, height_mm), {}
+        return folder_textures(path, load), {}
     if not path.is_file():
         raise InputError(f"compare input not found: {source}", parameter="input")
     if path.suffix.lower() == ".json":

@@ -7,26 +7,32 @@ recorded in ``errors`` with its reason and skipped; the others are still predict
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from roughness.core.errors import InputError
 from roughness.surface.heightmap import Heightmap
-from roughness.surface.io import Reading, heightmap_files, read_heightmap
+from roughness.surface.io import heightmap_files
+from roughness.surface.units import split_input
 
 
 class InputReader:
     """Heightmaps named by the paths given, in order; folders sorted by file name."""
 
-    def __init__(self, paths: list[str], pixel_mm: float | None, height_mm: float | None, footprint_mm: float,
-                 centre_mm: tuple[float, float] | None, tile: bool, resample_square: bool = False) -> None:
-        self.pixel_mm, self.height_mm, self.resample_square = pixel_mm, height_mm, resample_square
-        self.readings: dict[str, Reading] = {}  # how each file was read, by its name (for the reports)
+    def __init__(self, paths: list[str], footprint_mm: float, centre_mm: tuple[float, float] | None, tile: bool,
+                 load: Callable[[str, bool], Heightmap]) -> None:
+        """``load(text, several)`` loads one heightmap file (``text``: its path, with the units it carries as
+        FILE:pixel-mm=..,height-mm=..); ``several``: other inputs come with it. Units given with a folder go
+        with each of its files."""
+        self._load_file = load
         self.footprint_mm, self.centre_mm, self.tile = footprint_mm, centre_mm, tile
         self.errors: list[tuple[str, InputError]] = []  # (input, its error, whose message names the input)
         self._items: list[tuple[str, Path, str | None]] = []  # (name, file, sample id in a dataset)
-        for path in map(Path, paths):
-            self._items += self._expand(path)
+        for text in paths:
+            path = split_input(text)[0]
+            tail = text[len(path):]  # FILE:pixel-mm=..: the units go with every file of a folder
+            self._items += [(name + tail if sid is None else name, Path(f"{f}{tail}") if sid is None else f, sid)
+                            for name, f, sid in self._expand(Path(path))]
         self.total = len(self._items)
         self._names: deque[str] = deque()
 
@@ -66,9 +72,7 @@ class InputReader:
 
     def _load(self, name: str, path: Path, sid: str | None, datasets: dict) -> Heightmap:
         if sid is None:
-            reading = read_heightmap(path, self.pixel_mm, self.height_mm, resample_square=self.resample_square)
-            self.readings[name] = reading
-            return reading.heightmap
+            return self._load_file(str(path), self.total > 1)
         if path not in datasets:
             from roughness.dataset.store import open_dataset
 
@@ -85,4 +89,4 @@ def _is_dataset(path: Path) -> bool:
         with h5py.File(path, "r") as h5:
             return h5.attrs.get("schema") == SCHEMA
     except OSError:
-        return False  # not HDF5: load_heightmap reports it
+        return False  # not HDF5: loading it reports it

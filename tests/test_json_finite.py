@@ -195,17 +195,20 @@ def _check_simulate(objects):
     assert "discretization_error_undefined" in [n["code"] for n in o["notes"]]
 
 
-# path -> [(arguments, expected exit code, check of the parsed stdout objects)]; exit 2: a clear refusal
+# path -> [(arguments, expected exit code, check of the parsed stdout objects)]; exit 2: a clear refusal.
+# The 1 um relief needs --units-ok: without it, it is refused as implausible for mm (tests/test_cleanup.py)
 CASES = {
-    ("predict",): [(["flat.npy", "relief.npy", *MAP, "--engine", "surrogate", "--json"], 0, _below),
+    ("predict",): [(["flat.npy", "relief.npy", *MAP, "--units-ok", "--engine", "surrogate", "--json"], 0, _below),
                    (["flat.npy", *MAP, "--map", "flat-map.npy", "--json"], 0, None)],
-    ("jnd",): [(["flat.npy", "relief.npy", *MAP, "--engine", "surrogate", "--json"], 0, _check_jnd_flat),
-               (["relief.npy", "bumps.npy", *MAP, "--engine", "surrogate", "--json"], 0, _check_jnd_relief)],
+    ("jnd",): [(["flat.npy", "relief.npy", *MAP, "--units-ok", "--engine", "surrogate", "--json"], 0, _check_jnd_flat),
+               (["relief.npy", "bumps.npy", *MAP, "--units-ok", "--engine", "surrogate", "--json"], 0,
+                _check_jnd_relief)],
     ("homogeneity",): [(["flat.npy", *MAP, "--n", "5", "--json", "--quiet"], 0, _check_homogeneity),
-                       (["relief.npy", *MAP, "--n", "5", "--json", "--quiet"], 0, _check_homogeneity)],
+                       (["relief.npy", *MAP, "--units-ok", "--n", "5", "--json", "--quiet"], 0, _check_homogeneity)],
     ("simulate",): [(["flat.npy", *MAP, "--fidelity", "coarse", "--json"], 0, _check_simulate)],  # one FEM, ~10 s
     ("tune",): [(["flat.npy", *MAP, "--target-lambda", "1.0", "--out", "t.npz", "--json", "--quiet"], 2, None),
-                (["relief.npy", *MAP, "--target-v", "0.001", "--out", "t.npz", "--json", "--quiet"], 2, None)],
+                (["relief.npy", *MAP, "--units-ok", "--target-v", "0.001", "--out", "t.npz", "--json", "--quiet"], 2,
+                 None)],
     ("palette",): [(["--k", "2", "--family", "flat", "--out", "pal", "--json", "--quiet"], 2, None)],
     ("tactile-image",): [(["picture.png", "--family", "flat", "--out", "plate", "--json", "--quiet"], 2, None)],
     ("dataset", "info"): [(["zero.h5", "--json"], 0, None)],

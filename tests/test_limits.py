@@ -155,7 +155,7 @@ def test_dataset_map_bomb_is_refused_before_reading(tmp_path):
 # --- options that imply huge arrays or loops --------------------------------------------------------
 
 OPTION_CASES = [
-    (("predict",), ["--pixel-mm", "1e-7", "--tile"], "--pixel-mm", "MAX_HEIGHTMAP_PIXELS"),
+    (("predict",), ["--pixel-mm", "1e-7", "--tile", "--units-ok"], "--pixel-mm", "MAX_HEIGHTMAP_PIXELS"),
     (("predict",), ["--map", "m.npy", "--step-mm", "1e-5"], "--step-mm", "MAX_MAP_POSITIONS"),
     (("predict",), ["--map", "m.npy", "--step-mm", "1e-320", "--tile"], "--step-mm", "MAX_MAP_POSITIONS"),
     (("predict",), ["--pixel-mm", "1e-320", "--tile"], "--pixel-mm", "MIN_PIXEL_MM"),

@@ -273,6 +273,24 @@ def test_holes_stay_holes(tmp_path):
         load_heightmap(path)
 
 
+def test_holes_in_a_scan_reach_fill(workdir, capsys):  # noqa: F811
+    """One loading pipeline for every format: a scan's missing points are refused without --fill and filled with
+    it, reported and recorded like those of any other file."""
+    from roughness.cli import main
+
+    h = np.random.default_rng(2).random((240, 240)) * 0.5
+    h[100:104, 50:60] = np.nan
+    _topography("um", h, 0.05, 0.05).to_x3p(str(workdir / "holes.x3p"))
+    assert main(["predict", "holes.x3p", "--engine", "spectral"]) == 2
+    assert "40 missing points (NaN)" in capsys.readouterr().err
+    assert main(["predict", "holes.x3p", "--engine", "spectral", "--fill", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert "note: holes.x3p: filled 40 missing points" in err
+    record = json.loads(out)["readings"][0]
+    assert record["steps"] == [{"step": "filled", "pixels": 40, "fraction": pytest.approx(40 / 240**2)}]
+    assert record["format"].startswith("XML 3D surface profile") and record["pixel_from"] == "file"
+
+
 def test_formats_that_could_hold_code_or_have_no_units_are_not_routed_to_surfacetopography():
     from roughness.surface.scans import FORMATS
 
@@ -357,7 +375,6 @@ def _scan_files(folder) -> None:
     (["simulate", "scan.x3p", "--height-mm", "1", "--fidelity", "coarse"], ("--height-mm",)),
     (["predict", "corrupt.sur"], ("cannot read corrupt.sur as Digital Surf SUR",)),
     (["simulate", "corrupt.sur", "--fidelity", "coarse"], ("cannot read corrupt.sur as Digital Surf SUR",)),
-    (["compare", "maps", "--resample-square", "--out", "report"], ("--resample-square",)),
 ])
 def test_bad_scan_inputs_exit_2_naming_the_option(workdir, capsys, argv, names):  # noqa: F811
     _scan_files(workdir)
@@ -378,7 +395,7 @@ def test_predict_resamples_on_request_and_records_it(workdir, capsys):  # noqa: 
     assert main(["predict", "big.x3p", "--engine", "spectral", "--resample-square", "--json"]) == 0
     out, err = capsys.readouterr()
     assert "note: big.x3p: resampled (bilinear) from 240 x 200 pixels of 0.05 mm (x) by 0.06 mm (y) to 240 x 240" in err
-    reading = json.loads(out)["reading"]
+    reading = json.loads(out)["readings"][0]
     assert reading["resampled"]["shape_after"] == [240, 240] and reading["pixel_mm"] == pytest.approx(0.05)
     assert reading["unit"] == "m" and reading["pixel_file_mm"] == pytest.approx([0.05, 0.06])
 

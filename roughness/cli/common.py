@@ -12,9 +12,11 @@ from typing import TYPE_CHECKING
 
 from roughness.core.errors import InputError, OutputExists
 from roughness.core.limits import MAX_BATCH, MAX_CHANNELS, MAX_PARALLEL
+from roughness.surface.cleanup import LEVELS, MAX_FILL_FRACTION
 
 if TYPE_CHECKING:
     from roughness.surface.heightmap import Heightmap
+    from roughness.surface.loading import Loaded
 
 
 def float_pair(text: str) -> tuple[float, float]:
@@ -98,39 +100,80 @@ PARALLEL = Number(int, low=1, high=MAX_PARALLEL)  # threads or worker processes
 def add_heightmap_args(p: argparse.ArgumentParser) -> None:
     """The heightmap input and how to read it (one file)."""
     p.add_argument("heightmap", metavar="HEIGHTMAP", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .h5, "
-                   "or a measured scan (.x3p, .sur, .plu, .datx, .gwy, .sdf, ...: see README)")
+                   "or a measured scan (.x3p, .sur, .plu, .datx, .gwy, .sdf, ...: see README); "
+                   "FILE:pixel-mm=MM,height-mm=MM gives its units")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="repeat a small heightmap as a periodic texture")
     p.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
 
 
 def add_reading_args(p: argparse.ArgumentParser) -> None:
-    """--pixel-mm, --height-mm and --resample-square."""
+    """How heightmaps are loaded: --pixel-mm, --height-mm, --resample-square, the unit check's --units-ok, and
+    the scan clean-up options (roughness.surface.loading)."""
     p.add_argument("--pixel-mm", type=POSITIVE, metavar="MM",
                    help="pixel size in mm (required unless the file states it; refused if it differs from what a "
-                        "scan states; replaces TIFF resolution tags, with a note)")
+                        "file states, except TIFF resolution tags, which it replaces with a note; "
+                        "FILE:pixel-mm=MM for one file)")
     p.add_argument("--height-mm", type=POSITIVE, metavar="MM",
-                   help="height of full-scale white in mm (8/16-bit PNG/TIFF; unless the file states it)")
+                   help="height of full-scale white in mm (8/16-bit PNG/TIFF; unless the file states it; with several "
+                        "inputs it applies to those that need it; FILE:height-mm=MM for one file)")
     p.add_argument("--resample-square", action="store_true",
                    help="resample non-square pixels (e.g. a scan's 10 x 12 um) bilinearly to square pixels of the "
                         "finer size, reported and recorded in the JSON (default: refuse them)")
+    p.add_argument("--units-ok", action="store_true",
+                   help="the heights and pixel size are mm even though their relief, slope or pixel size look like "
+                        "metres or micrometres (default: refuse them)")
+    p.add_argument("--fill", action="store_true",
+                   help="interpolate missing points (NaN) of a scan, reported (default: refuse them)")
+    p.add_argument("--max-fill", type=FRACTION, default=MAX_FILL_FRACTION, metavar="FRACTION",
+                   help=f"--fill refuses maps with more missing than this fraction (default: {MAX_FILL_FRACTION:g})")
+    p.add_argument("--despike", type=POSITIVE, metavar="K",
+                   help="replace spikes: pixels further than K RMS height steps from their 3 x 3 median "
+                        "(5 leaves the product's textures untouched; default: off)")
+    p.add_argument("--level", choices=tuple(LEVELS),
+                   help="subtract the least-squares plane or polynomial of degree 2 or 3 (default: off)")
 
 
-def read_input(args: argparse.Namespace, path) -> Heightmap:
-    """A heightmap read with the command's reading options; what reading did (resampling, the pixel size's source)
-    is printed as notes on stderr, even with --quiet, and kept in ``args.readings`` for the JSON output."""
-    from roughness.surface.io import read_heightmap
+def load(args: argparse.Namespace, text: str, several: bool = False) -> tuple[Heightmap, Loaded]:
+    """One input file (``FILE`` or ``FILE:pixel-mm=..,height-mm=..``) loaded as the command's options say
+    (roughness.surface.loading), and the record of it; nothing printed. ``several``: the command reads other
+    inputs too (a --height-mm is then for those that need it)."""
+    from roughness.surface.cleanup import Cleanup
+    from roughness.surface.loading import load_surface
+    from roughness.surface.units import split_input
 
-    reading = read_heightmap(path, args.pixel_mm, args.height_mm, resample_square=args.resample_square)
-    for note in reading.notes:
-        print(f"note: {note}", file=sys.stderr, flush=True)
-    args.readings = [*getattr(args, "readings", []), reading]
-    return reading.heightmap
+    path, units = split_input(text)
+    footprint = None
+    if getattr(args, "tile", False):
+        from roughness.simulate.config import SimConfig
+
+        footprint = SimConfig().width_mm
+    try:
+        return load_surface(path, units.over(args.pixel_mm, args.height_mm), args.resample_square,
+                            Cleanup(args.fill, args.max_fill, args.despike, args.level), args.units_ok, several,
+                            tile_footprint_mm=footprint)
+    except InputError as err:  # in the CLI's words also where a batch collects the message (predict FOLDER)
+        raise InputError(error_message(err, getattr(args, "flags", {})), parameter=err.parameter) from None
+
+
+def load_input(args: argparse.Namespace, text: str, several: bool = False) -> Heightmap:
+    """``load``, with what loading did printed as notes on stderr (even with --quiet) and kept in
+    ``args.readings`` for the JSON output (``readings``)."""
+    hm, loaded = load(args, text, several)
+    show_notes(args, loaded.lines())
+    args.readings = [*getattr(args, "readings", []), loaded]
+    return hm
+
+
+def show_notes(args: argparse.Namespace, lines: list[str]) -> None:
+    """Notes on stderr, in the CLI's words, even with --quiet: nothing done to a user's surface is silent."""
+    for line in lines:
+        print(f"note: {in_flags(line, getattr(args, 'flags', {}))}", file=sys.stderr, flush=True)
 
 
 def readings(args: argparse.Namespace) -> list[dict]:
-    """The records of the heightmaps ``read_input`` read, for the JSON output."""
-    return [reading.as_dict() for reading in getattr(args, "readings", [])]
+    """The records of the heightmaps ``load_input`` loaded, in order, for the JSON output."""
+    return [loaded.as_dict() for loaded in getattr(args, "readings", [])]
 
 
 def add_quiet(p: argparse.ArgumentParser) -> None:
@@ -185,10 +228,17 @@ def error_message(err: InputError, flags: dict[str, str]) -> str:
     """An InputError in the CLI's words: parameters named by their flags."""
     if isinstance(err, OutputExists):
         return f"{err.path} already exists; pass --overwrite to replace it"
-    message, flag = str(err), flags.get(err.parameter or "")
-    if flag and "_" in err.parameter:  # the Python name (pixel_mm) reads as its flag (--pixel-mm)
-        message = re.sub(rf"(?<![\w-]){re.escape(err.parameter)}(?![\w-])", flag, message)
+    flag = flags.get(err.parameter or "")
+    message = in_flags(str(err), {err.parameter: flag} if flag else {})
     return f"{flag}: {message}" if flag and flag not in message else message
+
+
+def in_flags(text: str, flags: dict[str, str]) -> str:
+    """``text`` with the Python names of parameters (pixel_mm) as their flags (--pixel-mm)."""
+    for name, flag in flags.items():
+        if "_" in name:
+            text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, text)
+    return text
 
 
 def json_text(value: object, indent: int | None = None, default=None) -> str:

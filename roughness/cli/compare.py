@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import COUNT, add_overwrite, add_quiet, add_reading_args, finish, log
+from .common import COUNT, add_overwrite, add_quiet, add_reading_args, finish, load, log, show_notes
 
 COMPARE_ENGINES = ("fem:coarse", "fem:default", "surrogate", "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance")
 REFERENCE = "fem:fine"
@@ -38,16 +38,22 @@ def run(args: argparse.Namespace) -> int:
     from roughness.engines import make_engine
     from roughness.report import write_report
 
-    if args.resample_square:
-        raise InputError("compare does not resample textures; resample scans with non-square pixels first (e.g. "
-                         "tune or predict read them with --resample-square)", parameter="resample_square")
     specs = list(dict.fromkeys([args.reference, *args.engines]))
     engines = [make_engine(spec, "reference" if spec == args.reference else "engines") for spec in specs]
     out = Path(args.out)
     check_distinct({"--out": out}, {"INPUT": args.input})
     manifest = {"input": args.input, "n": args.n, "reference": args.reference, "engines": sorted(specs)}
     check_report_folder(out, manifest, args.overwrite)
-    textures, stored = textures_of(args.input, args.n, args.pixel_mm, args.height_mm)
+    shown = set()  # files whose notes were shown (a texture is loaded again for the report)
+
+    def load_file(path: Path):
+        hm, loaded = load(args, str(path), several=True)
+        if path not in shown:
+            shown.add(path)
+            show_notes(args, loaded.lines())
+        return hm
+
+    textures, stored = textures_of(args.input, args.n, load_file)
     cache = ResultCache(out, {e.spec: e.identity for e in engines}, manifest)
     try:
         outcome = run(textures, engines, cache, stored, quiet=args.quiet)

@@ -13,7 +13,7 @@ from .common import (
     finish,
     json_text,
     log,
-    read_input,
+    load_input,
     readings,
     write_stdout,
 )
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
         check_output(args.map, args.overwrite, "map")
     if args.n < 3:
         raise InputError(f"needs at least 3 windows, got {args.n}", parameter="n")
-    hm = read_input(args, args.heightmap)
+    hm = load_input(args, args.heightmap)
     evaluator = Evaluator(args.model, args.verify)
     engine = evaluator.verifier if args.engine == "fem" else args.engine
     log(args, f"homogeneity: {args.n} windows with the {engine}")

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import add_reading_args, defaults, finish, json_text, read_input, readings, write_stdout
+from .common import add_reading_args, defaults, finish, json_text, load_input, readings, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -11,8 +11,9 @@ def add_parser(sub) -> None:
 
     given = defaults(predict)
     p = sub.add_parser("jnd", help="tell two textures apart? their V, equivalent lambda and distance in JNDs")
-    p.add_argument("a", metavar="HEIGHTMAP_A", help="first texture (heightmap file)")
-    p.add_argument("b", metavar="HEIGHTMAP_B", help="second texture (heightmap file)")
+    p.add_argument("a", metavar="HEIGHTMAP_A", help="first texture (heightmap file; FILE:height-mm=MM,pixel-mm=MM "
+                   "gives its own units)")
+    p.add_argument("b", metavar="HEIGHTMAP_B", help="second texture (heightmap file, as A)")
     p.add_argument("--engine", choices=PREDICT_ENGINES, default=given["engine"],
                    help=f"surrogate, spectral, fem, or auto: the surrogate, FEM outside its domain "
                         f"(default: {given['engine']})")
@@ -26,7 +27,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.engines import predict
     from roughness.surrogate.calibration import jnd_distance, load_scale
 
-    maps = [read_input(args, path) for path in (args.a, args.b)]
+    maps = [load_input(args, path, several=True) for path in (args.a, args.b)]
     pa, pb = predict(maps, engine=args.engine, model=args.model, sources=[args.a, args.b])
     scale = load_scale(pa.fidelity)
     distance = jnd_distance(scale, pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))

@@ -13,7 +13,7 @@ from .common import (
     finish,
     json_text,
     log,
-    read_input,
+    load_input,
     readings,
     write_stdout,
 )
@@ -65,11 +65,12 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("applies only with --stl", "base_mm")
     evaluator = Evaluator(args.model, args.verify)
     progress = lambda line: log(args, "  " + line)
+    loaded = {}
     if args.candidates:
         from roughness.surface.io import heightmap_files
 
         files = heightmap_files(args.candidates)
-        candidates = [(name, read_input(args, f))
+        candidates = [(name, load_input(args, str(f), several=True))
                       for name, f in zip(candidate_names(files), files)]
         log(args, f"palette: choosing {args.k} of {len(candidates)} textures, {args.min_jnd:g} JND apart")
         palette = folder_palette(candidates, args.k, args.min_jnd, evaluator, args.tile, progress)

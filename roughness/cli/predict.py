@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import time
@@ -19,8 +20,11 @@ from .common import (
     finish,
     float_pair,
     json_text,
+    load,
+    load_input,
     log,
-    read_input,
+    readings,
+    show_notes,
 )
 from .simulate import add_curvature_args, curvature_fields
 
@@ -34,7 +38,8 @@ def add_parser(sub) -> None:
     given, mapping, threads = defaults(predict), defaults(roughness_map), defaults(SurrogateEngine)["threads"]
     pr = sub.add_parser("predict", help="roughness in milliseconds (surrogate), FEM where out of domain")
     pr.add_argument("inputs", nargs="+", metavar="HEIGHTMAP",
-                    help="heightmap files, folders of them, or roughness dataset files (.h5)")
+                    help="heightmap files, folders of them, or roughness dataset files (.h5); "
+                         "FILE:pixel-mm=MM,height-mm=MM gives a file (or every file of a folder) its own units")
     pr.add_argument("--model", help="ONNX surrogate (default: the shipped models/roughness-cnn.onnx)")
     pr.add_argument("--engine", choices=PREDICT_ENGINES, default=given["engine"],
                     help=f"surrogate (ms), spectral (the skin as an infinite layer: tens of ms, no mesh), fem "
@@ -90,18 +95,24 @@ def run(args: argparse.Namespace) -> int:
         footprint_mm = model.footprint_mm
     if args.map:
         return _predict_map(args, model)
-    reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, footprint_mm, args.centre, args.tile,
-                         args.resample_square)
+    loaded = {}  # input name -> what loading did to it, until its answer is shown
+
+    def load_one(text: str, several: bool):
+        hm, loaded[text] = load(args, text, several)
+        return hm
+
+    reader = InputReader(args.inputs, footprint_mm, args.centre, args.tile, load_one)
     start, done = time.monotonic(), 0
 
     def show(p) -> None:
         nonlocal done
         done += 1
-        reading = reader.readings.get(p.source)
-        for note in reading.notes if reading else ():
-            print(f"note: {note}", file=sys.stderr, flush=True)
-        record = p.as_dict() | ({"reading": reading.as_dict()} if reading else {})
-        print(json_text(record) if args.json else _prediction_line(p), flush=True)
+        record = loaded.pop(p.source, None)
+        if record and record.tile and record.tile.notes():  # a small or seamed patch: out of domain, and why
+            p = dataclasses.replace(p, in_domain=False, domain_notes=[*p.domain_notes, *record.tile.notes()])
+        show_notes(args, record.lines(tile=False) if record else [])
+        answer = p.as_dict() | {"readings": [record.as_dict()] if record else []}
+        print(json_text(answer) if args.json else _prediction_line(p), flush=True)
         if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 
@@ -125,7 +136,7 @@ def _predict_map(args: argparse.Namespace, model) -> int:
     if args.engine == "fem":
         raise InputError("--map needs thousands of footprints: use --engine spectral (one solve over the whole map), "
                          "surrogate or auto")
-    hm = read_input(args, args.inputs[0])
+    hm = load_input(args, args.inputs[0])
     start = last = time.perf_counter()
 
     def progress(done: int, total: int) -> None:
@@ -145,8 +156,7 @@ def _predict_map(args: argparse.Namespace, model) -> int:
         result = roughness_map(model, hm, args.step_mm, args.tile, args.batch_size, progress=progress)
     save_map(result, args.map, args.overwrite)
     summary = {"input": args.inputs[0], "map": args.map, "engine": args.engine, **result.summary(), "notes": notes,
-               "reading": args.readings[0].as_dict(),
-               "seconds": time.perf_counter() - start}
+               "seconds": time.perf_counter() - start, "readings": readings(args)}
     print(json_text(summary) if args.json else
           f"{args.inputs[0]}: {summary['positions']} footprint positions, V {summary['roughness_min']:.4f} to "
           f"{summary['roughness_max']:.4f} (median {summary['roughness_median']:.4f}), "

@@ -6,7 +6,18 @@ import math
 import sys
 
 from . import common
-from .common import FRACTION, POISSON, POSITIVE, SEED, Number, add_heightmap_args, json_text, log, read_input, readings
+from .common import (
+    FRACTION,
+    POISSON,
+    POSITIVE,
+    SEED,
+    Number,
+    add_heightmap_args,
+    json_text,
+    load_input,
+    log,
+    readings,
+)
 
 SIGNED_RADIUS = Number(float)  # a signed radius in mm; 0 is refused by SimConfig (not a radius)
 
@@ -89,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     for name in ("save_strain", "save_vtu"):
         if getattr(args, name):
             check_output(getattr(args, name), args.overwrite, name)
-    hm = read_input(args, args.heightmap)
+    hm = load_input(args, args.heightmap)
     config = SimConfig(fidelity=args.fidelity, force_n=args.force, poisson=args.poisson, contact=args.contact,
                        element=args.element, bone=args.bone, seed=args.seed,
                        tolerance=args.tolerance, **curvature_fields(args))
@@ -116,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
         save_vtu(result, sim.block(result.config), args.save_vtu, args.overwrite)
         log(args, f"deformed mesh written to {args.save_vtu}")
     if args.json:
-        print(json_text({"input": args.heightmap, **result.summary(), "reading": readings(args)[0]}))
+        print(json_text({"input": args.heightmap, **result.summary(), "readings": readings(args)}))
     else:
         _print_result(result)
     for note in result.unusual_notes:

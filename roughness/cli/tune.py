@@ -14,7 +14,7 @@ from .common import (
     finish,
     json_text,
     log,
-    read_input,
+    load_input,
     readings,
     write_stdout,
 )
@@ -73,8 +73,8 @@ def run(args: argparse.Namespace) -> int:
     factors = (args.min_factor or lo, args.max_factor or hi)
     if not factors[0] < factors[1]:
         raise InputError(f"the factor range must rise, got {factors[0]:g}..{factors[1]:g}", "min_factor")
-    hm = read_input(args, args.heightmap)
-    reference = read_input(args, args.like) if args.like else None
+    hm = load_input(args, args.heightmap, several=bool(args.like))
+    reference = load_input(args, args.like, several=True) if args.like else None
     evaluator = Evaluator(args.model, args.verify)
     if reference is not None:
         log(args, f"tune: FEM of the reference {args.like}")

@@ -44,6 +44,8 @@ MAX_PARALLEL = Limit(256, "MAX_PARALLEL")
 """Threads or worker processes of one run (--threads, --workers); more start slowly or not at all."""
 MAX_CHANNELS = Limit(4096, "MAX_CHANNELS")
 """Channels of one surrogate layer (train --widths; the shipped networks have at most 96)."""
+MAX_FILL_PIXELS = Limit(4_000_000, "MAX_FILL_PIXELS")
+"""Missing points one --fill interpolates (a sparse solve over them: about 1 GB at this size)."""
 MAX_HEIGHT_MM = 1000.0
 """|height| (mm) a heightmap may hold: a texture's relief is millimetres; 1 m is no texture."""
 MIN_PIXEL_MM = 1e-9

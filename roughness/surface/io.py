@@ -14,6 +14,8 @@ as the pixel size when the file states nothing else, which picture software fill
 inch by habit: a given ``pixel_mm`` replaces them, with a note.
 Pixels that are not square (a scan with 10 x 12 um pixels, or different TIFF X and Y resolutions)
 are refused unless ``resample_square`` asks for bilinear resampling to the finer of the two sizes.
+Missing points (NaN) are refused by ``load_heightmap`` and ``read_heightmap``; ``read_heights`` keeps
+them, for the loading pipeline's clean-up (roughness.surface.loading, which every command uses).
 Every failure the user can cause is reported as an InputError naming the file and the problem.
 The size a file declares is checked against MAX_HEIGHTMAP_PIXELS before its values are read, so a
 small compressed file that would expand to gigabytes is refused without allocating them.
@@ -25,7 +27,7 @@ import math
 import struct
 import warnings
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -75,23 +77,28 @@ class _Raw:
 
 @dataclass(frozen=True)
 class Reading:
-    """A heightmap as read from a file, and how: its format, units and what was done to its values."""
+    """How a file was read: its format, units and pixel size, and what reading did to its values (a record:
+    ``heightmap`` is the map itself only where ``read_heightmap`` made one; the loading pipeline's record,
+    whose heights go on to clean-up, has None)."""
 
-    heightmap: Heightmap
     path: str
     kind: str
     unit: str | None  # the file's length unit (scans), None where heights are mm or grey levels
     pixel_file_mm: tuple[float, float] | None  # (x, y) as the file states it, None if it states none
     pixel_from: str  # "file", "TIFF resolution tags" or "given" (pixel_mm)
+    pixel_mm: float  # the square pixel of the heights, after any resampling
     resampling: Resampling | None = None
+    own_units: bool = False  # heights already in mm: a height_mm given for other inputs was not applied
     notes: tuple[str, ...] = ()
+    heightmap: Heightmap | None = field(default=None, repr=False, compare=False)
 
     def as_dict(self) -> dict:
         """The record for JSON output."""
         return {"file": self.path, "format": self.kind, "unit": self.unit,
                 "pixel_file_mm": None if self.pixel_file_mm is None else list(self.pixel_file_mm),
-                "pixel_from": self.pixel_from, "pixel_mm": self.heightmap.pixel_mm,
-                "resampled": None if self.resampling is None else self.resampling.as_dict(), "notes": list(self.notes)}
+                "pixel_from": self.pixel_from, "pixel_mm": self.pixel_mm,
+                "resampled": None if self.resampling is None else self.resampling.as_dict(),
+                "own_units": self.own_units, "notes": list(self.notes)}
 
 
 def load_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: float | None = None,
@@ -115,7 +122,22 @@ def read_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: f
     """``load_heightmap``, with the record of how the file was read (for the reports and the JSON).
 
     ``resample_square``: resample non-square pixels bilinearly to square ones of the finer size
-    (recorded in ``resampling`` and ``notes``) instead of refusing them.
+    (recorded in ``resampling`` and ``notes``) instead of refusing them. Missing points (NaN) are an
+    InputError here; ``read_heights`` keeps them for clean-up.
+    """
+    heights, reading = read_heights(path, pixel_mm, height_mm, dataset, resample_square)
+    return replace(reading, heightmap=_heightmap(reading.path, heights, reading.pixel_mm))
+
+
+def read_heights(path: str | Path, pixel_mm: float | None = None, height_mm: float | None = None,
+                 dataset: str | None = None, resample_square: bool = False,
+                 height_for_others: bool = False) -> tuple[np.ndarray, Reading]:
+    """Heights (ny, nx) in mm on square pixels of ``reading.pixel_mm``, NaN where the file has no value (as
+    scanners mark missing points; a resampled pixel next to one is missing too), and how they were read.
+
+    Units as in ``load_heightmap``; ``height_for_others``: ``height_mm`` was given for other inputs of the same
+    command too, so a file whose heights are already mm keeps them (``own_units``, noted) instead of refusing it.
+    Everything but the holes is checked as a Heightmap is (shape, size, Inf, MAX_HEIGHT_MM).
     """
     path = _existing_file(Path(path))
     suffix = path.suffix.lower()
@@ -138,7 +160,24 @@ def read_heightmap(path: str | Path, pixel_mm: float | None = None, height_mm: f
         raw = _read_scan(path)
     else:
         raw = _read_h5(path, dataset or DEFAULT_DATASET)
-    return _to_heightmap(path, raw, pixel_mm, height_mm, resample_square)
+    own = height_for_others and raw.full_scale is None and height_mm is not None
+    heights, reading = _apply_units(path, raw, pixel_mm, None if own else height_mm, resample_square)
+    if own:
+        reading = replace(reading, own_units=True, notes=(*reading.notes, f"{path}: heights as the file states them "
+                                                          "(height_mm applies to inputs of grey levels)"))
+    holes = np.isnan(heights)
+    _heightmap(str(path), np.where(holes, 0.0, heights), reading.pixel_mm)  # every check but the holes'
+    if holes.all():
+        raise InputError(f"{path}: every point is missing (NaN); nothing to fill from")
+    return heights, reading
+
+
+def _heightmap(path: str, heights: np.ndarray, pixel_mm: float) -> Heightmap:
+    """A Heightmap, or InputError naming the file and the defect."""
+    try:
+        return Heightmap(heights, pixel_mm)
+    except InputError as err:
+        raise InputError(f"{path}: {err}", parameter=err.parameter) from None
 
 
 def heightmap_files(folder: str | Path) -> list[Path]:
@@ -217,9 +256,10 @@ def _unreadable(path: Path, kind: str, err: BaseException) -> InputError:
     return InputError(f"cannot read {path} as {kind}: {str(err) or type(err).__name__}")
 
 
-def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: float | None,
-                  resample_square: bool = False) -> Reading:
-    """Apply units to ``raw``; InputError names any missing, misplaced or contradicting unit."""
+def _apply_units(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: float | None,
+                 resample_square: bool = False) -> tuple[np.ndarray, Reading]:
+    """``raw``'s heights in mm on square pixels (NaN kept) and the record; InputError names any missing,
+    misplaced or contradicting unit."""
     notes: list[str] = []
     pixel_x, pixel_y, pixel_from = _pixels(path, raw, pixel_mm, notes)
     if raw.full_scale is None and height_mm is not None:
@@ -235,7 +275,7 @@ def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: floa
     if missing:
         raise InputError(f"{path}: {raw.kind} heightmaps need {' and '.join(missing)}; the file does not state it",
                          parameter=missing[0].split()[0])
-    values = raw.values
+    values = np.asarray(raw.values, dtype=float)
     if raw.full_scale is not None:
         values = values / raw.full_scale * height_mm
         if raw.base_mm is not None:
@@ -248,14 +288,11 @@ def _to_heightmap(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: floa
                              f"{source}; the engines need square pixels: pass resample_square to resample it "
                              f"(bilinear) to square pixels of {min(pixel_x, pixel_y):.6g} mm",
                              parameter="resample_square")
-        values, resampling = square(np.asarray(values, dtype=float), pixel_x, pixel_y)
+        values, resampling = square(values, pixel_x, pixel_y)
         notes.append(f"{path}: {resampling.describe()}")
-    try:
-        hm = Heightmap(values, min(pixel_x, pixel_y))
-    except InputError as err:
-        raise InputError(f"{path}: {err}", parameter=err.parameter) from None
     stated = None if raw.pixel_mm is None else (float(raw.pixel_mm), float(raw.pixel_y_mm or raw.pixel_mm))
-    return Reading(hm, str(path), raw.kind, raw.unit, stated, pixel_from, resampling, tuple(notes))
+    return values, Reading(str(path), raw.kind, raw.unit, stated, pixel_from, min(pixel_x, pixel_y), resampling,
+                           notes=tuple(notes))
 
 
 def _pixels(path: Path, raw: _Raw, given: float | None, notes: list[str]) -> tuple[float | None, float | None, str]:
