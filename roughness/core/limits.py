@@ -44,6 +44,9 @@ MAX_PARALLEL = Limit(256, "MAX_PARALLEL")
 """Threads or worker processes of one run (--threads, --workers); more start slowly or not at all."""
 MAX_CHANNELS = Limit(4096, "MAX_CHANNELS")
 """Channels of one surrogate layer (train --widths; the shipped networks have at most 96)."""
+MAX_PRINT_LAYERS = Limit(100_000, "MAX_PRINT_LAYERS")
+"""Layers of a printed texture (--printer): a resin print's layers are each filtered once; 100,000 layers of
+0.01 mm are a 1 m tall relief."""
 MAX_HEIGHT_MM = 1000.0
 """|height| (mm) a heightmap may hold: a texture's relief is millimetres; 1 m is no texture."""
 MIN_PIXEL_MM = 1e-9
