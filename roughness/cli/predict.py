@@ -20,6 +20,7 @@ from .common import (
     json_text,
     log,
 )
+from .printer import add_printer_arg
 from .simulate import add_curvature_args, curvature_fields
 
 MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
@@ -60,6 +61,7 @@ def add_parser(sub) -> None:
                     "unless --overwrite")
     pr.add_argument("--step-mm", type=POSITIVE, default=mapping["step_mm"],
                     help=f"--map: distance between footprint positions in mm (default: {mapping['step_mm']:g})")
+    add_printer_arg(pr, "predict")
     add_quiet(pr)
     add_overwrite(pr)
     finish(pr, run, centre_mm="--centre")
@@ -71,11 +73,17 @@ def run(args: argparse.Namespace) -> int:
     from roughness.surrogate.inputs import InputReader
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
+    from .printer import PrintPairs, printer_of
+
+    printer = printer_of(args)
     if args.map:
         from roughness.core.errors import InputError
         from roughness.core.files import check_distinct
         from roughness.surrogate.roughness_map import check_map_path
 
+        if printer is not None:
+            raise InputError("--map maps the digital object; a map of the printed one is not supported yet "
+                             "(predict the printed texture without --map)", "printer")
         check_distinct({"--map": args.map}, {"HEIGHTMAP": args.inputs, "--model": args.model})
 
         if args.curvature_mm is not None:
@@ -89,18 +97,28 @@ def run(args: argparse.Namespace) -> int:
     if args.map:
         return _predict_map(args, model)
     reader = InputReader(args.inputs, args.pixel_mm, args.height_mm, footprint_mm, args.centre, args.tile)
-    start, done = time.monotonic(), 0
+    heightmaps, sources = reader.heightmaps(), reader.sources()
+    if printer is not None:  # each input, then its print
+        pairs = PrintPairs(reader, printer, args.tile)
+        heightmaps, sources = pairs.heightmaps(), pairs.sources()
+    start, done, digital = time.monotonic(), 0, []
 
     def show(p) -> None:
         nonlocal done
+        if printer is not None and not digital:
+            digital.append(p)  # shown with its print, which comes next
+            return
         done += 1
-        print(json_text(p.as_dict()) if args.json else _prediction_line(p), flush=True)
+        if printer is None:
+            print(json_text(p.as_dict()) if args.json else _prediction_line(p), flush=True)
+        else:
+            _show_printed(args, digital.pop(), p, pairs.prints.popleft())
         if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 
-    predict(reader.heightmaps(), engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
+    predict(heightmaps, engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
             fidelity=args.fidelity, tolerance=args.tolerance, batch_size=args.batch_size,
-            sources=reader.sources(), on_result=show, max_std=args.max_std, **curvature_fields(args))
+            sources=sources, on_result=show, max_std=args.max_std, **curvature_fields(args))
     for source, error in reader.errors:
         print(f"roughness: error: {error}", file=sys.stderr)
         if args.json:
@@ -145,6 +163,27 @@ def _predict_map(args: argparse.Namespace, model) -> int:
           f"{100 * summary['in_domain_fraction']:.0f}% in domain, {summary['seconds']:.2f} s; map written to {args.map}"
           + "".join(f"\n  note: {note}" for note in notes))
     return 0
+
+
+def _show_printed(args: argparse.Namespace, digital, printed, result) -> None:
+    """One input's prediction for its print, with the digital texture's and the difference between them."""
+    from .printer import PrintDifference
+
+    diff = PrintDifference(digital.roughness, printed.roughness, digital.placement.equivalent_lambda_mm,
+                           printed.placement.equivalent_lambda_mm)
+    notes = list(result.notes)
+    if digital.engine != printed.engine:
+        notes.append(f"the digital texture was answered by the {digital.engine}, the print by the {printed.engine}: "
+                     "each is placed on its own engine's standard scale")
+    if args.json:
+        print(json_text({**printed.as_dict(), "printer": result.profile.as_dict(), "print_steps": list(result.steps),
+                         "print_notes": notes, "print_difference": diff.as_dict(), "digital": digital.as_dict()}),
+              flush=True)
+        return
+    lines = [_prediction_line(printed).replace(": V = ", " as printed: V = ", 1),
+             f"  printer {result.profile.describe()}: {diff.describe()}",
+             *(f"  print: {step}" for step in result.steps), *(f"  note: {note}" for note in notes)]
+    print("\n".join(lines), flush=True)
 
 
 def _prediction_line(p) -> str:

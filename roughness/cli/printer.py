@@ -1,0 +1,101 @@
+"""``--printer NAME|FILE`` of predict, tune and palette: answer for the printed plate, and say how far it is
+from the digital texture (roughness.surface.printing)."""
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+
+
+def add_printer_arg(p: argparse.ArgumentParser, what: str) -> None:
+    from roughness.surface.printing import PROFILES
+
+    p.add_argument("--printer", metavar="NAME|FILE",
+                   help=f"{what} for the plate as this printer would print it: a profile ({', '.join(PROFILES)}) or "
+                        "a JSON profile file (see README); the digital texture's V and the difference are reported")
+
+
+def printer_of(args: argparse.Namespace):
+    """The ``PrintProfile`` of --printer, or None (InputError naming --printer if unknown or invalid)."""
+    from roughness.surface.printing import printer_profile
+
+    return printer_profile(args.printer) if args.printer else None
+
+
+@dataclass(frozen=True)
+class PrintDifference:
+    """V of a texture as designed and as printed, each placed on the standard scale (lambda in mm)."""
+
+    digital_roughness: float
+    printed_roughness: float
+    digital_lambda_mm: float | None  # None: below the scale's floor
+    printed_lambda_mm: float | None
+
+    @property
+    def jnd(self) -> float | None:
+        """Signed JNDs of equivalent wavelength, printed against digital (None if either is below the scale)."""
+        from roughness.surrogate.calibration import jnd
+
+        if self.digital_lambda_mm is None or self.printed_lambda_mm is None:
+            return None
+        return jnd(self.printed_lambda_mm, self.digital_lambda_mm)
+
+    @property
+    def relative_change(self) -> float | None:
+        """(V printed - V digital) / V digital (None for a flat digital texture)."""
+        if self.digital_roughness == 0:
+            return None
+        return self.printed_roughness / self.digital_roughness - 1
+
+    def as_dict(self) -> dict:
+        return {"digital_roughness": self.digital_roughness, "printed_roughness": self.printed_roughness,
+                "digital_lambda_mm": self.digital_lambda_mm, "printed_lambda_mm": self.printed_lambda_mm,
+                "difference_jnd": self.jnd, "relative_change": self.relative_change}
+
+    def describe(self) -> str:
+        change = "" if self.relative_change is None else f"{100 * self.relative_change:+.1f}%, "
+        jnd = (f"{self.jnd:+.2f} JND" if self.jnd is not None else
+               "JND undefined: below the standard scale's floor")
+        return f"V digital {self.digital_roughness:.4f}, printed {self.printed_roughness:.4f} ({change}{jnd})"
+
+
+def difference(digital_roughness: float, printed_roughness: float, scale) -> PrintDifference:
+    """The difference of two V on one standard scale (``StandardScale``)."""
+    d, p = scale.place(digital_roughness), scale.place(printed_roughness)
+    return PrintDifference(digital_roughness, printed_roughness, d.equivalent_lambda_mm, p.equivalent_lambda_mm)
+
+
+class PrintPairs:
+    """The usable heightmaps of an ``InputReader``, each followed by its print (``printed``), named alike.
+
+    A heightmap that cannot be printed at its resolution is recorded in the reader's ``errors`` and skipped.
+    ``prints`` holds the ``PrintResult`` of each pair yielded, for the caller to take in order.
+    """
+
+    def __init__(self, reader, profile, tile: bool) -> None:
+        from collections import deque
+
+        self.reader, self.profile, self.tile = reader, profile, tile
+        self.prints: deque = deque()
+        self._names: deque[str] = deque()
+
+    def heightmaps(self):
+        from roughness.core.errors import InputError
+        from roughness.surface.printing import printed
+
+        names = self.reader.sources()
+        for hm in self.reader.heightmaps():
+            name = next(names)
+            try:
+                result = printed(hm, self.profile, self.tile)
+            except InputError as err:
+                self.reader.errors.append((name, f"{name}: {err}"))
+                continue
+            self.prints.append(result)
+            self._names.extend((name, name))
+            yield hm
+            yield result.heightmap
+
+    def sources(self):
+        """Names of the heightmaps yielded so far, in order (consume in step with ``heightmaps``)."""
+        while True:
+            yield self._names.popleft()
