@@ -15,6 +15,7 @@ from .common import (
     log,
     write_stdout,
 )
+from .printer import add_printer_arg, merged, print_report, printer_of
 
 
 def add_parser(sub) -> None:
@@ -45,11 +46,14 @@ def add_parser(sub) -> None:
     p.add_argument("--stl", action="store_true", help="also write each texture as a printable plate texture-N.stl")
     p.add_argument("--base-mm", type=POSITIVE,
                    help=f"--stl: plate thickness below the texture's lowest point in mm (default {DEFAULT_BASE_MM:g})")
+    add_printer_arg(p, "choose and space the textures (judged as printed; the files are the digital designs)")
     add_model_tail(p, "print palette.json's content (default: text)")
     finish(p, run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
     from roughness.core.errors import InputError
     from roughness.core.files import check_distinct, check_output_folder
     from roughness.design.evaluation import Evaluator
@@ -61,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"a palette needs at least 2 textures, got {args.k}", "k")
     if args.base_mm is not None and not args.stl:
         raise InputError("applies only with --stl", "base_mm")
-    evaluator = Evaluator(args.model, args.verify)
+    evaluator = Evaluator(args.model, args.verify, printer=printer_of(args))
     progress = lambda line: log(args, "  " + line)
     if args.candidates:
         from roughness.surface.io import heightmap_files, load_heightmap
@@ -69,12 +73,22 @@ def run(args: argparse.Namespace) -> int:
         files = heightmap_files(args.candidates)
         candidates = [(name, load_heightmap(f, args.pixel_mm, args.height_mm))
                       for name, f in zip(candidate_names(files), files)]
+        printing = merged([print_report(evaluator, hm, args.tile) for _, hm in candidates])  # each refused now if
+        # the printer cannot print it at its pixel size
         log(args, f"palette: choosing {args.k} of {len(candidates)} textures, {args.min_jnd:g} JND apart")
         palette = folder_palette(candidates, args.k, args.min_jnd, evaluator, args.tile, progress)
     else:
+        from roughness.dataset.catalogue import make_texture
+
+        printing = print_report(evaluator, make_texture(args.family, seed=args.seed)[0], False) \
+            if evaluator.printer else None
         log(args, f"palette: {args.k} variants of {args.family} by {args.by}, {args.min_jnd:g} JND apart")
         palette = family_palette(args.k, args.min_jnd, args.family, args.by, evaluator, args.tolerance_jnd,
                                  seed=args.seed, progress=progress)
+    if printing:
+        for m in palette.members:
+            printing.verify(m.heightmap, m.fem.roughness, args.tile and bool(args.candidates), m.name)
+        palette = replace(palette, printing=printing.as_dict())
     save_palette(palette, out, args.stl, args.base_mm, args.overwrite)
     summary = {**palette.summary(), "verifier": evaluator.verifier}
     if args.json:
@@ -85,5 +99,5 @@ def run(args: argparse.Namespace) -> int:
                  for m in palette.members]
         lines.append(f"closest pair {palette.closest_jnd:.2f} JND ({evaluator.verifier}): "
                      f"{'VERIFIED' if palette.verified else 'NOT VERIFIED'} >= {args.min_jnd:g} JND; written to {out}")
-        write_stdout("\n".join(lines))
+        write_stdout("\n".join(lines + (printing.lines() if printing else [])))
     return 0 if palette.verified else 1

@@ -99,3 +99,49 @@ class PrintPairs:
         """Names of the heightmaps yielded so far, in order (consume in step with ``heightmaps``)."""
         while True:
             yield self._names.popleft()
+
+
+class PrintReport:
+    """--printer in the design commands: what printing does to the input, and each result's digital V against its
+    printed V (the verifier's, on its standard scale)."""
+
+    def __init__(self, evaluator, result) -> None:
+        self.evaluator, self.result = evaluator, result  # result: the input's PrintResult
+        self.differences: list[tuple[str, PrintDifference]] = []
+
+    def verify(self, heightmap, printed_roughness: float, tile: bool, name: str = "result") -> PrintDifference:
+        """Verify the digital ``heightmap`` (its printed V is known) and record the difference under ``name``."""
+        digital = self.evaluator.verify(heightmap, tile=tile, digital=True)
+        diff = difference(digital.roughness, printed_roughness, self.evaluator.scale)
+        self.differences.append((name, diff))
+        return diff
+
+    def as_dict(self) -> dict:
+        return {**self.result.as_dict(), "verifier": self.evaluator.verifier,
+                "differences": {name: diff.as_dict() for name, diff in self.differences}}
+
+    def lines(self) -> list[str]:
+        profile = self.result.profile
+        return [f"judged as printed by {profile.describe()}; the files saved are the digital designs",
+                *(f"{name}: {diff.describe()} ({self.evaluator.verifier})" for name, diff in self.differences),
+                *(f"print: {step}" for step in self.result.steps), *(f"print note: {n}" for n in self.result.notes)]
+
+
+def print_report(evaluator, heightmap, tile: bool) -> PrintReport | None:
+    """A ``PrintReport`` if the evaluator has a printer (its print of ``heightmap`` made now, so that a map too
+    coarse for the printer is refused before any work), else None."""
+    from roughness.surface.printing import printed
+
+    if evaluator.printer is None:
+        return None
+    return PrintReport(evaluator, printed(heightmap, evaluator.printer, tile))
+
+
+def merged(reports: list[PrintReport | None]) -> PrintReport | None:
+    """One report for several inputs printed alike: the first's, with every input's notes (each once)."""
+    from dataclasses import replace
+
+    if not reports or reports[0] is None:
+        return None
+    notes = tuple(dict.fromkeys(note for r in reports for note in r.result.notes))
+    return PrintReport(reports[0].evaluator, replace(reports[0].result, notes=notes))

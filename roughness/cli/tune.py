@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 
 from .common import COUNT, POSITIVE, add_model_tail, add_reading_args, defaults, finish, json_text, log, write_stdout
+from .printer import add_printer_arg, print_report, printer_of
 
 
 def add_parser(sub) -> None:
@@ -34,6 +35,7 @@ def add_parser(sub) -> None:
                    help=f"most FEM verifications (default {given['max_fem']})")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="the texture is a periodic tile (for maps under 10 mm)")
+    add_printer_arg(p, "tune (the input, --like and the result judged as printed; --out is the digital design)")
     add_model_tail(p, "one JSON object (default: text)")
     finish(p, run)
 
@@ -56,9 +58,11 @@ def run(args: argparse.Namespace) -> int:
     factors = (args.min_factor or lo, args.max_factor or hi)
     if not factors[0] < factors[1]:
         raise InputError(f"the factor range must rise, got {factors[0]:g}..{factors[1]:g}", "min_factor")
+    printer = printer_of(args)
     hm = load_heightmap(args.heightmap, args.pixel_mm, args.height_mm)
     reference = load_heightmap(args.like, args.pixel_mm, args.height_mm) if args.like else None
-    evaluator = Evaluator(args.model, args.verify)
+    evaluator = Evaluator(args.model, args.verify, printer=printer)
+    printing = print_report(evaluator, hm, args.tile)  # refuses a map too coarse for the printer before any work
     if reference is not None:
         log(args, f"tune: FEM of the reference {args.like}")
     target = target_of(evaluator, args.target_lambda, args.target_v, reference, args.like or "", args.tile)
@@ -68,6 +72,9 @@ def run(args: argparse.Namespace) -> int:
                   progress=lambda line: log(args, "  " + line))
     save_heightmap(result.heightmap, out, base_mm=args.base_mm, overwrite=args.overwrite)
     summary = {"input": args.heightmap, "out": str(out), **result.summary(), "verifier": evaluator.verifier}
+    if printing:
+        printing.verify(result.heightmap, result.achieved.roughness, args.tile)
+        summary["printing"] = printing.as_dict()
     if args.json:
         write_stdout(json_text(summary))
     else:
@@ -78,6 +85,6 @@ def run(args: argparse.Namespace) -> int:
                   f"{a.equivalent_lambda_mm:.3f} mm; error {result.jnd_error:+.2f} ± {result.jnd_stderr:.2f} JND "
                   f"({'within' if result.reached else 'NOT within'} {result.tolerance_jnd:g} JND after "
                   f"{len(result.steps)} FEM run(s)); surrogate V {result.surrogate_roughness:.4f}"),
-                 *(f"note: {n}" for n in result.notes)]
+                 *(f"note: {n}" for n in result.notes), *(printing.lines() if printing else [])]
         write_stdout("\n".join(lines))
     return 0 if result.reached else 1
