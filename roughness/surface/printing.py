@@ -9,12 +9,13 @@ FDM (fused filament), in the order the printer applies them:
 2. layer quantisation: each layer is printed where the model reaches its middle (slicers slice at
    mid-layer), so heights round to the nearest whole layer above the plate (the texture's lowest
    point, taken as the top of a base of whole layers);
-3. the bead: every layer is made of extruded lines ``line_width_mm`` wide whose cross-section is
-   a rectangle with semicircular ends of the layer's height (nophead 2014, below). A layer's part
-   narrower than one bead is not printed, and its edges are rounded by the bead's ends: a grey
-   opening with the bead's footprint (a disk of the line width whose rim drops by half a layer
-   along a quarter circle). This is what rounds a bump's tip: a cap narrower than the bead is cut
-   down to where the bump is one bead wide.
+3. the bead's width: every layer is made of extruded lines ``line_width_mm`` wide, so a part of a
+   layer narrower than one line is not printed: a flat grey opening with a disk of the line width
+   (per layer, as openings commute with the layering). This is what rounds a bump's tip: a cap
+   narrower than the line is cut down to where the bump is one line wide;
+4. the bead's ends: a line's cross-section is a rectangle with semicircular ends of the layer's
+   height (nophead 2014, below), so each layer's edge is rounded down to its middle along a quarter
+   circle of radius half a layer.
 The ridges between neighbouring lines of a top layer (a fraction of the layer height), seam
 blobs and over-extrusion are not modelled.
 
@@ -245,22 +246,25 @@ def _disk(radius_px: float) -> np.ndarray:
     return x**2 + y**2 <= radius_px**2 + 1e-9
 
 
-def _bead(width_px: float, layer_px: float) -> tuple[np.ndarray, np.ndarray]:
-    """Footprint and height profile (in pixels, like ``layer_px``) of an FDM bead seen from above.
+def _rounded_edges(h: np.ndarray, base: float, layer_mm: float, pixel_mm: float, periodic: bool) -> np.ndarray:
+    """Layered heights with each layer's edge rounded by the bead's semicircular end (radius half a layer).
 
-    Within the line width the bead's top is flat to half a layer from its edge, then drops along a quarter
-    circle of radius half the layer height (its semicircular end) by half a layer at the edge.
+    A pixel on top of layer k at horizontal distance d (mm) from that layer's edge lies lower by
+    r - sqrt(r^2 - (r - d)^2) for d < r = layer / 2: down to the layer's middle at the edge itself.
     """
-    radius = width_px / 2
-    footprint = _disk(radius)
-    r = int(math.floor(radius))
-    y, x = np.mgrid[-r:r + 1, -r:r + 1]
-    rho = np.hypot(x, y)
-    cap = layer_px / 2  # radius of the bead's rounded end
-    flat = max(radius - cap, 0.0)
-    into = np.clip(rho - flat, 0.0, cap)
-    drop = cap - np.sqrt(np.maximum(cap**2 - into**2, 0.0))
-    return footprint, -np.where(footprint, drop, 0.0)
+    from scipy import ndimage
+
+    cap = layer_mm / 2
+    pad = int(math.ceil(cap / pixel_mm)) + 1  # beyond this the edge's distance does not matter
+    levels = np.rint((h - base) / layer_mm).astype(np.int64)
+    padded = np.pad(levels, pad, mode="wrap" if periodic else "edge")
+    drop = np.zeros(levels.shape)
+    for k in np.unique(levels[levels > 0]):
+        inside = ndimage.distance_transform_edt(padded >= k)[pad:-pad, pad:-pad]
+        top = levels == k
+        d = np.clip(inside[top] * pixel_mm - pixel_mm / 2, 0.0, cap)  # pixel centre to the edge between pixels
+        drop[top] = cap - np.sqrt(cap**2 - (cap - d) ** 2)
+    return h - drop
 
 
 def _fdm(h: np.ndarray, base: float, pixel_mm: float, p: FdmProfile, mode: str, notes: list[str]) -> tuple:
@@ -285,10 +289,11 @@ def _fdm(h: np.ndarray, base: float, pixel_mm: float, p: FdmProfile, mode: str, 
                      "no effect at this resolution")
     h = _quantised(h, base, p.layer_mm)
     steps.append(f"layer quantisation: heights rounded to whole {p.layer_mm:g} mm layers above the lowest point")
-    footprint, profile = _bead(width_px, p.layer_mm / pixel_mm)
-    out = ndimage.grey_opening(h, footprint=footprint, structure=profile * pixel_mm, mode=mode)
-    steps.append(f"bead: parts narrower than the {p.line_width_mm:g} mm line removed, layer edges rounded by the "
-                 f"bead's {p.layer_mm / 2:g} mm ends (grey opening)")
+    h = ndimage.grey_opening(h, footprint=_disk(width_px / 2), mode=mode)
+    steps.append(f"bead width: parts of a layer narrower than the {p.line_width_mm:g} mm line removed (opening with "
+                 "a disk of the line width)")
+    out = _rounded_edges(h, base, p.layer_mm, pixel_mm, mode == "wrap")
+    steps.append(f"bead ends: each layer's edge rounded along a quarter circle of radius {p.layer_mm / 2:g} mm")
     return out, steps
 
 
