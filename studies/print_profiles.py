@@ -130,8 +130,8 @@ def _table(result: dict) -> None:
               + ", ".join(f"{-100 * change[n]:.0f}% ({n})" for n in fdm) + " less rough in V; most of it is the bead's "
               f"width, which cuts the bumps' 0.3 mm caps down to where a bump is one line wide (the 0.4 mm disk alone: "
               f"{-100 * change['nozzle disk only']:.0f}%), while 0.2 mm layers alone change V by "
-              f"{100 * change['0.2 mm layers only']:+.1f}%. Thinner layers do not help: they follow the cut tip more "
-              "closely, where 0.2 mm layers sometimes round it up a layer. The resin profiles change V by "
+              f"{100 * change['0.2 mm layers only']:+.1f}%. Thinner layers do not help here (0.1 mm layers lose a little "
+              "more V than 0.2 mm ones; not investigated further). The resin profiles change V by "
               + ", ".join(f"{100 * change[n]:+.1f}% ({n})" for n in sla) + ": their 0.05 mm layers are the only step "
               "these 0.05 mm maps resolve (the LCD pixel and the light bleed are finer than a map pixel, as "
               "`--printer` says in its notes)."]
