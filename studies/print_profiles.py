@@ -5,8 +5,9 @@ is printed by each shipped profile and by two ablations (the 0.4 mm nozzle's dis
 negligible layers; 0.2 mm layers alone), and V of the design and of each print is computed with the
 spectral engine (roughness.simulate.spectral.engine.SpectralSimulator, the paper's parameters, tens of
 ms per texture). Differences are JNDs of equivalent wavelength on the spectral standard scale, per
-seed, then averaged. Also the texture of the README's tune example (standard-1.0, seed 0, heights x
-1.4139), the case the issue measured by hand (-0.24 JND for a 0.4 mm nozzle).
+seed, then averaged. Also two tuned textures (standard-1.0, seed 0, heights x 0.5675: the README's
+`tune --target-lambda 0.8` example; x 1.4139: `tune --target-lambda 1.2 --verify spectral`), the
+kind of case the issue measured by hand (-0.24 JND for a 0.4 mm nozzle on a tuned texture).
 
     python studies/print_profiles.py            # about four minutes on one shared core
     python studies/print_profiles.py --render   # table and plot again from results/print_profiles.json
@@ -28,7 +29,7 @@ import numpy as np  # noqa: E402
 
 OUT = Path(__file__).parent / "results" / "print_profiles"
 SEEDS = (100, 101, 102, 103, 104)
-TUNED = ("standard-1.0", 0, "height", 1.4139)  # texture, seed, knob, factor: tune's README example
+TUNED = (("standard-1.0", 0, "height", 0.5675), ("standard-1.0", 0, "height", 1.4139))  # texture, seed, knob, factor
 
 
 def profiles() -> dict:
@@ -71,13 +72,15 @@ def main(argv: list[str] | None = None) -> int:
                 row["printed"][name], row["jnd"][name] = vp, jnd(lam(vp), lam(v))
             rows.append(row)
         print(f"lambda {lam_mm}: done ({time.perf_counter() - start:.0f} s)", flush=True)
-    name, seed, by, factor = TUNED
-    tuned_hm = scaled(make_texture(name, seed=seed)[0], by, factor)
-    v = engine.run(tuned_hm).roughness
-    tuned = {"texture": name, "seed": seed, "by": by, "factor": factor, "designed": v, "printed": {}, "jnd": {}}
-    for pname, profile in profiles().items():
-        vp = engine.run(printed(tuned_hm, profile).heightmap).roughness
-        tuned["printed"][pname], tuned["jnd"][pname] = vp, jnd(lam(vp), lam(v))
+    tuned = []
+    for name, seed, by, factor in TUNED:
+        tuned_hm = scaled(make_texture(name, seed=seed)[0], by, factor)
+        v = engine.run(tuned_hm).roughness
+        entry = {"texture": name, "seed": seed, "by": by, "factor": factor, "designed": v, "printed": {}, "jnd": {}}
+        for pname, profile in profiles().items():
+            vp = engine.run(printed(tuned_hm, profile).heightmap).roughness
+            entry["printed"][pname], entry["jnd"][pname] = vp, jnd(lam(vp), lam(v))
+        tuned.append(entry)
     result = {"engine": "spectral (roughness.simulate.spectral.engine.SpectralSimulator, SimConfig defaults)",
               "pixel_mm": 0.05, "seeds": list(SEEDS), "profiles": {k: p.as_dict() for k, p in profiles().items()},
               "rows": rows, "tuned": tuned, "seconds": time.perf_counter() - start}
@@ -130,15 +133,15 @@ def _table(result: dict) -> None:
               + ", ".join(f"{-100 * change[n]:.0f}% ({n})" for n in fdm) + " less rough in V; most of it is the bead's "
               f"width, which cuts the bumps' 0.3 mm caps down to where a bump is one line wide (the 0.4 mm disk alone: "
               f"{-100 * change['nozzle disk only']:.0f}%), while 0.2 mm layers alone change V by "
-              f"{100 * change['0.2 mm layers only']:+.1f}%. Thinner layers do not help here (0.1 mm layers lose a little "
-              "more V than 0.2 mm ones; not investigated further). The resin profiles change V by "
+              f"{100 * change['0.2 mm layers only']:+.1f}%. Thinner layers do not help here (0.1 mm layers lose a "
+              "little more V than 0.2 mm ones; not investigated further). The resin profiles change V by "
               + ", ".join(f"{100 * change[n]:+.1f}% ({n})" for n in sla) + ": their 0.05 mm layers are the only step "
               "these 0.05 mm maps resolve (the LCD pixel and the light bleed are finer than a map pixel, as "
               "`--printer` says in its notes)."]
-    t = result["tuned"]
-    lines += ["", f"The tune example ({t['texture']}, seed {t['seed']}, {t['by']} x {t['factor']}): designed V "
-              f"{t['designed']:.4f}; " + "; ".join(f"{n}: V {t['printed'][n]:.4f} ({t['jnd'][n]:+.2f} JND)"
-                                                   for n in names) + "."]
+    for t in result["tuned"]:
+        lines += ["", f"Tuned texture {t['texture']}, seed {t['seed']}, {t['by']} x {t['factor']}: designed V "
+                  f"{t['designed']:.4f}; " + "; ".join(f"{n}: V {t['printed'][n]:.4f} ({t['jnd'][n]:+.2f} JND)"
+                                                       for n in names) + "."]
     lines += ["", "![V designed and printed](print_profiles.png)", ""]
     OUT.with_suffix(".md").write_text("\n".join(lines))
 

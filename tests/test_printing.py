@@ -34,7 +34,7 @@ def _plate(pillars: list[tuple[int, int, int, float]], n: int = 80, pixel_mm: fl
 
 def test_texture_finer_than_the_nozzle_loses_most_of_its_v():
     """Bumps 0.35 mm apart (finer than the 0.45 mm bead of a 0.4 mm nozzle) print nearly flat: measured 0.0079 ->
-    0.0006 with the spectral engine; bumps 1.5 mm apart keep most of theirs (the bead only cuts their tips)."""
+    0.0004 with the spectral engine; bumps 1.5 mm apart keep most of theirs (the bead only cuts their tips)."""
     fine = bump_texture(BumpRecipe(lambda_mm=0.35, seed=3))
     v_fine, v_fine_printed = _spectral_v(fine), _spectral_v(printed(fine, FDM).heightmap)
     assert v_fine_printed < 0.5 * v_fine, (v_fine, v_fine_printed)
@@ -110,6 +110,9 @@ BAD_PROFILES = {
     "unknown field": '{"kind": "fdm", "nozzle_mm": 0.4, "layer_mm": 0.2, "speed": 60}',
     "missing field": '{"kind": "sla", "pixel_mm": 0.05, "layer_mm": 0.05}',
     "unknown kind": '{"kind": "sls", "layer_mm": 0.1}',
+    "kind not a string": '{"kind": ["fdm"], "nozzle_mm": 0.4, "layer_mm": 0.2}',
+    "nested too deep": "[" * 60_000,
+    "not UTF-8": b'{"kind": "fdm", "name": "\xff", "nozzle_mm": 0.4, "layer_mm": 0.2}',
     "not an object": "[0.4, 0.2]",
     "empty name": '{"kind": "fdm", "name": "", "nozzle_mm": 0.4, "layer_mm": 0.2}',
 }
@@ -117,8 +120,8 @@ BAD_PROFILES = {
 
 @pytest.mark.parametrize("case", BAD_PROFILES)
 def test_bad_json_profiles_are_refused_with_the_reason(tmp_path, case):
-    path = tmp_path / "bad.json"
-    path.write_text(BAD_PROFILES[case])
+    path, content = tmp_path / "bad.json", BAD_PROFILES[case]
+    path.write_bytes(content if isinstance(content, bytes) else content.encode())
     with pytest.raises(InputError, match="printer profile") as err:
         load_profile(path)
     assert err.value.parameter == "printer"
@@ -170,3 +173,22 @@ def test_tune_judges_the_print_and_saves_the_digital_design(tmp_path, capsys):
     saved = load_heightmap(out)  # the file is the digital design: its own V is the digital one
     assert _spectral_v(saved) == pytest.approx(diff["digital_roughness"], rel=1e-9)
     assert diff["digital_roughness"] > diff["printed_roughness"]
+
+
+def test_palette_judges_members_as_printed_and_records_both(tmp_path, capsys):
+    folder = tmp_path / "candidates"
+    folder.mkdir()
+    for lam in (0.625, 1.0, 1.5):
+        np.save(folder / f"s{lam}.npy", standard_texture(lam).heights)
+    out = tmp_path / "palette"
+    code = main(["palette", "--k", "2", "--min-jnd", "1", "--from", str(folder), "--pixel-mm", "0.05",
+                 "--out", str(out), "--verify", "spectral", "--printer", "msla-35um", "--quiet"])
+    text = capsys.readouterr().out
+    assert code == 0 and "judged as printed by msla-35um" in text
+    saved = json.loads((out / "palette.json").read_text())
+    differences = saved["printing"]["differences"]
+    assert saved["printing"]["printer"]["name"] == "msla-35um"
+    for member in saved["members"]:  # the members' V are their prints'; the digital V is recorded beside it
+        diff = differences[member["name"]]
+        assert member["fem_roughness"] == diff["printed_roughness"]
+        assert diff["digital_roughness"] > 0 and diff["difference_jnd"] is not None

@@ -57,7 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
-from roughness.core.checks import in_range, non_negative
+from roughness.core.checks import in_range
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_PRINT_LAYERS, check_size
 
@@ -86,8 +86,8 @@ class FdmProfile:
         layer = in_range("layer_mm", self.layer_mm, 0.01, nozzle)  # slicers refuse layers thicker than the nozzle
         width = in_range("line_width_mm", self.line_width_mm, 0.5 * nozzle, 3.0 * nozzle)
         if width < layer:
-            raise InputError(f"line_width_mm ({width:g} mm) must be at least the layer height ({layer:g} mm): a bead is "
-                             "wider than it is tall", parameter="line_width_mm")
+            raise InputError(f"line_width_mm ({width:g} mm) must be at least the layer height ({layer:g} mm): a "
+                             "bead is wider than it is tall", parameter="line_width_mm")
         closing = in_range("closing_radius_mm", self.closing_radius_mm, 0.0, 1.0)
         for name, value in (("nozzle_mm", nozzle), ("layer_mm", layer), ("line_width_mm", width),
                             ("closing_radius_mm", closing)):
@@ -175,13 +175,13 @@ def load_profile(path: str | Path) -> PrintProfile:
                          "(a profile is a few lines of JSON)", parameter="printer")
     try:
         data = json.loads(path.read_text(encoding="utf-8"), parse_constant=_no_constant)
-    except (UnicodeDecodeError, json.JSONDecodeError, ValueError) as err:
+    except (ValueError, RecursionError) as err:  # UnicodeDecodeError and JSONDecodeError are ValueErrors
         raise InputError(f"printer profile {path} is not valid JSON: {err}", parameter="printer") from None
     if not isinstance(data, dict):
         raise InputError(f"printer profile {path} must be a JSON object, got {type(data).__name__}",
                          parameter="printer")
     kind = data.get("kind")
-    if kind not in KINDS:
+    if not isinstance(kind, str) or kind not in KINDS:
         raise InputError(f"printer profile {path}: \"kind\" must be one of {', '.join(map(repr, KINDS))}, got {kind!r}",
                          parameter="printer")
     cls = KINDS[kind]
@@ -226,7 +226,8 @@ def printed(heightmap: Heightmap, profile: PrintProfile, periodic: bool = False)
                "printer")
     notes = []
     if relief < 0.5 * profile.layer_mm:
-        notes.append(f"the texture's relief {relief:.3g} mm is below half a {profile.layer_mm:g} mm layer: it prints flat")
+        notes.append(f"the texture's relief {relief:.3g} mm is below half a {profile.layer_mm:g} mm layer: it prints "
+                     "flat")
     if isinstance(profile, FdmProfile):
         out, steps = _fdm(h, base, heightmap.pixel_mm, profile, mode, notes)
     else:
