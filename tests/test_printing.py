@@ -192,3 +192,8 @@ def test_palette_judges_members_as_printed_and_records_both(tmp_path, capsys):
         diff = differences[member["name"]]
         assert member["fem_roughness"] == diff["printed_roughness"]
         assert diff["digital_roughness"] > 0 and diff["difference_jnd"] is not None
+
+
+def test_printer_with_map_is_refused_not_ignored(workdir, capsys):  # noqa: F811 (the fixture)
+    _expect_refusal(["predict", *BASE[("predict",)], "--map", "m.png", "--printer", "fdm-0.4-0.2"], workdir, capsys,
+                    ("--printer: --map maps the digital object",))

@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.design.evaluation import Evaluator
     from roughness.design.palette import candidate_names, family_palette, folder_palette, save_palette
 
-    check_distinct({"--out": args.out}, {"--from": args.candidates, "--model": args.model})
+    check_distinct({"--out": args.out}, {"--from": args.candidates, "--model": args.model, "--printer": args.printer})
     out = check_output_folder(args.out, args.overwrite, "out")
     if args.k < 2:
         raise InputError(f"a palette needs at least 2 textures, got {args.k}", "k")

@@ -75,20 +75,20 @@ def run(args: argparse.Namespace) -> int:
 
     from .printer import PrintPairs, printer_of
 
-    printer = printer_of(args)
     if args.map:
         from roughness.core.errors import InputError
         from roughness.core.files import check_distinct
         from roughness.surrogate.roughness_map import check_map_path
 
-        if printer is not None:
+        check_distinct({"--map": args.map},
+                       {"HEIGHTMAP": args.inputs, "--model": args.model, "--printer": args.printer})
+        if args.printer:
             raise InputError("--map maps the digital object; a map of the printed one is not supported yet "
                              "(predict the printed texture without --map)", "printer")
-        check_distinct({"--map": args.map}, {"HEIGHTMAP": args.inputs, "--model": args.model})
-
         if args.curvature_mm is not None:
             raise InputError("--map slides the footprint over a flat object; it does not take --curvature-mm")
         check_map_path(args.map, args.overwrite)
+    printer = printer_of(args)
     if args.engine == "spectral":
         model, footprint_mm = None, defaults(SimConfig)["width_mm"]
     else:

@@ -47,7 +47,8 @@ def run(args: argparse.Namespace) -> int:
     from roughness.design.tune import FACTOR_RANGE, target_of, tune
     from roughness.surface.io import SAVE_SUFFIXES, load_heightmap, save_heightmap
 
-    check_distinct({"--out": args.out}, {"HEIGHTMAP": args.heightmap, "--like": args.like, "--model": args.model})
+    check_distinct({"--out": args.out}, {"HEIGHTMAP": args.heightmap, "--like": args.like, "--model": args.model,
+                                      "--printer": args.printer})
     out = check_output(args.out, args.overwrite, "out")
     if out.suffix.lower() not in SAVE_SUFFIXES:
         raise InputError(f"cannot save {out}: unsupported format {out.suffix or '(no suffix)'!r}; "
