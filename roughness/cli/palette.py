@@ -46,7 +46,8 @@ def add_parser(sub) -> None:
     p.add_argument("--stl", action="store_true", help="also write each texture as a printable plate texture-N.stl")
     p.add_argument("--base-mm", type=POSITIVE,
                    help=f"--stl: plate thickness below the texture's lowest point in mm (default {DEFAULT_BASE_MM:g})")
-    add_printer_arg(p, "choose and space the textures (judged as printed; the files are the digital designs)")
+    add_printer_arg(p, "the textures are chosen and spaced as printed; the files are the digital designs, whose "
+                       "own V and the differences in JND are reported")
     add_model_tail(p, "print palette.json's content (default: text)")
     finish(p, run)
 

@@ -61,7 +61,7 @@ def add_parser(sub) -> None:
                     "unless --overwrite")
     pr.add_argument("--step-mm", type=POSITIVE, default=mapping["step_mm"],
                     help=f"--map: distance between footprint positions in mm (default: {mapping['step_mm']:g})")
-    add_printer_arg(pr, "predict")
+    add_printer_arg(pr, "the digital texture's V and the difference in JND are reported too")
     add_quiet(pr)
     add_overwrite(pr)
     finish(pr, run, centre_mm="--centre")

@@ -10,8 +10,8 @@ def add_printer_arg(p: argparse.ArgumentParser, what: str) -> None:
     from roughness.surface.printing import PROFILES
 
     p.add_argument("--printer", metavar="NAME|FILE",
-                   help=f"{what} for the plate as this printer would print it: a profile ({', '.join(PROFILES)}) or "
-                        "a JSON profile file (see README); the digital texture's V and the difference are reported")
+                   help=f"answer for the plate as this printer would print it: a profile ({', '.join(PROFILES)}) or "
+                        f"a JSON profile file (see README); {what}")
 
 
 def printer_of(args: argparse.Namespace):

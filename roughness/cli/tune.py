@@ -35,7 +35,8 @@ def add_parser(sub) -> None:
                    help=f"most FEM verifications (default {given['max_fem']})")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="the texture is a periodic tile (for maps under 10 mm)")
-    add_printer_arg(p, "tune (the input, --like and the result judged as printed; --out is the digital design)")
+    add_printer_arg(p, "the input, --like and the result are judged as printed; --out is the digital design, "
+                       "whose own V and the difference in JND are reported")
     add_model_tail(p, "one JSON object (default: text)")
     finish(p, run)
 

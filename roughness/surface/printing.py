@@ -285,7 +285,7 @@ def _fdm(h: np.ndarray, base: float, pixel_mm: float, p: FdmProfile, mode: str, 
     if closing_px >= 1:
         h = ndimage.grey_closing(h, footprint=_disk(closing_px), mode=mode)
         steps.append(f"slicer gap closing: cracks narrower than {2 * p.closing_radius_mm:g} mm filled")
-    else:
+    elif p.closing_radius_mm > 0:
         notes.append(f"the slicer's {p.closing_radius_mm:g} mm gap closing is below one {pixel_mm:g} mm pixel: "
                      "no effect at this resolution")
     h = _quantised(h, base, p.layer_mm)
