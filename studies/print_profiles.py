@@ -7,7 +7,9 @@ spectral engine (roughness.simulate.spectral.engine.SpectralSimulator, the paper
 ms per texture). Differences are JNDs of equivalent wavelength on the spectral standard scale, per
 seed, then averaged. Also two tuned textures (standard-1.0, seed 0, heights x 0.5675: the README's
 `tune --target-lambda 0.8` example; x 1.4139: `tune --target-lambda 1.2 --verify spectral`), the
-kind of case the issue measured by hand (-0.24 JND for a 0.4 mm nozzle on a tuned texture).
+kind of case the issue measured by hand (-0.24 JND for a 0.4 mm nozzle on a tuned texture). And a
+resolution check: standard-1.0 (seed 100) made at 0.05, 0.025 and 0.0125 mm pixels, where the resin
+printers' LCD pixels and light bleed are resolved.
 
     python studies/print_profiles.py            # about four minutes on one shared core
     python studies/print_profiles.py --render   # table and plot again from results/print_profiles.json
@@ -29,6 +31,7 @@ import numpy as np  # noqa: E402
 
 OUT = Path(__file__).parent / "results" / "print_profiles"
 SEEDS = (100, 101, 102, 103, 104)
+RESOLUTION_PIXELS_MM = (0.05, 0.025, 0.0125)
 TUNED = (("standard-1.0", 0, "height", 0.5675), ("standard-1.0", 0, "height", 1.4139))  # texture, seed, knob, factor
 
 
@@ -81,9 +84,17 @@ def main(argv: list[str] | None = None) -> int:
             vp = engine.run(printed(tuned_hm, profile).heightmap).roughness
             entry["printed"][pname], entry["jnd"][pname] = vp, jnd(lam(vp), lam(v))
         tuned.append(entry)
+    resolution = []
+    for pixel_mm in RESOLUTION_PIXELS_MM:
+        hm = standard_texture(1.0, seed=100, pixel_mm=pixel_mm)
+        v = engine.run(hm).roughness
+        prints = {n: printed(hm, p) for n, p in profiles().items()}
+        resolution.append({"pixel_mm": pixel_mm, "designed": v,
+                           "printed": {n: engine.run(r.heightmap).roughness for n, r in prints.items()},
+                           "notes": {n: list(r.notes) for n, r in prints.items()}})
     result = {"engine": "spectral (roughness.simulate.spectral.engine.SpectralSimulator, SimConfig defaults)",
               "pixel_mm": 0.05, "seeds": list(SEEDS), "profiles": {k: p.as_dict() for k, p in profiles().items()},
-              "rows": rows, "tuned": tuned, "seconds": time.perf_counter() - start}
+              "rows": rows, "tuned": tuned, "resolution": resolution, "seconds": time.perf_counter() - start}
     OUT.with_suffix(".json").write_text(json.dumps(result, indent=1) + "\n")
     _table(result)
     _plot(result)
@@ -129,6 +140,7 @@ def _table(result: dict) -> None:
               "positive JND. The relative change of V is the reliable measure there."]
     fdm = [n for n, p in result["profiles"].items() if p["kind"] == "fdm" and n != "nozzle disk only"]
     sla = [n for n, p in result["profiles"].items() if p["kind"] == "sla" and n != "0.2 mm layers only"]
+    fine = [r for r in result["resolution"] if r["pixel_mm"] < result["pixel_mm"]]
     lines += ["", "Reading: the FDM prints feel "
               + ", ".join(f"{-100 * change[n]:.0f}% ({n})" for n in fdm) + " less rough in V; most of it is the bead's "
               f"width, which cuts the bumps' 0.3 mm caps down to where a bump is one line wide (the 0.4 mm disk alone: "
@@ -137,11 +149,23 @@ def _table(result: dict) -> None:
               "little more V than 0.2 mm ones; not investigated further). The resin profiles change V by "
               + ", ".join(f"{100 * change[n]:+.1f}% ({n})" for n in sla) + ": their 0.05 mm layers are the only step "
               "these 0.05 mm maps resolve (the LCD pixel and the light bleed are finer than a map pixel, as "
-              "`--printer` says in its notes)."]
+              "`--printer` says in its notes). Where they are resolved (the resolution check below: standard-1.0 at "
+              "finer pixels) the resin profiles still change V by at most "
+              f"{max(abs(r['printed'][n] / r['designed'] - 1) for r in fine for n in sla) * 100:.1f}%, and the FDM "
+              "profiles by "
+              f"{min(-(r['printed'][n] / r['designed'] - 1) for r in fine for n in fdm) * 100:.0f} to "
+              f"{max(-(r['printed'][n] / r['designed'] - 1) for r in fine for n in fdm) * 100:.0f}%, as at 0.05 mm."]
     for t in result["tuned"]:
         lines += ["", f"Tuned texture {t['texture']}, seed {t['seed']}, {t['by']} x {t['factor']}: designed V "
                   f"{t['designed']:.4f}; " + "; ".join(f"{n}: V {t['printed'][n]:.4f} ({t['jnd'][n]:+.2f} JND)"
                                                        for n in names) + "."]
+    lines += ["", "Resolution check (standard-1.0, seed 100, made at each pixel size; relative change of V, printed "
+              "against designed; * = a step of the profile is below that pixel and has no effect, as its notes say):",
+              "", "| pixel mm | designed V | " + " | ".join(names) + " |", "|---" * (2 + len(names)) + "|"]
+    for r in result["resolution"]:
+        lines.append(f"| {r['pixel_mm']:g} | {r['designed']:.4f} | " + " | ".join(
+            f"{100 * (r['printed'][n] / r['designed'] - 1):+.1f}%" + ("*" if r["notes"][n] else "") for n in names)
+            + " |")
     lines += ["", "![V designed and printed](print_profiles.png)", ""]
     OUT.with_suffix(".md").write_text("\n".join(lines))
 

@@ -303,20 +303,14 @@ def _sla(h: np.ndarray, base: float, pixel_mm: float, p: SlaProfile, mode: str, 
 
     levels = np.floor((h - base) / p.layer_mm + 0.5).astype(np.int64)
     steps = [f"layer quantisation: heights rounded to whole {p.layer_mm:g} mm layers above the lowest point"]
-    ny, nx = h.shape
-    coarse = p.pixel_mm > pixel_mm
-    if coarse:  # the LCD's grid: each printer pixel takes the layer count at its centre
-        cols = np.minimum(((np.arange(math.ceil(nx * pixel_mm / p.pixel_mm)) + 0.5) * p.pixel_mm / pixel_mm)
-                          .astype(np.intp), nx - 1)
-        rows = np.minimum(((np.arange(math.ceil(ny * pixel_mm / p.pixel_mm)) + 0.5) * p.pixel_mm / pixel_mm)
-                          .astype(np.intp), ny - 1)
-        levels = levels[np.ix_(rows, cols)]
+    if p.pixel_mm > pixel_mm:  # each LCD pixel takes the layer count at its centre; each map pixel, its LCD pixel's
+        levels = levels[np.ix_(_lcd_pixels(levels.shape[0], pixel_mm, p.pixel_mm),
+                               _lcd_pixels(levels.shape[1], pixel_mm, p.pixel_mm))]
         steps.append(f"exposure on the printer's {1e3 * p.pixel_mm:g} um pixel grid")
     else:
         notes.append(f"the printer's {1e3 * p.pixel_mm:g} um pixel is not coarser than the map's {1e3 * pixel_mm:g} "
                      "um: its pixel grid has no effect at this resolution")
-    grid_mm = p.pixel_mm if coarse else pixel_mm
-    sigma_px = p.bleed_mm / grid_mm
+    sigma_px = p.bleed_mm / pixel_mm
     if sigma_px >= 0.5:
         cured = np.zeros(levels.shape, dtype=np.int64)
         for k in range(1, int(levels.max()) + 1):
@@ -325,10 +319,13 @@ def _sla(h: np.ndarray, base: float, pixel_mm: float, p: SlaProfile, mode: str, 
         steps.append(f"light bleed: each layer's exposure blurred by {1e3 * p.bleed_mm:g} um (Gaussian), cured "
                      "where it reaches half the dose")
     elif p.bleed_mm > 0:
-        notes.append(f"the {1e3 * p.bleed_mm:g} um light bleed is below half a {1e3 * grid_mm:g} um pixel: no effect "
-                     "at this resolution")
-    if coarse:  # back on the map's pixels: each takes the printer pixel its centre lies in
-        cols = np.minimum(((np.arange(nx) + 0.5) * pixel_mm / p.pixel_mm).astype(np.intp), levels.shape[1] - 1)
-        rows = np.minimum(((np.arange(ny) + 0.5) * pixel_mm / p.pixel_mm).astype(np.intp), levels.shape[0] - 1)
-        levels = levels[np.ix_(rows, cols)]
+        notes.append(f"the {1e3 * p.bleed_mm:g} um light bleed is below half a {1e3 * pixel_mm:g} um map pixel: no "
+                     "effect at this resolution")
     return base + p.layer_mm * levels, steps
+
+
+def _lcd_pixels(n: int, pixel_mm: float, lcd_mm: float) -> np.ndarray:
+    """For each of ``n`` map pixels along an axis, the map pixel at the centre of the LCD pixel its centre lies in
+    (LCD grid aligned with the map's origin)."""
+    lcd = np.floor((np.arange(n) + 0.5) * pixel_mm / lcd_mm)
+    return np.minimum(((lcd + 0.5) * lcd_mm / pixel_mm).astype(np.intp), n - 1)
