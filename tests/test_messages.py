@@ -74,6 +74,8 @@ LIBRARY_ONLY = {
     "top": "texture parameter (--param)", "top_diameter_mm": "texture parameter (--param)",
     "flat_state": "SpectralSimulator(flat_state): studies compare the flat states; the CLI uses the default",
     "pressure": "SpectralSimulator(pressure): a study parameter; the CLI uses the flat state's pressure",
+    **{name: "printer profile field (a JSON profile's; load_profile reports it under --printer)"
+       for name in ("nozzle_mm", "layer_mm", "line_width_mm", "closing_radius_mm")},
 }
 CHECK_HELPERS = {"real": 0, "positive": 0, "non_negative": 0, "in_range": 0, "integer": 0,
                  "check_output": 2, "check_output_folder": 2}  # function -> position of its parameter-name argument

@@ -39,7 +39,7 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
     ("dataset", "verify"): ([0], []),
     ("train",): ([0, "--extra-data"], ["--out"]),
     ("export",): ([0], ["--out", "--int8"]),
-    ("predict",): ([0, "--model"], ["--map"]),
+    ("predict",): ([0, "--model", "--printer"], ["--map"]),
     ("compare",): ([0], ["--out"]),
     ("jnd",): ([0, 1, "--model"], []),
     ("perception", "embed"): ([0, "--stimuli"], ["--out"]),
@@ -48,8 +48,8 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
     ("perception", "simulate"): (["--stimuli", "--truth"], ["--out"]),
     ("perception", "plan"): (["--stimuli", "--truth"], ["--out"]),
     ("homogeneity",): ([0, "--model"], ["--map"]),
-    ("tune",): ([0, "--like", "--model"], ["--out"]),
-    ("palette",): (["--from", "--model"], ["--out"]),
+    ("tune",): ([0, "--like", "--model", "--printer"], ["--out"]),
+    ("palette",): (["--from", "--model", "--printer"], ["--out"]),
     ("tactile-image",): ([0, "--palette", "--model"], ["--out"]),
 }
 # String options that are not files: names, lists of names, addresses; --cache is a folder of FEM
@@ -58,7 +58,7 @@ NOT_PATHS = {"NAME", "--param", "--scheduler", "--holdout-family", "--engines", 
              "--family", "--cache"}
 INPUT_VALUE = {"--recipe": "recipe.json", "--labels": "labels.jsonl.gz", "--extra-data": "data.h5",
                "--model": "model.onnx", "--like": "map.npy", "--from": "maps", "--palette": "maps",
-               "--stimuli": "stimuli.csv"}
+               "--stimuli": "stimuli.csv", "--printer": "printer.json"}
 EXCLUDES = {"--like": "--target-lambda"}  # an input flag and the BASE option it cannot go with
 
 

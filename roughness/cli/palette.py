@@ -17,6 +17,7 @@ from .common import (
     readings,
     write_stdout,
 )
+from .printer import add_printer_arg, merged, print_report, printer_of
 
 
 def add_parser(sub) -> None:
@@ -47,37 +48,50 @@ def add_parser(sub) -> None:
     p.add_argument("--stl", action="store_true", help="also write each texture as a printable plate texture-N.stl")
     p.add_argument("--base-mm", type=POSITIVE,
                    help=f"--stl: plate thickness below the texture's lowest point in mm (default {DEFAULT_BASE_MM:g})")
+    add_printer_arg(p, "the textures are chosen and spaced as printed; the files are the digital designs, whose "
+                       "own V and the differences in JND are reported")
     add_model_tail(p, "print palette.json's content (default: text)")
     finish(p, run)
 
 
 def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
     from roughness.core.errors import InputError
     from roughness.core.files import check_distinct, check_output_folder
     from roughness.design.evaluation import Evaluator
     from roughness.design.palette import candidate_names, family_palette, folder_palette, save_palette
 
-    check_distinct({"--out": args.out}, {"--from": args.candidates, "--model": args.model})
+    check_distinct({"--out": args.out}, {"--from": args.candidates, "--model": args.model, "--printer": args.printer})
     out = check_output_folder(args.out, args.overwrite, "out")
     if args.k < 2:
         raise InputError(f"a palette needs at least 2 textures, got {args.k}", "k")
     if args.base_mm is not None and not args.stl:
         raise InputError("applies only with --stl", "base_mm")
-    evaluator = Evaluator(args.model, args.verify)
+    evaluator = Evaluator(args.model, args.verify, printer=printer_of(args))
     progress = lambda line: log(args, "  " + line)
-    loaded = {}
     if args.candidates:
         from roughness.surface.io import heightmap_files
 
         files = heightmap_files(args.candidates)
         candidates = [(name, load_input(args, str(f), several=True))
                       for name, f in zip(candidate_names(files), files)]
+        printing = merged([print_report(evaluator, hm, args.tile) for _, hm in candidates])  # each refused now if
+        # the printer cannot print it at its pixel size
         log(args, f"palette: choosing {args.k} of {len(candidates)} textures, {args.min_jnd:g} JND apart")
         palette = folder_palette(candidates, args.k, args.min_jnd, evaluator, args.tile, progress)
     else:
+        from roughness.dataset.catalogue import make_texture
+
+        printing = print_report(evaluator, make_texture(args.family, seed=args.seed)[0], False) \
+            if evaluator.printer else None
         log(args, f"palette: {args.k} variants of {args.family} by {args.by}, {args.min_jnd:g} JND apart")
         palette = family_palette(args.k, args.min_jnd, args.family, args.by, evaluator, args.tolerance_jnd,
                                  seed=args.seed, progress=progress)
+    if printing:
+        for m in palette.members:
+            printing.verify(m.heightmap, m.fem.roughness, args.tile and bool(args.candidates), m.name)
+        palette = replace(palette, printing=printing.as_dict())
     save_palette(palette, out, args.stl, args.base_mm, args.overwrite)
     summary = {**palette.summary(), "verifier": evaluator.verifier, "readings": readings(args)}
     if args.json:
@@ -88,5 +102,5 @@ def run(args: argparse.Namespace) -> int:
                  for m in palette.members]
         lines.append(f"closest pair {palette.closest_jnd:.2f} JND ({evaluator.verifier}): "
                      f"{'VERIFIED' if palette.verified else 'NOT VERIFIED'} >= {args.min_jnd:g} JND; written to {out}")
-        write_stdout("\n".join(lines))
+        write_stdout("\n".join(lines + (printing.lines() if printing else [])))
     return 0 if palette.verified else 1

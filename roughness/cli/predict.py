@@ -26,6 +26,7 @@ from .common import (
     readings,
     show_notes,
 )
+from .printer import add_printer_arg
 from .simulate import add_curvature_args, curvature_fields
 
 MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
@@ -67,6 +68,7 @@ def add_parser(sub) -> None:
                     "unless --overwrite")
     pr.add_argument("--step-mm", type=POSITIVE, default=mapping["step_mm"],
                     help=f"--map: distance between footprint positions in mm (default: {mapping['step_mm']:g})")
+    add_printer_arg(pr, "the digital texture's V and the difference in JND are reported too")
     add_quiet(pr)
     add_overwrite(pr)
     finish(pr, run, centre_mm="--centre")
@@ -78,16 +80,22 @@ def run(args: argparse.Namespace) -> int:
     from roughness.surrogate.inputs import InputReader
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
+    from .printer import PrintPairs, printer_of
+
     if args.map:
         from roughness.core.errors import InputError
         from roughness.core.files import check_distinct
         from roughness.surrogate.roughness_map import check_map_path
 
-        check_distinct({"--map": args.map}, {"HEIGHTMAP": args.inputs, "--model": args.model})
-
+        check_distinct({"--map": args.map},
+                       {"HEIGHTMAP": args.inputs, "--model": args.model, "--printer": args.printer})
+        if args.printer:
+            raise InputError("--map maps the digital object; a map of the printed one is not supported yet "
+                             "(predict the printed texture without --map)", "printer")
         if args.curvature_mm is not None:
             raise InputError("--map slides the footprint over a flat object; it does not take --curvature-mm")
         check_map_path(args.map, args.overwrite)
+    printer = printer_of(args)
     if args.engine == "spectral":
         model, footprint_mm = None, defaults(SimConfig)["width_mm"]
     else:
@@ -102,23 +110,33 @@ def run(args: argparse.Namespace) -> int:
         return hm
 
     reader = InputReader(args.inputs, footprint_mm, args.centre, args.tile, load_one)
-    start, done = time.monotonic(), 0
+    heightmaps, sources = reader.heightmaps(), reader.sources()
+    if printer is not None:  # each input, then its print
+        pairs = PrintPairs(reader, printer, args.tile)
+        heightmaps, sources = pairs.heightmaps(), pairs.sources()
+    start, done, digital = time.monotonic(), 0, []
 
     def show(p) -> None:
         nonlocal done
+        if printer is not None and not digital:
+            digital.append(p)  # shown with its print, which comes next
+            return
         done += 1
         record = loaded.pop(p.source, None)
         if record and record.tile and record.tile.notes():  # a small or seamed patch: out of domain, and why
             p = dataclasses.replace(p, in_domain=False, domain_notes=[*p.domain_notes, *record.tile.notes()])
         show_notes(args, record.lines(tile=False) if record else [])
-        answer = p.as_dict() | {"readings": [record.as_dict()] if record else []}
-        print(json_text(answer) if args.json else _prediction_line(p), flush=True)
+        loaded_json = {"readings": [record.as_dict()] if record else []}
+        if printer is None:
+            print(json_text(p.as_dict() | loaded_json) if args.json else _prediction_line(p), flush=True)
+        else:
+            _show_printed(args, digital.pop(), p, pairs.prints.popleft(), loaded_json)
         if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 
-    predict(reader.heightmaps(), engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
+    predict(heightmaps, engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
             fidelity=args.fidelity, tolerance=args.tolerance, batch_size=args.batch_size,
-            sources=reader.sources(), on_result=show, max_std=args.max_std, **curvature_fields(args))
+            sources=sources, on_result=show, max_std=args.max_std, **curvature_fields(args))
     for source, error in reader.errors:
         message = error_message(error, args.flags)
         print(f"roughness: error: {message}", file=sys.stderr)
@@ -163,6 +181,29 @@ def _predict_map(args: argparse.Namespace, model) -> int:
           f"{100 * summary['in_domain_fraction']:.0f}% in domain, {summary['seconds']:.2f} s; map written to {args.map}"
           + "".join(f"\n  note: {note}" for note in notes))
     return 0
+
+
+def _show_printed(args: argparse.Namespace, digital, printed, result, readings: dict) -> None:
+    """One input's prediction for its print, with the digital texture's and the difference between them
+    (``readings``: what loading did to the input, for the JSON)."""
+    from .printer import PrintDifference
+
+    diff = PrintDifference(digital.roughness, printed.roughness, digital.placement.equivalent_lambda_mm,
+                           printed.placement.equivalent_lambda_mm)
+    notes = list(result.notes)
+    if digital.engine != printed.engine:
+        notes.append(f"the digital texture was answered by the {digital.engine}, the print by the {printed.engine}: "
+                     "each is placed on its own engine's standard scale")
+    if args.json:
+        print(json_text({**printed.as_dict(), "printer": result.profile.as_dict(), "print_steps": list(result.steps),
+                         "print_notes": notes, "print_difference": diff.as_dict(), "digital": digital.as_dict(),
+                         **readings}),
+              flush=True)
+        return
+    lines = [_prediction_line(printed).replace(": V = ", " as printed: V = ", 1),
+             f"  printer {result.profile.describe()}: {diff.describe()}",
+             *(f"  print: {step}" for step in result.steps), *(f"  note: {note}" for note in notes)]
+    print("\n".join(lines), flush=True)
 
 
 def _prediction_line(p) -> str:

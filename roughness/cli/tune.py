@@ -18,6 +18,7 @@ from .common import (
     readings,
     write_stdout,
 )
+from .printer import add_printer_arg, print_report, printer_of
 
 
 def add_parser(sub) -> None:
@@ -51,6 +52,8 @@ def add_parser(sub) -> None:
                    help=f"most FEM verifications (default {given['max_fem']})")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="the texture is a periodic tile (for maps under 10 mm)")
+    add_printer_arg(p, "the input, --like and the result are judged as printed; --out is the digital design, "
+                       "whose own V and the difference in JND are reported")
     add_model_tail(p, "one JSON object (default: text)")
     finish(p, run)
 
@@ -62,7 +65,8 @@ def run(args: argparse.Namespace) -> int:
     from roughness.design.tune import FACTOR_RANGE, target_of, tune
     from roughness.surface.io import SAVE_SUFFIXES, save_heightmap
 
-    check_distinct({"--out": args.out}, {"HEIGHTMAP": args.heightmap, "--like": args.like, "--model": args.model})
+    check_distinct({"--out": args.out}, {"HEIGHTMAP": args.heightmap, "--like": args.like, "--model": args.model,
+                                      "--printer": args.printer})
     out = check_output(args.out, args.overwrite, "out")
     if out.suffix.lower() not in SAVE_SUFFIXES:
         raise InputError(f"cannot save {out}: unsupported format {out.suffix or '(no suffix)'!r}; "
@@ -73,9 +77,11 @@ def run(args: argparse.Namespace) -> int:
     factors = (args.min_factor or lo, args.max_factor or hi)
     if not factors[0] < factors[1]:
         raise InputError(f"the factor range must rise, got {factors[0]:g}..{factors[1]:g}", "min_factor")
+    printer = printer_of(args)
     hm = load_input(args, args.heightmap, several=bool(args.like))
     reference = load_input(args, args.like, several=True) if args.like else None
-    evaluator = Evaluator(args.model, args.verify)
+    evaluator = Evaluator(args.model, args.verify, printer=printer)
+    printing = print_report(evaluator, hm, args.tile)  # refuses a map too coarse for the printer before any work
     if reference is not None:
         log(args, f"tune: FEM of the reference {args.like}")
     if args.jnd is not None:
@@ -89,6 +95,9 @@ def run(args: argparse.Namespace) -> int:
     save_heightmap(result.heightmap, out, base_mm=args.base_mm, overwrite=args.overwrite)
     summary = {"input": args.heightmap, "out": str(out), **result.summary(), "verifier": evaluator.verifier,
                "readings": readings(args)}
+    if printing:
+        printing.verify(result.heightmap, result.achieved.roughness, args.tile)
+        summary["printing"] = printing.as_dict()
     if args.json:
         write_stdout(json_text(summary))
     else:
@@ -100,6 +109,6 @@ def run(args: argparse.Namespace) -> int:
                   f"({'within' if result.reached else 'NOT within'} {result.tolerance_jnd:g} JND after "
                   f"{len(result.steps)} {evaluator.verifier} run(s)); surrogate V {result.surrogate_roughness:.4f}"
                   + (", searched with the spectral engine" if result.search_engine == "spectral" else "")),
-                 *(f"note: {n}" for n in result.notes)]
+                 *(f"note: {n}" for n in result.notes), *(printing.lines() if printing else [])]
         write_stdout("\n".join(lines))
     return 0 if result.reached else 1

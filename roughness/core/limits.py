@@ -46,6 +46,9 @@ MAX_CHANNELS = Limit(4096, "MAX_CHANNELS")
 """Channels of one surrogate layer (train --widths; the shipped networks have at most 96)."""
 MAX_FILL_PIXELS = Limit(4_000_000, "MAX_FILL_PIXELS")
 """Missing points one --fill interpolates (a sparse solve over them: about 1 GB at this size)."""
+MAX_PRINT_LAYERS = Limit(100_000, "MAX_PRINT_LAYERS")
+"""Layers of a printed texture (--printer): a resin print's layers are each filtered once; 100,000 layers of
+0.01 mm are a 1 m tall relief."""
 MAX_HEIGHT_MM = 1000.0
 """|height| (mm) a heightmap may hold: a texture's relief is millimetres; 1 m is no texture."""
 MIN_PIXEL_MM = 1e-9

@@ -37,6 +37,7 @@ class Evaluator:
 
     model_path: str | None = None
     fidelity: str | None = None  # the verifier: a FEM fidelity or "spectral" (default: the model's training labels')
+    printer: object = None  # a PrintProfile: every texture is judged as printed (roughness.surface.printing)
     _model: object = field(default=None, repr=False)
     _fem: object = field(default=None, repr=False)
     fem_runs: int = 0  # FEM verifications so far
@@ -82,6 +83,7 @@ class Evaluator:
         """Surrogate V of each heightmap (at each centre, if given) and whether it was in the model's domain."""
         from roughness.engines import predict
 
+        heightmaps = [self.as_printed(hm, tile) for hm in heightmaps]
         if centres_mm is None or all(c is None for c in centres_mm):
             results = predict(list(heightmaps), engine="surrogate", model=self.model, tile=tile)
         else:  # one footprint centre per map: batched through the model directly
@@ -90,11 +92,19 @@ class Evaluator:
             return np.asarray(values, dtype=float), np.array([not r for r in reasons])
         return np.array([p.roughness for p in results]), np.array([p.in_domain for p in results])
 
-    def verify(self, heightmap: Heightmap, tile: bool = False, centre_mm: tuple[float, float] | None = None) -> Verified:
-        """The verifier's V of one heightmap, placed on its standard scale."""
+    def as_printed(self, heightmap: Heightmap, tile: bool = False) -> Heightmap:
+        """``heightmap`` as the ``printer`` would print it (unchanged without a printer)."""
+        from roughness.surface.printing import printed
+
+        return heightmap if self.printer is None else printed(heightmap, self.printer, tile).heightmap
+
+    def verify(self, heightmap: Heightmap, tile: bool = False, centre_mm: tuple[float, float] | None = None,
+               digital: bool = False) -> Verified:
+        """The verifier's V of one heightmap (as printed, if there is a ``printer``, unless ``digital``),
+        placed on its standard scale."""
         fem = self.fem
         fem.centre_mm, fem.tile = centre_mm, tile
-        result = fem.simulate(heightmap)
+        result = fem.simulate(heightmap if digital else self.as_printed(heightmap, tile))
         self.fem_runs += 1
         lam, on_scale = self.scale.equivalent_lambda(result.roughness)
         return Verified(result.roughness, result.roughness_stderr, lam, on_scale, result.seconds)

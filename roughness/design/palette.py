@@ -51,6 +51,7 @@ class Palette:
     distances_jnd: np.ndarray  # (K, K) signed FEM distances, row rougher than column when positive
     source: str
     notes: tuple[str, ...] = field(default=())
+    printing: dict = field(default_factory=dict)  # --printer: the profile and each member's digital and printed V
 
     @property
     def closest_jnd(self) -> float:
@@ -68,7 +69,8 @@ class Palette:
                              "fem_roughness_stderr": m.fem.roughness_stderr,
                              "equivalent_lambda_mm": m.fem.equivalent_lambda_mm, "on_scale": m.fem.on_scale,
                              "surrogate_roughness": m.surrogate_roughness, "recipe": m.recipe} for m in self.members],
-                "distances_jnd": np.round(self.distances_jnd, 4).tolist(), "notes": list(self.notes)}
+                "distances_jnd": np.round(self.distances_jnd, 4).tolist(), "notes": list(self.notes),
+                **({"printing": self.printing} if self.printing else {})}
 
 
 def _distances(members: list[Member]) -> np.ndarray:

@@ -1,0 +1,199 @@
+"""Print-aware prediction: the printed surface of a heightmap (roughness.surface.printing) and --printer."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from roughness.cli import main
+from roughness.core.errors import InputError
+from roughness.dataset.textures import BumpRecipe, bump_texture, standard_texture
+from roughness.surface.heightmap import Heightmap
+from roughness.surface.printing import PROFILES, FdmProfile, SlaProfile, load_profile, printed, printer_profile
+
+from test_bad_inputs import BASE, _expect_refusal, workdir  # noqa: F401 (workdir is a fixture)
+
+FDM = PROFILES["fdm-0.4-0.2"]
+
+
+def _spectral_v(hm: Heightmap, tile: bool = False) -> float:
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.spectral.engine import SpectralSimulator
+
+    return SpectralSimulator(SimConfig()).run(hm, None, tile).roughness
+
+
+def _plate(pillars: list[tuple[int, int, int, float]], n: int = 80, pixel_mm: float = 0.05) -> Heightmap:
+    """A flat map with square pillars (row, column, side in pixels, height mm)."""
+    h = np.zeros((n, n))
+    for i, j, side, height in pillars:
+        h[i:i + side, j:j + side] = height
+    return Heightmap(h, pixel_mm)
+
+
+def test_texture_finer_than_the_nozzle_loses_most_of_its_v():
+    """Bumps 0.35 mm apart (finer than the 0.45 mm bead of a 0.4 mm nozzle) print nearly flat: measured 0.0079 ->
+    0.0004 with the spectral engine; bumps 1.5 mm apart keep most of theirs (the bead only cuts their tips)."""
+    fine = bump_texture(BumpRecipe(lambda_mm=0.35, seed=3))
+    v_fine, v_fine_printed = _spectral_v(fine), _spectral_v(printed(fine, FDM).heightmap)
+    assert v_fine_printed < 0.5 * v_fine, (v_fine, v_fine_printed)
+    coarse = standard_texture(1.5, seed=100)
+    v_coarse, v_coarse_printed = _spectral_v(coarse), _spectral_v(printed(coarse, FDM).heightmap)
+    assert 0.8 * v_coarse < v_coarse_printed < v_coarse, (v_coarse, v_coarse_printed)
+
+
+def test_fdm_removes_parts_narrower_than_a_bead_and_keeps_wider_ones():
+    # heights are whole layers, so quantisation changes nothing: only the bead acts
+    hm = _plate([(10, 10, 6, 1.0), (40, 40, 20, 1.0)])  # 0.3 mm and 1.0 mm square pillars
+    out = printed(hm, FDM).heightmap.heights
+    assert out[10:16, 10:16].max() == 0.0  # narrower than the 0.45 mm line: not printed
+    assert out[45:55, 45:55].min() == pytest.approx(1.0)  # the inside of a wide pillar is untouched
+    edge = out[50, 40]  # its outermost pixel: the bead's rounded end drops it by up to half a layer
+    assert 1.0 - FDM.layer_mm / 2 - 1e-12 <= edge < 1.0
+    assert np.all(out <= hm.heights + 1e-12)  # an opening never adds material
+
+
+def test_fdm_layers_round_to_the_nearest_whole_layer_above_the_lowest_point():
+    hm = _plate([(0, 0, 40, 0.29), (40, 0, 40, 0.31)])  # wide terraces: no bead effect inside them
+    out = printed(hm, FDM).heightmap.heights
+    assert out[20, 20] == pytest.approx(0.2) and out[60, 20] == pytest.approx(0.4)
+    assert np.all(out[5:35, 5:35] == out[20, 20]) and np.all(out[45:75, 5:35] == out[60, 20])  # away from edges
+    layer = np.ceil(out / 0.2 - 1e-9)  # every pixel: a whole layer, or within half a layer under it (bead ends)
+    assert np.all((out > (layer - 0.5) * 0.2 - 1e-12) & (out <= layer * 0.2 + 1e-12))
+
+
+def test_sla_pixel_grid_and_light_bleed():
+    # a 0.1 mm LCD pixel over a 0.025 mm map: heights held over each 4 x 4 block of map pixels
+    rng = np.random.default_rng(1)
+    hm = Heightmap(rng.random((40, 40)), 0.025)
+    out = printed(hm, SlaProfile("coarse-lcd", 0.1, 0.05, 0.0)).heightmap.heights
+    blocks = out.reshape(10, 4, 10, 4)
+    assert np.all(blocks == blocks[:, :1, :, :1])
+    # a bleed of one pixel removes a single-pixel spike (its blurred dose 1/(2 pi) < 1/2), keeps a 10 x 10 block
+    hm = _plate([(20, 20, 1, 0.05), (50, 50, 10, 0.05)])
+    out = printed(hm, SlaProfile("bleed", 0.05, 0.05, 0.05)).heightmap.heights
+    assert out[20, 20] == 0.0 and out[55, 55] == pytest.approx(0.05)
+
+
+def test_what_the_map_cannot_resolve_is_said_or_refused():
+    coarse = Heightmap(np.zeros((40, 40)) + np.eye(40), 0.3)  # a 0.45 mm bead is 1.5 pixels of 0.3 mm
+    with pytest.raises(InputError, match="cannot be represented at this resolution") as err:
+        printed(coarse, FDM)
+    assert err.value.parameter == "printer"
+    notes = printed(standard_texture(1.0), PROFILES["msla-35um"]).notes  # 35 um LCD pixels on 50 um map pixels
+    assert any("pixel grid has no effect at this resolution" in n for n in notes)
+    assert any("prints flat" in n for n in printed(_plate([(0, 0, 5, 0.05)]), FDM).notes)  # 0.05 mm under 0.2 mm
+
+
+def test_profiles_by_name_and_from_json(tmp_path):
+    assert printer_profile("msla-35um") is PROFILES["msla-35um"]
+    assert all(p.source and p.source != "custom profile" for p in PROFILES.values())  # each says where it comes from
+    path = tmp_path / "mine.json"
+    path.write_text(json.dumps({"kind": "fdm", "nozzle_mm": 0.6, "layer_mm": 0.3}))
+    mine = printer_profile(str(path))
+    assert mine == FdmProfile("mine", 0.6, 0.3, 1.125 * 0.6, 0.049, "custom profile mine.json")
+    with pytest.raises(InputError, match="unknown printer 'prusa-xl'") as err:
+        printer_profile("prusa-xl")
+    assert err.value.parameter == "printer"
+
+
+BAD_PROFILES = {
+    "not JSON": "{kind: fdm",
+    "NaN": '{"kind": "fdm", "nozzle_mm": NaN, "layer_mm": 0.2}',
+    "Infinity": '{"kind": "sla", "pixel_mm": 0.05, "layer_mm": Infinity, "bleed_mm": 0.02}',
+    "huge": '{"kind": "fdm", "nozzle_mm": 0.4, "layer_mm": 1e400}',
+    "negative": '{"kind": "sla", "pixel_mm": -0.05, "layer_mm": 0.05, "bleed_mm": 0.02}',
+    "a string": '{"kind": "fdm", "nozzle_mm": "0.4", "layer_mm": 0.2}',
+    "a boolean": '{"kind": "fdm", "nozzle_mm": true, "layer_mm": 0.2}',
+    "layer thicker than the nozzle": '{"kind": "fdm", "nozzle_mm": 0.4, "layer_mm": 0.5}',
+    "unknown field": '{"kind": "fdm", "nozzle_mm": 0.4, "layer_mm": 0.2, "speed": 60}',
+    "missing field": '{"kind": "sla", "pixel_mm": 0.05, "layer_mm": 0.05}',
+    "unknown kind": '{"kind": "sls", "layer_mm": 0.1}',
+    "kind not a string": '{"kind": ["fdm"], "nozzle_mm": 0.4, "layer_mm": 0.2}',
+    "nested too deep": "[" * 60_000,
+    "not UTF-8": b'{"kind": "fdm", "name": "\xff", "nozzle_mm": 0.4, "layer_mm": 0.2}',
+    "not an object": "[0.4, 0.2]",
+    "empty name": '{"kind": "fdm", "name": "", "nozzle_mm": 0.4, "layer_mm": 0.2}',
+}
+
+
+@pytest.mark.parametrize("case", BAD_PROFILES)
+def test_bad_json_profiles_are_refused_with_the_reason(tmp_path, case):
+    path, content = tmp_path / "bad.json", BAD_PROFILES[case]
+    path.write_bytes(content if isinstance(content, bytes) else content.encode())
+    with pytest.raises(InputError, match="printer profile") as err:
+        load_profile(path)
+    assert err.value.parameter == "printer"
+
+
+COMMANDS = [("predict",), ("tune",), ("palette",)]
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("case", ["unknown name", "NaN", "negative", "unknown field", "too coarse"])
+def test_bad_printer_exits_2_before_any_work(workdir, capsys, command, case):  # noqa: F811 (the fixture)
+    """The bad-input matrix for --printer: exit 2, the message names --printer or the problem, no file changes."""
+    (workdir / "nan.json").write_text(BAD_PROFILES["NaN"])
+    (workdir / "neg.json").write_text(BAD_PROFILES["negative"])
+    (workdir / "extra.json").write_text(BAD_PROFILES["unknown field"])
+    (workdir / "fine.json").write_text('{"kind": "fdm", "nozzle_mm": 0.06, "layer_mm": 0.02, "line_width_mm": 0.07}')
+    printer = {"unknown name": "prusa-xl", "NaN": "nan.json", "negative": "neg.json", "unknown field": "extra.json",
+               "too coarse": "fine.json"}[case]  # too coarse: a 0.07 mm bead on 0.05 mm pixels
+    _expect_refusal([*command, *BASE[command], "--printer", printer], workdir, capsys,
+                    ("--printer", "cannot be represented"))
+
+
+def test_predict_reports_digital_printed_and_the_difference(tmp_path, capsys):
+    path = tmp_path / "s.npy"
+    np.save(path, standard_texture(1.0).heights)
+    assert main(["predict", str(path), "--pixel-mm", "0.05", "--engine", "spectral", "--printer", "fdm-0.4-0.2",
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    diff = out["print_difference"]
+    assert out["roughness"] == diff["printed_roughness"] and out["digital"]["roughness"] == diff["digital_roughness"]
+    assert diff["printed_roughness"] < diff["digital_roughness"] and diff["difference_jnd"] < 0
+    assert out["printer"]["name"] == "fdm-0.4-0.2" and out["print_steps"]
+    assert main(["predict", str(path), "--pixel-mm", "0.05", "--engine", "spectral", "--printer", "msla-35um"]) == 0
+    text = capsys.readouterr().out
+    assert "as printed: V = " in text and "V digital" in text and "JND" in text
+
+
+def test_tune_judges_the_print_and_saves_the_digital_design(tmp_path, capsys):
+    path, out = tmp_path / "s.npy", tmp_path / "tuned.npz"
+    np.save(path, standard_texture(1.0).heights)
+    code = main(["tune", str(path), "--pixel-mm", "0.05", "--target-lambda", "1.1", "--out", str(out),
+                 "--verify", "spectral", "--printer", "fdm-0.4-0.2", "--json", "--quiet"])
+    summary = json.loads(capsys.readouterr().out)
+    assert code in (0, 1)
+    diff = summary["printing"]["differences"]["result"]
+    assert diff["printed_roughness"] == summary["achieved_roughness"]  # the target is met by the print
+    from roughness.surface.io import load_heightmap
+
+    saved = load_heightmap(out)  # the file is the digital design: its own V is the digital one
+    assert _spectral_v(saved) == pytest.approx(diff["digital_roughness"], rel=1e-9)
+    assert diff["digital_roughness"] > diff["printed_roughness"]
+
+
+def test_palette_judges_members_as_printed_and_records_both(tmp_path, capsys):
+    folder = tmp_path / "candidates"
+    folder.mkdir()
+    for lam in (0.625, 1.0, 1.5):
+        np.save(folder / f"s{lam}.npy", standard_texture(lam).heights)
+    out = tmp_path / "palette"
+    code = main(["palette", "--k", "2", "--min-jnd", "1", "--from", str(folder), "--pixel-mm", "0.05",
+                 "--out", str(out), "--verify", "spectral", "--printer", "msla-35um", "--quiet"])
+    text = capsys.readouterr().out
+    assert code == 0 and "judged as printed by msla-35um" in text
+    saved = json.loads((out / "palette.json").read_text())
+    differences = saved["printing"]["differences"]
+    assert saved["printing"]["printer"]["name"] == "msla-35um"
+    for member in saved["members"]:  # the members' V are their prints'; the digital V is recorded beside it
+        diff = differences[member["name"]]
+        assert member["fem_roughness"] == diff["printed_roughness"]
+        assert diff["digital_roughness"] > 0 and diff["difference_jnd"] is not None
+
+
+def test_printer_with_map_is_refused_not_ignored(workdir, capsys):  # noqa: F811 (the fixture)
+    _expect_refusal(["predict", *BASE[("predict",)], "--map", "m.png", "--printer", "fdm-0.4-0.2"], workdir, capsys,
+                    ("--printer: --map maps the digital object",))
