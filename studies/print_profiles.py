@@ -133,11 +133,7 @@ def _table(result: dict) -> None:
               f"law V ~ lambda^{b:.2f} (smoother than the per-row JNDs, which follow the tabulated scale's local "
               "slope between its points): " + "; ".join(
                   f"{n}: {100 * change[n]:+.1f}% = {np.log1p(change[n]) / (b * np.log(1.19)):+.2f} JND" for n in names)
-              + ".",
-              "",
-              "The JNDs of the 1.625 mm (and 0.625 mm) row mix placements on the tabulated scale and beyond its end "
-              "(the power law), which do not meet exactly at the end; there a smaller printed V can read as a "
-              "positive JND. The relative change of V is the reliable measure there."]
+              + "."]
     fdm = [n for n, p in result["profiles"].items() if p["kind"] == "fdm" and n != "nozzle disk only"]
     sla = [n for n, p in result["profiles"].items() if p["kind"] == "sla" and n != "0.2 mm layers only"]
     fine = [r for r in result["resolution"] if r["pixel_mm"] < result["pixel_mm"]]

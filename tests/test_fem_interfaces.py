@@ -159,6 +159,11 @@ def test_ordinary_run_keeps_notes_in_json_and_quiet_stderr(tmp_path, capsys):
 
 
 def test_meaningless_pixel_size_exits_2_naming_the_flag(capsys):
-    assert main(["simulate", str(EXAMPLE), "--pixel-mm", "1000", "--height-mm", "1", "--fidelity", "coarse"]) == 2
+    """Refused by the unit check (a 1 m pixel is no touchable texture's), and confirmed, by the footprint."""
+    command = ["simulate", str(EXAMPLE), "--pixel-mm", "1000", "--height-mm", "1", "--fidelity", "coarse"]
+    assert main(command) == 2
+    err = capsys.readouterr().err
+    assert "--pixel-mm" in err and "implausible" in err and "--units-ok" in err and "Traceback" not in err
+    assert main([*command, "--units-ok"]) == 2
     err = capsys.readouterr().err
     assert "--pixel-mm" in err and "spans only 0.01 pixels" in err and "Traceback" not in err
