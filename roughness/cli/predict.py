@@ -208,12 +208,13 @@ def _show_printed(args: argparse.Namespace, digital, printed, result, readings: 
 
 def _prediction_line(p) -> str:
     where = p.placement
+    jnd = None if where.jnd_from_nearest is None else round(where.jnd_from_nearest, 1) + 0.0  # no "-0.0"
     scale = (f"below the standard scale (V < floor {where.floor:.4f}, the scale's finest bumps): no equivalent "
              "lambda" if where.below_scale else
-             f"~ lambda {where.equivalent_lambda_mm:.3f} mm on the standard scale, {where.jnd_from_nearest:+.1f} JND "
+             f"~ lambda {where.equivalent_lambda_mm:.3f} mm on the standard scale, {jnd:+.1f} JND "
              f"from {where.nearest_standard}" if where.on_scale else
              f"off the standard scale: ~ lambda {where.equivalent_lambda_mm:.3f} mm extrapolated by the scale's power "
-             f"law, {where.jnd_from_nearest:+.1f} JND from {where.nearest_standard}")
+             f"law, {jnd:+.1f} JND from {where.nearest_standard}")
     domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
     if p.in_domain and p.domain_notes:  # an ensemble's answer above the spread limit (auto would run the FEM)
         domain += " but " + "; ".join(p.domain_notes)
