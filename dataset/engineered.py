@@ -55,7 +55,8 @@ SCALE_PARAMETERS: dict[str, tuple[str, ...]] = {
 }
 SPARSE_CENTRE_MM = 3.0  # the first sparse feature lies within this distance (along x and y) of the map centre
 
-_family = validated(PARAMETER_RANGES, SCALE_PARAMETERS)
+PARAMETER_LIMITS = natural.limits(PARAMETER_RANGES, SCALE_PARAMETERS)  # what a family accepts (natural.limits)
+_family = validated(PARAMETER_LIMITS, SCALE_PARAMETERS)
 
 
 def _triangle(u: np.ndarray, period_mm: float) -> np.ndarray:

@@ -1,5 +1,6 @@
 """Every parametric texture family by name: the natural-like ones (natural.py) and the engineered and
-composite ones (engineered.py), with the parameter ranges a recipe samples (bumps: recipe.BUMP_RANGES)."""
+composite ones (engineered.py), with the parameter ranges a recipe samples by default (bumps:
+recipe.BUMP_RANGES) and the wider limits a recipe's own ranges and a direct call may reach."""
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -12,6 +13,7 @@ from .grid import PIXEL_MM, SIZE_MM
 
 FAMILIES: dict[str, Callable[..., Heightmap]] = {**natural.FAMILIES, **engineered.FAMILIES}
 PARAMETER_RANGES: dict[str, dict[str, tuple]] = {**natural.PARAMETER_RANGES, **engineered.PARAMETER_RANGES}
+PARAMETER_LIMITS: dict[str, dict[str, tuple]] = {**natural.PARAMETER_LIMITS, **engineered.PARAMETER_LIMITS}
 
 
 def make(family: str, seed: int = 0, size_mm: float = SIZE_MM, pixel_mm: float = PIXEL_MM, **params) -> Heightmap:

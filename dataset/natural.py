@@ -102,7 +102,39 @@ def validated(ranges: dict[str, dict[str, tuple]], scales: dict[str, tuple[str, 
     return decorate
 
 
-_validated = validated(PARAMETER_RANGES, SCALE_PARAMETERS)
+RELIEF_PARAMETERS = ("height_mm", "wave_height_mm", "rms_mm", "relief_mm")
+LIMIT_SCALE_MM = (0.1, 4.0)  # lateral scales a family accepts (with 4 pixels per feature, and half the map)
+RELIEF_FACTOR = 5  # reliefs a family accepts: down to a fifth of its default range's lowest
+
+
+def limits(ranges: dict[str, dict[str, tuple]], scales: dict[str, tuple[str, ...]],
+           exceptions: dict[str, dict[str, tuple]] | None = None) -> dict[str, dict[str, tuple]]:
+    """What the families accept, for a direct call and a recipe's ranges: their default ``ranges`` widened
+    to the finer, lower and longer textures people print (fine print layers and engraving from 0.1 mm, low
+    relief, long wavelengths to 4 mm), so that a recipe can reach them while the defaults (and every recipe
+    that relies on them) stay as they were. Reliefs reach down to 1 / ``RELIEF_FACTOR`` of the lowest default,
+    lateral scales span ``LIMIT_SCALE_MM``; ``exceptions`` replace a parameter's limits (a family's own
+    invariants)."""
+    out = {}
+    for family, params in ranges.items():
+        out[family] = {}
+        for name, allowed in params.items():
+            if isinstance(allowed[0], str):
+                out[family][name] = allowed
+            elif name in RELIEF_PARAMETERS:
+                out[family][name] = (allowed[0] / RELIEF_FACTOR, allowed[1])
+            elif name in scales[family]:
+                out[family][name] = (min(allowed[0], LIMIT_SCALE_MM[0]), max(allowed[1], LIMIT_SCALE_MM[1]))
+            else:
+                out[family][name] = allowed
+        out[family].update((exceptions or {}).get(family, {}))
+    return out
+
+
+# grains: the minimum and maximum diameter ranges meet at 0.5 mm, so grain_min_mm <= grain_max_mm always
+PARAMETER_LIMITS = limits(PARAMETER_RANGES, SCALE_PARAMETERS,
+                          {"grains": {"grain_min_mm": (0.1, 0.5), "grain_max_mm": (0.5, 4.0)}})
+_validated = validated(PARAMETER_LIMITS, SCALE_PARAMETERS)
 
 
 def _finish(heights: np.ndarray, pixel_mm: float) -> Heightmap:

@@ -95,7 +95,8 @@ def _known(field_name: str, family: object) -> dict[str, tuple]:
 
 def _check_range(family: str, key: str, spec: object, allowed: dict[str, tuple]) -> None:
     """InputError unless ``spec`` is a usable range of parameter ``key``: choices among the allowed
-    ones, or [low, high] with low <= high (within the family's limits for the parametric families)."""
+    ones, or [low, high] with low <= high (within the family's limits, ``families.PARAMETER_LIMITS``, for the
+    parametric families: wider than the default ranges)."""
     name = f"ranges.{family}.{key}"
     if key not in allowed:
         raise InputError(f"{name}: {family} has no parameter {key!r}; valid: {', '.join(allowed)}", "ranges")
@@ -106,7 +107,7 @@ def _check_range(family: str, key: str, spec: object, allowed: dict[str, tuple])
         return
     if not isinstance(spec, list) or len(spec) != 2:
         raise InputError(f"{name} must be [low, high], got {spec!r}", "ranges")
-    limits = families.PARAMETER_RANGES.get(family, {}).get(key)
+    limits = families.PARAMETER_LIMITS.get(family, {}).get(key)
     low, high = ((in_range(f"{name}[{i}]", v, *limits) if limits else real(f"{name}[{i}]", v))
                  for i, v in enumerate(spec))
     if low > high:

@@ -195,7 +195,7 @@ def test_make_matches_the_family_function():
 @pytest.mark.parametrize("call,message", [
     (lambda: make("velvet"), "unknown texture family 'velvet'; valid families: cellular, woven, knit"),
     (lambda: make("grating", period=1.0), "unknown grating parameter(s) period; valid parameters: period_mm"),
-    (lambda: make("grating", period_mm=5.0), "grating parameter period_mm must be between 0.3 and 3, got 5.0"),
+    (lambda: make("grating", period_mm=5.0), "grating parameter period_mm must be between 0.1 and 4, got 5.0"),
     (lambda: make("grating", profile="zigzag"), "grating parameter profile='zigzag' must be one of sine, square"),
     (lambda: make("dots", lattice="triangular"), "dots parameter lattice='triangular' must be one of square, hex"),
     (lambda: make("knit", height_mm="tall"), "knit parameter height_mm must be a finite number, got 'tall'"),

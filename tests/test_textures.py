@@ -201,7 +201,7 @@ def test_engineered_defaults_lie_in_their_documented_ranges(family):
 
 
 @pytest.mark.parametrize("family, params, message", [
-    ("knurl", {"pitch_mm": 0.1}, "knurl parameter pitch_mm must be between 0.4 and 2.5"),
+    ("knurl", {"pitch_mm": 0.05}, "knurl parameter pitch_mm must be between 0.1 and 4"),
     ("milled", {"pattern": "spiral"}, "must be one of parallel, crossed"),
     ("waffle", {"pitch_mm": 4.0, "size_mm": 6.0}, "needs a map of at least 8 mm"),
     ("sparse", {"diameter_mm": 0.3, "pixel_mm": 0.1}, "below 4 pixels"),
@@ -262,3 +262,38 @@ def test_training_v2_recipe_draws_every_family_and_never_the_held_out_one_inside
     for r in records[:12]:
         hm = realise(r)
         assert hm.shape == (240, 240) and np.all(np.isfinite(hm.heights))
+
+
+@pytest.mark.parametrize("family", sorted(FAMILIES))
+@pytest.mark.parametrize("k", [0, 1, 2, 3])
+def test_every_family_makes_textures_at_the_corners_of_its_limits(family, k):
+    """The limits (wider than the default ranges: 0.1 mm features, a fifth of the lowest relief, 4 mm
+    wavelengths) are what a recipe may ask for: each corner makes a finite texture within its relief."""
+    from roughness.dataset.families import PARAMETER_LIMITS
+
+    params = {name: allowed[k % len(allowed)] if isinstance(allowed[0], str) else allowed[k % 2]
+              for name, allowed in PARAMETER_LIMITS[family].items()}
+    if family == "grating" and k % 2 == 0:
+        params["duty"] = 0.5  # a 0.01 mm ridge (duty 0.1 of 0.1 mm) is narrower than a pixel: sampled away
+    hm = make(family, seed=k, size_mm=12.0, pixel_mm=0.025, **params)  # 0.1 mm at 4 pixels; 6 mm waves in half
+    h = hm.heights
+    assert hm.shape == (480, 480) and np.all(np.isfinite(h)) and h.min() == 0.0
+    if family in engineered.FAMILIES:
+        assert 0 < h.max() <= peak_mm(family, params) + 1e-12
+    elif family != "fbm":
+        assert 0 < h.max() <= params["height_mm"] + 1e-12
+
+
+def test_limits_widen_the_default_ranges_and_a_recipe_may_reach_them_but_not_beyond():
+    from roughness.dataset.families import PARAMETER_LIMITS
+    from roughness.dataset.recipe import Recipe
+
+    for family, ranges in PARAMETER_RANGES.items():
+        for name, allowed in ranges.items():
+            limit = PARAMETER_LIMITS[family][name]
+            assert limit == allowed if isinstance(allowed[0], str) else limit[0] <= allowed[0] <= allowed[1] <= limit[1]
+    fine = Recipe(seed=1, families={"grating": 1.0}, ranges={"grating": {"period_mm": [0.1, 0.5], "height_mm": [0.01, 0.2]}},
+                  size_mm=8.5, pixel_mm=0.025)
+    assert realise(sample_record(fine, 0)).shape == (340, 340)
+    with pytest.raises(InputError, match="period_mm"):
+        Recipe(seed=1, families={"grating": 1.0}, ranges={"grating": {"period_mm": [0.05, 0.5]}})

@@ -63,12 +63,13 @@ def run_make(args: argparse.Namespace) -> int:
 
 
 def run_list(args: argparse.Namespace) -> int:
-    from roughness.dataset.families import PARAMETER_RANGES
+    from roughness.dataset.families import PARAMETER_LIMITS
     from roughness.dataset.textures import texture_names
 
     lines = ["named: " + ", ".join(texture_names()),
-             "bumps: --param lambda_mm=... [top=cap|flat] [top_diameter_mm=] [height_mm=] [base_diameter_mm=]"]
-    lines += [f"{family}: " + ", ".join(f"{k} {v[0]}..{v[1]}" if isinstance(v[0], float) else f"{k} {'|'.join(v)}"
-                                        for k, v in ranges.items()) for family, ranges in PARAMETER_RANGES.items()]
+             "bumps: --param lambda_mm=... [top=cap|flat] [top_diameter_mm=] [height_mm=] [base_diameter_mm=]",
+             "families (the values each parameter accepts; lateral scales need 4 pixels and at most half the map):"]
+    lines += [f"{family}: " + ", ".join(f"{k} {v[0]:g}..{v[1]:g}" if isinstance(v[0], float) else f"{k} {'|'.join(v)}"
+                                        for k, v in ranges.items()) for family, ranges in PARAMETER_LIMITS.items()]
     write_stdout("\n".join(lines))
     return 0
