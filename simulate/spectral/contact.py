@@ -131,7 +131,7 @@ def _fixed_set(modes: Modes, heights: np.ndarray, mask: np.ndarray, traction: np
     t = traction * m
     t[2] = t[2] + (load - t[2].sum()) / count * m
     direction, g_old = np.zeros_like(t), 0.0
-    u = modes.inverse(modes.displacement(modes.forward(t), False))  # updated with each step, not recomputed
+    u = modes.stick_displacement(t)  # updated with each step, not recomputed
     for iteration in range(1, max_iterations + 1):
         residual = u.copy()
         residual[2] -= heights
@@ -139,12 +139,12 @@ def _fixed_set(modes: Modes, heights: np.ndarray, mask: np.ndarray, traction: np
         residual[2] -= residual[2].sum() / count * m
         if np.abs(residual).max() <= tolerance:
             break
-        precond = modes.inverse(modes.traction(modes.forward(residual))) * m
+        precond = modes.stick_traction(residual) * m
         precond[2] -= precond[2].sum() / count * m
         norm = float(np.vdot(residual, precond))
         direction = precond + (norm / g_old if g_old else 0.0) * direction
         g_old = norm
-        moved = modes.inverse(modes.displacement(modes.forward(direction), False))
+        moved = modes.stick_displacement(direction)
         response = moved * m
         response[2] -= response[2].sum() / count * m
         step = float(np.vdot(residual, direction)) / float(np.vdot(response, direction))

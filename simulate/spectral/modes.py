@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from dataclasses import dataclass
+from functools import cached_property
 from threading import Lock
 
 import numpy as np
@@ -55,6 +56,11 @@ def _mirror_transform(field: np.ndarray, parity: Parity, inverse: bool) -> np.nd
         else:
             field = (fft.dst if odd else fft.dct)(field, type=2, axis=axis)
     return field
+
+
+def _apply(matrices: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """Per mode, (3, 3, ...) matrices times (3, ...) vectors."""
+    return matrices[:, 0] * vectors[0] + matrices[:, 1] * vectors[1] + matrices[:, 2] * vectors[2]
 
 
 class Modes:
@@ -115,23 +121,59 @@ class Modes:
         """Spectra (c, ...) of real fields (c, ny, nx) with the given parities (mirror basis only)."""
         if not self.mirror:
             return np.fft.rfft2(fields)
-        ny, nx = self.shape
-        out = np.zeros((len(fields), ny + 1, nx + 1), dtype=complex)
-        for i, (field, (px, py)) in enumerate(zip(fields, parity, strict=True)):
-            out[i, py:py + ny, px:px + nx] = _mirror_transform(field, (px, py), inverse=False)
-            out[i] *= (-1j) ** (px + py)
-        return out
+        phases = np.array([(-1j) ** (px + py) for px, py in parity])
+        return self.coefficients(fields, parity) * phases[:, None, None]
 
     def inverse(self, spectra: np.ndarray, parity: tuple[Parity, ...] = FACE_PARITY) -> np.ndarray:
         """Real fields (c, ny, nx) of spectra (c, ...) with the given parities (mirror basis only)."""
         if not self.mirror:
             return np.fft.irfft2(spectra, s=self.shape)
+        phases = np.array([1j ** (px + py) for px, py in parity])
+        return self.fields((spectra * phases[:, None, None]).real, parity)
+
+    def coefficients(self, fields: np.ndarray, parity: tuple[Parity, ...] = FACE_PARITY) -> np.ndarray:
+        """Mirror basis: the real cosine/sine coefficients (c, ny + 1, nx + 1) of real fields (c, ny, nx)
+        (the spectra without their phases: ``forward``)."""
         ny, nx = self.shape
-        out = np.empty((len(spectra),) + self.shape)
-        for i, (spectrum, (px, py)) in enumerate(zip(spectra, parity, strict=True)):
-            real = (spectrum[py:py + ny, px:px + nx] * 1j ** (px + py)).real
-            out[i] = _mirror_transform(real, (px, py), inverse=True)
+        out = np.zeros((len(fields), ny + 1, nx + 1))
+        for i, (field, (px, py)) in enumerate(zip(fields, parity, strict=True)):
+            out[i, py:py + ny, px:px + nx] = _mirror_transform(field, (px, py), inverse=False)
         return out
+
+    def fields(self, coefficients: np.ndarray, parity: tuple[Parity, ...] = FACE_PARITY) -> np.ndarray:
+        """Mirror basis: real fields (c, ny, nx) of real cosine/sine coefficients (c, ny + 1, nx + 1)."""
+        ny, nx = self.shape
+        out = np.empty((len(coefficients),) + self.shape)
+        for i, (coefficient, (px, py)) in enumerate(zip(coefficients, parity, strict=True)):
+            out[i] = _mirror_transform(coefficient[py:py + ny, px:px + nx], (px, py), inverse=True)
+        return out
+
+    @cached_property
+    def real_operators(self) -> tuple[np.ndarray, np.ndarray]:
+        """Mirror basis: the stick face's compliance and stiffness as real matrices (3, 3, ny + 1, nx + 1) on the
+        cosine/sine coefficients of (x, y, z) face fields (``coefficients``): the complex operators with the
+        phases of the components' parities folded in, M_ij = Re(L_ij i^q_i (-i)^q_j) (the imaginary part is zero).
+        Built on first use (the contact solver's inner loop: real arithmetic, no mode frames)."""
+        q = np.array([px + py for px, py in FACE_PARITY])
+        phase = (1j ** q)[:, None] * ((-1j) ** q)[None, :]
+        unit = np.zeros((3, 3) + self.stiffness.shape[:2], dtype=complex)
+        for j in range(3):
+            unit[j, j] = 1.0
+        compliance = np.stack([self.displacement(unit[j], False) for j in range(3)], axis=1)  # (out, in, ...)
+        stiffness = np.stack([self.traction(unit[j]) for j in range(3)], axis=1)
+        return ((compliance * phase[:, :, None, None]).real.copy(), (stiffness * phase[:, :, None, None]).real.copy())
+
+    def stick_displacement(self, traction: np.ndarray) -> np.ndarray:
+        """Face displacements (3, ny, nx) of a stick face under face tractions (3, ny, nx) on the skin (real fields)."""
+        if not self.mirror:
+            return self.inverse(self.displacement(self.forward(traction), False))
+        return self.fields(_apply(self.real_operators[0], self.coefficients(traction)))
+
+    def stick_traction(self, face: np.ndarray) -> np.ndarray:
+        """Face tractions (3, ny, nx) that hold face displacements (3, ny, nx) of a stick face (real fields)."""
+        if not self.mirror:
+            return self.inverse(self.traction(self.forward(face)))
+        return self.fields(_apply(self.real_operators[1], self.coefficients(face)))
 
     def to_mode_frame(self, ux: np.ndarray, uy: np.ndarray, uz: np.ndarray) -> tuple[np.ndarray, ...]:
         """Fourier face displacements (x, y, z) -> (A, B, C): u_x' = i A, u_z = B, u_y' = C."""
