@@ -26,7 +26,8 @@ from .engine import fluctuation, lambda3, tissue_of
 from .flat_state import block_flat_state
 from .modes import GridKey, modes
 
-MAX_MAP_PIXELS = Limit(4096 * 4096, "MAX_MAP_PIXELS")  # the map's pixels (about 3 GB of fields at the limit)
+MAX_MAP_PIXELS = Limit(4096 * 4096, "MAX_MAP_PIXELS")  # the map's pixels (at the limit about 3 GB of fields, 2.4 GB more
+# for the real contact operators in partial contact)
 SAMPLE_CHUNK = 1 << 21  # values interpolated at once (16 MB per float64 array)
 MIN_PAIRS_PER_CHUNK = 256  # position rows per chunk are chosen to leave at least this many pairs
 
