@@ -7,6 +7,7 @@ would be mislabelled.
 """
 from __future__ import annotations
 
+import os
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,6 +19,7 @@ if TYPE_CHECKING:
     from dask.distributed import Client
 
 CONNECT_TIMEOUT_S = 30  # to reach a scheduler and read its scheduler file
+BLAS_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")  # one BLAS thread per task thread
 
 
 @dataclass(frozen=True)
@@ -84,20 +86,28 @@ def versions() -> dict[str, Any]:
     return {"roughness": version.package_version(), "spectral engine": engine.ENGINE_VERSION}
 
 
+def worker_report() -> dict[str, Any]:
+    """Run on a worker: its ``versions()`` and its BLAS thread variables."""
+    return {"versions": versions(), "blas": {name: os.environ.get(name) for name in BLAS_VARIABLES}}
+
+
 def check_workers(client: Client) -> dict[str, dict[str, Any]]:
-    """Each worker's ``versions()``; InputError if the cluster has no worker, or one that cannot import
+    """Each worker's ``worker_report()``; InputError if the cluster has no worker, or one that cannot import
     roughness or runs other versions than this process."""
-    if not client.scheduler_info()["workers"]:
-        client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)  # TimeoutError is caught below
     try:
-        found = client.run(versions)
+        if not client.scheduler_info()["workers"]:
+            client.wait_for_workers(1, timeout=CONNECT_TIMEOUT_S)
+        found = client.run(worker_report)
+    except TimeoutError:
+        raise InputError(f"the Dask cluster has no worker (waited {CONNECT_TIMEOUT_S} s); start some with "
+                         "dask worker --scheduler-file FILE --nthreads 1") from None
     except Exception as err:  # distributed relays a worker's ImportError as a plain Exception with its text
         raise InputError(f"a Dask worker cannot run roughness ({err}); install the same roughness on every "
                          "worker") from None
     mine = versions()
-    other = {worker: v for worker, v in found.items() if v != mine}
+    other = {worker: report["versions"] for worker, report in found.items() if report["versions"] != mine}
     if other:
-        worker, theirs = sorted(other.items())[0]
+        worker, theirs = min(other.items())
         diff = ", ".join(f"{k} {theirs.get(k)!r} (here {mine[k]!r})" for k in mine if theirs.get(k) != mine[k])
         raise InputError(f"{len(other)} of {len(found)} Dask workers run other versions than this process, "
                          f"e.g. {worker}: {diff}; start the workers from the same installation")
@@ -118,10 +128,24 @@ def allowed_failures(client: Client) -> int:
 
 
 def announce(client: Client, workers: dict[str, dict[str, Any]]) -> None:
-    """Lines on stderr: the dashboard (if the scheduler serves one), the workers, the retries on worker loss."""
+    """Lines on stderr: the dashboard (if the scheduler serves one), the workers, the retries on worker loss,
+    and a note if workers may run several BLAS threads per task."""
     link = client.dashboard_link if "dashboard" in client.scheduler_info().get("services", {}) else None
     threads = worker_threads(client)
     print(f"Dask dashboard: {link or 'none (the scheduler serves none)'}", file=sys.stderr, flush=True)
     print(f"Dask workers: {len(workers)} ({sum(threads.values())} threads), roughness "
           f"{versions()['roughness']} on each; a task whose worker dies is run again up to "
           f"{allowed_failures(client)} times", file=sys.stderr, flush=True)
+    loose = [w for w, report in workers.items() if not one_blas_thread(report["blas"])]
+    if loose:
+        found = ", ".join(f"{k}={v}" for k, v in workers[loose[0]]["blas"].items() if v) or "none of them"
+        print(f"note: {len(loose)} of {len(workers)} Dask workers may run several BLAS threads per task thread "
+              f"(they set {found}), which then compete for the cores; start workers with "
+              f"{' '.join(f'{v}=1' for v in BLAS_VARIABLES)} (a nanny sets them: dask worker without --no-nanny)",
+              file=sys.stderr, flush=True)
+
+
+def one_blas_thread(variables: dict[str, str | None]) -> bool:
+    """Whether OpenMP, OpenBLAS and MKL each run one thread with these variables (the library's own variable,
+    else OMP_NUM_THREADS)."""
+    return all((variables.get(name) or variables.get("OMP_NUM_THREADS")) == "1" for name in BLAS_VARIABLES)
