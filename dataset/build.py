@@ -19,6 +19,7 @@ whose worker dies is run again by the scheduler, up to its ``distributed.schedul
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import logging
 import os
@@ -103,13 +104,25 @@ def simulator(config: dict):
         return _SIMULATORS[key]
 
 
-def simulate_record(record: dict, config: dict, label: Label | None = None) -> dict:
+@functools.cache
+def worker_versions() -> dict:
+    """``cluster.versions()`` of this process, read once."""
+    from .cluster import versions
+
+    return versions()
+
+
+def simulate_record(record: dict, config: dict, label: Label | None = None, expected: dict | None = None) -> dict:
     """Run the FEM for one sample record (on a worker), or take ``label`` if its heightmap digest matches
-    the remade texture's (result key "label"); failures come back as data."""
+    the remade texture's (result key "label"); failures come back as data. With ``expected`` (the caller's
+    ``cluster.versions()``), a worker of other versions simulates nothing and returns its own ("versions"):
+    workers that join a cluster after the build's check are checked too."""
     from .labels import heights_digest
     from .recipe import realise
 
     out: dict = {"record": record, "heights": None, "pixel_mm": record["pixel_mm"]}
+    if expected is not None and (mine := worker_versions()) != expected:
+        return {**out, "versions": mine}
     try:  # a failure is recorded with its reason, never stops the run
         hm = realise(record)
         out.update(heights=hm.heights.astype(np.float32), pixel_mm=hm.pixel_mm)
@@ -219,8 +232,9 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
 def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config: dict, workers: int,
          where: ClusterChoice, counts: dict, quiet: bool) -> None:
     from dask.distributed import as_completed
+    from distributed import KilledWorker
 
-    from .cluster import announce, check_workers
+    from .cluster import announce, check_workers, versions
 
     cluster = client = None
     progress = Progress(total=len(pending), start=time.perf_counter())
@@ -235,10 +249,21 @@ def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config
         found = check_workers(client)
         if not quiet:
             announce(client, found)
-        futures = [client.submit(simulate_record, r, config, label, pure=False)
-                   for r, label in _preparing(pending, len(pending), "samples submitted to the workers", quiet)]
+        expected = versions()
+        futures = {client.submit(simulate_record, r, config, label, expected, pure=False): r
+                   for r, label in _preparing(pending, len(pending), "samples submitted to the workers", quiet)}
         for future in as_completed(futures):
-            res = future.result()
+            try:
+                res = future.result()
+            except KilledWorker as err:  # the sample's workers died more often than the scheduler allows
+                res = {"record": futures[future], "heights": None, "pixel_mm": futures[future]["pixel_mm"],
+                       "error": f"KilledWorker: the {err.allowed_failures + 1} workers that ran it all died "
+                                "(out of memory, or killed?)"}
+            if "versions" in res:
+                client.cancel(list(futures))
+                raise InputError(f"a Dask worker that joined during the build runs other versions "
+                                 f"({res['versions']}) than this process ({expected}); start the workers from the "
+                                 "same installation (the samples written so far are kept)")
             if "label" in res:
                 writer.write_labelled(res["record"], res["heights"], res["pixel_mm"], res["label"].values)
                 counts["restored"] += 1

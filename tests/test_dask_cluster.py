@@ -3,6 +3,7 @@
 against them, the worker version check, a `client=` from Python, and threaded workers."""
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -43,6 +44,36 @@ def wait_for(condition, what: str, deadline: float) -> None:
 def roughness_cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "roughness.cli", *args], check=False, env=ENV,
                           capture_output=True, text=True, timeout=DEADLINE_S)
+
+
+@contextlib.contextmanager
+def by_value():
+    """Functions of this module pickled by value for the workers, which cannot import it."""
+    import cloudpickle
+
+    cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    try:
+        yield
+    finally:
+        cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
+
+
+def _die_on_the_next_sample() -> None:
+    """Run on a worker: its next sample kills it (as the kernel's OOM killer would); the nanny starts a new one."""
+    from roughness.dataset import build as worker_build
+
+    def die(*_):
+        os._exit(1)
+
+    worker_build.simulate_record = die
+
+
+def _allowing(n: int):
+    """A function to run on the scheduler: a task is retried after ``n`` worker deaths."""
+    def set_allowed_failures(dask_scheduler) -> None:
+        dask_scheduler.allowed_failures = n
+
+    return set_allowed_failures
 
 
 def _pretend_another_version() -> None:
@@ -114,19 +145,51 @@ def test_a_client_from_python_is_used_and_left_open(cluster, tmp_path):
             build.build(str(out), N, Recipe(seed=SEED), engine="spectral", client=client, scheduler="tcp://x:1")
 
 
+def test_a_sample_whose_worker_dies_runs_again_and_one_that_kills_every_worker_is_recorded(cluster, tmp_path):
+    """The worker dies on its next sample and its nanny restarts it: with the scheduler's default retries the
+    build completes; with none, the samples on the dead worker are recorded as failed (KilledWorker) and the
+    build goes on."""
+    from distributed import Client
+
+    with by_value(), Client(scheduler_file=str(cluster), timeout=30) as client:
+        before = set(client.run(os.getpid).values())
+        client.run(_die_on_the_next_sample)
+        counts = build.build(str(tmp_path / "retried.h5"), N, Recipe(seed=SEED), engine="spectral", client=client,
+                             quiet=True)
+        assert counts["written"] == N and counts["failed"] == 0
+        assert not before & set(client.run(os.getpid).values())  # the worker that ran the first sample died
+        client.wait_for_workers(1, timeout=DEADLINE_S)
+        client.run(_die_on_the_next_sample)
+        client.run_on_scheduler(_allowing(0))
+        try:
+            counts = build.build(str(tmp_path / "killed.h5"), N, Recipe(seed=SEED), engine="spectral",
+                                 client=client, quiet=True)
+        finally:
+            client.run_on_scheduler(_allowing(3))
+    # the scheduler sends a worker one task more than its threads (worker-saturation): one or two die with it
+    assert 1 <= counts["failed"] <= 2 and counts["written"] + counts["failed"] == N
+    with open_dataset(tmp_path / "killed.h5") as ds:
+        errors = [error for _, _, error in ds.failures()]
+    assert len(errors) == counts["failed"]
+    assert all(e == "KilledWorker: the 1 workers that ran it all died (out of memory, or killed?)" for e in errors)
+
+
+def test_a_worker_of_other_versions_simulates_nothing():
+    """Each task checks its worker (workers may join after the build's check)."""
+    record = expand(Recipe(seed=SEED), 1)[0]
+    config = build.simulation_config(build.BUILD_CONFIG, "spectral")
+    res = build.simulate_record(record, config, None, {**versions(), "roughness": "0.0.0-other"})
+    assert res["versions"] == versions() and "fields" not in res and "error" not in res
+    assert "fields" in build.simulate_record(record, config, None, versions())
+
+
 def test_workers_of_another_version_are_refused_before_any_work(cluster, tmp_path):
     """Last in this module: it changes the worker's version for the rest of its life."""
     from distributed import Client
 
     out = tmp_path / "v.h5"
-    import cloudpickle
-
-    cloudpickle.register_pickle_by_value(sys.modules[__name__])  # the worker cannot import this test module
-    try:
-        with Client(scheduler_file=str(cluster), timeout=30) as client:
-            client.run(_pretend_another_version)
-    finally:
-        cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
+    with by_value(), Client(scheduler_file=str(cluster), timeout=30) as client:
+        client.run(_pretend_another_version)
     run = roughness_cli("dataset", "build", "--engine", "spectral", "--n", str(N), "--seed", str(SEED),
                         "--out", str(out), "--scheduler-file", str(cluster))
     assert run.returncode == 2, run.stderr
