@@ -231,7 +231,7 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
 
 def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config: dict, workers: int,
          where: ClusterChoice, counts: dict, quiet: bool) -> None:
-    from dask.distributed import as_completed
+    from dask.distributed import Client, as_completed
     from distributed import KilledWorker
 
     from .cluster import announce, check_workers, versions
@@ -241,8 +241,6 @@ def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config
     try:
         if where.local:
             cluster = _local_cluster(workers)
-            from dask.distributed import Client
-
             client = Client(cluster)
         else:
             client = where.client or where.connect()
