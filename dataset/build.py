@@ -9,10 +9,17 @@ worker (a cluster's workers may run several) share it, and get the answers of a 
 
 Ctrl-C, which a terminal sends to every process of its foreground group, stops only the calling
 process: the local workers are started ignoring SIGINT, and are closed by it (``Interrupted``).
+
+A cluster of others is reached by ``scheduler`` (its address), ``scheduler_file`` (the file ``dask scheduler
+--scheduler-file`` writes) or ``client`` (a connected ``dask.distributed.Client``, left open). Before any work is
+submitted, every worker is asked for its roughness and engine versions, which must equal this process's. A task
+whose worker dies is run again by the scheduler, up to its ``distributed.scheduler.allowed-failures`` times
+(``ALLOWED_FAILURES`` on the local cluster); the build reports that number and the dashboard's address.
 """
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import logging
 import os
@@ -32,9 +39,12 @@ from roughness.core.limits import MAX_DATASET_SAMPLES, check_size
 from roughness.core.version import package_version
 from roughness.simulate.config import SimConfig
 
+from .cluster import ClusterChoice
 from .schema import DatasetConfig, result_fields, sample_id
 
 if TYPE_CHECKING:  # the texture generators load on first use (the CLI reads this module's defaults)
+    from dask.distributed import Client
+
     from .labels import Label, LabelSet
     from .recipe import Recipe
     from .store import DatasetWriter
@@ -43,6 +53,7 @@ BUILD_CONFIG = SimConfig(fidelity="coarse")  # how the project's training sets a
 ENGINES = ("fem", "spectral")
 MESH_FIELDS = ("fidelity", "tolerance", "element", "h_contact_mm", "max_rounds")  # not in a spectral configuration
 WORKERS = 2  # local Dask worker processes
+ALLOWED_FAILURES = 3  # local cluster: worker deaths a task survives before it is reported as killing workers
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration, shared by its threads
 _SIMULATORS_LOCK = threading.Lock()
@@ -93,13 +104,25 @@ def simulator(config: dict):
         return _SIMULATORS[key]
 
 
-def simulate_record(record: dict, config: dict, label: Label | None = None) -> dict:
+@functools.cache
+def worker_versions() -> dict:
+    """``cluster.versions()`` of this process, read once."""
+    from .cluster import versions
+
+    return versions()
+
+
+def simulate_record(record: dict, config: dict, label: Label | None = None, expected: dict | None = None) -> dict:
     """Run the FEM for one sample record (on a worker), or take ``label`` if its heightmap digest matches
-    the remade texture's (result key "label"); failures come back as data."""
+    the remade texture's (result key "label"); failures come back as data. With ``expected`` (the caller's
+    ``cluster.versions()``), a worker of other versions simulates nothing and returns its own ("versions"):
+    workers that join a cluster after the build's check are checked too."""
     from .labels import heights_digest
     from .recipe import realise
 
     out: dict = {"record": record, "heights": None, "pixel_mm": record["pixel_mm"]}
+    if expected is not None and (mine := worker_versions()) != expected:
+        return {**out, "versions": mine}
     try:  # a failure is recorded with its reason, never stops the run
         hm = realise(record)
         out.update(heights=hm.heights.astype(np.float32), pixel_mm=hm.pixel_mm)
@@ -159,7 +182,7 @@ def _duration(seconds: float) -> str:
 
 def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, workers: int = WORKERS,
           scheduler: str | None = None, quiet: bool = False, labels: LabelSet | None = None,
-          engine: str = "fem") -> dict:
+          engine: str = "fem", scheduler_file: str | None = None, client: Client | None = None) -> dict:
     """Simulate the first ``n`` samples of ``recipe`` into ``out`` with ``engine`` (``fem``, or ``spectral``:
     the spectral skin engine, which ignores the mesh fields of ``config``); returns counts.
 
@@ -167,12 +190,17 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
     ``labels``: results of an earlier build of the same configuration (``labels.load_labels``),
     taken for the samples whose remade heightmap matches ("restored" in the counts).
     ``Interrupted`` (a KeyboardInterrupt) on Ctrl-C, with the counts so far.
+    Where it runs: ``workers`` local processes (default), or a running cluster given by at most one of
+    ``scheduler`` (address, e.g. ``tcp://host:8786``), ``scheduler_file`` (JSON written by ``dask scheduler
+    --scheduler-file``) or ``client`` (a ``dask.distributed.Client``; not closed). Workers whose roughness or
+    engine version differs from this process's are refused (``InputError``) before anything is submitted.
     """
     from .recipe import sample_record
     from .store import DatasetWriter
 
     n = check_size("samples of one build", integer("n", n, minimum=1), MAX_DATASET_SAMPLES, "n")
     integer("workers", workers, minimum=1)
+    cluster = ClusterChoice.of(scheduler, scheduler_file, client)
     records = [sample_record(recipe, i) for i in _preparing(range(n), n, "sample records made", quiet)]
     ids = [sample_id(r) for r in records]
     if len(set(ids)) != len(ids):
@@ -189,11 +217,11 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
         if not quiet:
             print(f"{out}: {counts['already_done']} of {n} samples present; "
                   f"{f'{labelled} labelled (restored if their textures match), ' if labels is not None else ''}"
-                  f"simulating {len(pending) - labelled} on {scheduler or f'{workers} local workers'}",
+                  f"simulating {len(pending) - labelled} on {cluster.describe(workers)}",
                   file=sys.stderr, flush=True)
         if pending:
             try:
-                _run(writer, pending, file_config.simulation, workers, scheduler, counts, quiet)
+                _run(writer, pending, file_config.simulation, workers, cluster, counts, quiet)
             except KeyboardInterrupt:
                 if not quiet and sys.stderr.isatty():
                     print(file=sys.stderr)  # end the progress line
@@ -202,18 +230,38 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
 
 
 def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config: dict, workers: int,
-         scheduler: str | None, counts: dict, quiet: bool) -> None:
+         where: ClusterChoice, counts: dict, quiet: bool) -> None:
     from dask.distributed import Client, as_completed
+    from distributed import KilledWorker
+
+    from .cluster import announce, check_workers, versions
 
     cluster = client = None
     progress = Progress(total=len(pending), start=time.perf_counter())
     try:
-        cluster = None if scheduler else _local_cluster(workers)
-        client = Client(scheduler or cluster)
-        futures = [client.submit(simulate_record, r, config, label, pure=False)
-                   for r, label in _preparing(pending, len(pending), "samples submitted to the workers", quiet)]
+        if where.local:
+            cluster = _local_cluster(workers)
+            client = Client(cluster)
+        else:
+            client = where.client or where.connect()
+        found = check_workers(client)
+        if not quiet:
+            announce(client, found)
+        expected = versions()
+        futures = {client.submit(simulate_record, r, config, label, expected, pure=False): r
+                   for r, label in _preparing(pending, len(pending), "samples submitted to the workers", quiet)}
         for future in as_completed(futures):
-            res = future.result()
+            try:
+                res = future.result()
+            except KilledWorker as err:  # the sample's workers died more often than the scheduler allows
+                res = {"record": futures[future], "heights": None, "pixel_mm": futures[future]["pixel_mm"],
+                       "error": f"KilledWorker: the {err.allowed_failures + 1} workers that ran it all died "
+                                "(out of memory, or killed?)"}
+            if "versions" in res:
+                client.cancel(list(futures))
+                raise InputError(f"a Dask worker that joined during the build runs other versions "
+                                 f"({res['versions']}) than this process ({expected}); start the workers from the "
+                                 "same installation (the samples written so far are kept)")
             if "label" in res:
                 writer.write_labelled(res["record"], res["heights"], res["pixel_mm"], res["label"].values)
                 counts["restored"] += 1
@@ -228,14 +276,14 @@ def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config
                 progress.update("error" in res, "label" in res)
     except KeyboardInterrupt:
         # The workers are closed mid-task: distributed's warnings about it (tasks cancelled, workers killed
-        # after a grace period) are expected, not news; a cluster of others (``scheduler``) is left alone.
+        # after a grace period) are expected, not news; a cluster of others is left alone.
         _quiet_distributed()
         if cluster is not None and client is not None:
             with contextlib.suppress(Exception):  # quieter if it works; the interrupt goes on either way
                 client.run(_quiet_distributed, on_error="ignore")
         raise
     finally:
-        if client is not None:
+        if client is not None and client is not where.client:
             client.close()
         if cluster is not None:
             cluster.close()
@@ -250,6 +298,7 @@ def _local_cluster(workers: int):
     """A local Dask cluster of ``workers`` processes, one thread and one BLAS thread each (the
     environment, inherited), started ignoring SIGINT (also inherited), so that a Ctrl-C interrupts
     only this process, which closes them; from a thread other than the main one, signals stay as they are."""
+    import dask
     from dask.distributed import LocalCluster
 
     for name in THREAD_VARIABLES:
@@ -257,7 +306,8 @@ def _local_cluster(workers: int):
     main = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
     try:
-        return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
+        with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
+            return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
     finally:
         if previous is not None:
             signal.signal(signal.SIGINT, previous)

@@ -33,7 +33,7 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
     ("simulate",): ([0], ["--save-strain", "--save-vtu"]),
     ("texture", "make"): ([], ["--out"]),
     ("texture", "list"): ([], []),
-    ("dataset", "build"): (["--recipe", "--labels"], ["--out"]),
+    ("dataset", "build"): (["--recipe", "--labels", "--scheduler-file"], ["--out"]),
     ("dataset", "labels"): ([0], ["--out"]),
     ("dataset", "info"): ([0], []),
     ("dataset", "verify"): ([0], []),
@@ -58,7 +58,7 @@ NOT_PATHS = {"NAME", "--param", "--scheduler", "--holdout-family", "--engines", 
              "--family", "--cache"}
 INPUT_VALUE = {"--recipe": "recipe.json", "--labels": "labels.jsonl.gz", "--extra-data": "data.h5",
                "--model": "model.onnx", "--like": "map.npy", "--from": "maps", "--palette": "maps",
-               "--stimuli": "stimuli.csv", "--printer": "printer.json"}
+               "--stimuli": "stimuli.csv", "--printer": "printer.json", "--scheduler-file": "scheduler.json"}
 EXCLUDES = {"--like": "--target-lambda"}  # an input flag and the BASE option it cannot go with
 
 

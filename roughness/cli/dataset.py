@@ -28,9 +28,14 @@ def add_parser(sub) -> None:
                    help=f"--fidelity converged: target relative discretization error of V "
                         f"(default {BUILD_CONFIG.tolerance})")
     b.add_argument("--workers", type=PARALLEL, default=WORKERS,
-                   help=f"local Dask worker processes, one thread each (default {WORKERS}; ignored with --scheduler)")
-    b.add_argument("--scheduler", metavar="ADDRESS",
+                   help=f"local Dask worker processes, one thread each (default {WORKERS}; ignored with --scheduler "
+                        "or --scheduler-file)")
+    where = b.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="ADDRESS",
                    help="address of a running Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
+    where.add_argument("--scheduler-file", metavar="FILE",
+                   help="the file a running Dask scheduler wrote (dask scheduler --scheduler-file FILE); "
+                        "its workers must run this roughness version (checked)")
     b.add_argument("--seed", type=SEED, help="replace the recipe's seed (default: the recipe's)")
     b.add_argument("--labels", metavar="LABELS", help="labels file of an earlier build of this configuration "
                    "(roughness dataset labels): samples whose remade texture matches take its results, without FEM")
@@ -58,7 +63,8 @@ def build(args: argparse.Namespace) -> int:
     from roughness.dataset.build import BUILD_CONFIG, Interrupted, build
     from roughness.dataset.recipe import Recipe, load_recipe
 
-    check_distinct({"--out": args.out}, {"--recipe": args.recipe, "--labels": args.labels})
+    check_distinct({"--out": args.out}, {"--recipe": args.recipe, "--labels": args.labels,
+                                         "--scheduler-file": args.scheduler_file})
     recipe = load_recipe(args.recipe) if args.recipe else Recipe()
     if args.seed is not None:
         recipe = replace(recipe, seed=args.seed)
@@ -74,7 +80,7 @@ def build(args: argparse.Namespace) -> int:
         labels = load_labels(args.labels)
     try:
         counts = build(args.out, args.n, recipe, config, workers=args.workers, scheduler=args.scheduler,
-                       quiet=args.quiet, labels=labels, engine=args.engine)
+                       quiet=args.quiet, labels=labels, engine=args.engine, scheduler_file=args.scheduler_file)
     except Interrupted as stop:
         print(f"roughness: interrupted; {stop.stored} of {args.n} samples written to {args.out}; "
               "run the same command again to resume", file=sys.stderr)
