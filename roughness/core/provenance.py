@@ -1,0 +1,50 @@
+"""Provenance: which tool, model, engine and configuration made a result.
+
+One record, built by ``make_provenance`` and written under the JSON key ``provenance`` by every command
+(and carried by ``roughness.Prediction``), so a result can be traced to what made it and a cached or
+shared one checked against what would make it now.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from roughness.core.version import package_version
+
+MODEL_ID_DIGITS = 16  # hex digits of the model file's SHA-256 kept as its id
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """What made a result.
+
+    ``tool_version``: roughness's version; ``engine``: ``surrogate``, ``spectral``, ``fem``, a classical
+    measure or a mixture (``auto``); ``fidelity``: the FEM fidelity of its scale (``spectral`` for that
+    engine; None where none applies); ``config_digest``: the digest of the simulation configuration the
+    result cache keys results by (``fem-...`` / ``spectral-...``, see ``roughness.engines``); ``model_id``:
+    ``sha256:`` and the first 16 hex digits of the ONNX file's SHA-256 (None: no model used);
+    ``model_version``: the ONNX file's ``model_version`` (0: an unversioned file).
+    """
+
+    tool_version: str
+    engine: str
+    fidelity: str | None = None
+    config_digest: str | None = None
+    model_id: str | None = None
+    model_version: int | None = None
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def make_provenance(engine: str, fidelity: str | None = None, config_digest: str | None = None,
+                    model: object | None = None) -> Provenance:
+    """The provenance of a result of ``engine``; ``model`` is the ``SurrogateModel`` used, if any."""
+    return Provenance(package_version(), engine, fidelity, config_digest,
+                      getattr(model, "model_id", None), getattr(model, "model_version", None))
+
+
+def model_id(data: bytes) -> str:
+    """A model's id from its file's bytes: ``sha256:`` and the first ``MODEL_ID_DIGITS`` hex digits."""
+    import hashlib
+
+    return "sha256:" + hashlib.sha256(data).hexdigest()[:MODEL_ID_DIGITS]
