@@ -411,6 +411,14 @@ def model_provenance(model) -> Provenance:
                            model)
 
 
+def engine_provenance(engine: Engine) -> Provenance:
+    """Provenance of an engine's results (``compare``): its kind, fidelity and identity, and its model if any."""
+    if isinstance(engine, SurrogateEngine):
+        return model_provenance(engine.model)
+    kind = engine.spec if engine.kind == "classical" else engine.kind
+    return make_provenance(kind, getattr(engine, "fidelity", None), engine.identity)
+
+
 def spectral_provenance(simulation: dict | None = None) -> Provenance:
     """Provenance of the spectral engine's answers with ``simulation`` (default: the paper's parameters)."""
     return make_provenance("spectral", "spectral", SpectralEngine.of(simulation).identity)

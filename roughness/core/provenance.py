@@ -36,6 +36,19 @@ class Provenance:
         return asdict(self)
 
 
+def combined(records: list[Provenance]) -> Provenance:
+    """One record for results made by several (``jnd``'s two answers): fields that differ are joined with
+    ``+`` (their model versions: None), so the record says the results were not all made alike."""
+    def join(values: list) -> str | None:
+        distinct = list(dict.fromkeys(v for v in values if v is not None))
+        return "+".join(map(str, distinct)) if distinct else None
+
+    versions = {r.model_version for r in records}
+    return Provenance(join([r.tool_version for r in records]), join([r.engine for r in records]),
+                      join([r.fidelity for r in records]), join([r.config_digest for r in records]),
+                      join([r.model_id for r in records]), versions.pop() if len(versions) == 1 else None)
+
+
 def make_provenance(engine: str, fidelity: str | None = None, config_digest: str | None = None,
                     model: object | None = None) -> Provenance:
     """The provenance of a result of ``engine``; ``model`` is the ``SurrogateModel`` used, if any."""
