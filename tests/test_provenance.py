@@ -120,6 +120,29 @@ def test_every_command_json_has_provenance(tmp_path, capsys):
     assert tune["provenance"]["config_digest"] == SpectralEngine.of(SHIPPED.meta.simulation).identity
 
 
+def test_design_files_record_their_verifier_and_searching_model(tmp_path, capsys):
+    """palette.json and plate.json (and their --json) name the spectral verifier and the shipped surrogate."""
+    from PIL import Image
+
+    spectral = SpectralEngine.of(SHIPPED.meta.simulation).identity
+    pal = tmp_path / "pal"
+    printed = _json(["palette", "--k", "2", "--min-jnd", "1", "--verify", "spectral", "--out", str(pal), "--quiet",
+                     "--json"], capsys)
+    written = json.loads((pal / "palette.json").read_text())
+    assert printed["provenance"] == written["provenance"]
+    _surrogate_record(written["provenance"])
+    assert written["provenance"]["engine"] == "spectral" and written["provenance"]["config_digest"] == spectral
+    rgb = np.zeros((24, 40, 3), dtype=np.uint8)
+    rgb[:, :20], rgb[:, 20:] = (250, 240, 200), (20, 20, 90)
+    Image.fromarray(rgb).save(tmp_path / "picture.png")
+    plate = tmp_path / "plate"
+    _json(["tactile-image", str(tmp_path / "picture.png"), "--palette", str(pal), "--out", str(plate), "--size-mm",
+           "40", "--step-mm", "4", "--verify", "spectral", "--json", "--quiet"], capsys)
+    record = json.loads((plate / "plate.json").read_text())["provenance"]
+    _surrogate_record(record)
+    assert record["engine"] == "spectral" and record["config_digest"] == spectral
+
+
 def test_compare_files_record_each_engines_provenance(tmp_path, capsys):
     folder = tmp_path / "maps"
     folder.mkdir()
@@ -178,3 +201,40 @@ def test_citation_and_licence():
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     assert pyproject["license"] in licence.splitlines()[0] and "LICENSE" in pyproject["license-files"]
     assert (ROOT / "CHANGELOG.md").read_text().startswith("# Changelog")
+
+
+def test_training_records_provenance_and_export_writes_the_model_version(tmp_path):
+    """A 1-epoch run on synthetic labels (test_surrogate's tiny set): metrics.json names the labels'
+    configuration; the export carries the version asked for, which the loaded model reports."""
+    import torch
+    from roughness.core.hashing import digest
+    from roughness.dataset.recipe import Recipe, realise, sample_record
+    from roughness.dataset.store import DatasetWriter
+    from roughness.surrogate.export import check_patches, export
+    from roughness.surrogate.patch import descriptors, footprint_patch
+    from roughness.surrogate.train import TrainConfig, train
+    from test_surrogate import CONFIG, fake_fields
+
+    data = tmp_path / "tiny.h5"
+    recipe = Recipe(name="tiny", seed=5, families={"bumps": 1, "fbm": 1, "grating": 1, "knit": 1},
+                    holdout_family="knit")
+    with DatasetWriter(data, CONFIG, "test") as writer:
+        for i in range(40):
+            record = sample_record(recipe, i)
+            hm = realise(record)
+            writer.write_result(record, hm.heights, hm.pixel_mm, fake_fields(0.05 * descriptors(footprint_patch(hm))[2]),
+                                np.zeros((5, 5)))
+    torch.manual_seed(0)
+    checkpoint = train(TrainConfig(data=str(data), out=str(tmp_path / "run"), max_epochs=1, batch_size=8,
+                                   val_fraction=0.2))
+    record = json.loads((tmp_path / "run" / "metrics.json").read_text())["provenance"]
+    assert set(record) == FIELDS and record["engine"] == "surrogate" and record["fidelity"] == "coarse"
+    with h5py.File(data) as h5:
+        simulation = json.loads(h5.attrs["config"])["simulation"]
+    assert record["config_digest"] == "fem-" + digest(simulation) and record["model_id"] is None
+    report = export(checkpoint, tmp_path / "model.onnx", patches=check_patches(2), model_version=3)
+    model = SurrogateModel(tmp_path / "model.onnx")
+    assert report["model_version"] == 3 == model.model_version
+    with pytest.raises(roughness.InputError, match="model_version"):
+        export(checkpoint, tmp_path / "zero.onnx", patches=check_patches(2), model_version=0)
+    assert not (tmp_path / "zero.onnx").exists()
