@@ -198,8 +198,10 @@ def test_citation_and_licence():
     assert [a["family-names"] for a in paper["authors"]] == ["Tymms", "Gardner", "Zorin"]
     assert citation["version"] == roughness.__version__
     licence = (ROOT / "LICENSE").read_text()
-    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    assert pyproject["license"] in licence.splitlines()[0] and "LICENSE" in pyproject["license-files"]
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert pyproject["project"]["license"]["text"] in licence.splitlines()[0] == "BSD-3-Clause License"
+    assert "LICENSE" in pyproject["tool"]["setuptools"]["license-files"]
+    assert "include LICENSE CITATION.cff CHANGELOG.md" in (ROOT / "MANIFEST.in").read_text()
     assert (ROOT / "CHANGELOG.md").read_text().startswith("# Changelog")
 
 
