@@ -160,10 +160,7 @@ def _duration(seconds: float) -> str:
 
 def build_provenance(config: SimConfig, engine: str) -> Provenance:
     """The provenance of a build's labels: its engine and the configuration digest the result cache uses."""
-    from roughness.engines import FemEngine, SpectralEngine
-
-    made = FemEngine("fem", config) if engine == "fem" else SpectralEngine("spectral", config)
-    return make_provenance(engine, made.fidelity, made.identity)
+    return make_provenance(engine, config.fidelity if engine == "fem" else "spectral", config.identity(engine))
 
 
 def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, workers: int = WORKERS,

@@ -122,7 +122,7 @@ class FemEngine(SimulatorEngine):
 
     @property
     def identity(self) -> str:
-        return fem_identity(self.config.as_dict())
+        return self.config.identity("fem")
 
     def _make(self) -> object:
         from roughness.simulate.model import Simulator
@@ -151,9 +151,7 @@ class SpectralEngine(SimulatorEngine):
 
     @property
     def identity(self) -> str:
-        from roughness.simulate.spectral.engine import ENGINE_VERSION
-
-        return "spectral-" + digest({**self.config.as_dict(), "engine_version": ENGINE_VERSION})
+        return self.config.identity("spectral")
 
     def _make(self) -> object:
         from roughness.simulate.spectral.engine import SpectralSimulator

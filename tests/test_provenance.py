@@ -16,6 +16,7 @@ import yaml
 import roughness
 from roughness.cli import main
 from roughness.core.provenance import Provenance, combined, model_id
+from roughness.core.version import RELEASE
 from roughness.engines import FemEngine, SpectralEngine, predict
 from roughness.models import MODELS_DIR
 from roughness.surface.heightmap import Heightmap
@@ -45,7 +46,7 @@ def _json(argv: list[str], capsys) -> dict:
 
 def _surrogate_record(record: dict) -> None:
     assert set(record) == FIELDS
-    assert record["tool_version"] == roughness.__version__
+    assert record["tool_version"] == RELEASE
     assert record["model_id"] == SHIPPED.model_id and record["model_version"] == SHIPPED_MODEL_VERSION
 
 
@@ -196,7 +197,8 @@ def test_citation_and_licence():
     paper = citation["preferred-citation"]
     assert paper["journal"] == "ACM Transactions on Graphics" and paper["volume"] == 37 and paper["issue"] == 5
     assert [a["family-names"] for a in paper["authors"]] == ["Tymms", "Gardner", "Zorin"]
-    assert citation["version"] == roughness.__version__
+    assert citation["version"] == RELEASE == roughness.__version__
+    assert RELEASE == tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
     licence = (ROOT / "LICENSE").read_text()
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
     assert pyproject["project"]["license"]["text"] in licence.splitlines()[0] == "BSD-3-Clause License"

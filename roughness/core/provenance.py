@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from roughness.core.version import package_version
+from roughness.core.version import RELEASE
 
 MODEL_ID_DIGITS = 16  # hex digits of the model file's SHA-256 kept as its id
 
@@ -17,7 +17,7 @@ MODEL_ID_DIGITS = 16  # hex digits of the model file's SHA-256 kept as its id
 class Provenance:
     """What made a result.
 
-    ``tool_version``: roughness's version; ``engine``: ``surrogate``, ``spectral``, ``fem``, a classical
+    ``tool_version``: roughness's release (``core.version.RELEASE``); ``engine``: ``surrogate``, ``spectral``, ``fem``, a classical
     measure or a mixture (``auto``); ``fidelity``: the FEM fidelity of its scale (``spectral`` for that
     engine; None where none applies); ``config_digest``: the digest of the simulation configuration the
     result cache keys results by (``fem-...`` / ``spectral-...``, see ``roughness.engines``); ``model_id``:
@@ -52,7 +52,7 @@ def combined(records: list[Provenance]) -> Provenance:
 def make_provenance(engine: str, fidelity: str | None = None, config_digest: str | None = None,
                     model: object | None = None) -> Provenance:
     """The provenance of a result of ``engine``; ``model`` is the ``SurrogateModel`` used, if any."""
-    return Provenance(package_version(), engine, fidelity, config_digest,
+    return Provenance(RELEASE, engine, fidelity, config_digest,
                       getattr(model, "model_id", None), getattr(model, "model_version", None))
 
 
