@@ -226,8 +226,8 @@ def test_training_records_provenance_and_export_writes_the_model_version(tmp_pat
         for i in range(40):
             record = sample_record(recipe, i)
             hm = realise(record)
-            writer.write_result(record, hm.heights, hm.pixel_mm, fake_fields(0.05 * descriptors(footprint_patch(hm))[2]),
-                                np.zeros((5, 5)))
+            v = 0.05 * descriptors(footprint_patch(hm))[2]
+            writer.write_result(record, hm.heights, hm.pixel_mm, fake_fields(v), np.zeros((5, 5)))
     torch.manual_seed(0)
     checkpoint = train(TrainConfig(data=str(data), out=str(tmp_path / "run"), max_epochs=1, batch_size=8,
                                    val_fraction=0.2))

@@ -17,10 +17,10 @@ MODEL_ID_DIGITS = 16  # hex digits of the model file's SHA-256 kept as its id
 class Provenance:
     """What made a result.
 
-    ``tool_version``: roughness's release (``core.version.RELEASE``); ``engine``: ``surrogate``, ``spectral``, ``fem``, a classical
-    measure or a mixture (``auto``); ``fidelity``: the FEM fidelity of its scale (``spectral`` for that
-    engine; None where none applies); ``config_digest``: the digest of the simulation configuration the
-    result cache keys results by (``fem-...`` / ``spectral-...``, see ``roughness.engines``); ``model_id``:
+    ``tool_version``: roughness's release (``core.version.RELEASE``); ``engine``: ``surrogate``, ``spectral``,
+    ``fem``, a classical measure (``compare``), or several joined with ``+`` (``combined``); ``fidelity``: the
+    FEM fidelity of its scale (``spectral`` for that engine; None where none applies); ``config_digest``: the
+    digest the result cache keys results by (``SimConfig.identity``: ``fem-...`` / ``spectral-...``); ``model_id``:
     ``sha256:`` and the first 16 hex digits of the ONNX file's SHA-256 (None: no model used);
     ``model_version``: the ONNX file's ``model_version`` (0: an unversioned file).
     """
