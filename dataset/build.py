@@ -36,6 +36,7 @@ import numpy as np
 from roughness.core.checks import integer
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_DATASET_SAMPLES, check_size
+from roughness.core.provenance import Provenance, make_provenance
 from roughness.core.version import package_version
 from roughness.simulate.config import SimConfig
 
@@ -180,6 +181,11 @@ def _duration(seconds: float) -> str:
     return f"{h}h{m:02d}m" if h else f"{m}m{s:02d}s"
 
 
+def build_provenance(config: SimConfig, engine: str) -> Provenance:
+    """The provenance of a build's labels: its engine and the configuration digest the result cache uses."""
+    return make_provenance(engine, config.fidelity if engine == "fem" else "spectral", config.identity(engine))
+
+
 def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, workers: int = WORKERS,
           scheduler: str | None = None, quiet: bool = False, labels: LabelSet | None = None,
           engine: str = "fem", scheduler_file: str | None = None, client: Client | None = None) -> dict:
@@ -210,7 +216,7 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
         raise InputError(f"the labels were made with another configuration ({labels.config.differences(file_config)})",
                          parameter="labels")
     known = {} if labels is None else labels.labels
-    with DatasetWriter(out, file_config, package_version()) as writer:
+    with DatasetWriter(out, file_config, package_version(), build_provenance(config, engine)) as writer:
         pending = [(r, known.get(i)) for r, i in zip(records, ids) if i not in writer.ids]  # (record, label or None)
         counts = {"requested": n, "already_done": n - len(pending), "written": 0, "failed": 0, "restored": 0}
         labelled = sum(label is not None for _, label in pending)

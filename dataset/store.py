@@ -37,6 +37,7 @@ from roughness.core.checks import positive
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write
 from roughness.core.hashing import canonical_json
+from roughness.core.provenance import Provenance
 from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
 from roughness.surface.heightmap import Heightmap
 
@@ -86,8 +87,10 @@ class DatasetWriter:
     requires the same configuration. ``version`` is the package version (stored).
     """
 
-    def __init__(self, path: str | os.PathLike, config: DatasetConfig | dict, version: str) -> None:
+    def __init__(self, path: str | os.PathLike, config: DatasetConfig | dict, version: str,
+                 provenance: Provenance | None = None) -> None:
         self.path = Path(path)
+        self._provenance = provenance  # stored as the root attribute ``provenance`` (JSON) by the last writer
         self.config = config if isinstance(config, DatasetConfig) else DatasetConfig.parse(config)
         self._version = version
         self._parts = parts_folder(self.path)
@@ -192,6 +195,8 @@ class DatasetWriter:
                         entries[sid], maps = _read_part(self._parts / f"{sid}.npz")
                         _put_maps(samples.create_group(sid), maps)
                 h5.attrs.update(Header(header.config, header.roughness_version, header.created).attrs())
+                if self._provenance is not None:
+                    h5.attrs["provenance"] = json.dumps(self._provenance.as_dict())
                 _write_index(h5, entries)
 
         atomic_write(self.path, write)

@@ -138,15 +138,18 @@ def check_report_folder(folder: Path, manifest: dict, overwrite: bool = False) -
     The same comparison (input, number of textures, reference and engines) resumes there.
     """
     try:
-        same = json.loads((folder / MANIFEST_FILE).read_text()) == manifest
+        written = json.loads((folder / MANIFEST_FILE).read_text())
+        same = isinstance(written, dict) and {k: v for k, v in written.items() if k != "provenance"} == manifest
     except (OSError, json.JSONDecodeError):
         same = False
     check_output_folder(folder, overwrite or same, "out")
 
 
-def write_manifest(folder: Path, manifest: dict) -> None:
+def write_manifest(folder: Path, manifest: dict, provenance: dict | None = None) -> None:
+    """The folder's manifest, with each engine's provenance record (spec -> record) if given."""
     folder.mkdir(parents=True, exist_ok=True)
-    atomic_write(folder / MANIFEST_FILE, lambda tmp: Path(tmp).write_text(json.dumps(manifest, indent=1) + "\n"))
+    text = json.dumps(manifest | ({"provenance": provenance} if provenance else {}), indent=1) + "\n"
+    atomic_write(folder / MANIFEST_FILE, lambda tmp: Path(tmp).write_text(text))
 
 
 class ResultCache:
@@ -155,11 +158,12 @@ class ResultCache:
     ``key`` is the texture's ``content_key``; ``identities`` maps each engine spec to what its results
     depend on (configuration digest, model file digest): entries made under another identity (a
     retrained model, say) are ignored. The file is created with the first result, after the folder's
-    ``manifest`` (if given) is written.
+    ``manifest`` (if given) is written. ``provenance`` (engine spec -> provenance record) goes into each new line.
     """
 
-    def __init__(self, folder: Path, identities: dict[str, str], manifest: dict | None = None) -> None:
-        self.identities = identities
+    def __init__(self, folder: Path, identities: dict[str, str], manifest: dict | None = None,
+                 provenance: dict[str, dict] | None = None) -> None:
+        self.identities, self.provenance = identities, provenance or {}
         self.folder, self.manifest = folder, manifest
         self.path = folder / RESULTS_FILE
         self.entries: dict[tuple[str, str], dict] = {}
@@ -181,10 +185,11 @@ class ResultCache:
         return self.entries.get((engine, key))
 
     def put(self, engine: str, key: str, **fields) -> None:
-        entry = {"engine": engine, "identity": self.identities[engine], "key": key, **fields}
+        entry = {"engine": engine, "identity": self.identities[engine], "key": key, **fields,
+                 **({"provenance": self.provenance[engine]} if engine in self.provenance else {})}
         self.entries[(engine, key)] = entry
         if self.manifest is not None:  # what these results belong to, before the first of them
-            write_manifest(self.folder, self.manifest)
+            write_manifest(self.folder, self.manifest, self.provenance)
             self.manifest = None
         self.path.parent.mkdir(parents=True, exist_ok=True)
         with open(self.path, "a") as f:

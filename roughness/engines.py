@@ -36,6 +36,7 @@ import numpy as np
 from roughness.core.checks import integer
 from roughness.core.errors import InputError
 from roughness.core.hashing import digest, file_sha256
+from roughness.core.provenance import Provenance, make_provenance
 from roughness.models import MODELS_DIR
 from roughness.surface.heightmap import Heightmap
 
@@ -121,7 +122,7 @@ class FemEngine(SimulatorEngine):
 
     @property
     def identity(self) -> str:
-        return fem_identity(self.config.as_dict())
+        return self.config.identity("fem")
 
     def _make(self) -> object:
         from roughness.simulate.model import Simulator
@@ -150,9 +151,7 @@ class SpectralEngine(SimulatorEngine):
 
     @property
     def identity(self) -> str:
-        from roughness.simulate.spectral.engine import ENGINE_VERSION
-
-        return "spectral-" + digest({**self.config.as_dict(), "engine_version": ENGINE_VERSION})
+        return self.config.identity("spectral")
 
     def _make(self) -> object:
         from roughness.simulate.spectral.engine import SpectralSimulator
@@ -306,12 +305,14 @@ class Prediction:
     roughness_stderr: float | None = None  # FEM: Monte Carlo standard error of V; surrogate: not estimated yet
     roughness_std: float | None = None  # surrogate ensemble: spread of V over its members; None: not estimated
     discretization_error: float | None = None  # FEM: estimated relative error of V from the mesh
+    provenance: Provenance | None = None  # tool version, model, engine, configuration digest
 
     def as_dict(self) -> dict:
         return {"input": self.source, "roughness": self.roughness, "roughness_stderr": self.roughness_stderr,
                 "roughness_std": self.roughness_std, "discretization_error": self.discretization_error,
                 "engine": self.engine, "fidelity": self.fidelity, "in_domain": self.in_domain,
-                "seconds": self.seconds, **self.placement.as_dict(), "domain_notes": self.domain_notes}
+                "seconds": self.seconds, **self.placement.as_dict(), "domain_notes": self.domain_notes,
+                "provenance": None if self.provenance is None else self.provenance.as_dict()}
 
 
 def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
@@ -357,6 +358,9 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
     results: list[Prediction] = []
     batch: list[tuple[str, Heightmap]] = []
+    # the surrogate's configuration is that of its training labels; the FEM's here comes from the model too
+    surrogate_provenance = model_provenance(model)
+    fem_provenance = make_provenance("fem", fem.fidelity, fem.identity, model)
 
     def flush() -> None:
         start = time.perf_counter()
@@ -371,7 +375,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
                 notes.append(f"uncertain: relative spread {rel:.3g} above the limit {max_std:.3g}")
             climbed = _spectral_rung(spectral, hm, notes) if engine == "auto" and notes and spectral else None
             if climbed is not None:
-                result = _spectral_prediction(source, climbed, not why, notes)
+                result = _spectral_prediction(source, climbed, not why, notes, spectral.identity, model)
             elif engine == "fem" or (engine == "auto" and notes):
                 r = fem.simulate(hm)
                 error = r.discretization_error
@@ -380,10 +384,11 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
                     notes.append("discretization error undefined: V is 0 at this mesh but not at the coarser one")
                 result = Prediction(source, r.roughness, "fem", fem.fidelity, not why, r.seconds,
                                     fem_scale.place(r.roughness), notes, r.roughness_stderr,
-                                    discretization_error=error)
+                                    discretization_error=error, provenance=fem_provenance)
             else:
                 result = Prediction(source, float(v), "surrogate", model.fidelity, not why, share,
-                                    surrogate_scale.place(float(v)), notes, roughness_std=std)
+                                    surrogate_scale.place(float(v)), notes, roughness_std=std,
+                                    provenance=surrogate_provenance)
             results.append(result)
             if on_result:
                 on_result(result)
@@ -396,6 +401,25 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     if batch:
         flush()
     return results
+
+
+def model_provenance(model) -> Provenance:
+    """Provenance of the surrogate ``model``'s answers: its configuration is that of its training labels."""
+    return make_provenance("surrogate", model.fidelity, FemEngine.of(model.fidelity, model.meta.simulation).identity,
+                           model)
+
+
+def engine_provenance(engine: Engine) -> Provenance:
+    """Provenance of an engine's results (``compare``): its kind, fidelity and identity, and its model if any."""
+    if isinstance(engine, SurrogateEngine):
+        return model_provenance(engine.model)
+    kind = engine.spec if engine.kind == "classical" else engine.kind
+    return make_provenance(kind, getattr(engine, "fidelity", None), engine.identity)
+
+
+def spectral_provenance(simulation: dict | None = None) -> Provenance:
+    """Provenance of the spectral engine's answers with ``simulation`` (default: the paper's parameters)."""
+    return make_provenance("spectral", "spectral", SpectralEngine.of(simulation).identity)
 
 
 def _spectral_rung(spectral: SpectralEngine, hm: Heightmap, notes: list[str]):
@@ -412,12 +436,16 @@ def _spectral_rung(spectral: SpectralEngine, hm: Heightmap, notes: list[str]):
     return result
 
 
-def _spectral_prediction(source: str, result, in_domain: bool, notes: list[str]) -> Prediction:
-    """A ``SpectralResult`` as a prediction, placed on the spectral standard scale; ``notes`` come before its own."""
+def _spectral_prediction(source: str, result, in_domain: bool, notes: list[str], identity: str,
+                         model: object | None = None) -> Prediction:
+    """A ``SpectralResult`` as a prediction, placed on the spectral standard scale; ``notes`` come before its own.
+
+    ``identity`` is the engine's configuration digest; ``model`` the surrogate consulted first (``auto``), if any."""
     from roughness.surrogate.calibration import load_scale
 
     return Prediction(source, result.roughness, "spectral", "spectral", in_domain, result.seconds,
-                      load_scale("spectral").place(result.roughness), notes + result.notes, result.roughness_stderr)
+                      load_scale("spectral").place(result.roughness), notes + result.notes, result.roughness_stderr,
+                      provenance=make_provenance("spectral", "spectral", identity, model))
 
 
 def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tuple[float, float] | None, tile: bool,
@@ -434,7 +462,7 @@ def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tu
     names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
     results = []
     for hm in [heightmaps] if isinstance(heightmaps, Heightmap) else heightmaps:
-        result = _spectral_prediction(next(names), spectral.simulate(hm), True, [])
+        result = _spectral_prediction(next(names), spectral.simulate(hm), True, [], spectral.identity)
         results.append(result)
         if on_result:
             on_result(result)

@@ -184,3 +184,15 @@ class SimConfig:
                 del out[name]
         return out
 
+    def identity(self, engine: str = "fem") -> str:
+        """What results of ``engine`` (``fem`` or ``spectral``) with this configuration depend on, as the result
+        cache and provenance records name it: ``fem-`` or ``spectral-`` and a digest of ``as_dict()`` (with the
+        spectral engine's version)."""
+        from roughness.core.hashing import digest
+
+        if engine == "fem":
+            return "fem-" + digest(self.as_dict())
+        from .spectral.engine import ENGINE_VERSION
+
+        return "spectral-" + digest({**self.as_dict(), "engine_version": ENGINE_VERSION})
+

@@ -23,6 +23,7 @@ import numpy as np
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write
 from roughness.core.hashing import file_sha256
+from roughness.core.provenance import model_id
 
 from .metadata import ModelMetadata, onnx_metadata
 from .patch import DESCRIPTOR_NAMES, FOOTPRINT_MM
@@ -234,11 +235,18 @@ def write_card(run: Path, model_path: Path, card: Path, plots: Path, latency_pat
     coarse_note = (" The coarse labels sit a few %\n  below `default` FEM (studies/results/mesh_convergence.md); the "
                    "standard scale used for the\n  equivalent wavelength is computed at the same fidelity, so "
                    "equivalent wavelengths and JNDs carry over." if meta.label_fidelity == "coarse" else "")
+    import onnx
+
+    onnx_version = onnx.load(str(model_path), load_external_data=False).model_version
+    version = f"model version {onnx_version}" if onnx_version else "unversioned (ONNX model_version 0)"
     extra_files = "".join(f" with `{e['file']}`" for e in (meta.multi_fidelity or {}).get("extra_data", []))
     text = f"""# Model card: {model_path.name}
 
 A small CNN that predicts the FEM roughness V (strain variation at the Merkel receptor depth,
 Tymms et al. 2018) of a texture from its heightmap, in about a millisecond instead of seconds.
+
+- **Version**: {version} (the ONNX `model_version`); **model id** `{model_id(model_path.read_bytes())}` (the first
+  16 hex digits of the file's SHA-256), as every result's `provenance` names it.
 
 ## What it computes
 - **Input**: the heights under the {FOOTPRINT_MM:g} mm x {FOOTPRINT_MM:g} mm skin footprint, box-averaged to

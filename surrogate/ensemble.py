@@ -30,6 +30,7 @@ import onnxruntime as ort
 import torch
 from torch import nn
 
+from roughness.core.checks import integer
 from roughness.core.errors import InputError, OutputExists
 from roughness.core.files import atomic_write, check_distinct, check_output
 from roughness.core.hashing import file_sha256
@@ -38,6 +39,7 @@ from .domain import Domain
 from .export import RTOL, ExportError, check_patches, load_checkpoint
 from .metadata import METADATA_KEY, ModelMetadata
 from .metrics import scores
+from .versioning import set_version
 from .network import RoughnessNet
 from .patch import batch_descriptors
 from .predictor import EMBEDDING_OUTPUT, INPUT, LOG_OUTPUT, STD_OUTPUT
@@ -131,9 +133,13 @@ def calibrate(logs: np.ndarray, roughness: np.ndarray, split: np.ndarray, log_of
 
 
 def export_ensemble(checkpoints: list[str | Path], out: str | Path,
-                    data: str | Path | list[str | Path] | None = None, overwrite: bool = False) -> dict:
-    """Write the ensemble graph (checked against PyTorch) and return what was measured; see the module docstring."""
+                    data: str | Path | list[str | Path] | None = None, overwrite: bool = False,
+                    model_version: int = 1) -> dict:
+    """Write the ensemble graph (checked against PyTorch) and return what was measured; see the module docstring.
+
+    ``model_version``: the ONNX ``model_version`` field (surrogate/versioning.py)."""
     out = check_output(out, overwrite, "out")
+    integer("model_version", model_version, minimum=1)
     members, metas = load_members(checkpoints)
     first = metas[0]
     info: dict = {"members": len(members), "member_sha256": [file_sha256(p)[:16] for p in checkpoints],
@@ -165,11 +171,12 @@ def export_ensemble(checkpoints: list[str | Path], out: str | Path,
                           external_data=False, dynamo=True)
         graph = onnx.load(tmp)
         graph.metadata_props.add(key=METADATA_KEY, value=meta.to_json())
+        set_version(graph, model_version)
         onnx.save(graph, tmp)
         report.update(_verify(model, tmp, patches))
 
     atomic_write(out, write, overwrite)
-    return {"path": str(out), "bytes": out.stat().st_size, "check": report, **info}
+    return {"path": str(out), "bytes": out.stat().st_size, "model_version": model_version, "check": report, **info}
 
 
 def _scores_by_family(samples, predicted: np.ndarray, rows: np.ndarray) -> dict[str, dict]:
@@ -229,6 +236,8 @@ def main(argv: list[str] | None = None) -> int:
                                                   "split and report it on the test split (default: not calibrated)")
     parser.add_argument("--int8", metavar="FILE", help="also write the int8 graph of the ensemble (surrogate/quantize.py; "
                                                        "nothing is written if it strays from fp32 beyond its limits)")
+    parser.add_argument("--model-version", type=int, default=1,
+                        help="the model's version (ONNX model_version), the next whole number (default: 1)")
     parser.add_argument("--overwrite", action="store_true", help="replace --out (and --int8) if they exist")
     args = parser.parse_args(argv)
     from .quantize import QuantizationError, quantize
@@ -238,7 +247,7 @@ def main(argv: list[str] | None = None) -> int:
                        {"CHECKPOINT": args.checkpoints, "--data": args.data})
         if args.int8:  # both outputs checked before anything is computed
             check_output(args.int8, args.overwrite, "int8")
-        report = export_ensemble(args.checkpoints, args.out, args.data, args.overwrite)
+        report = export_ensemble(args.checkpoints, args.out, args.data, args.overwrite, args.model_version)
         print(json.dumps({k: v for k, v in report.items() if k != "member_val"}))
         if args.int8:
             print(json.dumps(quantize(args.out, args.int8, overwrite=args.overwrite)))

@@ -21,6 +21,7 @@ import onnx
 import onnxruntime as ort
 import torch
 
+from roughness.core.checks import integer
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output
 
@@ -29,6 +30,7 @@ from .network import RoughnessNet
 from .patch import footprint_patch
 from .predictor import INPUT
 from .target import roughness_from_log
+from .versioning import set_version
 
 RTOL = 1e-4
 OUTPUTS = ("log_roughness", "embedding")
@@ -88,12 +90,15 @@ def check_patches(n: int = 16) -> np.ndarray:
 
 
 def export(checkpoint_path: str | Path, out: str | Path, patches: np.ndarray | None = None,
-           overwrite: bool = False) -> dict:
+           overwrite: bool = False, model_version: int = 1) -> dict:
     """Write the ONNX model to ``out`` after checking it; returns the check's numbers.
+
+    ``model_version`` (a whole number >= 1) goes into the ONNX ``model_version`` field (surrogate/versioning.py).
 
     ``out`` must not exist unless ``overwrite``; it is written whole or not at all.
     """
     out = check_output(out, overwrite, "out")
+    integer("model_version", model_version, minimum=1)
     model, meta = load_checkpoint(checkpoint_path)
     patches = check_patches() if patches is None else patches.astype(np.float32)
     report: dict = {}
@@ -104,11 +109,12 @@ def export(checkpoint_path: str | Path, out: str | Path, patches: np.ndarray | N
                           dynamic_shapes=({0: batch},), external_data=False, dynamo=True)
         graph = onnx.load(tmp)
         graph.metadata_props.add(key=METADATA_KEY, value=meta.to_json())
+        set_version(graph, model_version)
         onnx.save(graph, tmp)
         report.update(verify(model, tmp, patches))
 
     atomic_write(out, write, overwrite)
-    return report | {"path": str(out), "bytes": out.stat().st_size}
+    return report | {"path": str(out), "bytes": out.stat().st_size, "model_version": model_version}
 
 
 def verify(model: RoughnessNet, onnx_path: str, patches: np.ndarray) -> dict:

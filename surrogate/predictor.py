@@ -15,6 +15,7 @@ import numpy as np
 import onnxruntime as ort
 
 from roughness.core.errors import InputError
+from roughness.core.provenance import model_id
 from roughness.models import MODELS_DIR
 from roughness.surface.heightmap import Heightmap, flat
 
@@ -51,11 +52,18 @@ class SurrogateModel:
         options.intra_op_num_threads = threads  # explicit: the default counts the host's cores
         options.inter_op_num_threads = 1
         try:
-            self.session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
+            data = path.read_bytes()  # hashed and loaded from the same bytes: the id is of what answers
+        except OSError as err:
+            raise InputError(f"cannot read the surrogate model {path}: {err.strerror}", parameter="model") from None
+        self.model_id = model_id(data)
+        try:
+            self.session = ort.InferenceSession(data, options, providers=["CPUExecutionProvider"])
         except Exception as err:
             raise InputError(f"{path} is not a loadable ONNX model: {err}", parameter="model") from None
         self.path = path
         self.meta: ModelMetadata = read_metadata(self.session.get_modelmeta().custom_metadata_map, path)
+        version = self.session.get_modelmeta().version  # onnxruntime reads an unset model_version as 2**63 - 1
+        self.model_version = int(version) if 0 <= version < 2**63 - 1 else 0  # the ONNX model_version (0: unset)
         self.domain = Domain.from_dict(self.meta.domain)
         self.pixel_mm = float(self.meta.patch_pixel_mm)
         self.footprint_mm = float(self.meta.footprint_mm)

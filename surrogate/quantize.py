@@ -124,6 +124,7 @@ def quantize(fp32_path: str | Path, out: str | Path, calibration: int = 512, che
             raise QuantizationError("the int8 graph has ConvInteger/MatMulInteger nodes (dynamic quantisation)")
         del graph.metadata_props[:]
         graph.metadata_props.add(key=METADATA_KEY, value=replace(fp32_meta, int8=report).to_json())
+        graph.model_version = onnx.load(str(fp32_path), load_external_data=False).model_version  # the fp32's
         atomic_write(out, lambda path: onnx.save(graph, path), overwrite)
     return report | {"path": str(out), "bytes": out.stat().st_size}
 

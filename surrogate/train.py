@@ -34,6 +34,8 @@ import torch.nn.functional as F
 
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output_folder
+from roughness.core.hashing import digest
+from roughness.core.provenance import make_provenance
 from roughness.dataset.digest import inputs_sha256
 from roughness.dataset.store import Dataset, open_dataset
 
@@ -205,7 +207,12 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         if multi else None)
     plain = json.loads(meta.to_json())  # plain types only (no numpy scalars): export loads it with weights_only
     save_torch({"state_dict": model.state_dict(), **plain}, out / "checkpoint.pt")
-    write_text(out / "metrics.json", json.dumps({k: v for k, v in meta.to_dict().items() if k != "domain"}, indent=1))
+    # the digest of the labels' simulation record (for FEM labels the result cache's); the model id comes with the
+    # exported file
+    provenance = make_provenance("surrogate", meta.label_fidelity,
+                                 f"{simulation.get('engine', 'fem')}-{digest(simulation)}")
+    write_text(out / "metrics.json", json.dumps({k: v for k, v in meta.to_dict().items() if k != "domain"}
+                                                | {"provenance": provenance.as_dict()}, indent=1))
     write_text(out / "history.csv", "epoch,train_loss,val_loss,lr,minutes\n" + "".join(
         ",".join(f"{v:.6g}" for v in row) + "\n" for row in history))
     write_text(out / "predictions.csv", "id,family,split,V_fem,V_predicted,out_of_domain,h_mm\n" + "".join(

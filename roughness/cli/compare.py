@@ -35,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.compare import ResultCache, check_report_folder, run, textures_of, write_manifest
     from roughness.core.errors import InputError
     from roughness.core.files import check_distinct
-    from roughness.engines import make_engine
+    from roughness.engines import engine_provenance, make_engine
     from roughness.report import write_report
 
     specs = list(dict.fromkeys([args.reference, *args.engines]))
@@ -54,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
         return hm
 
     textures, stored = textures_of(args.input, args.n, load_file)
-    cache = ResultCache(out, {e.spec: e.identity for e in engines}, manifest)
+    provenance = {e.spec: engine_provenance(e).as_dict() for e in engines}
+    cache = ResultCache(out, {e.spec: e.identity for e in engines}, manifest, provenance)
     try:
         outcome = run(textures, engines, cache, stored, quiet=args.quiet)
     except KeyboardInterrupt:
@@ -64,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     if not outcome.keys:
         raise InputError(f"none of the {len(textures)} textures of {args.input} could be compared (reasons above)",
                          parameter="input")
-    write_manifest(out, manifest)  # also when every result was cached
+    write_manifest(out, manifest, provenance)  # also when every result was cached
     cost = next((e.model.meta.cost_core_seconds for e in engines if e.kind == "surrogate"), None)
     table = write_report(textures, outcome, {e.spec: e.kind for e in engines}, args.reference, cache, out, cost,
                          args.input)

@@ -60,7 +60,7 @@ def build(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from roughness.core.files import check_distinct
-    from roughness.dataset.build import BUILD_CONFIG, Interrupted, build
+    from roughness.dataset.build import BUILD_CONFIG, Interrupted, build, build_provenance
     from roughness.dataset.recipe import Recipe, load_recipe
 
     check_distinct({"--out": args.out}, {"--recipe": args.recipe, "--labels": args.labels,
@@ -85,7 +85,7 @@ def build(args: argparse.Namespace) -> int:
         print(f"roughness: interrupted; {stop.stored} of {args.n} samples written to {args.out}; "
               "run the same command again to resume", file=sys.stderr)
         return 130
-    write_stdout(json_text(counts))
+    write_stdout(json_text(counts | {"provenance": build_provenance(config, args.engine).as_dict()}))
     return 0
 
 

@@ -47,6 +47,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
     from roughness.design.evaluation import Evaluator
     from roughness.design.homogeneity import homogeneity, save_map
+    from roughness.engines import model_provenance
 
     check_distinct({"--map": args.map}, {"HEIGHTMAP": args.heightmap, "--model": args.model})
     if args.map:
@@ -63,7 +64,9 @@ def run(args: argparse.Namespace) -> int:
                          progress=lambda done, total: log(args, f"  {engine} window {done}/{total}"))
     if args.map:
         save_map(result, hm, args.map, args.overwrite)
-    summary = {"input": args.heightmap, **result.summary(), "verifier": engine, "readings": readings(args)}
+    provenance = evaluator.provenance if args.engine == "fem" else model_provenance(evaluator.model)
+    summary = {"input": args.heightmap, **result.summary(), "verifier": engine, "readings": readings(args),
+               "provenance": provenance.as_dict()}
     if args.json:
         write_stdout(json_text(summary))
         return 0

@@ -24,6 +24,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from roughness.core.provenance import combined
     from roughness.engines import predict
     from roughness.surrogate.calibration import jnd_distance, load_scale
 
@@ -33,7 +34,8 @@ def run(args: argparse.Namespace) -> int:
     distance = jnd_distance(scale, pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
     if args.json:
         write_stdout(json_text({"a": pa.as_dict(), "b": pb.as_dict(), **distance.as_dict(),
-                                "readings": readings(args)}))
+                                "readings": readings(args),
+                                "provenance": combined([pa.provenance, pb.provenance]).as_dict()}))
         return 0
     lines = [_line(p) for p in (pa, pb)]
     kinds = " and ".join(dict.fromkeys("Monte Carlo of V" if p.roughness_stderr is not None else "ensemble spread"

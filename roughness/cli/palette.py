@@ -92,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
         for m in palette.members:
             printing.verify(m.heightmap, m.fem.roughness, args.tile and bool(args.candidates), m.name)
         palette = replace(palette, printing=printing.as_dict())
+    palette = replace(palette, provenance=evaluator.provenance)
     save_palette(palette, out, args.stl, args.base_mm, args.overwrite)
     summary = {**palette.summary(), "verifier": evaluator.verifier, "readings": readings(args)}
     if args.json:

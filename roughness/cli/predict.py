@@ -147,6 +147,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _predict_map(args: argparse.Namespace, model) -> int:
     from roughness.core.errors import InputError
+    from roughness.engines import model_provenance, spectral_provenance
     from roughness.surrogate.roughness_map import roughness_map, save_map
 
     if len(args.inputs) != 1 or os.path.isdir(args.inputs[0]):
@@ -170,11 +171,13 @@ def _predict_map(args: argparse.Namespace, model) -> int:
         from roughness.simulate.spectral.maps import spectral_map
 
         result, notes = spectral_map(hm, args.step_mm, args.tile, progress=progress)
+        provenance = spectral_provenance()
     else:
         result = roughness_map(model, hm, args.step_mm, args.tile, args.batch_size, progress=progress)
+        provenance = model_provenance(model)
     save_map(result, args.map, args.overwrite)
     summary = {"input": args.inputs[0], "map": args.map, "engine": args.engine, **result.summary(), "notes": notes,
-               "seconds": time.perf_counter() - start, "readings": readings(args)}
+               "seconds": time.perf_counter() - start, "readings": readings(args), "provenance": provenance.as_dict()}
     print(json_text(summary) if args.json else
           f"{args.inputs[0]}: {summary['positions']} footprint positions, V {summary['roughness_min']:.4f} to "
           f"{summary['roughness_max']:.4f} (median {summary['roughness_median']:.4f}), "

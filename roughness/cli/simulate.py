@@ -93,6 +93,7 @@ def _detrend_spec(text: str):
 
 def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
+    from roughness.core.provenance import make_provenance
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator
 
@@ -127,7 +128,9 @@ def run(args: argparse.Namespace) -> int:
         save_vtu(result, sim.block(result.config), args.save_vtu, args.overwrite)
         log(args, f"deformed mesh written to {args.save_vtu}")
     if args.json:
-        print(json_text({"input": args.heightmap, **result.summary(), "readings": readings(args)}))
+        provenance = make_provenance("fem", config.fidelity, config.identity("fem"))
+        print(json_text({"input": args.heightmap, **result.summary(), "readings": readings(args),
+                         "provenance": provenance.as_dict()}))
     else:
         _print_result(result)
     for note in result.unusual_notes:

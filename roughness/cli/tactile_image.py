@@ -110,7 +110,8 @@ def run(args: argparse.Namespace) -> int:
     save_figures(plate, out)
     atomic_write(out / "clustered.png", lambda tmp: Image.fromarray(found.clustered()).save(tmp, format="PNG"),
                  args.overwrite)
-    summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier}
+    summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier,
+               "provenance": evaluator.provenance.as_dict()}
     atomic_write(out / "plate.json", lambda tmp: Path(tmp).write_text(json_text(summary, indent=1) + "\n"),
                  args.overwrite)
     if args.json:

@@ -51,6 +51,9 @@ def add_parser(sub) -> None:
     ex.add_argument("--out", required=True, help="ONNX file to write; refused if it exists unless --overwrite")
     ex.add_argument("--int8", metavar="FILE", help="also write an int8 model (static QDQ, per-channel weights) "
                                                    "(default: none); refused if it exists unless --overwrite")
+    ex.add_argument("--model-version", type=COUNT, default=1,
+                    help="the model's version, written as the ONNX model_version: the next whole number after the "
+                         "model it replaces (the shipped models are 2) (default: 1)")
     add_overwrite(ex)
     finish(ex, export, checkpoint="CHECKPOINT")
 
@@ -89,7 +92,7 @@ def export(args: argparse.Namespace) -> int:
     if args.int8:
         check_output(args.int8, args.overwrite, "int8")
     try:
-        report = export(args.checkpoint, args.out, overwrite=args.overwrite)
+        report = export(args.checkpoint, args.out, overwrite=args.overwrite, model_version=args.model_version)
     except ExportError as err:
         print(f"roughness: export check failed, nothing written: {err}", file=sys.stderr)
         return 1

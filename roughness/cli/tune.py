@@ -94,6 +94,7 @@ def run(args: argparse.Namespace) -> int:
                   progress=lambda line: log(args, "  " + line))
     save_heightmap(result.heightmap, out, base_mm=args.base_mm, overwrite=args.overwrite)
     summary = {"input": args.heightmap, "out": str(out), **result.summary(), "verifier": evaluator.verifier,
+               "provenance": evaluator.provenance.as_dict(),
                "readings": readings(args)}
     if printing:
         printing.verify(result.heightmap, result.achieved.roughness, args.tile)

@@ -62,6 +62,14 @@ class Evaluator:
         return self._fem
 
     @property
+    def provenance(self):
+        """The ``Provenance`` of the design's verified answers: the verifier's engine, fidelity and configuration,
+        and the surrogate that searched."""
+        from roughness.core.provenance import make_provenance
+
+        return make_provenance(self.fem.kind, getattr(self.fem, "fidelity", None), self.fem.identity, self.model)
+
+    @property
     def verifier(self) -> str:
         """The verifier in words: ``FEM fine``, ``spectral``."""
         fidelity = self.fidelity or self.model.fidelity

@@ -24,6 +24,7 @@ import numpy as np
 
 from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
+from roughness.core.provenance import Provenance
 from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator, Verified, jnd_between
@@ -52,6 +53,7 @@ class Palette:
     source: str
     notes: tuple[str, ...] = field(default=())
     printing: dict = field(default_factory=dict)  # --printer: the profile and each member's digital and printed V
+    provenance: Provenance | None = None  # what verified it (``Evaluator.provenance``)
 
     @property
     def closest_jnd(self) -> float:
@@ -70,7 +72,8 @@ class Palette:
                              "equivalent_lambda_mm": m.fem.equivalent_lambda_mm, "on_scale": m.fem.on_scale,
                              "surrogate_roughness": m.surrogate_roughness, "recipe": m.recipe} for m in self.members],
                 "distances_jnd": np.round(self.distances_jnd, 4).tolist(), "notes": list(self.notes),
-                **({"printing": self.printing} if self.printing else {})}
+                **({"printing": self.printing} if self.printing else {}),
+                **({"provenance": self.provenance.as_dict()} if self.provenance else {})}
 
 
 def _distances(members: list[Member]) -> np.ndarray:
