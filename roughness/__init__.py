@@ -15,6 +15,21 @@ from __future__ import annotations
 
 from importlib import import_module
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load on first use (``__getattr__``)
+    from roughness.core.errors import InputError, SimulationError
+    from roughness.dataset.store import open_dataset
+    from roughness.dataset.textures import named_texture, standard_texture
+    from roughness.engines import Prediction, predict
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.model import Result, Simulator
+    from roughness.simulate.model import roughness as fem_roughness
+    from roughness.surface.heightmap import Heightmap, as_heightmap
+    from roughness.surface.io import load_heightmap, save_heightmap
+    from roughness.surrogate.calibration import StandardScale, load_scale
+
+    __version__: str
 
 _SOURCE_ROOT = Path(__file__).resolve().parents[1]
 if (_SOURCE_ROOT / "pyproject.toml").is_file() and (_SOURCE_ROOT / "simulate" / "__init__.py").is_file():
@@ -25,6 +40,7 @@ if (_SOURCE_ROOT / "pyproject.toml").is_file() and (_SOURCE_ROOT / "simulate" / 
 
 _HOMES = {
     "Heightmap": "roughness.surface.heightmap",
+    "as_heightmap": "roughness.surface.heightmap",
     "InputError": "roughness.core.errors",
     "SimulationError": "roughness.core.errors",
     "load_heightmap": "roughness.surface.io",
@@ -42,6 +58,9 @@ _HOMES = {
     "open_dataset": "roughness.dataset.store",
 }
 
+# subpackages offered to tab completion, imported on first use like the names above
+_SUBPACKAGES = ("dataset", "design", "perception", "simulate", "surface", "surrogate")
+
 __all__ = sorted(_HOMES) + ["__version__"]
 
 
@@ -50,8 +69,16 @@ def __getattr__(name: str) -> object:
         from .core.version import package_version
 
         return package_version()
+    if name in _SUBPACKAGES:
+        return import_module(f"{__name__}.{name}")
     if name not in _HOMES:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     module, _, attr = _HOMES[name].partition(":")
     return getattr(import_module(module), attr or name)
 
+
+
+def __dir__() -> list[str]:
+    """The public API beside the module's own attributes, for tab completion and ``help()``."""
+    own = {name for name in globals() if name.startswith("__")}
+    return sorted(own | set(__all__) | set(_SUBPACKAGES))

@@ -37,7 +37,7 @@ from roughness.core.checks import integer
 from roughness.core.errors import InputError
 from roughness.core.hashing import digest, file_sha256
 from roughness.models import MODELS_DIR
-from roughness.surface.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap, heightmaps_of
 
 from .classical import MEASURES, footprint
 
@@ -314,14 +314,17 @@ class Prediction:
                 "seconds": self.seconds, **self.placement.as_dict(), "domain_notes": self.domain_notes}
 
 
-def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
+def predict(heightmaps: Heightmap | np.ndarray | Iterable[Heightmap | np.ndarray], engine: str = "auto",
             model: object | str | Path | None = None, centre_mm: tuple[float, float] | None = None,
             tile: bool = False, fidelity: str | None = None, tolerance: float | None = None, batch_size: int = 256,
             sources: Iterable[str] | None = None,
             on_result: Callable[[Prediction], None] | None = None, max_std: float | None = None,
             curvature_mm: float | None = None, base: str = "cylinder", curvature_axis: str = "x",
-            texture_along: str = "normal") -> list[Prediction]:
+            texture_along: str = "normal", pixel_mm: float | None = None) -> list[Prediction]:
     """Predict V for each heightmap (mm) with ``engine`` (see the module docstring).
+
+    ``heightmaps`` is one ``Heightmap`` or 2-D NumPy array of heights (mm), or an iterable of them; arrays
+    need ``pixel_mm``, their pixel size (mm).
 
     ``model`` is a ``SurrogateModel`` or the path of an ONNX model (default: the shipped one);
     ``fidelity`` is the FEM's (default: the model's training labels'; ``converged`` refines to
@@ -337,6 +340,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     if engine not in PREDICT_ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(PREDICT_ENGINES)}", parameter="engine")
     integer("batch_size", batch_size, minimum=1)
+    heightmaps = heightmaps_of(heightmaps, pixel_mm)
     if engine == "spectral":
         return _predict_spectral(heightmaps, centre_mm, tile, fidelity, tolerance, sources, on_result, curvature_mm)
     model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
@@ -389,7 +393,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
                 on_result(result)
         batch.clear()
 
-    for hm in [heightmaps] if isinstance(heightmaps, Heightmap) else heightmaps:
+    for hm in heightmaps:
         batch.append((next(names), hm))
         if len(batch) >= batch_size:
             flush()
@@ -420,7 +424,7 @@ def _spectral_prediction(source: str, result, in_domain: bool, notes: list[str])
                       load_scale("spectral").place(result.roughness), notes + result.notes, result.roughness_stderr)
 
 
-def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tuple[float, float] | None, tile: bool,
+def _predict_spectral(heightmaps: Iterable[Heightmap], centre_mm: tuple[float, float] | None, tile: bool,
                       fidelity: str | None, tolerance: float | None, sources: Iterable[str] | None,
                       on_result: Callable[[Prediction], None] | None, curvature_mm: float | None) -> list[Prediction]:
     """``predict`` with the spectral engine: the paper's parameters, no surrogate loaded."""
@@ -433,7 +437,7 @@ def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tu
     spectral = SpectralEngine.of(centre_mm=centre_mm, tile=tile)
     names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
     results = []
-    for hm in [heightmaps] if isinstance(heightmaps, Heightmap) else heightmaps:
+    for hm in heightmaps:
         result = _spectral_prediction(next(names), spectral.simulate(hm), True, [])
         results.append(result)
         if on_result:
