@@ -29,17 +29,21 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from roughness.core.checks import integer
 from roughness.core.errors import InputError
+from roughness.core.reprs import short_repr, v_text
 from roughness.core.hashing import digest, file_sha256
 from roughness.models import MODELS_DIR
 from roughness.surface.heightmap import Heightmap, heightmaps_of
 
 from .classical import MEASURES, footprint
+
+if TYPE_CHECKING:
+    from roughness.surrogate.calibration import Placement
 
 FEM_FIDELITIES = ("coarse", "default", "fine", "converged")
 PREDICT_ENGINES = ("surrogate", "spectral", "fem", "auto")
@@ -301,11 +305,21 @@ class Prediction:
     fidelity: str  # FEM fidelity of the engine's scale (for the surrogate: of its training labels)
     in_domain: bool
     seconds: float  # wall time spent on this input (batched surrogate time is shared out)
-    placement: object  # roughness.surrogate.calibration.Placement on the standard scale
+    placement: Placement  # on the standard scale of its engine and fidelity
     domain_notes: list[str] = field(default_factory=list)
     roughness_stderr: float | None = None  # FEM: Monte Carlo standard error of V; surrogate: not estimated yet
     roughness_std: float | None = None  # surrogate ensemble: spread of V over its members; None: not estimated
     discretization_error: float | None = None  # FEM: estimated relative error of V from the mesh
+
+    def __repr__(self) -> str:
+        v = v_text(self.roughness, self.roughness_stderr)
+        if self.roughness_std is not None:
+            v += f" (ensemble spread {self.roughness_std:.2g})"
+        engine = self.engine if self.fidelity == self.engine else f"{self.engine} ({self.fidelity})"
+        return short_repr(self, repr(self.source), v, engine,
+                          "in domain" if self.in_domain else "out of domain",
+                          self.placement.describe(), f"{len(self.domain_notes)} note(s)"
+                          if self.domain_notes else "")
 
     def as_dict(self) -> dict:
         return {"input": self.source, "roughness": self.roughness, "roughness_stderr": self.roughness_stderr,

@@ -13,6 +13,7 @@ import numpy as np
 
 from roughness.core.errors import InputError, SimulationError
 from roughness.core.hashing import canonical_json
+from roughness.core.reprs import short_repr, v_text
 
 from . import mesh as meshing
 from .config import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES, BlockSpec, SimConfig
@@ -83,6 +84,12 @@ class Result:
     discretization_error: float | None = None
     ladder: list = field(default_factory=list)
     contact_check: ContactCheck | None = None
+
+    def __repr__(self) -> str:
+        return short_repr(self, v_text(self.roughness, self.roughness_stderr), f"fem ({self.config.fidelity})",
+                          "converged" if self.converged else "NOT converged", f"contact {self.contact_fraction:.2f}",
+                          f"indentation {self.indentation_mm:.3g} mm", f"{self.nodes:,} nodes", f"{self.seconds:.2f} s",
+                          f"{len(self.notes)} note(s)" if self.notes else "")
 
     def summary(self) -> dict:
         """The scalars, contact history, notes and main settings, as plain Python types (JSON-ready)."""

@@ -35,6 +35,7 @@ import numpy as np
 
 from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
+from roughness.core.reprs import short_repr
 from roughness.core.limits import MAX_WINDOWS, MAX_WORKING_VALUES, check_size
 from roughness.surface.heightmap import Heightmap
 
@@ -68,6 +69,11 @@ class Homogeneity:
     mean_roughness: float
     floor: float = 0.0  # V of the standard scale's floor
     below_scale: int = 0  # windows whose V is below the floor
+
+    def __repr__(self) -> str:
+        spread = "" if self.range_jnd is None else f"10-90% range {self.range_jnd:.2f} JND"
+        return short_repr(self, self.verdict, f"{len(self.roughness)} windows of {self.window_mm:g} mm",
+                          f"mean V {self.mean_roughness:.4g}", spread, self.engine)
 
     @property
     def verdict(self) -> str:

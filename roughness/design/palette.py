@@ -24,6 +24,7 @@ import numpy as np
 
 from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
+from roughness.core.reprs import short_repr, v_text
 from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator, Verified, jnd_between
@@ -43,6 +44,10 @@ class Member:
     surrogate_roughness: float
     recipe: dict  # how it was made: family, knob and factor, or the source file
 
+    def __repr__(self) -> str:
+        return short_repr(self, repr(self.name), v_text(self.fem.roughness, self.fem.roughness_stderr),
+                          f"lambda {self.fem.equivalent_lambda_mm:.3f} mm", repr(self.heightmap))
+
 
 @dataclass(frozen=True)
 class Palette:
@@ -52,6 +57,11 @@ class Palette:
     source: str
     notes: tuple[str, ...] = field(default=())
     printing: dict = field(default_factory=dict)  # --printer: the profile and each member's digital and printed V
+
+    def __repr__(self) -> str:
+        members = ", ".join(f"{m.name} V {m.fem.roughness:.4g}" for m in self.members)
+        return short_repr(self, f"{len(self.members)} members [{members}]", f"closest pair {self.closest_jnd:.2f} JND",
+                          f"min {self.min_jnd:g} JND", "verified" if self.verified else "NOT verified")
 
     @property
     def closest_jnd(self) -> float:

@@ -28,6 +28,7 @@ from scipy import ndimage
 
 from roughness.core.checks import non_negative, positive
 from roughness.core.errors import InputError
+from roughness.core.reprs import short_repr
 from roughness.core.limits import MAX_IMAGE_PIXELS, MAX_MAP_POSITIONS, MAX_PLATE_PIXELS, check_size
 from roughness.surface.heightmap import Heightmap
 
@@ -64,6 +65,12 @@ class TactilePlate:
     strain: np.ndarray | None = None  # fluctuation of lambda3 mosaic (FEM), on strain_axis_mm
     strain_extent_mm: tuple[float, float, float, float] | None = None
     notes: tuple[str, ...] = field(default=())
+
+    def __repr__(self) -> str:
+        regions = ", ".join(f"{hex_colour(r.colour)} {r.texture}" for r in self.regions)
+        return short_repr(self, repr(self.heightmap), f"{len(self.regions)} regions [{regions}]",
+                          "strain image" if self.strain is not None else "", f"{len(self.notes)} note(s)"
+                          if self.notes else "")
 
     def distances_jnd(self, which: str = "plate") -> np.ndarray:
         """Signed pairwise distances of the regions (JND): on the plate's map ("plate") or of the textures (FEM)."""

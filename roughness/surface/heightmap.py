@@ -13,6 +13,7 @@ import numpy as np
 
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
+from roughness.core.reprs import short_repr, shape_text, v_text
 from roughness.core.limits import MAX_COORDINATE_MM, MAX_HEIGHT_MM, MAX_HEIGHTMAP_PIXELS, MIN_PIXEL_MM, check_size
 
 TOLERANCE_MM = 1e-9
@@ -31,6 +32,12 @@ class Heightmap:
     def __post_init__(self) -> None:
         object.__setattr__(self, "heights", _checked_heights(self.heights))
         object.__setattr__(self, "pixel_mm", pixel_size(self.pixel_mm))
+
+    def __repr__(self) -> str:
+        h = self.heights
+        width, height = self.size_mm
+        return short_repr(self, f"{shape_text(self.shape)} px", f"pixel {self.pixel_mm:g} mm",
+                          f"{width:g} x {height:g} mm", f"heights {h.min():.4g}..{h.max():.4g} mm")
 
     @property
     def shape(self) -> tuple[int, int]:
