@@ -21,6 +21,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load
     from roughness.core.errors import InputError, SimulationError
     from roughness.dataset.store import open_dataset
     from roughness.dataset.textures import named_texture, standard_texture
+    from roughness.design.api import homogeneity, palette, tactile_image, tune
     from roughness.engines import Prediction, predict
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Result, Simulator
@@ -56,6 +57,10 @@ _HOMES = {
     "standard_texture": "roughness.dataset.textures",
     "named_texture": "roughness.dataset.textures",
     "open_dataset": "roughness.dataset.store",
+    "tune": "roughness.design.api",
+    "palette": "roughness.design.api",
+    "tactile_image": "roughness.design.api",
+    "homogeneity": "roughness.design.api",
 }
 
 # subpackages offered to tab completion, imported on first use like the names above

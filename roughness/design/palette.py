@@ -19,16 +19,21 @@ import math
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
+from roughness.core.figures import new_figure, save_figure
 from roughness.core.reprs import short_repr, v_text
 from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator, Verified, jnd_between
 from .tune import FACTOR_RANGE, GRID, TOLERANCE_JND, scaled, target_of, tune
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 DEFAULT_FAMILY = "standard-1.0"
 MARGIN_JND = 0.2  # targets stay this far inside the reachable range (room for the FEM's correction)
@@ -210,17 +215,17 @@ def folder_palette(candidates: list[tuple[str, Heightmap]], k: int, min_jnd: flo
     return Palette(tuple(members), min_jnd, _distances(members), f"{len(candidates)} candidates")
 
 
-def save_preview(palette: Palette, path, overwrite: bool = True) -> None:
-    """PNG sheet: each member's heightmap with its FEM V and equivalent wavelength."""
-    import matplotlib
+def save_preview(palette: Palette, path: str | Path | None = None, overwrite: bool = True) -> Figure:
+    """A sheet of each member's heightmap with its FEM V and equivalent wavelength; PNG to ``path`` if given.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from roughness.core.files import atomic_write
-
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The sheet (no pyplot: the backend is left as it was).
+    """
     k = len(palette.members)
-    fig, axes = plt.subplots(1, k, figsize=(2.4 * k, 2.9), squeeze=False)
+    fig = new_figure(figsize=(2.4 * k, 2.9))
+    axes = fig.subplots(1, k, squeeze=False)
     for ax, m in zip(axes[0], palette.members):
         width, height = m.heightmap.size_mm
         ax.imshow(m.heightmap.heights, cmap="gray", extent=(0, width, height, 0))
@@ -228,8 +233,7 @@ def save_preview(palette: Palette, path, overwrite: bool = True) -> None:
         ax.set_xticks([]), ax.set_yticks([])
     fig.suptitle(f"closest pair {palette.closest_jnd:.2f} JND (FEM; asked >= {palette.min_jnd:g})", fontsize=10)
     fig.tight_layout()
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=100), overwrite)
-    plt.close(fig)
+    return save_figure(fig, path, 100, overwrite)
 
 
 def save_palette(palette: Palette, folder, stl: bool = False, base_mm: float | None = None,
