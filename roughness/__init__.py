@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load
     from roughness.dataset.textures import named_texture, standard_texture
     from roughness.design.api import homogeneity, palette, tactile_image, tune
     from roughness.engines import Prediction, predict
+    from roughness.perception.api import embed_trials, fit_embedding
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Result, Simulator
     from roughness.simulate.model import roughness as fem_roughness
@@ -61,6 +62,8 @@ _HOMES = {
     "palette": "roughness.design.api",
     "tactile_image": "roughness.design.api",
     "homogeneity": "roughness.design.api",
+    "embed_trials": "roughness.perception.api",
+    "fit_embedding": "roughness.perception.api",
 }
 
 # subpackages offered to tab completion, imported on first use like the names above
