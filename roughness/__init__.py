@@ -15,8 +15,8 @@ from __future__ import annotations
 
 from importlib import import_module
 from pathlib import Path
-from typing import TYPE_CHECKING
 
+TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (type checkers take this name as True)
 if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load on first use (``__getattr__``)
     from roughness.core.errors import InputError, SimulationError
     from roughness.dataset.store import open_dataset

@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 
 import roughness
 from roughness.core.errors import InputError
+from tests.test_packaging import installed  # noqa: F401 (the fixture: the wheel in a fresh environment)
 
 ROOT = Path(__file__).resolve().parents[1]
 LIBRARY = ("roughness", "simulate", "dataset", "surrogate", "models")  # installed as roughness.*
@@ -299,3 +300,9 @@ def test_library_code_never_selects_a_backend_or_uses_pyplot():
                  for i, line in enumerate(path.read_text().splitlines(), 1)
                  if re.search(r"matplotlib\.use\(|import matplotlib\.pyplot|from matplotlib import pyplot", line)]
     assert offenders == []
+
+
+def test_wheel_ships_the_py_typed_marker(installed):
+    from tests.test_packaging import _purelib
+
+    assert (_purelib(installed) / "roughness" / "py.typed").is_file()
