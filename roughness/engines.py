@@ -335,18 +335,46 @@ def predict(heightmaps: Heightmap | np.ndarray | Iterable[Heightmap | np.ndarray
             on_result: Callable[[Prediction], None] | None = None, max_std: float | None = None,
             curvature_mm: float | None = None, base: str = "cylinder", curvature_axis: str = "x",
             texture_along: str = "normal", pixel_mm: float | None = None) -> list[Prediction]:
-    """Predict V for each heightmap (mm) with ``engine`` (see the module docstring).
+    """Predict the roughness V (dimensionless strain variation) of each heightmap.
 
-    ``heightmaps`` is one ``Heightmap`` or 2-D NumPy array of heights (mm), or an iterable of them; arrays
-    need ``pixel_mm``, their pixel size (mm).
+    Parameters
+    ----------
+    heightmaps : Heightmap, 2-D array of heights (mm), or an iterable of them
+        The textures; arrays need ``pixel_mm``.
+    engine : {"auto", "surrogate", "spectral", "fem"}
+        See the module docstring: ``auto`` is the surrogate, climbing to the spectral engine or the FEM where
+        the input is outside its domain or too uncertain.
+    model : SurrogateModel or path, optional
+        The ONNX surrogate (default: the shipped one).
+    centre_mm : (float, float), optional
+        Centre (x, y) of the 10 mm skin footprint (mm; default: the map's centre).
+    tile : bool
+        The map is one period of a periodic texture.
+    fidelity : str, optional
+        The FEM's (default: the model's training labels'; ``converged`` refines to ``tolerance``, relative).
+    batch_size : int
+        Surrogate inputs per network call.
+    sources : iterable of str, optional
+        Names of the inputs in the results (default: ``heightmap 0``, ...).
+    on_result : callable, optional
+        Called with each ``Prediction`` as it is ready.
+    max_std : float, optional
+        Relative ensemble spread above which ``auto`` runs a physics engine (default: the model's).
+    curvature_mm, base, curvature_axis, texture_along
+        A curved base under the texture (radius in mm; ``SimConfig``'s fields): inside the ``CurvatureRange``
+        the flat-trained surrogate answers; outside it ``auto`` runs the curved FEM.
+    pixel_mm : float, optional
+        Pixel size (mm) of array inputs.
 
-    ``model`` is a ``SurrogateModel`` or the path of an ONNX model (default: the shipped one);
-    ``fidelity`` is the FEM's (default: the model's training labels'; ``converged`` refines to
-    ``tolerance``, see ``SimConfig``). ``sources`` names the inputs in the results; ``on_result`` is
-    called as each result is ready. ``max_std``: the relative spread above which ``auto`` runs the FEM
-    (ensemble models only; default: the model's). ``curvature_mm`` and the rest place the texture on a
-    curved base (``SimConfig``'s fields): inside the ``CurvatureRange`` the flat-trained surrogate
-    answers; outside it ``auto`` runs the curved FEM and ``surrogate`` answers with a note.
+    Returns
+    -------
+    list of Prediction
+        One per input, in order: V, its error, engine, domain and place on the standard scale.
+
+    Raises
+    ------
+    InputError
+        A bad option or input (an array without ``pixel_mm``, NaN/Inf heights, not 2-D).
     """
     from roughness.surrogate.calibration import load_scale
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel

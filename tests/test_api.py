@@ -306,3 +306,19 @@ def test_wheel_ships_the_py_typed_marker(installed):
     from tests.test_packaging import _purelib
 
     assert (_purelib(installed) / "roughness" / "py.typed").is_file()
+
+
+def test_fem_takes_an_array_with_its_pixel_size(texture, monkeypatch):
+    from roughness.simulate.model import Simulator
+
+    seen = []
+    monkeypatch.setattr(Simulator, "solve", lambda self, hm, *args, **kwargs: seen.append(hm) or "solved")
+    simulator = Simulator(roughness.SimConfig(fidelity="coarse"))
+    assert roughness.fem_roughness(texture.heights, pixel_mm=0.05, simulator=simulator, estimate_error=False) == "solved"
+    [hm] = seen  # the array became the same Heightmap
+    assert np.array_equal(hm.heights, texture.heights) and hm.pixel_mm == texture.pixel_mm
+    for heights, kwargs, parameter in ((texture.heights, {}, "pixel_mm"), (np.zeros((2, 40, 40)), {"pixel_mm": 0.05},
+                                                                          "heightmap")):
+        with pytest.raises(InputError) as err:
+            roughness.fem_roughness(heights, simulator=simulator, **kwargs)
+        assert err.value.parameter == parameter
