@@ -6,7 +6,12 @@ no FEM stack and no torch)::
     import roughness
     hm = roughness.load_heightmap("texture.png", pixel_mm=0.05, height_mm=1.0)
     [p] = roughness.predict(hm)                  # surrogate, FEM where out of domain
-    r = roughness.fem_roughness(hm)              # FEM reference: r.roughness, r.standard_error
+    r = roughness.fem_roughness(hm)              # FEM reference: r.roughness, r.roughness_stderr
+    [q] = roughness.predict(heights, pixel_mm=0.05)  # any 2-D array of heights (mm) with its pixel size (mm)
+
+Design tools and perception analysis with plain arguments: ``tune``, ``palette``, ``tactile_image``,
+``homogeneity``, ``embed_trials``, ``fit_embedding``. Plot functions return ``matplotlib.figure.Figure``
+objects and never change the backend.
 
 Subpackages: ``roughness.simulate`` (FEM), ``roughness.dataset`` (textures, HDF5 datasets),
 ``roughness.surrogate`` (CNN, ONNX), ``roughness.models`` (shipped models).
@@ -83,7 +88,6 @@ def __getattr__(name: str) -> object:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     module, _, attr = _HOMES[name].partition(":")
     return getattr(import_module(module), attr or name)
-
 
 
 def __dir__() -> list[str]:
