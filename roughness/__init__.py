@@ -6,7 +6,12 @@ no FEM stack and no torch)::
     import roughness
     hm = roughness.load_heightmap("texture.png", pixel_mm=0.05, height_mm=1.0)
     [p] = roughness.predict(hm)                  # surrogate, FEM where out of domain
-    r = roughness.fem_roughness(hm)              # FEM reference: r.roughness, r.standard_error
+    r = roughness.fem_roughness(hm)              # FEM reference: r.roughness, r.roughness_stderr
+    [q] = roughness.predict(heights, pixel_mm=0.05)  # any 2-D array of heights (mm) with its pixel size (mm)
+
+Design tools and perception analysis with plain arguments: ``tune``, ``palette``, ``tactile_image``,
+``homogeneity``, ``embed_trials``, ``fit_embedding``. Plot functions return ``matplotlib.figure.Figure``
+objects and never change the backend.
 
 Subpackages: ``roughness.simulate`` (FEM), ``roughness.dataset`` (textures, HDF5 datasets),
 ``roughness.surrogate`` (CNN, ONNX), ``roughness.models`` (shipped models).
@@ -15,6 +20,23 @@ from __future__ import annotations
 
 from importlib import import_module
 from pathlib import Path
+
+TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (type checkers take this name as True)
+if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load on first use (``__getattr__``)
+    from roughness.core.errors import InputError, SimulationError
+    from roughness.dataset.store import open_dataset
+    from roughness.dataset.textures import named_texture, standard_texture
+    from roughness.design.api import homogeneity, palette, tactile_image, tune
+    from roughness.engines import Prediction, predict
+    from roughness.perception.api import embed_trials, fit_embedding
+    from roughness.simulate.config import SimConfig
+    from roughness.simulate.model import Result, Simulator
+    from roughness.simulate.model import roughness as fem_roughness
+    from roughness.surface.heightmap import Heightmap, as_heightmap
+    from roughness.surface.io import load_heightmap, save_heightmap
+    from roughness.surrogate.calibration import StandardScale, load_scale
+
+    __version__: str
 
 _SOURCE_ROOT = Path(__file__).resolve().parents[1]
 if (_SOURCE_ROOT / "pyproject.toml").is_file() and (_SOURCE_ROOT / "simulate" / "__init__.py").is_file():
@@ -25,6 +47,7 @@ if (_SOURCE_ROOT / "pyproject.toml").is_file() and (_SOURCE_ROOT / "simulate" / 
 
 _HOMES = {
     "Heightmap": "roughness.surface.heightmap",
+    "as_heightmap": "roughness.surface.heightmap",
     "InputError": "roughness.core.errors",
     "SimulationError": "roughness.core.errors",
     "load_heightmap": "roughness.surface.io",
@@ -40,7 +63,16 @@ _HOMES = {
     "standard_texture": "roughness.dataset.textures",
     "named_texture": "roughness.dataset.textures",
     "open_dataset": "roughness.dataset.store",
+    "tune": "roughness.design.api",
+    "palette": "roughness.design.api",
+    "tactile_image": "roughness.design.api",
+    "homogeneity": "roughness.design.api",
+    "embed_trials": "roughness.perception.api",
+    "fit_embedding": "roughness.perception.api",
 }
+
+# subpackages offered to tab completion, imported on first use like the names above
+_SUBPACKAGES = ("dataset", "design", "perception", "simulate", "surface", "surrogate")
 
 __all__ = sorted(_HOMES) + ["__version__"]
 
@@ -50,8 +82,15 @@ def __getattr__(name: str) -> object:
         from .core.version import package_version
 
         return package_version()
+    if name in _SUBPACKAGES:
+        return import_module(f"{__name__}.{name}")
     if name not in _HOMES:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     module, _, attr = _HOMES[name].partition(":")
     return getattr(import_module(module), attr or name)
 
+
+def __dir__() -> list[str]:
+    """The public API beside the module's own attributes, for tab completion and ``help()``."""
+    own = {name for name in globals() if name.startswith("__")}
+    return sorted(own | set(__all__) | set(_SUBPACKAGES))

@@ -29,18 +29,22 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from roughness.core.checks import integer
 from roughness.core.errors import InputError
+from roughness.core.reprs import short_repr, v_text
 from roughness.core.hashing import digest, file_sha256
 from roughness.core.provenance import Provenance, make_provenance
 from roughness.models import MODELS_DIR
-from roughness.surface.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap, heightmaps_of
 
 from .classical import MEASURES, footprint
+
+if TYPE_CHECKING:
+    from roughness.surrogate.calibration import Placement
 
 FEM_FIDELITIES = ("coarse", "default", "fine", "converged")
 PREDICT_ENGINES = ("surrogate", "spectral", "fem", "auto")
@@ -300,12 +304,22 @@ class Prediction:
     fidelity: str  # FEM fidelity of the engine's scale (for the surrogate: of its training labels)
     in_domain: bool
     seconds: float  # wall time spent on this input (batched surrogate time is shared out)
-    placement: object  # roughness.surrogate.calibration.Placement on the standard scale
+    placement: Placement  # on the standard scale of its engine and fidelity
     domain_notes: list[str] = field(default_factory=list)
     roughness_stderr: float | None = None  # FEM: Monte Carlo standard error of V; surrogate: not estimated yet
     roughness_std: float | None = None  # surrogate ensemble: spread of V over its members; None: not estimated
     discretization_error: float | None = None  # FEM: estimated relative error of V from the mesh
     provenance: Provenance | None = None  # tool version, model, engine, configuration digest
+
+    def __repr__(self) -> str:
+        v = v_text(self.roughness, self.roughness_stderr)
+        if self.roughness_std is not None:
+            v += f" (ensemble spread {self.roughness_std:.2g})"
+        engine = self.engine if self.fidelity == self.engine else f"{self.engine} ({self.fidelity})"
+        return short_repr(self, repr(self.source), v, engine,
+                          "in domain" if self.in_domain else "out of domain",
+                          self.placement.describe(), f"{len(self.domain_notes)} note(s)"
+                          if self.domain_notes else "")
 
     def as_dict(self) -> dict:
         return {"input": self.source, "roughness": self.roughness, "roughness_stderr": self.roughness_stderr,
@@ -315,22 +329,53 @@ class Prediction:
                 "provenance": None if self.provenance is None else self.provenance.as_dict()}
 
 
-def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
+def predict(heightmaps: Heightmap | np.ndarray | Iterable[Heightmap | np.ndarray], engine: str = "auto",
             model: object | str | Path | None = None, centre_mm: tuple[float, float] | None = None,
             tile: bool = False, fidelity: str | None = None, tolerance: float | None = None, batch_size: int = 256,
             sources: Iterable[str] | None = None,
             on_result: Callable[[Prediction], None] | None = None, max_std: float | None = None,
             curvature_mm: float | None = None, base: str = "cylinder", curvature_axis: str = "x",
-            texture_along: str = "normal") -> list[Prediction]:
-    """Predict V for each heightmap (mm) with ``engine`` (see the module docstring).
+            texture_along: str = "normal", pixel_mm: float | None = None) -> list[Prediction]:
+    """Predict the roughness V (dimensionless strain variation) of each heightmap.
 
-    ``model`` is a ``SurrogateModel`` or the path of an ONNX model (default: the shipped one);
-    ``fidelity`` is the FEM's (default: the model's training labels'; ``converged`` refines to
-    ``tolerance``, see ``SimConfig``). ``sources`` names the inputs in the results; ``on_result`` is
-    called as each result is ready. ``max_std``: the relative spread above which ``auto`` runs the FEM
-    (ensemble models only; default: the model's). ``curvature_mm`` and the rest place the texture on a
-    curved base (``SimConfig``'s fields): inside the ``CurvatureRange`` the flat-trained surrogate
-    answers; outside it ``auto`` runs the curved FEM and ``surrogate`` answers with a note.
+    Parameters
+    ----------
+    heightmaps : Heightmap, 2-D array of heights (mm), or an iterable of them
+        The textures; arrays need ``pixel_mm``.
+    engine : {"auto", "surrogate", "spectral", "fem"}
+        See the module docstring: ``auto`` is the surrogate, climbing to the spectral engine or the FEM where
+        the input is outside its domain or too uncertain.
+    model : SurrogateModel or path, optional
+        The ONNX surrogate (default: the shipped one).
+    centre_mm : (float, float), optional
+        Centre (x, y) of the 10 mm skin footprint (mm; default: the map's centre).
+    tile : bool
+        The map is one period of a periodic texture.
+    fidelity : str, optional
+        The FEM's (default: the model's training labels'; ``converged`` refines to ``tolerance``, relative).
+    batch_size : int
+        Surrogate inputs per network call.
+    sources : iterable of str, optional
+        Names of the inputs in the results (default: ``heightmap 0``, ...).
+    on_result : callable, optional
+        Called with each ``Prediction`` as it is ready.
+    max_std : float, optional
+        Relative ensemble spread above which ``auto`` runs a physics engine (default: the model's).
+    curvature_mm, base, curvature_axis, texture_along
+        A curved base under the texture (radius in mm; ``SimConfig``'s fields): inside the ``CurvatureRange``
+        the flat-trained surrogate answers; outside it ``auto`` runs the curved FEM.
+    pixel_mm : float, optional
+        Pixel size (mm) of array inputs.
+
+    Returns
+    -------
+    list of Prediction
+        One per input, in order: V, its error, engine, domain and place on the standard scale.
+
+    Raises
+    ------
+    InputError
+        A bad option or input (an array without ``pixel_mm``, NaN/Inf heights, not 2-D).
     """
     from roughness.surrogate.calibration import load_scale
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
@@ -338,6 +383,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
     if engine not in PREDICT_ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(PREDICT_ENGINES)}", parameter="engine")
     integer("batch_size", batch_size, minimum=1)
+    heightmaps = heightmaps_of(heightmaps, pixel_mm)
     if engine == "spectral":
         return _predict_spectral(heightmaps, centre_mm, tile, fidelity, tolerance, sources, on_result, curvature_mm)
     model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
@@ -394,7 +440,7 @@ def predict(heightmaps: Heightmap | Iterable[Heightmap], engine: str = "auto",
                 on_result(result)
         batch.clear()
 
-    for hm in [heightmaps] if isinstance(heightmaps, Heightmap) else heightmaps:
+    for hm in heightmaps:
         batch.append((next(names), hm))
         if len(batch) >= batch_size:
             flush()
@@ -448,7 +494,7 @@ def _spectral_prediction(source: str, result, in_domain: bool, notes: list[str],
                       provenance=make_provenance("spectral", "spectral", identity, model))
 
 
-def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tuple[float, float] | None, tile: bool,
+def _predict_spectral(heightmaps: Iterable[Heightmap], centre_mm: tuple[float, float] | None, tile: bool,
                       fidelity: str | None, tolerance: float | None, sources: Iterable[str] | None,
                       on_result: Callable[[Prediction], None] | None, curvature_mm: float | None) -> list[Prediction]:
     """``predict`` with the spectral engine: the paper's parameters, no surrogate loaded."""
@@ -461,7 +507,7 @@ def _predict_spectral(heightmaps: Heightmap | Iterable[Heightmap], centre_mm: tu
     spectral = SpectralEngine.of(centre_mm=centre_mm, tile=tile)
     names = iter(sources) if sources is not None else (f"heightmap {i}" for i in itertools.count())
     results = []
-    for hm in [heightmaps] if isinstance(heightmaps, Heightmap) else heightmaps:
+    for hm in heightmaps:
         result = _spectral_prediction(next(names), spectral.simulate(hm), True, [], spectral.identity)
         results.append(result)
         if on_result:

@@ -10,14 +10,19 @@ import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.stats import spearmanr
 
+from roughness.core.figures import new_figure, save_figure
 from roughness.core.files import atomic_write
 from roughness.surrogate.metrics import scores
 
 from .compare import SETUP_KEY, STORED, Outcome, ResultCache, Texture
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 COLUMNS = ("engine", "kind", "n", "failures", "median_s", "p95_s", "median_rel_err", "p95_rel_err", "spearman",
            "r2_log")
@@ -127,10 +132,10 @@ MARKERS = {"fem": ("s", "FEM"), "spectral": ("D", "spectral (the skin as an infi
 LABEL_OFFSETS = [(7, 7), (7, -13), (-7, 7), (-7, -13), (7, 19), (7, -25), (-7, 19), (-7, -25), (7, 31), (7, -37)]
 
 
-def plot_pareto(rows: list[dict], reference: str, out: Path) -> None:
+def plot_pareto(rows: list[dict], reference: str, out: Path | None = None) -> Figure:
     """Median time against median error per engine: marker by kind (legend), labels placed not to overlap."""
-    plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7.5, 5))
+    fig = new_figure(figsize=(7.5, 5))
+    ax = fig.subplots()
     rows = [r for r in rows if not math.isnan(r["median_s"]) and not math.isnan(r["median_rel_err"])]
     points = [(r["median_s"], 100 * r["median_rel_err"]) for r in rows]
     for kind, (marker, name) in MARKERS.items():
@@ -147,7 +152,7 @@ def plot_pareto(rows: list[dict], reference: str, out: Path) -> None:
     ax.grid(alpha=0.3)
     fig.tight_layout()
     _place_labels(fig, ax, [label(r["engine"]) + (STORED_MARK if r.get("stored_times") else "") for r in rows], points)
-    _save(fig, out, 110)
+    return save_figure(fig, out, 110)
 
 
 def _place_labels(fig, ax, texts: list[str], points: list[tuple[float, float]]) -> None:
@@ -184,12 +189,13 @@ def label(engine: str) -> str:
     return f"{kind}:{Path(path).stem}" if kind == "surrogate" and path else engine
 
 
-def plot_scatter(scores: list[EngineScore], reference: str, out: Path) -> None:
-    plt = _pyplot()
+def plot_scatter(scores: list[EngineScore], reference: str, out: Path | None = None) -> Figure:
+    """Each engine's estimate against the reference's V, one panel per engine (log axes)."""
     shown = [s for s in scores if s.engine != reference and len(s.keys)]
     cols = min(4, max(len(shown), 1))
     rows = math.ceil(len(shown) / cols) or 1
-    fig, axes = plt.subplots(rows, cols, figsize=(3.4 * cols, 3.2 * rows), squeeze=False)
+    fig = new_figure(figsize=(3.4 * cols, 3.2 * rows))
+    axes = fig.subplots(rows, cols, squeeze=False)
     for ax, s in zip(axes.ravel(), shown):
         ax.scatter(s.reference, s.estimate, s=8, alpha=0.7)
         lo, hi = min(s.reference.min(), s.estimate.min()), max(s.reference.max(), s.estimate.max())
@@ -201,7 +207,7 @@ def plot_scatter(scores: list[EngineScore], reference: str, out: Path) -> None:
     for ax in axes.ravel()[len(shown):]:
         ax.axis("off")
     fig.tight_layout()
-    _save(fig, out, 100)
+    return save_figure(fig, out, 100)
 
 
 def family_errors(scores: list[EngineScore], families: dict[str, str], reference: str) -> dict[str, dict[str, float]]:
@@ -216,10 +222,11 @@ def family_errors(scores: list[EngineScore], families: dict[str, str], reference
     return out
 
 
-def plot_family_errors(errors: dict[str, dict[str, float]], out: Path) -> None:
-    plt = _pyplot()
+def plot_family_errors(errors: dict[str, dict[str, float]], out: Path | None = None) -> Figure:
+    """Median relative error (%) per engine and texture family (bars, log axis)."""
     families = sorted({f for e in errors.values() for f in e})
-    fig, ax = plt.subplots(figsize=(max(7, 1.1 * len(families) + 4), 4.2))
+    fig = new_figure(figsize=(max(7, 1.1 * len(families) + 4), 4.2))
+    ax = fig.subplots()
     width = 0.8 / max(len(errors), 1)
     for i, (engine, per_family) in enumerate(errors.items()):
         x = np.arange(len(families)) + i * width
@@ -228,7 +235,7 @@ def plot_family_errors(errors: dict[str, dict[str, float]], out: Path) -> None:
     ax.set(yscale="log", ylabel="median relative error (%)", title="Error by texture family")
     ax.legend(fontsize=7, bbox_to_anchor=(1.01, 1), loc="upper left")
     fig.tight_layout()
-    _save(fig, out, 110)
+    return save_figure(fig, out, 110)
 
 
 def disagreements(s: EngineScore, families: dict[str, str], count: int = 8) -> list[dict]:
@@ -254,22 +261,6 @@ def break_even(rows: list[dict], cost_core_seconds: dict | None) -> list[dict]:
                         "saving_s_per_prediction": r["median_s"] - surrogate["median_s"],
                         "predictions": math.ceil(fixed / (r["median_s"] - surrogate["median_s"]))})
     return out
-
-
-def _save(fig, path: Path, dpi: int) -> None:
-    import matplotlib.pyplot as plt
-
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=dpi))
-    plt.close(fig)
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def write_report(textures: list[Texture], outcome: Outcome, kinds: dict[str, str], reference: str,

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from roughness.core.reprs import shape_text, short_repr
+
 
 @dataclass
 class RoughnessMap:
@@ -18,6 +20,13 @@ class RoughnessMap:
     roughness: np.ndarray  # (len(y_mm), len(x_mm)) V
     in_domain: np.ndarray  # same shape, bool
     roughness_std: np.ndarray | None = None  # same shape, spread of V (ensemble models; None: a single network)
+
+    def __repr__(self) -> str:
+        s = self.summary()
+        step = "" if s["step_mm"] is None else f"step {s['step_mm']:g} mm"
+        return short_repr(self, f"{shape_text(self.roughness.shape)} positions", step,
+                          f"V {s['roughness_min']:.4g}..{s['roughness_max']:.4g} (median {s['roughness_median']:.4g})",
+                          f"{100 * s['in_domain_fraction']:.0f}% in domain")
 
     def summary(self) -> dict:
         v = self.roughness

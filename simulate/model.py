@@ -13,6 +13,7 @@ import numpy as np
 
 from roughness.core.errors import InputError, SimulationError
 from roughness.core.hashing import canonical_json
+from roughness.core.reprs import short_repr, v_text
 
 from . import mesh as meshing
 from .config import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES, BlockSpec, SimConfig
@@ -20,7 +21,7 @@ from .contact import ContactCheck, ContactError, ContactProblem, ContactResult, 
 from .curved import FLAT, BaseShape, base_surface, textured_surface
 from .elasticity import rigid_body_modes, stiffness
 from .face import ContactFace
-from roughness.surface.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap, as_heightmap
 from .linsolve import AMGCache, SolverError
 from .strain import StrainSampler
 from .variation import PairSampling, variation
@@ -83,6 +84,12 @@ class Result:
     discretization_error: float | None = None
     ladder: list = field(default_factory=list)
     contact_check: ContactCheck | None = None
+
+    def __repr__(self) -> str:
+        return short_repr(self, v_text(self.roughness, self.roughness_stderr), f"fem ({self.config.fidelity})",
+                          "converged" if self.converged else "NOT converged", f"contact {self.contact_fraction:.2f}",
+                          f"indentation {self.indentation_mm:.3g} mm", f"{self.nodes:,} nodes", f"{self.seconds:.2f} s",
+                          f"{len(self.notes)} note(s)" if self.notes else "")
 
     def summary(self) -> dict:
         """The scalars, contact history, notes and main settings, as plain Python types (JSON-ready)."""
@@ -227,15 +234,17 @@ class Simulator:
             self._blocks.move_to_end(key)
             return self._blocks[key]
 
-    def run(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False,
+    def run(self, heightmap: Heightmap | np.ndarray, centre_mm: tuple[float, float] | None = None, tile: bool = False,
             callback: Callable[[ContactRound], None] | None = None, estimate_error: bool = True,
-            **overrides) -> Result:
-        """Roughness V of ``heightmap`` under the skin footprint centred at ``centre_mm``.
+            pixel_mm: float | None = None, **overrides) -> Result:
+        """Roughness V of ``heightmap`` under the skin footprint centred at ``centre_mm`` (mm).
 
+        ``heightmap`` is a ``Heightmap`` or a 2-D array of heights (mm) with its pixel size ``pixel_mm`` (mm).
         ``overrides`` replace ``SimConfig`` fields; ``callback`` receives each contact round's statistics.
         With ``estimate_error`` (and always for fidelity ``converged``) a coarser level is solved too, for
         the discretization-error estimate (``simulate.converged``); without it, ``solve``: one level.
         """
+        heightmap = as_heightmap(heightmap, pixel_mm)
         if estimate_error or replace(self.config, **overrides).fidelity == "converged":
             from .converged import estimated
 
@@ -369,7 +378,8 @@ def _notes(config: SimConfig, state: ContactResult, heightmap: Heightmap) -> lis
 _DEFAULT = Simulator()
 
 
-def roughness(heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False,
-              simulator: Simulator | None = None, **config) -> Result:
-    """FEM roughness of a heightmap; keyword arguments override ``SimConfig`` fields."""
-    return (simulator or _DEFAULT).run(heightmap, centre_mm, tile, **config)
+def roughness(heightmap: Heightmap | np.ndarray, centre_mm: tuple[float, float] | None = None, tile: bool = False,
+              simulator: Simulator | None = None, pixel_mm: float | None = None, **config) -> Result:
+    """FEM roughness of a heightmap (or a 2-D array of heights in mm with its ``pixel_mm``, mm); keyword arguments
+    override ``SimConfig`` fields."""
+    return (simulator or _DEFAULT).run(heightmap, centre_mm, tile, pixel_mm=pixel_mm, **config)

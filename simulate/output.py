@@ -2,26 +2,33 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from roughness.core.figures import new_figure, save_figure
 from roughness.core.files import atomic_write
 
 from .elasticity import strain_tensors, vertex_strain_operator
 from .model import Block, Result
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
-def save_strain_png(result: Result, path: str | Path, overwrite: bool = True) -> None:
-    """Image of lambda3 at receptor depth and its fluctuation (strain, dimensionless)."""
-    import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def save_strain_png(result: Result, path: str | Path | None = None, overwrite: bool = True) -> Figure:
+    """Image of lambda3 at receptor depth and its fluctuation (strain, dimensionless); PNG to ``path`` if given.
 
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (no pyplot: the backend is left as it was).
+    """
     a = result.grid_axis_mm
     c = result.config
     extent = (a[0], a[-1], a[0], a[-1])
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.6), constrained_layout=True)
+    fig = new_figure(figsize=(10, 4.6), layout="constrained")
+    axes = fig.subplots(1, 2)
     panels = ((result.lambda3, f"$\\lambda_3$ at {c.depth_mm} mm depth",
                "max. compressive principal strain $\\lambda_3$ (dimensionless)"),
               (result.fluctuation, "fluctuation: $\\lambda_3$ minus that of the flat texture",
@@ -32,10 +39,7 @@ def save_strain_png(result: Result, path: str | Path, overwrite: bool = True) ->
         fig.colorbar(im, ax=ax, shrink=0.85, label=label)
     fig.suptitle(f"FEM ({c.fidelity} fidelity, h = {c.h_contact_mm} mm): V = {result.roughness:.4g} ± "
                  f"{result.roughness_stderr:.2g}   (F = {c.force_n} N, contact {100 * result.contact_fraction:.0f}%)")
-    try:
-        atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110, format="png"), overwrite)
-    finally:
-        plt.close(fig)
+    return save_figure(fig, path, 110, overwrite)
 
 
 def save_vtu(result: Result, block: Block, path: str | Path, overwrite: bool = True) -> None:

@@ -17,10 +17,12 @@ import os
 from collections import Counter
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from roughness.core.errors import InputError
+from roughness.core.figures import new_figure, save_figure
 from roughness.core.files import atomic_write
 from roughness.core.hashing import file_sha256
 from roughness.core.provenance import model_id
@@ -28,6 +30,9 @@ from roughness.core.provenance import model_id
 from .metadata import ModelMetadata, onnx_metadata
 from .patch import DESCRIPTOR_NAMES, FOOTPRINT_MM
 from .predictor import DEFAULT_MODEL
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 SPLIT_NAMES = {"train": "training", "val": "validation", "test": "held-out (unseen base textures)",
                "ood": "out-of-family"}
@@ -38,15 +43,14 @@ def read_csv(path: Path) -> list[dict]:
         return list(csv.DictReader(f))
 
 
-def plot_accuracy(rows: list[dict], holdout: str | None, fidelity: str, out: Path) -> None:
+def plot_accuracy(rows: list[dict], holdout: str | None, fidelity: str, out: Path | None = None) -> Figure:
+    """Surrogate V against FEM V on the held-out and out-of-family splits (log axes); PNG to ``out`` if given."""
     import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.8), sharex=True, sharey=True)
+    fig = new_figure(figsize=(10, 4.8))
+    axes = fig.subplots(1, 2, sharex=True, sharey=True)
     families = sorted({r["family"] for r in rows})
-    colours = dict(zip(families, plt.cm.tab20(np.arange(len(families)) % 20)))  # the v2 data has 14 families
+    colours = dict(zip(families, matplotlib.colormaps["tab20"](np.arange(len(families)) % 20)))  # the v2 data has 14 families
     for ax, split in zip(axes, ("test", "ood")):
         part = [r for r in rows if r["split"] == split and float(r["V_fem"]) > 0]
         for family in families:
@@ -63,25 +67,20 @@ def plot_accuracy(rows: list[dict], holdout: str | None, fidelity: str, out: Pat
             ax.legend(fontsize=7, loc="upper left")
     fig.suptitle(f"Surrogate vs FEM (held-out family: {holdout})")
     fig.tight_layout()
-    atomic_write(out, lambda tmp: fig.savefig(tmp, dpi=110))
-    plt.close(fig)
+    return save_figure(fig, out, 110)
 
 
-def plot_history(rows: list[dict], out: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def plot_history(rows: list[dict], out: Path | None = None) -> Figure:
+    """Training and validation loss per epoch; PNG to ``out`` if given."""
     epoch = [int(r["epoch"]) for r in rows]
-    fig, ax = plt.subplots(figsize=(6, 3.6))
+    fig = new_figure(figsize=(6, 3.6))
+    ax = fig.subplots()
     ax.semilogy(epoch, [float(r["train_loss"]) for r in rows], label="training (augmented)")
     ax.semilogy(epoch, [float(r["val_loss"]) for r in rows], label="validation")
     ax.set(xlabel="epoch", ylabel="MSE of log(V + 0.001)", title="Training history")
     ax.legend()
     fig.tight_layout()
-    atomic_write(out, lambda tmp: fig.savefig(tmp, dpi=110))
-    plt.close(fig)
+    return save_figure(fig, out, 110)
 
 
 def metric_table(metrics: dict, names: dict) -> str:

@@ -17,6 +17,7 @@ import numpy as np
 
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
+from roughness.core.figures import new_figure, save_figure
 from roughness.core.files import atomic_write, check_output
 from roughness.core.limits import MAX_BATCH, MAX_MAP_POSITIONS, check_size
 from roughness.simulate.footprints import RoughnessMap, centre_count, centres
@@ -25,6 +26,8 @@ from roughness.surface.heightmap import Heightmap
 from .patch import batch_descriptors, footprint_patches
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from .predictor import SurrogateModel
 
 
@@ -78,25 +81,32 @@ def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 
     return RoughnessMap(xs, ys, np.concatenate(values).reshape(shape), np.array(flags).reshape(shape), spread)
 
 
-def save_map(result: RoughnessMap, path: str | Path, overwrite: bool = True) -> None:
-    """.npy: the V array (rows = y); .png: a figure with axes in mm, out-of-domain positions hatched."""
+def save_map(result: RoughnessMap, path: str | Path, overwrite: bool = True) -> Figure | None:
+    """.npy: the V array (rows = y); .png: ``map_figure`` (returned)."""
     path = Path(path)
     if path.suffix.lower() not in MAP_SUFFIXES:
         raise InputError(f"cannot write {path}: a roughness map is saved as .npy or .png", parameter="map")
     if path.suffix.lower() == ".npy":
         atomic_write(path, lambda tmp: np.save(tmp, result.roughness), overwrite)
-        return
-    import matplotlib
+        return None
+    return save_figure(map_figure(result), path, 110, overwrite)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+def map_figure(result: RoughnessMap) -> Figure:
+    """V per footprint centre with axes in mm, out-of-domain positions hatched (beside the ensemble's spread).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (no pyplot: the backend is left as it was).
+    """
     x, y = result.x_mm, result.y_mm
     half = (x[1] - x[0]) / 2 if len(x) > 1 else 0.5
     extent = (x[0] - half, x[-1] + half, y[-1] + half, y[0] - half)
     panels = [("V", result.roughness)] + ([("spread of V (ensemble std)", result.roughness_std)]
                                          if result.roughness_std is not None else [])
-    fig, axes = plt.subplots(1, len(panels), figsize=(6 * len(panels), 5), squeeze=False)
+    fig = new_figure(figsize=(6 * len(panels), 5))
+    axes = fig.subplots(1, len(panels), squeeze=False)
     for ax, (label, values) in zip(axes[0], panels):
         image = ax.imshow(values, extent=extent, cmap="magma")
         if not result.in_domain.all():
@@ -104,5 +114,4 @@ def save_map(result: RoughnessMap, path: str | Path, overwrite: bool = True) -> 
         ax.set(xlabel="x (mm)", ylabel="y (mm)", title=f"{label} per footprint centre (hatched: out of domain)")
         fig.colorbar(image, ax=ax, label=label)
     fig.tight_layout()
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110), overwrite)
-    plt.close(fig)
+    return fig

@@ -15,7 +15,8 @@ ROOT = Path(__file__).resolve().parents[1]
 GENERIC_NAMES = ("simulate", "dataset", "surrogate", "models")
 PUBLIC_API = ("Heightmap", "InputError", "SimulationError", "load_heightmap", "save_heightmap", "SimConfig",
               "Simulator", "Result", "fem_roughness", "predict", "Prediction", "StandardScale", "load_scale",
-              "standard_texture", "named_texture", "open_dataset")
+              "standard_texture", "named_texture", "open_dataset", "as_heightmap", "tune", "palette", "tactile_image",
+              "homogeneity", "embed_trials", "fit_embedding")
 
 
 def _source_copy(dest: Path) -> Path:

@@ -30,15 +30,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
+from roughness.core.figures import new_figure, save_figure
 from roughness.core.limits import MAX_WINDOWS, MAX_WORKING_VALUES, check_size
+from roughness.core.reprs import short_repr
 from roughness.surface.heightmap import Heightmap
 
 from .evaluation import ENGINES, Evaluator
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 PAPER_THRESHOLD = 1e-3  # relative variance above which the paper calls a texture inhomogeneous
 JND_RANGE = 1.0  # 10th-90th percentile range (JND) at and above which parts of a surface feel different
@@ -68,6 +75,11 @@ class Homogeneity:
     mean_roughness: float
     floor: float = 0.0  # V of the standard scale's floor
     below_scale: int = 0  # windows whose V is below the floor
+
+    def __repr__(self) -> str:
+        spread = "" if self.range_jnd is None else f"10-90% range {self.range_jnd:.2f} JND"
+        return short_repr(self, self.verdict, f"{len(self.roughness)} windows of {self.window_mm:g} mm",
+                          f"mean V {self.mean_roughness:.4g}", spread, self.engine)
 
     @property
     def verdict(self) -> str:
@@ -190,20 +202,23 @@ def homogeneity(heightmap: Heightmap, engine: str = "surrogate", window_mm: floa
                        spread, range_, mean, floor, below)
 
 
-def save_map(result: Homogeneity, heightmap: Heightmap, path, overwrite: bool = True) -> None:
-    """PNG: the heightmap in grey with each window outlined and coloured by its V."""
-    import matplotlib
+def save_map(result: Homogeneity, heightmap: Heightmap, path: str | Path | None = None,
+             overwrite: bool = True) -> Figure:
+    """The heightmap in grey with each window outlined and coloured by its V; written as PNG to ``path`` if given.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure (no pyplot: the backend is left as it was).
+    """
+    import matplotlib
     from matplotlib.patches import Rectangle
 
-    from roughness.core.files import atomic_write
-
     width, height = heightmap.size_mm
-    fig, ax = plt.subplots(figsize=(6.4, 5))
+    fig = new_figure(figsize=(6.4, 5))
+    ax = fig.subplots()
     ax.imshow(heightmap.heights, cmap="gray", extent=(0, width, height, 0))
-    cmap = plt.get_cmap("magma")
+    cmap = matplotlib.colormaps["magma"]
     lo, hi = float(result.roughness.min()), float(result.roughness.max())
     norm = matplotlib.colors.Normalize(lo, hi if hi > lo else lo + 1e-9)
     half = result.window_mm / 2
@@ -217,8 +232,7 @@ def save_map(result: Homogeneity, heightmap: Heightmap, path, overwrite: bool = 
         "all below the standard scale" if result.spread_jnd is None else
         f"relative variance {_format(result.relative_variance, '.1e')}, spread {result.spread_jnd:.2f} JND"))
     fig.tight_layout()
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=80), overwrite)
-    plt.close(fig)
+    return save_figure(fig, path, 80, overwrite)
 
 
 def _format(value: float | None, spec: str) -> str:

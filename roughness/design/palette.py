@@ -19,16 +19,22 @@ import math
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
+from roughness.core.figures import new_figure, save_figure
 from roughness.core.provenance import Provenance
+from roughness.core.reprs import short_repr, v_text
 from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator, Verified, jnd_between
 from .tune import FACTOR_RANGE, GRID, TOLERANCE_JND, scaled, target_of, tune
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 DEFAULT_FAMILY = "standard-1.0"
 MARGIN_JND = 0.2  # targets stay this far inside the reachable range (room for the FEM's correction)
@@ -44,6 +50,10 @@ class Member:
     surrogate_roughness: float
     recipe: dict  # how it was made: family, knob and factor, or the source file
 
+    def __repr__(self) -> str:
+        return short_repr(self, repr(self.name), v_text(self.fem.roughness, self.fem.roughness_stderr),
+                          f"lambda {self.fem.equivalent_lambda_mm:.3f} mm", repr(self.heightmap))
+
 
 @dataclass(frozen=True)
 class Palette:
@@ -54,6 +64,11 @@ class Palette:
     notes: tuple[str, ...] = field(default=())
     printing: dict = field(default_factory=dict)  # --printer: the profile and each member's digital and printed V
     provenance: Provenance | None = None  # what verified it (``Evaluator.provenance``)
+
+    def __repr__(self) -> str:
+        members = ", ".join(f"{m.name} V {m.fem.roughness:.4g}" for m in self.members)
+        return short_repr(self, f"{len(self.members)} members [{members}]", f"closest pair {self.closest_jnd:.2f} JND",
+                          f"min {self.min_jnd:g} JND", "verified" if self.verified else "NOT verified")
 
     @property
     def closest_jnd(self) -> float:
@@ -203,17 +218,17 @@ def folder_palette(candidates: list[tuple[str, Heightmap]], k: int, min_jnd: flo
     return Palette(tuple(members), min_jnd, _distances(members), f"{len(candidates)} candidates")
 
 
-def save_preview(palette: Palette, path, overwrite: bool = True) -> None:
-    """PNG sheet: each member's heightmap with its FEM V and equivalent wavelength."""
-    import matplotlib
+def save_preview(palette: Palette, path: str | Path | None = None, overwrite: bool = True) -> Figure:
+    """A sheet of each member's heightmap with its FEM V and equivalent wavelength; PNG to ``path`` if given.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from roughness.core.files import atomic_write
-
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The sheet (no pyplot: the backend is left as it was).
+    """
     k = len(palette.members)
-    fig, axes = plt.subplots(1, k, figsize=(2.4 * k, 2.9), squeeze=False)
+    fig = new_figure(figsize=(2.4 * k, 2.9))
+    axes = fig.subplots(1, k, squeeze=False)
     for ax, m in zip(axes[0], palette.members):
         width, height = m.heightmap.size_mm
         ax.imshow(m.heightmap.heights, cmap="gray", extent=(0, width, height, 0))
@@ -221,8 +236,7 @@ def save_preview(palette: Palette, path, overwrite: bool = True) -> None:
         ax.set_xticks([]), ax.set_yticks([])
     fig.suptitle(f"closest pair {palette.closest_jnd:.2f} JND (FEM; asked >= {palette.min_jnd:g})", fontsize=10)
     fig.tight_layout()
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=100), overwrite)
-    plt.close(fig)
+    return save_figure(fig, path, 100, overwrite)
 
 
 def save_palette(palette: Palette, folder, stl: bool = False, base_mm: float | None = None,

@@ -22,17 +22,23 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy import ndimage
 
 from roughness.core.checks import non_negative, positive
 from roughness.core.errors import InputError
+from roughness.core.figures import new_figure, save_figure
 from roughness.core.limits import MAX_IMAGE_PIXELS, MAX_MAP_POSITIONS, MAX_PLATE_PIXELS, check_size
+from roughness.core.reprs import short_repr
 from roughness.surface.heightmap import Heightmap
 
 from .colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
 from .evaluation import Evaluator, jnd_between
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 WIDTH_MM = 60.0
 PIXEL_MM = 0.1
@@ -64,6 +70,12 @@ class TactilePlate:
     strain: np.ndarray | None = None  # fluctuation of lambda3 mosaic (FEM), on strain_axis_mm
     strain_extent_mm: tuple[float, float, float, float] | None = None
     notes: tuple[str, ...] = field(default=())
+
+    def __repr__(self) -> str:
+        regions = ", ".join(f"{hex_colour(r.colour)} {r.texture}" for r in self.regions)
+        return short_repr(self, repr(self.heightmap), f"{len(self.regions)} regions [{regions}]",
+                          "strain image" if self.strain is not None else "", f"{len(self.notes)} note(s)"
+                          if self.notes else "")
 
     def distances_jnd(self, which: str = "plate") -> np.ndarray:
         """Signed pairwise distances of the regions (JND): on the plate's map ("plate") or of the textures (FEM)."""
@@ -306,34 +318,27 @@ def strain_image(plate: Heightmap, evaluator: Evaluator, progress=None
     return mosaic, (xs[0] - window / 2, xs[-1] + window / 2, ys[-1] + window / 2, ys[0] - window / 2)
 
 
-def save_figures(plate: TactilePlate, folder: Path) -> None:
-    """regions.png (the plate's relief with region outlines), roughness_map.png and, if computed, strain.png."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from roughness.core.files import atomic_write
-
+def figures(plate: TactilePlate) -> dict[str, Figure]:
+    """The plate's figures by file name: relief.png (relief with region outlines), roughness_map.png and, if
+    computed, strain.png (no pyplot: the backend is left as it was)."""
     width, height = plate.heightmap.size_mm
     extent = (0, width, height, 0)
+    size = (6.4, 6.4 * height / width + 0.8)
+    out = {}
 
-    def save(fig, name: str) -> None:
-        fig.tight_layout()
-        atomic_write(folder / name, lambda tmp: fig.savefig(tmp, dpi=90))
-        plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(6.4, 6.4 * height / width + 0.8))
+    fig = new_figure(figsize=size)
+    ax = fig.subplots()
     image = ax.imshow(plate.heightmap.heights, cmap="gray", extent=extent)
     fig.colorbar(image, ax=ax, label="height (mm)", shrink=0.8)
     ax.set(xlabel="x (mm)", ylabel="y (mm)", title="plate relief: " + ", ".join(
         f"{hex_colour(r.colour)}: {r.texture}" for r in plate.regions))
     ax.title.set_fontsize(8)
-    save(fig, "relief.png")
+    out["relief.png"] = fig
 
     x, y = plate.map_x_mm, plate.map_y_mm
     half = (x[1] - x[0]) / 2 if len(x) > 1 else 0.5
-    fig, ax = plt.subplots(figsize=(6.4, 6.4 * height / width + 0.8))
+    fig = new_figure(figsize=size)
+    ax = fig.subplots()
     image = ax.imshow(plate.roughness_map, extent=(x[0] - half, x[-1] + half, y[-1] + half, y[0] - half),
                       cmap="magma")
     ax.contour((np.arange(plate.labels.shape[1]) + 0.5) * plate.heightmap.pixel_mm,
@@ -343,14 +348,23 @@ def save_figures(plate: TactilePlate, folder: Path) -> None:
            title="predicted V per footprint centre (surrogate); cyan: region edges")
     ax.title.set_fontsize(9)
     fig.colorbar(image, ax=ax, label="V", shrink=0.8)
-    save(fig, "roughness_map.png")
+    out["roughness_map.png"] = fig
 
     if plate.strain is not None:
-        fig, ax = plt.subplots(figsize=(6.4, 6.4 * height / width + 0.8))
+        fig = new_figure(figsize=size)
+        ax = fig.subplots()
         limit = float(np.percentile(np.abs(plate.strain), 99))
         image = ax.imshow(plate.strain, extent=plate.strain_extent_mm, cmap="RdBu_r", vmin=-limit, vmax=limit)
         ax.set(xlim=(0, width), ylim=(height, 0), xlabel="x (mm)", ylabel="y (mm)",
                title="strain fluctuation at the receptors (FEM, per 8 mm window)")
         ax.title.set_fontsize(9)
         fig.colorbar(image, ax=ax, label="strain", shrink=0.8)
-        save(fig, "strain.png")
+        out["strain.png"] = fig
+    for fig in out.values():
+        fig.tight_layout()
+    return out
+
+
+def save_figures(plate: TactilePlate, folder: Path) -> dict[str, Figure]:
+    """``figures(plate)`` written into ``folder`` (PNG); returns them."""
+    return {name: save_figure(fig, Path(folder) / name, 90) for name, fig in figures(plate).items()}

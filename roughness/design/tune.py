@@ -26,6 +26,7 @@ import numpy as np
 
 from roughness.core.checks import in_range, integer, positive
 from roughness.core.errors import InputError
+from roughness.core.reprs import short_repr, v_text
 from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator, Verified, jnd_between, roughness_of_lambda
@@ -93,6 +94,13 @@ class TuneResult:
     tolerance_jnd: float
     search_engine: str  # "surrogate", or "spectral" where the surrogate cannot reach the target
     notes: tuple[str, ...] = field(default=())
+
+    def __repr__(self) -> str:
+        a = self.achieved
+        return short_repr(self, f"{self.by} x {self.factor:.4g}", f"target {self.target.describe()}",
+                          f"achieved {v_text(a.roughness, a.roughness_stderr)}, lambda {a.equivalent_lambda_mm:.3f} mm",
+                          f"{self.jnd_error:+.2f} ± {self.jnd_stderr:.2f} JND", "reached" if self.reached else
+                          "NOT reached", f"{len(self.steps)} verification(s)", repr(self.heightmap))
 
     @property
     def reached(self) -> bool:

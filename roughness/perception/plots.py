@@ -1,36 +1,37 @@
-"""Figures in the style of the paper's Figs. 9, 10, 17 and 18 (matplotlib, Agg backend)."""
+"""Figures in the style of the paper's Figs. 9, 10, 17 and 18.
+
+Each function returns a ``matplotlib.figure.Figure`` (made without pyplot: a notebook's backend is left as
+it was) and writes it as PNG to ``path`` if one is given.
+"""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughness.core.files import atomic_write
+from roughness.core.figures import new_figure, save_figure
 
 from .analysis import EmbeddingAnalysis
 from .fit import Fit
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
 
 def _figure(width: float = 6.4, height: float = 4.0, cols: int = 1):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, cols, figsize=(width, height))
-    return plt, fig, axes
+    fig = new_figure(figsize=(width, height))
+    return fig, fig.subplots(1, cols)
 
 
-def _save(plt, fig, path: str | Path) -> Path:
+def _save(fig: Figure, path: str | Path | None) -> Figure:
     fig.tight_layout()
-    out = atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=110))
-    plt.close(fig)
-    return out
+    return save_figure(fig, path, 110)
 
 
-def plot_embedding(analysis: EmbeddingAnalysis, path: str | Path) -> Path:
+def plot_embedding(analysis: EmbeddingAnalysis, path: str | Path | None = None) -> Figure:
     """Fig. 9: every stimulus on the 1-D perceptual axis with its bootstrap 5-95% interval."""
-    plt, fig, ax = _figure(6.4, max(3.0, 0.17 * len(analysis.stimuli) + 1.0))
+    fig, ax = _figure(6.4, max(3.0, 0.17 * len(analysis.stimuli) + 1.0))
     order = np.argsort(analysis.coordinate)
     y = np.arange(len(order))
     x = analysis.coordinate[order]
@@ -44,12 +45,12 @@ def plot_embedding(analysis: EmbeddingAnalysis, path: str | Path) -> Path:
     ax.set_ylabel("stimulus")
     ax.set_title(f"1-D Thurstone scale (start: SDP at lambda = {analysis.fit.lam:.3g})" if analysis.scale == "thurstone"
                  else f"1-D embedding, lambda = {analysis.fit.lam:.3g}")
-    return _save(plt, fig, path)
+    return _save(fig, path)
 
 
-def plot_cross_validation(analysis: EmbeddingAnalysis, path: str | Path) -> Path:
+def plot_cross_validation(analysis: EmbeddingAnalysis, path: str | Path | None = None) -> Figure:
     """Fig. 10: train and held-out triplet error against lambda (left), eigenvalue spectrum (right)."""
-    plt, fig, (left, right) = _figure(9.0, 3.6, cols=2)
+    fig, (left, right) = _figure(9.0, 3.6, cols=2)
     if analysis.cv is not None:
         cv = analysis.cv
         sem = cv.test_error.std(axis=1, ddof=1) / np.sqrt(cv.test_error.shape[1])
@@ -67,12 +68,12 @@ def plot_cross_validation(analysis: EmbeddingAnalysis, path: str | Path) -> Path
     right.set_xlabel("dimension")
     right.set_ylabel("eigenvalue / trace")
     right.set_title("spectrum of the embedding")
-    return _save(plt, fig, path)
+    return _save(fig, path)
 
 
-def plot_fit(fit: Fit, path: str | Path) -> Path:
+def plot_fit(fit: Fit, path: str | Path | None = None) -> Figure:
     """Fig. 17: V of every stimulus against its perceptual coordinate (excluded stimuli hollow)."""
-    plt, fig, ax = _figure(6.0, 4.5)
+    fig, ax = _figure(6.0, 4.5)
     v = fit.roughness
     se = np.array([s.roughness_stderr for s in fit.values])
     if np.all(np.isfinite(fit.low)):
@@ -93,13 +94,13 @@ def plot_fit(fit: Fit, path: str | Path) -> Path:
     ax.set_xlabel("perceptual coordinate (embedding units)")
     ax.set_ylabel(f"strain variation V ({fit.values[0].engine}; dimensionless)")
     ax.legend(fontsize=8)
-    return _save(plt, fig, path)
+    return _save(fig, path)
 
 
-def plot_sampling(fit: Fit, path: str | Path) -> Path:
+def plot_sampling(fit: Fit, path: str | Path | None = None) -> Figure:
     """Fig. 18: Pearson R over the pair sampling (d, r), and over force if re-fitted."""
     cols = 2 if fit.forces else 1
-    plt, fig, axes = _figure(5.2 * cols, 4.0, cols=cols)
+    fig, axes = _figure(5.2 * cols, 4.0, cols=cols)
     axes = np.atleast_1d(axes)
     s = fit.sampling
     ax = axes[0]
@@ -124,4 +125,4 @@ def plot_sampling(fit: Fit, path: str | Path) -> Path:
         axes[1].set_xlabel("normal force (N)")
         axes[1].set_ylabel("Pearson R of V with the embedding")
         axes[1].set_title("R over force")
-    return _save(plt, fig, path)
+    return _save(fig, path)

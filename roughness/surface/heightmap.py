@@ -6,12 +6,14 @@ Pixel (i, j) holds the height at x = (j + 0.5) * pixel_mm, y = (i + 0.5) * pixel
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
 
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
+from roughness.core.reprs import short_repr, shape_text, v_text
 from roughness.core.limits import MAX_COORDINATE_MM, MAX_HEIGHT_MM, MAX_HEIGHTMAP_PIXELS, MIN_PIXEL_MM, check_size
 
 TOLERANCE_MM = 1e-9
@@ -30,6 +32,12 @@ class Heightmap:
     def __post_init__(self) -> None:
         object.__setattr__(self, "heights", _checked_heights(self.heights))
         object.__setattr__(self, "pixel_mm", pixel_size(self.pixel_mm))
+
+    def __repr__(self) -> str:
+        h = self.heights
+        width, height = self.size_mm
+        return short_repr(self, f"{shape_text(self.shape)} px", f"pixel {self.pixel_mm:g} mm",
+                          f"{width:g} x {height:g} mm", f"heights {h.min():.4g}..{h.max():.4g} mm")
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -223,3 +231,56 @@ def _indices_inside(lo_mm: float, hi_mm: float, pixel_mm: float, n: int, periodi
 def _mm(value: float) -> str:
     """Length for messages: one decimal (as in "10.0") unless more digits are needed."""
     return f"{value:.1f}" if round(value, 1) == value else f"{value:g}"
+
+
+def as_heightmap(heights: Heightmap | np.ndarray, pixel_mm: float | None = None,
+                 parameter: str = "heightmap") -> Heightmap:
+    """A ``Heightmap`` from a ``Heightmap`` or a 2-D array of heights (mm) on square pixels of ``pixel_mm`` (mm).
+
+    Parameters
+    ----------
+    heights : Heightmap or array_like, shape (ny, nx)
+        Heights in mm; row index -> y, column -> x.
+    pixel_mm : float, optional
+        Pixel size in mm: required for an array; for a ``Heightmap`` it must match its own (or be None).
+    parameter : str
+        The caller's name for ``heights``, used in error messages.
+
+    Raises
+    ------
+    InputError
+        An array without ``pixel_mm``, a pixel size that contradicts the heightmap's, anything other than
+        a finite 2-D array of real numbers.
+    """
+    if isinstance(heights, Heightmap):
+        if pixel_mm is not None and not math.isclose(pixel_size(pixel_mm), heights.pixel_mm, rel_tol=1e-9):
+            raise InputError(f"pixel_mm={pixel_mm:g} contradicts the heightmap's own pixel of {heights.pixel_mm:g} mm; "
+                             "give pixel_mm only with an array", parameter="pixel_mm")
+        return heights
+    if isinstance(heights, (str, bytes)) or not hasattr(heights, "__array__") and not isinstance(heights, (list, tuple)):
+        raise InputError(f"{parameter} must be a Heightmap or a 2-D array of heights in mm, got "
+                         f"{type(heights).__name__}", parameter=parameter)
+    if pixel_mm is None:
+        raise InputError(f"{parameter} is an array of heights (mm) without a pixel size: pass pixel_mm= (mm per "
+                         "pixel), or a Heightmap", parameter="pixel_mm")
+    try:
+        return Heightmap(np.asarray(heights), pixel_mm)
+    except InputError as err:
+        err.parameter = err.parameter or parameter
+        raise
+
+
+def heightmaps_of(heightmaps: Heightmap | np.ndarray | Iterable[Heightmap | np.ndarray], pixel_mm: float | None = None,
+                  parameter: str = "heightmaps") -> Iterator[Heightmap]:
+    """Each of one heightmap (a ``Heightmap`` or a 2-D array) or an iterable of them as a ``Heightmap`` (lazily).
+
+    An array is always one map (a 3-D array is refused, not split); ``pixel_mm`` as in ``as_heightmap``.
+    """
+    if isinstance(heightmaps, (Heightmap, np.ndarray)):
+        yield as_heightmap(heightmaps, pixel_mm, parameter)
+        return
+    if isinstance(heightmaps, (str, bytes)) or not isinstance(heightmaps, Iterable):
+        raise InputError(f"{parameter} must be a Heightmap, a 2-D array of heights (mm) or an iterable of them, got "
+                         f"{type(heightmaps).__name__}", parameter=parameter)
+    for heightmap in heightmaps:
+        yield as_heightmap(heightmap, pixel_mm, parameter)

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from roughness.core.errors import InputError
+from roughness.core.reprs import short_repr, v_text
 
 from ..config import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES, SimConfig
 from roughness.surface.heightmap import Heightmap
@@ -59,6 +60,12 @@ class SpectralResult:
     # error estimate, no nodes left unresolved by a converged solve and no ladder of levels
     discretization_error: float | None = None
     ladder: list = field(default_factory=list)
+
+    def __repr__(self) -> str:
+        return short_repr(self, v_text(self.roughness, self.roughness_stderr), "spectral",
+                          "converged" if self.converged else f"NOT converged ({self.message})",
+                          f"contact {self.contact_fraction:.2f}", f"indentation {self.indentation_mm:.3g} mm",
+                          f"{self.seconds:.3f} s", f"{len(self.notes)} note(s)" if self.notes else "")
 
     @property
     def unresolved_nodes(self) -> int:

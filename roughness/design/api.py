@@ -1,0 +1,244 @@
+"""The design tools with plain arguments (arrays or paths, numbers, strings), for Python and notebooks.
+
+``roughness.tune``, ``roughness.palette``, ``roughness.tactile_image`` and ``roughness.homogeneity`` are
+these functions: they build the ``Evaluator`` and ``Target`` the tools' modules take and call them, as
+the CLI subcommands do (without the CLI's files and printing).
+"""
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from roughness.core.errors import InputError
+from roughness.surface.heightmap import Heightmap, as_heightmap
+
+from . import homogeneity as _homogeneity
+from . import palette as _palette
+from . import tactile_image as _tactile
+from . import tune as _tune
+from .colours import cluster_colours
+from .evaluation import Evaluator
+
+HeightmapLike = Heightmap | np.ndarray | str | Path
+
+
+def heightmap_arg(value: HeightmapLike, pixel_mm: float | None = None, height_mm: float | None = None,
+                  parameter: str = "heightmap") -> Heightmap:
+    """A ``Heightmap`` from a ``Heightmap``, a 2-D array of heights (mm) with ``pixel_mm`` (mm), or a file path
+    (read with ``roughness.load_heightmap(path, pixel_mm, height_mm)``: units the file lacks must be given)."""
+    if isinstance(value, (str, Path)):
+        from roughness.surface.io import load_heightmap
+
+        return load_heightmap(value, pixel_mm=pixel_mm, height_mm=height_mm)
+    if height_mm is not None:
+        raise InputError("height_mm applies to image files only: an array holds heights in mm",
+                         parameter="height_mm")
+    return as_heightmap(value, pixel_mm, parameter)
+
+
+def rgb_array(picture: np.ndarray) -> np.ndarray:
+    """RGB pixels (h, w, 3) uint8 from an array: (h, w) grey or (h, w, 3) RGB, integers 0..255 or floats 0..1
+    (as ``matplotlib.pyplot.imread`` gives); InputError for anything else."""
+    from roughness.core.limits import MAX_IMAGE_PIXELS, check_size
+
+    a = np.asarray(picture)
+    if a.dtype.kind not in "uif" or a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] != 3) or 0 in a.shape:
+        raise InputError(f"picture must be an (h, w) grey or (h, w, 3) RGB array of numbers, got shape {a.shape}, "
+                         f"dtype {a.dtype}", parameter="picture")
+    check_size(f"picture pixels ({a.shape[0]:,} x {a.shape[1]:,})", a.shape[0] * a.shape[1], MAX_IMAGE_PIXELS,
+               "picture")
+    top = 1.0 if a.dtype.kind == "f" else 255
+    if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > top:
+        raise InputError(f"picture values must be finite and within 0..{top:g} ({a.dtype})", parameter="picture")
+    rgb = np.round(a * (255 / top)).astype(np.uint8)
+    return rgb if rgb.ndim == 3 else np.repeat(rgb[..., None], 3, axis=2)
+
+
+def tune(heightmap: HeightmapLike, *, target_lambda_mm: float | None = None, target_v: float | None = None,
+         like: HeightmapLike | None = None, jnd: float | None = None, by: str = "height",
+         pixel_mm: float | None = None, height_mm: float | None = None, factor_range: tuple[float, float] | None = None,
+         tolerance_jnd: float = _tune.TOLERANCE_JND, max_fem: int = _tune.MAX_FEM, tile: bool = False,
+         verify: str | None = None, model: str | Path | None = None) -> _tune.TuneResult:
+    """Scale a texture by height or lateral size until it feels like a target roughness.
+
+    Parameters
+    ----------
+    heightmap : Heightmap, array of heights (mm) or path
+        The texture to tune; an array needs ``pixel_mm``.
+    target_lambda_mm : float, optional
+        Target equivalent wavelength on the standard scale (mm).
+    target_v : float, optional
+        Target roughness V (dimensionless strain variation).
+    like : Heightmap, array or path, optional
+        A reference texture to match (its V from the verifier).
+    jnd : float, optional
+        Target this many just-noticeable differences from ``heightmap`` (positive: rougher).
+        Exactly one of ``target_lambda_mm``, ``target_v``, ``like`` and ``jnd`` is given.
+    by : {"height", "lateral"}
+        The knob: heights or lateral size scaled.
+    pixel_mm, height_mm : float, optional
+        Pixel size (mm) of arrays; units of image files (mm).
+    factor_range : (float, float), optional
+        Smallest and largest scale factor searched (default: the knob's).
+    tolerance_jnd : float
+        Stop when the verifier's answer is this close to the target (JND).
+    max_fem : int
+        At most this many verifications.
+    tile : bool
+        The map is one period of a periodic texture.
+    verify : str, optional
+        The verifier: a FEM fidelity ("coarse", "default", "fine") or "spectral" (default: the model's labels').
+    model : str or Path, optional
+        ONNX surrogate model (default: the shipped one).
+
+    Returns
+    -------
+    TuneResult
+        ``.heightmap`` the scaled texture, ``.factor``, ``.achieved`` (V, its standard error, wavelength in mm),
+        ``.jnd_error`` and ``.reached``.
+    """
+    hm = heightmap_arg(heightmap, pixel_mm, height_mm)
+    reference = None if like is None else heightmap_arg(like, pixel_mm, height_mm, "like")
+    evaluator = Evaluator(None if model is None else str(model), verify)
+    target = _tune.target_of(evaluator, target_lambda_mm, target_v, reference, "reference", tile, jnd, hm)
+    return _tune.tune(hm, target, by, evaluator, factor_range, tolerance_jnd, max_fem, tile)
+
+
+def palette(k: int, *, min_jnd: float = 2.0, family: str = _palette.DEFAULT_FAMILY, by: str = "height",
+            candidates: str | Path | Mapping[str, HeightmapLike] | None = None, pixel_mm: float | None = None,
+            tolerance_jnd: float = _tune.TOLERANCE_JND, seed: int = 0, tile: bool = False,
+            verify: str | None = None, model: str | Path | None = None) -> _palette.Palette:
+    """``k`` textures that feel different from each other, at least ``min_jnd`` apart (verified).
+
+    Parameters
+    ----------
+    k : int
+        Number of textures (at least 2).
+    min_jnd : float
+        Smallest distance between any two members (just-noticeable differences).
+    family : str
+        Without ``candidates``: the named texture whose variants (scaled ``by`` height or lateral size) are tuned.
+    by : {"height", "lateral"}
+        The knob for a family palette.
+    candidates : folder path or mapping of name to Heightmap, array (mm) or path, optional
+        Choose the ``k`` farthest apart among these instead; arrays need ``pixel_mm`` (mm).
+    tolerance_jnd : float
+        Tuning tolerance of a family palette's members (JND).
+    seed : int
+        Seed of the family's texture.
+    tile : bool
+        Candidates are periodic tiles.
+    verify, model
+        As in ``roughness.tune``.
+
+    Returns
+    -------
+    Palette
+        ``.members`` (name, heightmap, verified V) smoothest first, ``.closest_jnd`` and ``.verified``;
+        ``roughness.design.palette.save_palette`` writes it as the CLI does.
+    """
+    evaluator = Evaluator(None if model is None else str(model), verify)
+    if candidates is None:
+        return _palette.family_palette(k, min_jnd, family, by, evaluator, tolerance_jnd, seed=seed)
+    if isinstance(candidates, (str, Path)):
+        from roughness.surface.io import heightmap_files, load_heightmap
+
+        files = heightmap_files(candidates)
+        pairs = [(name, load_heightmap(f, pixel_mm=pixel_mm))
+                 for name, f in zip(_palette.candidate_names(files), files)]
+    elif isinstance(candidates, Mapping):
+        pairs = [(str(name), heightmap_arg(hm, pixel_mm, parameter="candidates")) for name, hm in candidates.items()]
+    else:
+        raise InputError("candidates must be a folder of heightmaps or a mapping of name to heightmap, got "
+                         f"{type(candidates).__name__}", parameter="candidates")
+    return _palette.folder_palette(pairs, k, min_jnd, evaluator, tile)
+
+
+def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Sequence[HeightmapLike] | None = None, *,
+                  k: int | None = None, min_jnd: float = 2.0, family: str = _palette.DEFAULT_FAMILY,
+                  size_mm: float = _tactile.WIDTH_MM, pixel_mm: float = _tactile.PIXEL_MM,
+                  texture_pixel_mm: float | None = None, outline_mm: float | None = None,
+                  outline_height_mm: float | None = None, step_mm: float = _tactile.STEP_MM, strain: bool = False,
+                  colour_tolerance: float = _tactile.TOLERANCE, verify: str | None = None,
+                  model: str | Path | None = None) -> _tactile.TactilePlate:
+    """A printable plate on which each flat colour of a picture is a texture that feels different.
+
+    Parameters
+    ----------
+    picture : array (ny, nx, 3) of RGB or path of an image
+        The picture; its flat colours become regions.
+    textures : palette folder, sequence of Heightmap / array (mm) / path, optional
+        The textures, smoothest first (a folder written by ``save_palette``); default: a palette of ``k``
+        (default: as many as colours) variants of ``family``, ``min_jnd`` apart.
+    size_mm : float
+        Plate width (mm).
+    pixel_mm : float
+        Plate pixel (mm).
+    texture_pixel_mm : float, optional
+        Pixel size (mm) of texture arrays.
+    outline_mm, outline_height_mm : float, optional
+        Raised outlines between regions: width and height (mm).
+    step_mm : float
+        Step of the roughness map (mm).
+    strain : bool
+        Also compute the FEM strain image (slow).
+    colour_tolerance : float
+        Colours within this CIE Delta E are one colour.
+    verify, model
+        As in ``roughness.tune``.
+
+    Returns
+    -------
+    TactilePlate
+        ``.heightmap`` the plate (mm), ``.regions`` (colour, texture, V on the plate); ``figures(plate)`` in
+        ``roughness.design.tactile_image`` draws it.
+    """
+    rgb = _tactile.read_image(picture) if isinstance(picture, (str, Path)) else rgb_array(picture)
+    found = cluster_colours(rgb, colour_tolerance)
+    evaluator = Evaluator(None if model is None else str(model), verify)
+    _tactile.plate_shape(rgb.shape, size_mm, pixel_mm, step_mm, evaluator.footprint_mm)  # refused before any palette
+    if textures is None:
+        made = _palette.family_palette(k or len(found.colours), min_jnd, family, "height", evaluator)
+        chosen = [(m.name, m.heightmap, m.fem.roughness) for m in made.members]
+    elif isinstance(textures, (str, Path)):
+        chosen = [(name, hm, meta.get("fem_roughness")) for name, hm, meta in _palette.load_palette(textures)]
+    else:
+        chosen = [(f"texture {i + 1}", heightmap_arg(t, texture_pixel_mm, parameter="textures"), None)
+                  for i, t in enumerate(textures)]
+    return _tactile.tactile_image(found, chosen, size_mm, pixel_mm, outline_mm, outline_height_mm, step_mm, strain,
+                                  evaluator)
+
+
+def homogeneity(heightmap: HeightmapLike, *, pixel_mm: float | None = None, height_mm: float | None = None,
+                engine: str = "surrogate", window_mm: float | None = None, n: int = _homogeneity.N_WINDOWS,
+                seed: int = 0, tile: bool = False, model: str | Path | None = None) -> _homogeneity.Homogeneity:
+    """Does a texture feel the same everywhere? V over ``n`` windows, its spread in JND and the verdicts.
+
+    Parameters
+    ----------
+    heightmap : Heightmap, array of heights (mm) or path
+        The texture; an array needs ``pixel_mm`` (mm), an image file its units.
+    engine : {"surrogate", "fem"}
+        What computes V per window.
+    window_mm : float, optional
+        Window side (mm; default: the 10 mm skin footprint).
+    n : int
+        Number of windows.
+    seed : int
+        Seed of the window positions.
+    tile : bool
+        The map is one period of a periodic texture.
+    model : str or Path, optional
+        ONNX surrogate model (default: the shipped one).
+
+    Returns
+    -------
+    Homogeneity
+        ``.verdict``, ``.range_jnd`` and ``.spread_jnd`` (JND), ``.relative_variance`` (the paper's measure);
+        ``save_map(result, heightmap)`` in ``roughness.design.homogeneity`` draws it.
+    """
+    hm = heightmap_arg(heightmap, pixel_mm, height_mm)
+    evaluator = Evaluator(None if model is None else str(model))
+    return _homogeneity.homogeneity(hm, engine, window_mm, n, seed, tile, evaluator)
