@@ -75,6 +75,7 @@ LIBRARY_ONLY = {
     "flat_state": "SpectralSimulator(flat_state): studies compare the flat states; the CLI uses the default",
     "pressure": "SpectralSimulator(pressure): a study parameter; the CLI uses the flat state's pressure",
     "client": "dataset.build.build(client): a dask.distributed.Client; the CLI takes --scheduler(-file)",
+    "picture": "roughness.tactile_image(picture): an RGB or grey array from Python; the CLI reads a PICTURE file",
     **{name: "printer profile field (a JSON profile's; load_profile reports it under --printer)"
        for name in ("nozzle_mm", "layer_mm", "line_width_mm", "closing_radius_mm")},
 }
