@@ -212,22 +212,12 @@ def test_training_records_provenance_and_export_writes_the_model_version(tmp_pat
     configuration; the export carries the version asked for, which the loaded model reports."""
     import torch
     from roughness.core.hashing import digest
-    from roughness.dataset.recipe import Recipe, realise, sample_record
-    from roughness.dataset.store import DatasetWriter
     from roughness.surrogate.export import check_patches, export
-    from roughness.surrogate.patch import descriptors, footprint_patch
     from roughness.surrogate.train import TrainConfig, train
-    from test_surrogate import CONFIG, fake_fields
+    from test_surrogate import write_tiny_dataset
 
     data = tmp_path / "tiny.h5"
-    recipe = Recipe(name="tiny", seed=5, families={"bumps": 1, "fbm": 1, "grating": 1, "knit": 1},
-                    holdout_family="knit")
-    with DatasetWriter(data, CONFIG, "test") as writer:
-        for i in range(40):
-            record = sample_record(recipe, i)
-            hm = realise(record)
-            v = 0.05 * descriptors(footprint_patch(hm))[2]
-            writer.write_result(record, hm.heights, hm.pixel_mm, fake_fields(v), np.zeros((5, 5)))
+    write_tiny_dataset(data)
     torch.manual_seed(0)
     checkpoint = train(TrainConfig(data=str(data), out=str(tmp_path / "run"), max_epochs=1, batch_size=8,
                                    val_fraction=0.2))

@@ -49,12 +49,8 @@ def fake_fields(v: float) -> dict:
             "discretization_error": None, "ladder": []}
 
 
-@pytest.fixture(scope="module")
-def tiny(tmp_path_factory):
-    """A 40-sample dataset of real textures with a synthetic label (V = 0.05 rms slope), a short
-    training run on it, and its export: the machinery, not the accuracy, is under test here."""
-    root = tmp_path_factory.mktemp("surrogate")
-    data = root / "tiny.h5"
+def write_tiny_dataset(data) -> None:
+    """40 real textures (knit held out) with a synthetic label, V = 0.05 rms slope, written to ``data``."""
     recipe = Recipe(name="tiny", seed=5, families={"bumps": 1, "fbm": 1, "grating": 1, "knit": 1},
                     holdout_family="knit")
     with DatasetWriter(data, CONFIG, "test") as writer:
@@ -63,6 +59,15 @@ def tiny(tmp_path_factory):
             hm = realise(record)
             v = 0.05 * descriptors(footprint_patch(hm))[2]
             writer.write_result(record, hm.heights, hm.pixel_mm, fake_fields(v), np.zeros((5, 5)))
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    """A 40-sample dataset of real textures with a synthetic label (``write_tiny_dataset``), a short
+    training run on it, and its export: the machinery, not the accuracy, is under test here."""
+    root = tmp_path_factory.mktemp("surrogate")
+    data = root / "tiny.h5"
+    write_tiny_dataset(data)
     torch.manual_seed(0)
     checkpoint = train(TrainConfig(data=str(data), out=str(root / "run"), max_epochs=3, batch_size=8,
                                    val_fraction=0.2))
