@@ -20,6 +20,7 @@ from roughness.dataset import build
 from roughness.dataset.cluster import ClusterChoice, versions
 from roughness.dataset.recipe import Recipe, expand, realise
 from roughness.dataset.store import open_dataset, sample_id, verify
+from test_build_distributed import start, wait_for
 
 ROOT = Path(__file__).parents[1]
 SEED = 3  # the CLI's default recipe (bump textures) with this seed
@@ -27,18 +28,6 @@ N = 3  # spectral: tens of ms per sample
 DEADLINE_S = 120  # a bound on every wait; the cluster test takes about 10 s on an idle 2-core machine
 ENV = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
        "MKL_NUM_THREADS": "1"}
-
-
-def start(args: list[str], log: Path) -> subprocess.Popen:
-    """A process in its own session (killed as a group, with a nanny's worker), its output in ``log``."""
-    with open(log, "wb") as out:
-        return subprocess.Popen(args, env=ENV, stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
-
-
-def wait_for(condition, what: str, deadline: float) -> None:
-    while not condition():
-        assert time.monotonic() < deadline, f"timed out waiting for {what}"
-        time.sleep(0.1)
 
 
 def roughness_cli(*args: str) -> subprocess.CompletedProcess:
@@ -93,13 +82,13 @@ def cluster(tmp_path_factory):
     deadline = time.monotonic() + DEADLINE_S
     processes = [start([sys.executable, "-m", "dask", "scheduler", "--scheduler-file", str(scheduler_file),
                         "--host", "127.0.0.1", "--port", "0", "--dashboard-address", "127.0.0.1:0"],
-                       folder / "scheduler.log")]
+                       ENV, folder / "scheduler.log")]
     try:
         wait_for(lambda: scheduler_file.exists() and scheduler_file.stat().st_size > 0, "the scheduler file",
                  deadline)
         processes.append(start([sys.executable, "-m", "dask", "worker", "--scheduler-file", str(scheduler_file),
                                 "--nthreads", "1", "--nworkers", "1", "--host", "127.0.0.1", "--no-dashboard"],
-                               folder / "worker.log"))
+                               ENV, folder / "worker.log"))
         with Client(scheduler_file=str(scheduler_file), timeout=30) as client:
             client.wait_for_workers(1, timeout=DEADLINE_S)
         yield scheduler_file
