@@ -15,6 +15,8 @@ A cluster of others is reached by ``scheduler`` (its address), ``scheduler_file`
 submitted, every worker is asked for its roughness and engine versions, which must equal this process's. A task
 whose worker dies is run again by the scheduler, up to its ``distributed.scheduler.allowed-failures`` times
 (``ALLOWED_FAILURES`` on the local cluster); the build reports that number and the dashboard's address.
+Tasks are submitted as earlier ones finish, IN_FLIGHT_PER_THREAD per worker thread ahead, so a build of 100,000
+samples starts at once and the scheduler holds a few hundred tasks, not all of them.
 """
 from __future__ import annotations
 
@@ -58,7 +60,9 @@ ALLOWED_FAILURES = 3  # local cluster: worker deaths a task survives before it i
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration, shared by its threads
 _SIMULATORS_LOCK = threading.Lock()
-PREPARATION_PROGRESS_SECONDS = 5.0  # a line on stderr this often while records are made and submitted
+PREPARATION_PROGRESS_SECONDS = 5.0  # a line on stderr this often while records are made
+IN_FLIGHT_PER_THREAD = 8  # tasks submitted ahead per worker thread: workers never wait, the scheduler holds few
+MIN_IN_FLIGHT = 64  # (workers that join later still find work)
 T = TypeVar("T")
 
 
@@ -237,10 +241,10 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
 
 def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config: dict, workers: int,
          where: ClusterChoice, counts: dict, quiet: bool) -> None:
-    from dask.distributed import Client, as_completed
+    from dask.distributed import Client, Future, as_completed
     from distributed import KilledWorker
 
-    from .cluster import announce, check_workers, versions
+    from .cluster import announce, check_workers, versions, worker_threads
 
     cluster = client = None
     progress = Progress(total=len(pending), start=time.perf_counter())
@@ -254,13 +258,28 @@ def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config
         if not quiet:
             announce(client, found)
         expected = versions()
-        futures = {client.submit(simulate_record, r, config, label, expected, pure=False): r
-                   for r, label in _preparing(pending, len(pending), "samples submitted to the workers", quiet)}
-        for future in as_completed(futures):
+        queue = iter(pending)
+        futures: dict = {}  # in flight: future -> record
+
+        def submit_next() -> Future | None:
+            item = next(queue, None)
+            if item is None:
+                return None
+            future = client.submit(simulate_record, item[0], config, item[1], expected, pure=False)
+            futures[future] = item[0]
+            return future
+
+        window = max(MIN_IN_FLIGHT, IN_FLIGHT_PER_THREAD * sum(worker_threads(client).values()))
+        completed = as_completed([f for f in (submit_next() for _ in range(window)) if f is not None])
+        for future in completed:
+            record = futures.pop(future)
+            following = submit_next()
+            if following is not None:
+                completed.add(following)
             try:
                 res = future.result()
             except KilledWorker as err:  # the sample's workers died more often than the scheduler allows
-                res = {"record": futures[future], "heights": None, "pixel_mm": futures[future]["pixel_mm"],
+                res = {"record": record, "heights": None, "pixel_mm": record["pixel_mm"],
                        "error": f"KilledWorker: the {err.allowed_failures + 1} workers that ran it all died "
                                 "(out of memory, or killed?)"}
             if "versions" in res:

@@ -46,6 +46,18 @@ def test_local_dask_run_with_two_workers(tmp_path):
     assert again["already_done"] == 6 and again["written"] == 2
 
 
+def test_samples_beyond_the_submission_window_are_all_built(tmp_path, monkeypatch):
+    """Tasks go out as earlier ones finish: with one in flight at a time, every sample still arrives once."""
+    import roughness.dataset.build as build_module
+    monkeypatch.setattr(build_module, "MIN_IN_FLIGHT", 1)
+    monkeypatch.setattr(build_module, "IN_FLIGHT_PER_THREAD", 0)
+    out = tmp_path / "w.h5"
+    counts = build(str(out), 4, RECIPE, SMALL, workers=1, quiet=True)
+    assert counts["written"] == 4 and counts["failed"] == 0, counts
+    with open_dataset(out) as ds:
+        assert sorted(ds.ids) == sorted(sample_id(r) for r in expand(RECIPE, 4))
+
+
 def test_failed_samples_are_recorded_and_do_not_stop_the_run(tmp_path):
     out = tmp_path / "f.h5"
     too_small = Recipe(seed=1, families={"grating": 1.0}, size_mm=5.0)  # map smaller than the footprint
