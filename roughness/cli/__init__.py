@@ -12,7 +12,8 @@ DESCRIPTION = ("Predict how rough a surface texture feels to a fingertip (the FE
 # subcommand -> module of roughness.cli that defines it (imported only when its parser is built)
 COMMANDS = {"simulate": "simulate", "texture": "texture", "dataset": "dataset", "train": "train",
             "predict": "predict", "compare": "compare", "jnd": "jnd", "perception": "perception", "tune": "tune",
-            "palette": "palette", "tactile-image": "tactile_image", "homogeneity": "homogeneity"}
+            "palette": "palette", "tactile-image": "tactile_image", "homogeneity": "homogeneity",
+            "object": "object"}
 
 
 class _VersionAction(argparse.Action):
