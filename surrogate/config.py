@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .target import LOG_OFFSET
+
 
 @dataclass(frozen=True)
 class TrainConfig:
@@ -24,6 +26,9 @@ class TrainConfig:
     extra_data: tuple[str, ...] = ()  # more files of the same recipe's textures at other fidelities ("all" levels)
     levels: str = "last"  # "last": each sample's V; "all": every solved mesh level, spacing as an input
     query_h_mm: float | None = None  # "all": the contact spacing (mm) the model answers for (default: finest)
+    max_label_error: float | None = None  # keep only FEM labels whose estimated discretization error is at most this
+    fem_weight: float = 1.0  # loss weight of a FEM label row relative to a spectral one
+    log_offset: float = LOG_OFFSET  # the network predicts log(V + log_offset) (V of the finest standard: ~0.003)
 
     def minimum_samples(self, test_fraction: float = 0.1) -> int:
         """About how many ok samples a dataset needs: ``batch_size`` training samples after the splits."""

@@ -7,7 +7,9 @@ Labels: one row per sample (its V, at the dataset's contact spacing), or with ``
 one row per (sample, mesh level) over every level the FEM solved for it (``ladder_h_mm`` and
 ``ladder_V``: a ``default`` label comes with its ``coarse`` one) and over several files of the
 same textures at other fidelities: the multi-fidelity rows a spacing-conditioned network
-learns from (``h_mm`` is each row's contact spacing).
+learns from (``h_mm`` is each row's contact spacing). Rows of the spectral engine (``engine``
+"spectral") have no contact spacing (``h_mm`` nan). ``max_label_error`` keeps only the FEM labels
+whose estimated discretization error is at most that fraction (each sample's finest level).
 """
 from __future__ import annotations
 
@@ -55,7 +57,8 @@ class Samples:
     family: np.ndarray
     split: np.ndarray
     descriptors: np.ndarray  # (n, len(DESCRIPTOR_NAMES))
-    h_mm: np.ndarray  # contact spacing (mm) of each row's label (nan: not recorded)
+    h_mm: np.ndarray  # contact spacing (mm) of each row's FEM label (nan: a spectral label, or not recorded)
+    engine: np.ndarray  # the engine of each row's label: "fem" or "spectral"
 
     def subset(self, split: str) -> Samples:
         return self.where(self.split == split)
@@ -65,7 +68,7 @@ class Samples:
         return Samples(*(getattr(self, f.name)[keep] for f in fields(self)))
 
     def at_level(self, h_mm: float) -> Samples:
-        """The rows labelled at contact spacing ``h_mm``."""
+        """The rows labelled by the FEM at contact spacing ``h_mm``."""
         return self.where(np.isclose(self.h_mm, h_mm))
 
     def __len__(self) -> int:
@@ -81,33 +84,47 @@ def labels(sample: Sample, spacing_mm: float, levels: str) -> list[tuple[float, 
 
 
 def load_samples(data: Dataset | list[Dataset], test_fraction: float = 0.1, val_fraction: float = 0.1,
-                 holdout_family: str | None = "knit", progress: bool = True, levels: str = "last") -> Samples:
+                 holdout_family: str | None = "knit", progress: bool = True, levels: str = "last",
+                 max_label_error: float | None = None) -> Samples:
     """Every ok sample of open datasets as a footprint patch with its split and label rows.
 
     ``levels``: "last" (one row per sample: its V) or "all" (a row per solved mesh level; a
-    level found in several files counts once, from the first).
+    level found in several files counts once, from the first). ``max_label_error``: FEM samples
+    whose estimated discretization error exceeds this fraction give no row, the others only their
+    finest level (coarser levels are less converged than the estimate says).
     """
     if levels not in LEVELS:
         raise InputError(f"levels must be one of {', '.join(LEVELS)}, got {levels!r}", parameter="levels")
+    if max_label_error is not None and not max_label_error > 0:
+        raise InputError(f"max_label_error must be a positive fraction, got {max_label_error!r}",
+                         parameter="max_label_error")
     datasets = data if isinstance(data, list) else [data]
     rows: dict[str, list] = {f.name: [] for f in fields(Samples)}
-    seen: set[tuple[str, float]] = set()
+    seen: set[tuple[str, str, float | None]] = set()
     made: dict[str, tuple[np.ndarray, np.ndarray]] = {}  # sample id -> (patch, descriptors), made once
     start = time.monotonic()
     for ds in datasets:
-        spacing = _spacing_mm(ds.config.simulation)
+        spacing, engine = _spacing_mm(ds.config.simulation), ds.config.simulation.get("engine", "fem")
         for i, sample in enumerate(ds.iter_samples("ok")):
+            rows_of = labels(sample, spacing, levels)
+            if engine == "fem" and max_label_error is not None:
+                error = sample.values.get("discretization_error")
+                rows_of = rows_of[-1:] if error is not None and error <= max_label_error else []
+            if not rows_of:
+                continue
             if sample.id not in made:
                 patch = footprint_patch(sample.heightmap)
                 made[sample.id] = patch, descriptors(patch)
             patch, descr = made[sample.id]
             split = split_of(sample.recipe, test_fraction, val_fraction, holdout_family)
-            for h_mm, v in labels(sample, spacing, levels):
-                if (sample.id, round(h_mm, 6)) in seen:
+            for h_mm, v in rows_of:
+                level = (sample.id, engine, None if math.isnan(h_mm) else round(h_mm, 6))
+                if level in seen:
                     continue
-                seen.add((sample.id, round(h_mm, 6)))
+                seen.add(level)
                 for key, value in (("ids", sample.id), ("patches", patch), ("roughness", v), ("split", split),
-                                   ("family", sample.recipe["family"]), ("descriptors", descr), ("h_mm", h_mm)):
+                                   ("family", sample.recipe["family"]), ("descriptors", descr), ("h_mm", h_mm),
+                                   ("engine", engine)):
                     rows[key].append(value)
             if progress and (i + 1) % 250 == 0:
                 print(f"\rreading {ds.path}: {i + 1}/{len(ds)} samples ({time.monotonic() - start:.0f} s)",
@@ -123,9 +140,12 @@ LEVELS = ("last", "all")
 
 
 def _spacing_mm(simulation: dict) -> float:
-    """Contact spacing (mm) of a dataset's labels from its simulation configuration (nan if not fixed)."""
+    """Contact spacing (mm) of a dataset's labels from its simulation configuration (nan if not fixed, and for
+    the spectral engine, which has no mesh)."""
     from roughness.simulate.config import FIDELITY_SPACING_MM
 
+    if simulation.get("engine", "fem") != "fem":
+        return math.nan
     if simulation.get("h_contact_mm") is not None:
         return float(simulation["h_contact_mm"])
     return FIDELITY_SPACING_MM.get(simulation.get("fidelity", "default"), math.nan)

@@ -205,7 +205,8 @@ def _samples(data: str | Path | list[str | Path], meta: ModelMetadata):
     with ExitStack() as stack:
         datasets = [stack.enter_context(open_dataset(p)) for p in paths]
         samples = load_samples(datasets, meta.test_fraction, meta.train_config["val_fraction"], meta.holdout_family,
-                               progress=False, levels=meta.train_config.get("levels", "last"))
+                               progress=False, levels=meta.train_config.get("levels", "last"),
+                               max_label_error=meta.train_config.get("max_label_error"))
     return samples if meta.query_h_mm is None else samples.at_level(meta.query_h_mm)
 
 

@@ -70,7 +70,7 @@ def load_checkpoint(path: str | Path) -> tuple[RoughnessNet, ModelMetadata]:
     meta = ModelMetadata.from_dict({k: v for k, v in checkpoint.items() if k != "state_dict"}, str(path),
                                    parameter="checkpoint")
     with torch.device("meta"):  # no memory until the weights are assigned: metadata cannot claim a huge network
-        model = RoughnessNet(meta.widths, meta.hidden, meta.query_h_mm)
+        model = RoughnessNet(meta.widths, meta.hidden, meta.query_h_mm, meta.engine_input)
     try:
         model.load_state_dict(state, assign=True)
     except RuntimeError as err:

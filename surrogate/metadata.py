@@ -46,13 +46,19 @@ class ModelMetadata:
     int8: dict | None = None  # quantisation check of an int8 model (quantize.py); None for fp32
     ensemble: dict | None = None  # members and uncertainty checks of an ensemble graph (ensemble.py); None: one net
     # A network trained on labels of several mesh levels with the spacing as an input (train.py):
-    # {"query_h_mm": spacing it answers for, "rows_by_h_mm": labels per spacing, "extra_data": [files]}
+    # {"query_h_mm": spacing it answers for, "rows_by_h_mm": labels per spacing, "extra_data": [files],
+    #  "engines": engines of the labels (v3 on: "fem" and "spectral" when both)}
     multi_fidelity: dict | None = None
 
     @property
     def query_h_mm(self) -> float | None:
         """The contact spacing (mm) a multi-fidelity network answers for (None: a one-level network)."""
         return None if self.multi_fidelity is None else float(self.multi_fidelity["query_h_mm"])
+
+    @property
+    def engine_input(self) -> bool:
+        """Whether the network learned spectral and FEM labels together (the engine an input of its head)."""
+        return self.multi_fidelity is not None and len(self.multi_fidelity.get("engines", ["fem"])) > 1
 
     def to_dict(self) -> dict:
         """Plain JSON-able dict; the OPTIONAL keys only when present."""

@@ -6,9 +6,9 @@ import numpy as np
 LOG_OFFSET = 1e-3  # the network predicts log(V + LOG_OFFSET): finite for flat textures (V = 0)
 
 
-def target(roughness: np.ndarray) -> np.ndarray:
-    """Network target (float32) from V."""
-    return np.log(np.asarray(roughness, dtype=np.float64) + LOG_OFFSET).astype(np.float32)
+def target(roughness: np.ndarray, log_offset: float = LOG_OFFSET) -> np.ndarray:
+    """Network target (float32) log(V + log_offset) from V."""
+    return np.log(np.asarray(roughness, dtype=np.float64) + log_offset).astype(np.float32)
 
 
 def roughness_from_log(log_v: np.ndarray, log_offset: float = LOG_OFFSET) -> np.ndarray:

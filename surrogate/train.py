@@ -16,6 +16,14 @@ network takes the row's contact spacing as an input, and the exported model answ
 query spacing (default: the finest labelled). Scores are against the labels at that spacing.
 
     roughness train training-default.h5 --extra-data training-fine.h5 --levels all --out runs/mf
+
+Spectral labels with FEM labels (a spectral dataset among the files, ``levels="all"``): the network
+also takes the label's engine as an input (``RoughnessNet(engine_input=True)``) and answers as the FEM
+at the query spacing; the files may hold other textures of the same physics, ``max_label_error`` keeps
+only the FEM labels converged to that fraction, and ``fem_weight`` weighs their rows in the loss.
+
+    roughness train training-v3.h5 --extra-data training-v2-default.h5 training-v2-fine.h5 --levels all \
+        --max-label-error 0.03 --query-h-mm 0.14 --out runs/v3
 """
 from __future__ import annotations
 
@@ -30,7 +38,6 @@ from pathlib import Path
 
 import numpy as np
 import torch
-import torch.nn.functional as F
 
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output_folder
@@ -57,15 +64,16 @@ def augment(x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
 
 
 @torch.no_grad()
-def infer(model: RoughnessNet, patches: np.ndarray, batch: int = 256) -> tuple[np.ndarray, np.ndarray]:
-    """Predicted V and embeddings for patches (n, P, P)."""
+def infer(model: RoughnessNet, patches: np.ndarray, log_offset: float = LOG_OFFSET,
+          batch: int = 256) -> tuple[np.ndarray, np.ndarray]:
+    """Predicted V and embeddings for patches (n, P, P) of a network that predicts log(V + log_offset)."""
     model.eval()
     logs, embeddings = [], []
     for i in range(0, len(patches), batch):
         log_v, emb = model(torch.from_numpy(patches[i:i + batch, None]))
         logs.append(log_v.numpy())
         embeddings.append(emb.numpy())
-    return roughness_from_log(np.concatenate(logs)), np.concatenate(embeddings)
+    return roughness_from_log(np.concatenate(logs), log_offset), np.concatenate(embeddings)
 
 
 def format_scores(values: dict) -> str:
@@ -100,15 +108,26 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
     with ExitStack() as stack:
         data = stack.enter_context(open_dataset(cfg.data))
         extras = [stack.enter_context(open_dataset(path)) for path in cfg.extra_data]
-        recipe, simulation = data.config.recipe, data.config.simulation
+        recipe = data.config.recipe
+        # the physics of the labels the model answers as: the first FEM file's (the spectral engine's records no mesh)
+        simulation = next((ds.config.simulation for ds in [data, *extras] if ds.config.simulation.get(
+            "engine", "fem") == "fem"), data.config.simulation)
         for extra in extras:
-            _require_same_textures(data, extra)
+            _require_same_physics(data, extra)
         data_fem_seconds = float(sum(np.nansum(ds.table()["seconds"]) for ds in [data, *extras]))  # one core each
         holdout = recipe.get("holdout_family") if cfg.holdout_family is None else cfg.holdout_family
         holdout = None if holdout == "none" else holdout
         test_fraction = recipe.get("test_fraction", 0.1) if cfg.test_fraction is None else cfg.test_fraction
-        samples = load_samples([data, *extras], test_fraction, cfg.val_fraction, holdout, levels=cfg.levels)
+        samples = load_samples([data, *extras], test_fraction, cfg.val_fraction, holdout, levels=cfg.levels,
+                               max_label_error=cfg.max_label_error)
     multi = cfg.levels == "all"
+    engines = sorted(set(samples.engine))
+    if len(engines) > 1 and not multi:
+        raise InputError("spectral and FEM labels are learned together only with levels='all' (the engine is an "
+                         "input then)", parameter="levels")
+    if multi and np.isnan(samples.h_mm).all():
+        raise InputError("levels='all' needs FEM labels at the query spacing; these files hold spectral labels "
+                         "only", parameter="levels")
     query = (cfg.query_h_mm or float(np.nanmin(samples.h_mm))) if multi else None
     if multi and not np.isclose(samples.h_mm, query).any():
         raise InputError(f"no label at the query spacing {query} mm (labels at "
@@ -120,16 +139,18 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
                          f"validation sample, about {cfg.minimum_samples(test_fraction)} ok samples in the dataset",
                          parameter="data")
     out.mkdir(parents=True, exist_ok=True)
-    x_train, y_train = torch.from_numpy(tr.patches[:, None]), torch.from_numpy(target(tr.roughness))
-    x_val, y_val = torch.from_numpy(va.patches[:, None]), torch.from_numpy(target(va.roughness))
+    x_train, y_train = torch.from_numpy(tr.patches[:, None]), torch.from_numpy(target(tr.roughness, cfg.log_offset))
+    x_val, y_val = torch.from_numpy(va.patches[:, None]), torch.from_numpy(target(va.roughness, cfg.log_offset))
     h_train, h_val = (torch.from_numpy(part.h_mm.astype(np.float32)) if multi else None for part in (tr, va))
+    w_train, w_val = (torch.from_numpy(np.where(part.engine == "fem", cfg.fem_weight, 1.0).astype(np.float32))
+                      for part in (tr, va))
     log(f"samples: {', '.join(f'{s} {int((samples.split == s).sum())}' for s in ('train', 'val', 'test', 'ood'))}")
     if multi:
         log(f"labels per contact spacing: {_rows_by_level(samples)}; the model answers at h = {query:g} mm")
 
     # model and optimiser: AdamW, linear warm-up then cosine decay to zero over max_epochs or the
     # time budget, whichever runs out first (a budget that ends the epochs early still anneals)
-    model = RoughnessNet(cfg.widths, cfg.hidden, query)
+    model = RoughnessNet(cfg.widths, cfg.hidden, query, engine_input=len(engines) > 1)
     log(f"model: {parameter_count(model):,} parameters")
     optimizer = torch.optim.AdamW(model.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
     steps_per_epoch = math.ceil(len(tr) / cfg.batch_size)
@@ -146,7 +167,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         for i in range(0, len(tr), cfg.batch_size):
             idx = order[i:i + cfg.batch_size]
             pred, _ = model(augment(x_train[idx], generator), None if h_train is None else h_train[idx])
-            loss = F.mse_loss(pred, y_train[idx])
+            loss = weighted_mse(pred, y_train[idx], w_train[idx])
             optimizer.zero_grad(set_to_none=True)
             loss.backward()
             optimizer.step()
@@ -155,7 +176,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
 
         model.eval()
         with torch.no_grad():
-            val_loss = F.mse_loss(model(x_val, h_val)[0], y_val).item()
+            val_loss = weighted_mse(model(x_val, h_val)[0], y_val, w_val).item()
         minutes = (time.monotonic() - start) / 60
         history.append((epoch, train_loss, val_loss, schedule.get_last_lr()[0], minutes))
         improved = val_loss < best_val
@@ -175,7 +196,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
     # query spacing); fit its input domain on the training inputs (each texture once)
     model.load_state_dict(torch.load(out / "best.pt", weights_only=True))
     ids, first = np.unique(samples.ids, return_index=True)  # rows of one texture share its patch
-    answers, codes = infer(model, samples.patches[first])  # at the query spacing
+    answers, codes = infer(model, samples.patches[first], cfg.log_offset)  # at the query spacing
     trained = samples.split[first] == "train"
     domain = Domain.fit(samples.descriptors[first][trained], codes[trained])
     scored = samples.at_level(query) if multi else samples
@@ -193,7 +214,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
                  for f in np.unique(scored.family[test])}
     meta = ModelMetadata(
         widths=tuple(cfg.widths), hidden=cfg.hidden, patch_pixel_mm=PATCH_PIXEL_MM, footprint_mm=FOOTPRINT_MM,
-        log_offset=LOG_OFFSET, simulation=simulation,
+        log_offset=cfg.log_offset, simulation=simulation,
         label_fidelity=_fidelity_name(query) if multi else simulation.get("fidelity", "default"),
         domain=domain.to_dict(), metrics=metrics, test_by_family=by_family, holdout_family=holdout,
         test_fraction=test_fraction,
@@ -202,7 +223,7 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         best_epoch=best_epoch, epochs=len(history),
         minutes=(time.monotonic() - start) / 60, parameters=parameter_count(model),
         cost_core_seconds={"data_fem": data_fem_seconds, "training": (time.monotonic() - start) * cfg.threads},
-        multi_fidelity={"query_h_mm": query, "rows_by_h_mm": _rows_by_level(samples),
+        multi_fidelity={"query_h_mm": query, "rows_by_h_mm": _rows_by_level(samples), "engines": engines,
                         "extra_data": [{"file": Path(p).name, "inputs_sha256": inputs_sha256(p)} for p in cfg.extra_data]}
         if multi else None)
     plain = json.loads(meta.to_json())  # plain types only (no numpy scalars): export loads it with weights_only
@@ -222,6 +243,11 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
     return out / "checkpoint.pt"
 
 
+def weighted_mse(predicted: torch.Tensor, target_: torch.Tensor, weight: torch.Tensor) -> torch.Tensor:
+    """Mean of weight x squared error over the rows, normalised by the weights."""
+    return (weight * (predicted - target_) ** 2).sum() / weight.sum()
+
+
 def lr_factor(step: int, total_steps: int, warmup: int, elapsed_fraction: float) -> float:
     """The learning rate's factor at optimiser ``step``: a linear warm-up over ``warmup`` steps, then a cosine
     from 1 to 0 over the steps or the time budget (``elapsed_fraction`` of it used), whichever runs out first."""
@@ -229,21 +255,23 @@ def lr_factor(step: int, total_steps: int, warmup: int, elapsed_fraction: float)
     return min((step + 1) / warmup, 0.5 * (1 + math.cos(math.pi * progress)))
 
 
-def _require_same_textures(data: Dataset, extra: Dataset) -> None:
-    """``extra`` labels the same recipe's textures under the same physics, at another mesh fidelity."""
-    mesh_only = ("fidelity", "h_contact_mm", "tolerance")
-    a, b = data.config, extra.config
-    differences = [d for d in a.differences(b).split("; ") if d and not d.startswith(
-        tuple(f"simulation.{k}:" for k in mesh_only))]
+def _require_same_physics(data: Dataset, extra: Dataset) -> None:
+    """``extra`` labels textures under the same physics as ``data``: other textures (recipes), mesh fidelities
+    and engines are allowed, other forces, tissues or strain statistics are not."""
+    from roughness.dataset.build import MESH_FIELDS
+
+    allowed = ("recipe.", *(f"simulation.{k}:" for k in (*MESH_FIELDS, "engine", "engine_version")))
+    differences = [d for d in data.config.differences(extra.config).split("; ") if d and not d.startswith(allowed)]
     if differences:
-        raise InputError(f"{extra.path} does not label the textures of {data.path} under the same physics: "
+        raise InputError(f"{extra.path} does not label textures under the physics of {data.path}: "
                          f"{'; '.join(differences)}", parameter="extra_data")
 
 
 def _rows_by_level(samples) -> dict[str, int]:
-    """Number of label rows per contact spacing (mm, as text)."""
-    values, counts = np.unique(samples.h_mm, return_counts=True)
-    return {f"{h:g}": int(c) for h, c in zip(values, counts)}
+    """Number of label rows per contact spacing (mm, as text; "spectral" for the spectral engine's)."""
+    names = np.array(["spectral" if np.isnan(h) else f"{h:g}" for h in samples.h_mm])
+    values, counts = np.unique(names, return_counts=True)
+    return {str(h): int(c) for h, c in zip(values, counts)}
 
 
 def _fidelity_name(h_mm: float) -> str:

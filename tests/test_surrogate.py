@@ -787,20 +787,65 @@ def test_ensemble_map_has_a_spread_beside_v(ensemble, tmp_path):
     assert (tmp_path / "m.png").read_bytes()[:4] == b"\x89PNG"
 
 
-def write_levels(path: Path, simulation: dict, n: int, ladder) -> None:
+def write_levels(path: Path, simulation: dict, n: int, ladder, error=lambda i: 0.01, seed: int = 5) -> None:
     """A dataset of ``n`` recipe textures whose labels come with coarser levels: ``ladder(v)`` gives
-    (spacing mm, V) of every level solved, the last being the sample's V (v = 0.05 rms slope)."""
-    recipe = Recipe(name="tiny", seed=5, families={"bumps": 1, "fbm": 1, "grating": 1, "knit": 1},
+    (spacing mm, V) of every level solved, the last being the sample's V (v = 0.05 rms slope); ``error(i)``
+    the i-th label's estimated discretization error. ``ladder=None``: labels without levels (the spectral
+    engine's: put ``"engine": "spectral"`` in ``simulation``)."""
+    recipe = Recipe(name="tiny", seed=seed, families={"bumps": 1, "fbm": 1, "grating": 1, "knit": 1},
                     holdout_family="knit")
-    config = {"recipe": CONFIG["recipe"], "simulation": simulation}
+    config = {"recipe": CONFIG["recipe"] | {"seed": seed}, "simulation": simulation}
     with DatasetWriter(path, config, "test") as writer:
         for i in range(n):
             record = sample_record(recipe, i)
             hm = realise(record)
-            levels = ladder(0.05 * descriptors(footprint_patch(hm))[2])
-            fields = fake_fields(levels[-1][1]) | {"ladder": [{"h_contact_mm": h, "roughness": v} for h, v in levels],
-                                                   "discretization_error": 0.01}
+            v = 0.05 * descriptors(footprint_patch(hm))[2]
+            if ladder is None:
+                fields = fake_fields(v)
+            else:
+                levels = ladder(v)
+                fields = fake_fields(levels[-1][1]) | {"discretization_error": error(i), "ladder": [
+                    {"h_contact_mm": h, "roughness": v} for h, v in levels]}
             writer.write_result(record, hm.heights, hm.pixel_mm, fields, np.zeros((5, 5)))
+
+
+def test_spectral_and_fem_labels_train_one_network_that_answers_as_the_fem(tmp_path):
+    """Spectral labels of some textures beside converged FEM labels of others (same physics): the engine is an
+    input, unconverged FEM labels are left out, and the exported one-input graph answers as the FEM."""
+    from roughness.surrogate.data import load_samples
+    from roughness.surrogate.metadata import onnx_metadata
+    from roughness.surrogate.target import roughness_from_log
+
+    spectral, fem = tmp_path / "spectral.h5", tmp_path / "fem.h5"
+    write_levels(spectral, {"engine": "spectral", "force_n": 10.0}, 40, None, seed=9)
+    write_levels(fem, {"fidelity": "default", "force_n": 10.0}, 24, lambda v: [(0.3, 1.2 * v), (0.2, 1.05 * v)],
+                 error=lambda i: 0.2 if i % 4 == 0 else 0.01)  # every 4th FEM label unconverged
+    with open_dataset(spectral) as a, open_dataset(fem) as b:
+        rows = load_samples([a, b], 0.2, 0.2, "knit", progress=False, levels="all", max_label_error=0.03)
+    assert int((rows.engine == "spectral").sum()) == 40 and np.isnan(rows.h_mm[rows.engine == "spectral"]).all()
+    assert int((rows.engine == "fem").sum()) == 18 and np.all(rows.h_mm[rows.engine == "fem"] == 0.2)
+    assert not set(rows.ids[rows.engine == "fem"]) & set(rows.ids[rows.engine == "spectral"])  # other textures
+
+    checkpoint = train(TrainConfig(data=str(spectral), out=str(tmp_path / "run"), max_epochs=2, batch_size=8,
+                                   val_fraction=0.2, extra_data=(str(fem),), levels="all", max_label_error=0.03,
+                                   fem_weight=3.0, log_offset=1e-4))
+    model, meta = load_checkpoint(checkpoint)
+    assert meta.engine_input and meta.multi_fidelity["engines"] == ["fem", "spectral"]
+    assert meta.multi_fidelity["rows_by_h_mm"] == {"0.2": 18, "spectral": 40} and meta.log_offset == 1e-4
+    x = torch.from_numpy(check_patches(2))
+    with torch.no_grad():
+        at_query, as_spectral = model(x)[0], model(x, torch.full((2,), float("nan")))[0]
+        assert torch.equal(at_query, model(x, torch.full((2,), 0.2))[0]) and not torch.equal(at_query, as_spectral)
+    onnx_path = tmp_path / "v3.onnx"
+    export(checkpoint, onnx_path, patches=check_patches(2))
+    assert onnx_metadata(onnx_path).engine_input
+    np.testing.assert_allclose(SurrogateModel(onnx_path).run(x.numpy()[:, 0])[0],
+                               roughness_from_log(at_query.numpy(), 1e-4), rtol=1e-4, atol=1e-8)
+    with pytest.raises(InputError, match="levels='all'"):
+        train(TrainConfig(data=str(spectral), out=str(tmp_path / "a"), max_epochs=1, batch_size=8,
+                          extra_data=(str(fem),)))
+    with pytest.raises(InputError, match="spectral labels only"):
+        train(TrainConfig(data=str(spectral), out=str(tmp_path / "b"), max_epochs=1, batch_size=8, levels="all"))
 
 
 def test_multi_fidelity_training_uses_every_level_and_answers_at_the_finest(tmp_path):

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import COUNT, POSITIVE, SEED, add_overwrite, count_list, defaults, finish, json_text
+from .common import COUNT, FRACTION, POSITIVE, SEED, add_overwrite, count_list, defaults, finish, json_text
 
 
 def add_parser(sub) -> None:
@@ -39,11 +39,20 @@ def add_parser(sub) -> None:
                          "build holds each texture's coarse V too), the contact spacing an input of the network "
                          f"(multi-fidelity) (default: {d['levels']})")
     tr.add_argument("--extra-data", nargs="+", default=[], metavar="DATASET",
-                    help="--levels all: more datasets of the same recipe's textures at other fidelities, e.g. a fine "
-                         "build of its first N samples (default: none)")
+                    help="--levels all: more datasets under the same physics, e.g. a fine build of the recipe's first "
+                         "N samples, or FEM builds beside a spectral one (the engine is then an input and the model "
+                         "answers as the FEM) (default: none)")
     tr.add_argument("--query-h-mm", type=POSITIVE, default=d["query_h_mm"],
                     help="--levels all: the contact spacing in mm the model answers for (default: the finest "
                          "labelled)")
+    tr.add_argument("--max-label-error", type=FRACTION, default=d["max_label_error"], metavar="FRACTION",
+                    help="keep only the FEM labels whose estimated discretization error is at most FRACTION (e.g. "
+                         "0.03), each at its finest level (default: all)")
+    tr.add_argument("--fem-weight", type=POSITIVE, default=d["fem_weight"],
+                    help=f"loss weight of a FEM label relative to a spectral one (default: {d['fem_weight']:g})")
+    tr.add_argument("--log-offset", type=POSITIVE, default=d["log_offset"],
+                    help="the network predicts log(V + offset); a smaller offset resolves smaller V (default: "
+                         f"{d['log_offset']:g})")
     add_overwrite(tr)
     finish(tr, train, data="DATASET")
     ex = sub.add_parser("export", help="export a training checkpoint to ONNX, checked against PyTorch")
@@ -77,7 +86,9 @@ def train(args: argparse.Namespace) -> int:
     train(TrainConfig(data=args.data, out=args.out, seed=args.seed, holdout_family=args.holdout_family,
                       batch_size=args.batch_size, max_epochs=args.max_epochs, max_minutes=args.max_minutes,
                       threads=args.threads, extra_data=tuple(args.extra_data), levels=args.levels,
-                      query_h_mm=args.query_h_mm, widths=args.widths, hidden=args.hidden), overwrite=args.overwrite)
+                      query_h_mm=args.query_h_mm, widths=args.widths, hidden=args.hidden,
+                      max_label_error=args.max_label_error, fem_weight=args.fem_weight, log_offset=args.log_offset),
+          overwrite=args.overwrite)
     return 0
 
 
