@@ -51,6 +51,11 @@ class Recipe:
     pixel_mm: float = PIXEL_MM
     holdout_family: str | None = None  # never trained on: the out-of-family score
     test_fraction: float = 0.1  # share of base recipes (by sample id) held out for testing
+    # printed versions: with this probability a sample is printed by one of ``printers`` (names of
+    # roughness.surface.printing.PROFILES), drawn after everything else, so a recipe with probability 1 makes the
+    # printed twins of the same recipe's unprinted samples (same base texture, same split)
+    print_probability: float = 0.0
+    printers: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -80,9 +85,27 @@ class Recipe:
                              "holdout_family")
         if in_range("test_fraction", self.test_fraction, 0.0, 1.0) == 1.0:
             raise InputError("test_fraction must be below 1, got 1", "test_fraction")
+        in_range("print_probability", self.print_probability, 0.0, 1.0)
+        _check_printers(self.printers, self.print_probability)
 
     def to_json(self) -> str:
-        return json.dumps(asdict(self), sort_keys=True)
+        """The recipe as JSON; the print fields only when used (so recipes from before them keep their JSON, and
+        their datasets resume)."""
+        data = asdict(self)
+        if not self.print_probability and not self.printers:
+            del data["print_probability"], data["printers"]
+        return json.dumps(data, sort_keys=True)
+
+
+def _check_printers(printers: object, probability: float) -> None:
+    """InputError unless ``printers`` is a list of shipped print profile names, non-empty if ``probability`` > 0."""
+    from roughness.surface.printing import PROFILES
+
+    if not isinstance(printers, list) or any(p not in PROFILES for p in printers):
+        raise InputError(f"printers must be a list of print profile names ({', '.join(PROFILES)}), got {printers!r}",
+                         "printers")
+    if probability > 0 and not printers:
+        raise InputError("print_probability > 0 needs printers to draw from", "printers")
 
 
 def _known(field_name: str, family: object) -> dict[str, tuple]:
@@ -157,9 +180,12 @@ def sample_record(recipe: Recipe, index: int) -> dict:
         params["top_diameter_mm"] = 0.3
     texture_seed = int(rng.integers(2**31))
     pipeline = random_pipeline(rng, recipe.max_perturb_steps) if rng.random() < recipe.perturb_probability else None
-    return {"family": family, "params": params, "seed": texture_seed, "size_mm": recipe.size_mm,
-            "pixel_mm": recipe.pixel_mm, "perturbation": None if pipeline is None else json.loads(pipeline.to_json()),
-            "perturbation_seed": texture_seed + 1}
+    record = {"family": family, "params": params, "seed": texture_seed, "size_mm": recipe.size_mm,
+              "pixel_mm": recipe.pixel_mm, "perturbation": None if pipeline is None else json.loads(pipeline.to_json()),
+              "perturbation_seed": texture_seed + 1}
+    if recipe.print_probability > 0 and rng.random() < recipe.print_probability:
+        record["printer"] = recipe.printers[int(rng.integers(len(recipe.printers)))]
+    return record
 
 
 def expand(recipe: Recipe, n: int) -> list[dict]:
@@ -174,4 +200,8 @@ def realise(record: dict) -> Heightmap:
                          pixel_mm=record["pixel_mm"], params=record["params"])
     if record["perturbation"]:
         hm = Pipeline.from_json(json.dumps(record["perturbation"])).apply(hm, record["perturbation_seed"])
+    if record.get("printer"):
+        from roughness.surface.printing import PROFILES, printed
+
+        hm = printed(hm, PROFILES[record["printer"]]).heightmap
     return hm

@@ -197,3 +197,22 @@ def test_palette_judges_members_as_printed_and_records_both(tmp_path, capsys):
 def test_printer_with_map_is_refused_not_ignored(workdir, capsys):  # noqa: F811 (the fixture)
     _expect_refusal(["predict", *BASE[("predict",)], "--map", "m.png", "--printer", "fdm-0.4-0.2"], workdir, capsys,
                     ("--printer: --map maps the digital object",))
+
+
+def test_a_recipe_with_printers_makes_the_printed_twins_of_its_unprinted_samples():
+    """print_probability 1 with the same seed: each record is the unprinted recipe's with a printer drawn last, its
+    heightmap that one printed; recipes without printers keep their JSON (their datasets resume)."""
+    from roughness.dataset.recipe import Recipe, realise, sample_record
+
+    plain = Recipe(name="p", seed=3, families={"grating": 1.0, "dots": 1.0})
+    twins = Recipe(name="p", seed=3, families={"grating": 1.0, "dots": 1.0}, print_probability=1.0,
+                   printers=["fdm-0.4-0.2", "msla-35um"])
+    assert "print" not in plain.to_json() and '"printers"' in twins.to_json()
+    for i in range(3):
+        a, b = sample_record(plain, i), sample_record(twins, i)
+        assert {k: v for k, v in b.items() if k != "printer"} == a and b["printer"] in twins.printers
+        np.testing.assert_array_equal(realise(b).heights, printed(realise(a), PROFILES[b["printer"]]).heightmap.heights)
+    with pytest.raises(InputError, match="printers must be a list of print profile names"):
+        Recipe(print_probability=0.5, printers=["no-such-printer"])
+    with pytest.raises(InputError, match="needs printers"):
+        Recipe(print_probability=0.5)
