@@ -5,12 +5,12 @@
 #   bash models/train-v3.sh DATA RUNS
 #
 # DATA holds training-v3.h5 and training-v3-printed.h5 (110,000 spectral labels) and training-v2-default.h5,
-# training-v2-fine.h5 (FEM labels): datasets/build-v3.sh. Members are trained one after another (2 torch threads each; MEMBERS,
-# MINUTES, WIDTHS, HIDDEN, FEM_WEIGHT override the defaults below); a member whose checkpoint exists is
-# kept, so an interrupted run goes on where it stopped. Multi-fidelity: the spectral labels teach the
-# shared features; the FEM labels converged to 3% (their estimate), each at its finest level, teach the
-# finite block's departure; the graph answers as the FEM at fine (h = 0.14 mm). knit and waffle are held
-# out entirely (the out-of-family scores). log(V + 1e-4): resolves V a tenth of the finest standard's.
+# training-v2-fine.h5 (FEM labels): datasets/build-v3.sh. Members are trained one after another (2 torch
+# threads each; MEMBERS, MINUTES, WIDTHS, HIDDEN, FEM_WEIGHT override the defaults below); a member whose
+# checkpoint exists is kept, so an interrupted run goes on where it stopped. Multi-fidelity: the spectral
+# labels teach the shared features; the FEM labels converged to 3% (their estimate), each at its finest level,
+# teach the finite block's departure; the graph answers as the FEM at fine (h = 0.14 mm). knit and waffle are
+# held out entirely (the out-of-family scores). log(V + 1e-4): resolves V a tenth of the finest standard's.
 set -euo pipefail
 DATA=${1:?usage: train-v3.sh DATA RUNS}
 RUNS=${2:?usage: train-v3.sh DATA RUNS}
