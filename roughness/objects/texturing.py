@@ -6,7 +6,9 @@ Steps, each reported in ``TexturedMesh.notes``:
 
 1. the faces of the region are refined to edges of at most ``edge_mm`` (default: sqrt(2) times the mapping's pixel
    on the surface, so that most edges are about one pixel; ``remesh``): untextured faces stay as they were except where they border textured ones;
-2. vertex normals, area-weighted (``normals``), optionally smoothed over ``normal_radius_mm``;
+2. vertex normals, area-weighted over the textured faces (``normals``; so a region's border moves along the
+   region's normals, not tilted towards the untextured faces beside it), optionally smoothed over
+   ``normal_radius_mm``;
 3. the texture's heights at the vertices of textured faces (``mapping``), bumps outwards;
 4. refused (InputError) if the texture is deeper than the surface's radius where it is concave: the offset
    surface folds where the depth exceeds the radius at which the normals converge (estimated on every textured
@@ -39,7 +41,10 @@ CHUNK = 2_000_000
 
 @dataclass
 class TexturedMesh:
-    """A textured mesh (``mesh``, a trimesh, mm) and what was done to make it."""
+    """A textured mesh (``mesh``, a trimesh, mm) and what was done to make it. ``mean_height_mm`` is the
+    area-weighted mean of the heights over the textured base faces, ``height_volume_mm3`` their integral: the
+    volume the texture adds to first order (exact on flat faces; on a surface of radius R the offset adds a
+    further fraction of about height / R)."""
 
     mesh: object
     triangles_in: int
@@ -51,6 +56,7 @@ class TexturedMesh:
     normal_smoothing_rounds: int
     max_height_mm: float
     mean_height_mm: float
+    height_volume_mm3: float
     min_concave_radius_mm: float
     volume_in_mm3: float
     volume_out_mm3: float
@@ -88,9 +94,9 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
                  f"edge splitting): {len(base_faces):,} -> {len(f):,} triangles; untextured faces kept except where "
                  "they border textured ones")
 
-    normals = vertex_normals(v, f)
-    normals, rounds = smoothed(normals, f, radius, edge)
-    notes.append("displaced along area-weighted vertex normals" +
+    normals = vertex_normals(v, f[textured])
+    normals, rounds = smoothed(normals, f[textured], radius, edge)
+    notes.append("displaced along area-weighted vertex normals of the textured faces" +
                  (f", smoothed over about {radius:g} mm ({rounds} rounds)" if rounds else ""))
 
     moving = np.zeros(len(v), dtype=bool)
@@ -140,9 +146,11 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     import trimesh
 
     out = trimesh.Trimesh(v, f, process=False, validate=False)
-    area = _area(refined.vertices, f[textured])
+    at_vertex = np.zeros(len(v))
+    at_vertex[where] = heights
+    area, volume = _area_and_volume(refined.vertices, f[textured], at_vertex)
     return TexturedMesh(out, len(base_faces), len(f), int(selected.sum()), area, edge, refined.rounds, rounds, depth,
-                        float(heights.mean()), concave.radius_mm, volume_in, signed_volume(v, f), tested, notes)
+                        volume / area, volume, concave.radius_mm, volume_in, signed_volume(v, f), tested, notes)
 
 
 @dataclass(frozen=True)
@@ -189,9 +197,15 @@ def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
     return total
 
 
-def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
-    return sum(0.5 * float(np.linalg.norm(face_normals(vertices, faces[s:s + CHUNK], unit=False), axis=1).sum())
-               for s in range(0, len(faces), CHUNK))
+def _area_and_volume(vertices: np.ndarray, faces: np.ndarray, heights: np.ndarray) -> tuple[float, float]:
+    """Area (mm^2) of the base faces and the integral (mm^3) over them of the heights, linear on each face."""
+    area = volume = 0.0
+    for s in range(0, len(faces), CHUNK):
+        f = faces[s:s + CHUNK]
+        a = 0.5 * np.linalg.norm(face_normals(vertices, f, unit=False), axis=1)
+        area += float(a.sum())
+        volume += float((a * heights[f].mean(axis=1)).sum())
+    return area, volume
 
 
 def _face_normals_chunked(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
