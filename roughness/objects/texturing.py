@@ -33,6 +33,8 @@ from .normals import face_normals, smoothed, vertex_normals
 from .regions import Region
 from .remesh import refine
 
+DEFAULT_NORMAL_RADIUS_MM = 0.0
+"""Normals are area-weighted vertex normals, not smoothed further, unless asked."""
 FLAT_CURVATURE = 1e-3
 """Curvatures (1/mm) below this (radii above 1 m) are taken as flat (rounding in the normals of a flat face)."""
 CHUNK = 2_000_000
@@ -68,7 +70,7 @@ class TexturedMesh:
 
 
 def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_mm: float | None = None,
-                 normal_radius_mm: float = 0.0, check_intersections: bool = True) -> TexturedMesh:
+                 normal_radius_mm: float = DEFAULT_NORMAL_RADIUS_MM, check_intersections: bool = True) -> TexturedMesh:
     """``mesh`` (a closed trimesh, mm) with ``mapping``'s texture on the faces of ``region`` (module docstring).
 
     ``edge_mm``: longest edge of a textured face (default: sqrt(2) times the mapping's ``pixel_mm``, so that the
