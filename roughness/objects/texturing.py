@@ -37,8 +37,8 @@ DEFAULT_NORMAL_RADIUS_MM = 0.0
 """Normals are area-weighted vertex normals, not smoothed further, unless asked."""
 FLAT_CURVATURE = 1e-3
 """Curvatures (1/mm) below this (radii above 1 m) are taken as flat (rounding in the normals of a flat face)."""
-CHUNK = 2_000_000
-"""Edges or faces handled at once in the checks (arrays of this many vectors: tens of MB)."""
+CHUNK = 500_000
+"""Faces handled at once in the checks (their edges' vectors: tens of MB)."""
 
 
 @dataclass
@@ -119,23 +119,25 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
         notes.append(f"smallest concave radius of the textured surface {concave.radius_mm:.3g} mm, above the "
                      f"texture's depth {depth:.3g} mm")
 
-    base_face_normals = _face_normals_chunked(v, f)
-    v = v.copy()
-    v[where] += heights[:, None] * normals[where]
-    folded = _chunked_any(lambda s: folded_faces(base_face_normals[s], v, f[s]), len(f))
+    displaced = v.copy()
+    displaced[where] += heights[:, None] * normals[where]
+    del normals
+    folded = np.concatenate([folded_faces(face_normals(v, f[s:s + CHUNK]), displaced, f[s:s + CHUNK])
+                             for s in range(0, len(f), CHUNK)])
     if folded.any():
-        x, y, z = v[f[np.flatnonzero(folded)[0]]].mean(axis=0)
+        x, y, z = displaced[f[np.flatnonzero(folded)[0]]].mean(axis=0)
         raise InputError(f"displacing by the texture turns {int(folded.sum()):,} faces over (first near ({x:.2f}, "
                          f"{y:.2f}, {z:.2f}) mm): the texture is too deep for the mesh there; use a shallower texture, "
                          "smooth the normals (--normal-radius-mm) or a finer mesh", parameter="mapping")
+    del folded
     check_closed(f)
     notes.append("checked: closed, consistently wound, no face turned over")
     tested = None
     if check_intersections:
         moved_faces = moving[f].any(axis=1)
-        crossing = self_intersections(v, f, moved_faces)
+        crossing = self_intersections(displaced, f, moved_faces)
         if crossing.count:
-            x, y, z = v[f[crossing.pairs[0, 0]]].mean(axis=0)
+            x, y, z = displaced[f[crossing.pairs[0, 0]]].mean(axis=0)
             raise InputError(f"the textured mesh crosses itself: {crossing.count:,} pairs of faces intersect (first "
                              f"near ({x:.2f}, {y:.2f}, {z:.2f}) mm): the texture is too deep where parts of the object "
                              "are close; use a shallower texture or leave that part out of the region",
@@ -147,12 +149,12 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
 
     import trimesh
 
-    out = trimesh.Trimesh(v, f, process=False, validate=False)
+    out = trimesh.Trimesh(displaced, f, process=False, validate=False)
     at_vertex = np.zeros(len(v))
     at_vertex[where] = heights
-    area, volume = _area_and_volume(refined.vertices, f[textured], at_vertex)
+    area, volume = _area_and_volume(v, f[textured], at_vertex)
     return TexturedMesh(out, len(base_faces), len(f), int(selected.sum()), area, edge, refined.rounds, rounds, depth,
-                        volume / area, volume, concave.radius_mm, volume_in, signed_volume(v, f), tested, notes)
+                        volume / area, volume, concave.radius_mm, volume_in, signed_volume(displaced, f), tested, notes)
 
 
 @dataclass(frozen=True)
@@ -184,9 +186,12 @@ def check_closed(faces: np.ndarray) -> None:
     refinement guarantees it, so a failure is a bug, not bad input."""
     n = int(faces.max()) + 1
     a, b = faces.ravel(), np.roll(faces, -1, axis=1).ravel()
-    forward = np.sort(a * n + b)
-    backward = np.sort(b * n + a)
-    if np.any(forward[1:] == forward[:-1]) or not np.array_equal(forward, backward):
+    # each undirected edge as 2 * key + direction: sorted, a closed consistently wound mesh holds every key exactly
+    # twice, once in each direction
+    code = (np.minimum(a, b) * n + np.maximum(a, b)) * 2 + (a < b)
+    del a, b
+    code.sort()
+    if len(code) % 2 or np.any(code[0::2] % 2 != 0) or np.any(code[1::2] != code[0::2] + 1):
         raise RuntimeError("the textured mesh is not closed and consistently wound (a bug in the refinement)")
 
 
@@ -210,10 +215,3 @@ def _area_and_volume(vertices: np.ndarray, faces: np.ndarray, heights: np.ndarra
     return area, volume
 
 
-def _face_normals_chunked(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    return np.concatenate([face_normals(vertices, faces[s:s + CHUNK]) for s in range(0, len(faces), CHUNK)]) \
-        if len(faces) else np.empty((0, 3))
-
-
-def _chunked_any(test, n: int) -> np.ndarray:
-    return np.concatenate([test(slice(s, s + CHUNK)) for s in range(0, n, CHUNK)]) if n else np.empty(0, dtype=bool)
