@@ -93,7 +93,7 @@ def _closed(mesh) -> bool:
 def test_textured_shapes_are_closed_and_do_not_cross_themselves(shape, texture):
     mesh = SHAPES[shape]()
     assert _closed(mesh)
-    kind = "cylinder" if shape == "knob" else "triplanar"
+    kind = {"knob": "cylinder", "sphere": "sphere"}.get(shape, "triplanar")
     result = texture_mesh(mesh, make_mapping(kind, texture, mesh))
     assert _closed(result.mesh)
     assert result.intersection_pairs_tested > 100  # the check tested close pairs (as many as brute force: below)
@@ -224,6 +224,18 @@ def test_cylinder_wrap_closes_without_a_seam(waves):
     assert jumps["fitted"][0] <= 1.2 * jumps["fitted"][1]
     assert jumps["fitted"][2] <= 1.2 * jumps["fitted"][3]
     assert jumps["unstretched"][2] > 2 * jumps["unstretched"][3]
+
+
+def test_uv_mapping_reads_the_mesh_coordinates(texture):
+    ball = trimesh.creation.icosphere(3, radius=8)
+    ball.visual = trimesh.visual.TextureVisuals(uv=ball.vertices[:, :2] / 10)  # a planar UV map, 10 mm per unit
+    mapping = make_mapping("uv", texture, ball, uv_mm=10)
+    top = ball.vertices[:, 2] > 0
+    points, normals = ball.vertices[top], ball.vertex_normals[top]
+    expected = texture.sample(points[:, 0], points[:, 1], periodic=True)
+    assert np.abs(mapping.heights(points, normals) - expected).max() < 1e-9
+    with pytest.raises(InputError, match="no texture coordinates"):
+        make_mapping("uv", texture, trimesh.creation.box())
 
 
 def test_whole_tiles_stretch_least():
