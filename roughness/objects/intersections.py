@@ -61,7 +61,8 @@ def self_intersections(vertices: np.ndarray, faces: np.ndarray, moved: np.ndarra
         sl = slice(start, start + PAIR_CHUNK)
         span = [grid.cells(maxs[sl, k], k) - grid.cells(mins[sl, k], k) + 1 for k in range(3)]
         large[sl] = span[0] * span[1] * span[2] > MAX_CELLS
-    found, tested = [], 0
+    found: list[np.ndarray] = []
+    tested = 0
     small = np.flatnonzero(~large)
     order = small[np.argsort(lo_x[small], kind="stable")]
     cuts = [int(lo_x[order[k]]) for k in range(0, len(order), SLAB_FACES)] + [int(hi_x.max()) + 1]

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -255,7 +255,7 @@ class UVMapping:
     mesh (``base``, a trimesh with per-vertex UVs), the tile is read at UV * ``uv_mm`` (mm per UV unit, periodic)."""
 
     texture: Heightmap
-    base: object  # trimesh.Trimesh with visual.uv
+    base: Any  # trimesh.Trimesh with visual.uv
     uv_mm: float
 
     @property

@@ -9,6 +9,7 @@ import os
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -29,7 +30,7 @@ UNIT_MM = {"mm": 1.0, "millimeter": 1.0, "millimeters": 1.0, "millimetre": 1.0, 
 class ReadMesh:
     """A mesh read from ``path`` (a trimesh, mm) and what reading did to it (``notes``)."""
 
-    mesh: object  # trimesh.Trimesh
+    mesh: Any  # trimesh.Trimesh
     path: str
     notes: list[str] = field(default_factory=list)
 

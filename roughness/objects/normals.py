@@ -5,9 +5,11 @@ import math
 
 import numpy as np
 
-from roughness.core.limits import MAX_WORKING_VALUES, check_size
+from roughness.core.limits import Limit, check_size
 
 CHUNK_FACES = 500_000
+MAX_SMOOTHING_WORK = Limit(4_000_000_000, "MAX_SMOOTHING_WORK")
+"""Rounds x edges of normal smoothing (about a minute of sparse products)."""
 
 
 def face_normals(vertices: np.ndarray, faces: np.ndarray, unit: bool = True) -> np.ndarray:
@@ -38,10 +40,10 @@ def smoothed(normals: np.ndarray, faces: np.ndarray, radius_mm: float, edge_mm: 
     rounds = math.ceil((radius_mm / edge_mm) ** 2) if radius_mm > 0 else 0
     if rounds == 0:
         return normals, 0
+    check_size("normal-smoothing work (rounds x edges)", float(rounds) * 3 * len(faces), MAX_SMOOTHING_WORK,
+               "normal_radius_mm")
     from scipy.sparse import coo_matrix
 
-    check_size("normal-smoothing work (rounds x edges)", float(rounds) * 3 * len(faces), MAX_WORKING_VALUES * 10,
-               "normal_radius_mm")
     n = len(normals)
     a, b = faces.ravel(), np.roll(faces, -1, axis=1).ravel()
     adjacency = coo_matrix((np.ones(2 * len(a)), (np.concatenate([a, b]), np.concatenate([b, a]))), shape=(n, n))

@@ -29,7 +29,7 @@ class Region:
     half_angle_deg: float | None = None
     low: tuple[float, float, float] | None = None
     high: tuple[float, float, float] | None = None
-    colour: tuple[int, int, int] | None = None
+    colour: tuple[float, float, float] | None = None
     tolerance: float = 0.0
 
     def __post_init__(self) -> None:
@@ -63,7 +63,7 @@ class Region:
         if self.kind == "cone":
             axis = _vector("axis", self.axis, nonzero=True)
             cosine = np.asarray(mesh.face_normals) @ (axis / np.linalg.norm(axis))
-            return cosine >= math.cos(math.radians(self.half_angle_deg)) - 1e-12
+            return cosine >= math.cos(math.radians(float(self.half_angle_deg or 0.0))) - 1e-12
         if self.kind == "box":
             centre = np.asarray(mesh.triangles_center)
             return np.all((centre >= np.asarray(self.low)) & (centre <= np.asarray(self.high)), axis=1)
@@ -76,11 +76,11 @@ class Region:
         if self.kind == "all":
             return "all faces"
         if self.kind == "cone":
-            axis = ", ".join(f"{c:g}" for c in self.axis)
+            axis = ", ".join(f"{c:g}" for c in self.axis or ())
             return f"faces whose normal lies within {self.half_angle_deg:g} degrees of ({axis})"
         if self.kind == "box":
-            return f"faces whose centre lies in the box {tuple(self.low)}..{tuple(self.high)} mm"
-        return f"faces painted {tuple(self.colour)} (within {self.tolerance:g} per channel)"
+            return f"faces whose centre lies in the box {self.low}..{self.high} mm"
+        return f"faces painted {self.colour} (within {self.tolerance:g} per channel)"
 
 
 def face_colours(mesh) -> np.ndarray | None:
@@ -120,9 +120,9 @@ def parse_region(text: str) -> Region:
         raise InputError(f"region {text!r}: {kind} takes {' or '.join(map(str, counts[kind]))} numbers, got "
                          f"{len(values)}", parameter="region")
     if kind == "cone":
-        return Region("cone", axis=tuple(values[:3]), half_angle_deg=values[3])
+        return Region("cone", axis=(values[0], values[1], values[2]), half_angle_deg=values[3])
     if kind == "box":
-        return Region("box", low=tuple(values[:3]), high=tuple(values[3:]))
+        return Region("box", low=(values[0], values[1], values[2]), high=(values[3], values[4], values[5]))
     if kind == "colour":
-        return Region("colour", colour=tuple(values[:3]), tolerance=values[3] if len(values) == 4 else 0.0)
+        return Region("colour", colour=(values[0], values[1], values[2]), tolerance=values[3] if len(values) == 4 else 0.0)
     return Region()

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -48,7 +49,7 @@ class TexturedMesh:
     volume the texture adds to first order (exact on flat faces; on a surface of radius R the offset adds a
     further fraction of about height / R)."""
 
-    mesh: object
+    mesh: Any  # trimesh.Trimesh
     triangles_in: int
     triangles_out: int
     textured_faces_in: int
@@ -177,7 +178,8 @@ def min_concave_radius(vertices: np.ndarray, faces: np.ndarray, normals: np.ndar
         k = int(np.argmax(curvature))
         if curvature[k] > FLAT_CURVATURE and 1 / curvature[k] < best:
             best = float(1 / curvature[k])
-            where = tuple(float(c) for c in (vertices[a[k]] + vertices[b[k]]) / 2)
+            x, y, z = (float(c) for c in (vertices[a[k]] + vertices[b[k]]) / 2)
+            where = (x, y, z)
     return Concave(best, where)
 
 
