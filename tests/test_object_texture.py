@@ -346,6 +346,19 @@ def test_bad_mesh_files_are_refused(tmp_path):
         read_mesh(tmp_path / "points.ply")
 
 
+def test_a_3mf_that_unpacks_beyond_the_limit_is_refused_unpacked(tmp_path, monkeypatch):
+    import zipfile
+
+    import roughness.objects.meshes as meshes
+
+    monkeypatch.setattr(meshes, "MAX_MESH_FILE_BYTES", 1_000_000)  # the 4 GB limit, scaled down
+    with zipfile.ZipFile(tmp_path / "bomb.3mf", "w", zipfile.ZIP_DEFLATED) as z:  # 2 MB of zeros, 2 kB packed
+        z.writestr("3D/3dmodel.model", b"\0" * 2_000_000)
+    assert (tmp_path / "bomb.3mf").stat().st_size < 10_000
+    with pytest.raises(InputError, match="unpacks to 2,000,000 bytes"):
+        read_mesh(tmp_path / "bomb.3mf")
+
+
 def test_inside_out_mesh_is_turned_and_noted(tmp_path):
     box = trimesh.creation.box((2, 2, 2))
     box.invert()

@@ -1,7 +1,9 @@
 """Meshes in and out: read STL, OBJ, PLY and 3MF through trimesh (mm), check them, write STL (streamed) and 3MF.
 
-Sizes are checked before anything is allocated: the file's bytes (MAX_MESH_FILE_BYTES), a binary STL's declared
-triangle count and every mesh's triangles (MAX_MESH_TRIANGLES). trimesh parses the files as data (no code runs).
+Sizes are checked before anything is allocated: the file's bytes (MAX_MESH_FILE_BYTES; a 3MF's unpacked members too),
+a binary STL's declared triangle count and every mesh's triangles (MAX_MESH_TRIANGLES). trimesh parses the files as
+data (no code runs; 3MF's XML with entities, DTDs and network access off). Polygons with more than three corners
+(OBJ, PLY) are triangulated by trimesh as it reads them.
 """
 from __future__ import annotations
 
@@ -63,6 +65,8 @@ def read_mesh(path: str | Path, watertight: bool = True, parameter: str = "mesh"
         raise InputError(f"{path} is empty", parameter=parameter)
     if suffix == ".stl":
         _check_binary_stl(path, size, parameter)
+    if suffix == ".3mf":
+        _check_zip(path, parameter)
     try:
         loaded = trimesh.load(str(path), file_type=suffix[1:], force="mesh", process=True)
     except Exception as err:  # trimesh raises many kinds for a malformed file
@@ -91,6 +95,20 @@ def _check_binary_stl(path: Path, size: int, parameter: str) -> None:
     (count,) = struct.unpack("<I", head[80:84])
     if 84 + 50 * count == size:
         check_size(f"triangles declared in {path}", count, MAX_MESH_TRIANGLES, parameter)
+
+
+def _check_zip(path: Path, parameter: str) -> None:
+    """A 3MF (a zip archive) whose members unpack to more than MAX_MESH_FILE_BYTES is refused before unpacking."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as archive:
+            unpacked = sum(member.file_size for member in archive.infolist())
+    except (zipfile.BadZipFile, OSError) as err:
+        raise InputError(f"cannot read {path} as a 3MF mesh (a zip archive): {err}", parameter=parameter) from None
+    if unpacked > MAX_MESH_FILE_BYTES:
+        raise InputError(f"{path} unpacks to {unpacked:,} bytes, above the limit of {MAX_MESH_FILE_BYTES:,} "
+                         "(MAX_MESH_FILE_BYTES)", parameter=parameter)
 
 
 def _to_mm(read: ReadMesh) -> None:
