@@ -131,6 +131,16 @@ def test_texture_that_would_cross_a_narrow_gap_is_refused(texture):
     texture_mesh(two, Triplanar(Heightmap(texture.heights / 4, PIXEL)))  # 0.075 mm on each side fits
 
 
+def test_a_refinement_beyond_the_triangle_limit_is_refused_before_it_starts(texture, monkeypatch):
+    import roughness.objects.remesh as remesh
+
+    allocated = []
+    monkeypatch.setattr(remesh, "_split", lambda *a: allocated.append(1))
+    with pytest.raises(InputError, match="MAX_MESH_TRIANGLES") as err:  # a 1 m ball at 1 um: 1e13 triangles
+        texture_mesh(trimesh.creation.icosphere(2, radius=500), Triplanar(texture), edge_mm=0.001)
+    assert err.value.parameter == "edge_mm" and not allocated
+
+
 def test_depth_beyond_the_concave_radius_is_refused(texture):
     cavity = trimesh.creation.icosphere(4, radius=1.0)
     cavity.invert()
