@@ -210,15 +210,18 @@ def test_triplanar_seams_are_blended(texture):
     assert bound[0.0][0] > 1.5 * bound[0.0][1]  # the check can fail: a hard seam
 
 
-def test_cylinder_wrap_closes_without_a_seam(waves):
-    """A whole number of tiles around: the largest jump across the wrap (angle +-pi) <= 1.2 x the largest jump
-    elsewhere on the side; with the tile laid unstretched (a fraction of a tile left over) the jumps across the wrap
-    are, in RMS, twice those elsewhere."""
-    can = trimesh.creation.cylinder(radius=7, height=8, sections=64)
+@pytest.mark.parametrize("kind", ["cylinder", "sphere"])
+def test_wrap_closes_without_a_seam(kind, waves):
+    """A whole number of tiles around: the largest height jump across an edge crossing the wrap (angle +-pi) is at
+    most 1.2 x the largest across edges crossing three other meridians (same orientation), on the side (the
+    sphere's equatorial band); with the tile laid unstretched (a fraction of a tile left over) the jumps across the
+    wrap are, in RMS, more than twice those across the other meridians."""
+    can = trimesh.creation.cylinder(radius=7, height=8, sections=64) if kind == "cylinder" else \
+        trimesh.creation.icosphere(4, radius=7)
     axis = axis_of((0, 0, 0), (0, 0, 1))
-    fitted = wrap(waves, "cylinder", axis, 7.0)
+    fitted = wrap(waves, kind, axis, 7.0)
     assert fitted.tiles == 4 and fitted.stretch == pytest.approx(2 * math.pi * 7 / (4 * 12))
-    unstretched = Wrap(waves, "cylinder", axis, 7.0, 4, 1.0)
+    unstretched = Wrap(waves, kind, axis, 7.0, 4, 1.0)
     jumps = {}
     for name, mapping in (("fitted", fitted), ("unstretched", unstretched)):
         v, n, h, edges = _vertex_heights(can, mapping, PIXEL * math.sqrt(2))
@@ -226,14 +229,23 @@ def test_cylinder_wrap_closes_without_a_seam(waves):
         ok = side[edges[:, 0]] & side[edges[:, 1]]
         _, e1, e2, _ = axis.frame()  # the wrap's angle 0 lies along e1
         angle = np.arctan2(v @ e2, v @ e1)
-        across = ok & (np.abs(angle[edges[:, 0]] - angle[edges[:, 1]]) > math.pi)
         jump = np.abs(h[edges[:, 0]] - h[edges[:, 1]])
-        assert across.sum() > 20
-        rms = [math.sqrt(np.mean(jump[k] ** 2)) for k in (across, ok & ~across)]
-        jumps[name] = (jump[across].max(), jump[ok & ~across].max(), *rms)
+        crossing = [ok & _crosses(angle, edges, at) for at in (math.pi, 0.0, math.pi / 2, -math.pi / 2)]
+        across, control = crossing[0], crossing[1] | crossing[2] | crossing[3]  # control: three other meridians
+        assert across.sum() > 20 and control.sum() > 60
+        rms = [math.sqrt(np.mean(jump[k] ** 2)) for k in (across, control)]
+        jumps[name] = (jump[across].max(), jump[control].max(), *rms)
     assert jumps["fitted"][0] <= 1.2 * jumps["fitted"][1]
     assert jumps["fitted"][2] <= 1.2 * jumps["fitted"][3]
     assert jumps["unstretched"][2] > 2 * jumps["unstretched"][3]
+
+
+def _crosses(angle: np.ndarray, edges: np.ndarray, at: float) -> np.ndarray:
+    """Edges that cross or touch the meridian at angle ``at`` (their ends on either side of it or one on it, both
+    within 90 degrees of it)."""
+    a, b = np.sin(angle[edges[:, 0]] - at), np.sin(angle[edges[:, 1]] - at)
+    near = (np.cos(angle[edges[:, 0]] - at) > 0) & (np.cos(angle[edges[:, 1]] - at) > 0)
+    return near & (a * b <= 1e-12) & ((np.abs(a) > 1e-12) | (np.abs(b) > 1e-12))
 
 
 def test_uv_mapping_reads_the_mesh_coordinates(texture):
