@@ -441,3 +441,19 @@ def test_cli_refuses_a_texture_deeper_than_a_hollow(tmp_path, monkeypatch, capsy
     argv = ["object", "texture", "hollow.stl", "--texture", "standard-1.0", "--region", "box:-1.5,-1.5,-1.5,1.5,1.5,1.5",
             "--edge-mm", "0.3", "--out", "h.stl"]
     _expect_refusal(argv, tmp_path, capsys, ("concave with a radius",))
+
+
+def test_smoothed_normals_spread_the_turn_of_a_crease(texture):
+    """Smoothing the normals over a radius spreads a crease's turn over more edges: the smallest concave radius the
+    displacement sees grows, and the smoothing is reported."""
+    cavity = trimesh.creation.icosphere(2, radius=2.0)  # facets of about 1 mm: creases between them
+    cavity.invert()
+    block = trimesh.util.concatenate([trimesh.creation.box((8, 8, 8)), cavity])
+    region = Region("box", low=(-2.5, -2.5, -2.5), high=(2.5, 2.5, 2.5))
+    shallow = Triplanar(Heightmap(texture.heights / 10, PIXEL))
+    plain = texture_mesh(block, shallow, region)
+    smooth = texture_mesh(block, shallow, region, normal_radius_mm=1.0)
+    assert plain.normal_smoothing_rounds == 0 and smooth.normal_smoothing_rounds == 8  # (1 / 0.354)^2 rounded up
+    assert smooth.min_concave_radius_mm > 1.5 * plain.min_concave_radius_mm
+    assert any("smoothed over about 1 mm" in n for n in smooth.notes)
+    assert _closed(smooth.mesh)
