@@ -38,8 +38,9 @@ def main() -> None:
     texture = named_texture("standard-1.0")
     steps["mesh and texture"] = time.perf_counter() - t
     t = time.perf_counter()
-    result = texture_mesh(ball, Triplanar(texture))
+    result = texture_mesh(ball, Triplanar(texture), progress=print)
     steps["texture_mesh (refine, displace, all checks)"] = time.perf_counter() - t
+    steps |= {f"- {name}": seconds for name, seconds in result.seconds.items()}
     t = time.perf_counter()
     written = write_mesh(result.mesh, args.out, overwrite=True)
     steps["write binary STL"] = time.perf_counter() - t

@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
                            args.blend_deg, args.uv_mm)
     log(args, f"object texture: {read.triangles:,} triangles in {args.mesh}; texturing")
     result = texture_mesh(read.mesh, mapping, region, args.edge_mm, args.normal_radius_mm,
-                          check_intersections=not args.no_intersection_check)
+                          check_intersections=not args.no_intersection_check, progress=lambda line: log(args, line))
     written = write_mesh(result.mesh, out, args.overwrite)
     if preview is not None:
         from roughness.core.figures import save_figure

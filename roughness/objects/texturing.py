@@ -19,6 +19,8 @@ Steps, each reported in ``TexturedMesh.notes``:
 from __future__ import annotations
 
 import math
+import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -65,20 +67,24 @@ class TexturedMesh:
     volume_out_mm3: float
     intersection_pairs_tested: int | None
     notes: list[str] = field(default_factory=list)
+    seconds: dict[str, float] = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         return {k: v for k, v in self.__dict__.items() if k != "mesh"}
 
 
 def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_mm: float | None = None,
-                 normal_radius_mm: float = DEFAULT_NORMAL_RADIUS_MM, check_intersections: bool = True) -> TexturedMesh:
+                 normal_radius_mm: float = DEFAULT_NORMAL_RADIUS_MM, check_intersections: bool = True,
+                 progress: Callable[[str], object] | None = None) -> TexturedMesh:
     """``mesh`` (a closed trimesh, mm) with ``mapping``'s texture on the faces of ``region`` (module docstring).
 
     ``edge_mm``: longest edge of a textured face (default: sqrt(2) times the mapping's ``pixel_mm``, so that the
     right triangles bisection makes have legs of about one pixel); ``normal_radius_mm``: smooth
     the displacement's normals over about this radius (0: area-weighted vertex normals only);
-    ``check_intersections``: test the result for faces crossing each other (the slow part of large meshes).
+    ``check_intersections``: test the result for faces crossing each other (the slow part of large meshes);
+    ``progress``: called with a line as each step ends (its time in ``TexturedMesh.seconds``).
     """
+    clock = _Clock(progress)
     require_closed(mesh, "the mesh")
     edge = positive("edge_mm", math.sqrt(2) * mapping.pixel_mm if edge_mm is None else edge_mm)
     radius = non_negative("normal_radius_mm", normal_radius_mm)
@@ -93,6 +99,7 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
 
     refined = refine(base_vertices, base_faces, selected, edge)
     v, f, textured = refined.vertices, refined.faces, refined.textured
+    clock.step("refine", f"{len(f):,} triangles")
     notes.append(f"remeshed the textured faces to edges of at most {edge:.4g} mm ({refined.rounds} rounds of "
                  f"edge splitting): {len(base_faces):,} -> {len(f):,} triangles; untextured faces kept except where "
                  "they border textured ones")
@@ -105,11 +112,14 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     moving = np.zeros(len(v), dtype=bool)
     moving[f[textured].ravel()] = True
     where = np.flatnonzero(moving)
+    clock.step("normals", f"{len(v):,} vertices")
     heights = np.asarray(mapping.heights(v[where], normals[where]), dtype=float)
     if heights.shape != (len(where),) or not np.all(np.isfinite(heights)):
         raise InputError("the mapping gave heights that are not finite numbers (one per point)", parameter="mapping")
     depth = float(heights.max())
+    clock.step("heights", f"{len(where):,} vertices")
     concave = min_concave_radius(v, f[textured], normals)
+    clock.step("concave radius")
     if concave.radius_mm < depth:
         x, y, z = concave.where
         raise InputError(f"the texture is {depth:.3g} mm deep but the surface is concave with a radius of "
@@ -132,6 +142,7 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
                          "smooth the normals (--normal-radius-mm) or a finer mesh", parameter="mapping")
     del folded
     check_closed(f)
+    clock.step("displace, turned-face and closed checks")
     notes.append("checked: closed, consistently wound, no face turned over")
     tested = None
     if check_intersections:
@@ -144,6 +155,7 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
                              "are close; use a shallower texture or leave that part out of the region",
                              parameter="mapping")
         tested = crossing.tested
+        clock.step("self-intersection check", f"{tested:,} pairs")
         notes.append(f"checked: no two faces cross ({tested:,} pairs of faces with overlapping boxes tested exactly)")
     else:
         notes.append("self-intersection NOT checked (asked not to)")
@@ -155,7 +167,24 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     at_vertex[where] = heights
     area, volume = _area_and_volume(v, f[textured], at_vertex)
     return TexturedMesh(out, len(base_faces), len(f), int(selected.sum()), area, edge, refined.rounds, rounds, depth,
-                        volume / area, volume, concave.radius_mm, volume_in, signed_volume(displaced, f), tested, notes)
+                        volume / area, volume, concave.radius_mm, volume_in, signed_volume(displaced, f), tested, notes,
+                        clock.seconds)
+
+
+class _Clock:
+    """Times the steps of texture_mesh and tells ``progress`` as each ends."""
+
+    def __init__(self, progress: Callable[[str], object] | None) -> None:
+        self.progress = progress
+        self.seconds: dict[str, float] = {}
+        self.last = time.perf_counter()
+
+    def step(self, name: str, detail: str = "") -> None:
+        now = time.perf_counter()
+        self.seconds[name] = now - self.last
+        self.last = now
+        if self.progress is not None:
+            self.progress(f"  {name}: {self.seconds[name]:.1f} s" + (f" ({detail})" if detail else ""))
 
 
 @dataclass(frozen=True)
