@@ -99,7 +99,7 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
 
     refined = refine(base_vertices, base_faces, selected, edge)
     v, f, textured = refined.vertices, refined.faces, refined.textured
-    clock.step("refine", f"{len(f):,} triangles")
+    clock.step("check input, refine", f"{len(f):,} triangles")
     notes.append(f"remeshed the textured faces to edges of at most {edge:.4g} mm ({refined.rounds} rounds of "
                  f"edge splitting): {len(base_faces):,} -> {len(f):,} triangles; untextured faces kept except where "
                  "they border textured ones")
