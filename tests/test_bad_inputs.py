@@ -44,6 +44,7 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("tactile-image",): ["picture.png", "--out", "plate"],
     ("perception", "plan"): ["--stimuli", "stimuli.csv", "--truth", "truth.csv", "--trials", "10", "--experiments", "2",
                              "--out", "plan"],
+    ("object", "texture"): ["mesh.stl", "--texture", "standard-1.0", "--out", "new.stl"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -65,6 +66,7 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("tune",): [(0, ".npy", [])],
     ("tactile-image",): [(0, ".png", [])],
     ("perception", "plan"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
+    ("object", "texture"): [(0, ".stl", []), ("--texture", ".npy", ["--pixel-mm", "0.05"])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
@@ -79,8 +81,9 @@ FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("tune",): ["--out"],
     ("palette",): ["--out"],
     ("tactile-image",): ["--out"],
+    ("object", "texture"): ["--out", "--preview"],
 }
-OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy"}
+OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy", "--preview": ".png"}
 OUTPUT_SUFFIX_OF = {("homogeneity",): {"--map": ".png"}}
 
 
@@ -133,6 +136,9 @@ def workdir(tmp_path, monkeypatch):
 
     Image.fromarray(np.repeat(np.uint8([[0, 128, 255]]), 30, axis=0).repeat(3, axis=1)[..., None].repeat(3, axis=2)
                     ).save(tmp_path / "picture.png")  # three flat colours
+    import trimesh
+
+    trimesh.creation.box((10, 10, 10)).export(tmp_path / "mesh.stl")
     monkeypatch.chdir(tmp_path)
     _tripwires(monkeypatch)
     return tmp_path
@@ -148,6 +154,9 @@ def _tripwires(monkeypatch) -> None:
     import roughness.dataset.build
 
     monkeypatch.setattr(roughness.dataset.build, "build", tripped)
+    import roughness.objects.texturing
+
+    monkeypatch.setattr(roughness.objects.texturing, "texture_mesh", tripped)
 
 
 def _snapshot(folder: Path) -> dict[str, str]:

@@ -1,0 +1,134 @@
+"""Refine the textured faces of a mesh to a target edge length, conforming, so a closed mesh stays closed.
+
+Each round splits, at its midpoint, the longest edge of every textured face whose longest edge exceeds the target
+(longest-edge bisection, which keeps the triangles' angles bounded and does not over-refine long thin faces); each
+face is then replaced by the template for its split edges (one, two or three: two, three or four triangles, the quad
+of two split edges cut along its shorter diagonal). An edge is
+split for both faces that share it, so no crack opens; untextured faces are only split where they share an edge
+with a textured one (the transition), elsewhere they stay as they were. A new vertex is the midpoint of its edge,
+so flat faces stay flat. Orientation is kept, so a consistently wound mesh stays so.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughness.core.errors import InputError
+from roughness.core.limits import MAX_MESH_TRIANGLES, check_size
+
+
+CHUNK = 1_000_000
+"""Faces handled at once in a round (their edges, lengths and templates: about 200 MB)."""
+
+
+@dataclass
+class Refined:
+    """A refined mesh: ``vertices`` (n, 3) mm, ``faces`` (m, 3), ``textured`` (m,) bool, and the ``rounds`` of
+    splitting it took."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    textured: np.ndarray
+    rounds: int
+
+
+def predicted_triangles(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_mm: float) -> float:
+    """About how many triangles refinement will make, from above: the textured area over edge_mm^2 / 8 (the
+    triangles of longest-edge bisection average 0.17 edge_mm^2: 13.1 million on the 11,296 mm^2 of
+    benchmarks/object_texture.py), plus the untextured faces; checked against MAX_MESH_TRIANGLES before anything
+    is refined."""
+    area = 0.0
+    for s in range(0, len(faces), CHUNK):
+        tri = vertices[faces[s:s + CHUNK][textured[s:s + CHUNK]]]
+        area += 0.5 * float(np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
+    return area / (edge_mm**2 / 8) + float((~textured).sum())
+
+
+def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_mm: float) -> Refined:
+    """Split edges of textured faces until none is longer than ``edge_mm`` (mm) (module docstring)."""
+    if not edge_mm > 0:
+        raise InputError(f"edge length must be positive, got {edge_mm!r}", parameter="edge_mm")
+    check_size("triangles after refinement (estimated)", predicted_triangles(vertices, faces, textured, edge_mm),
+               MAX_MESH_TRIANGLES, "edge_mm")
+    v = np.ascontiguousarray(vertices, dtype=float)
+    f = np.ascontiguousarray(faces, dtype=np.int64)
+    tex = np.asarray(textured, dtype=bool).copy()
+    rounds = 0
+    while True:
+        split = _edges_to_split(v, f, tex, edge_mm)
+        if split.size == 0:
+            return Refined(v, f, tex, rounds)
+        rounds += 1
+        n = len(v)
+        v = np.concatenate([v, 0.5 * (v[split // n] + v[split % n])])
+        pieces = [_split(v, f[s:s + CHUNK], tex[s:s + CHUNK], split, n) for s in range(0, len(f), CHUNK)]
+        del f, tex
+        f = np.concatenate([p[0] for p in pieces])
+        tex = np.concatenate([p[1] for p in pieces])
+        del pieces
+        check_size("triangles during refinement", len(f), MAX_MESH_TRIANGLES, "edge_mm")
+
+
+def _edge_keys(f: np.ndarray, n_vertices: int) -> np.ndarray:
+    """(m, 3) int64 keys of each face's edges (a, b), (b, c), (c, a), the same for both faces of an edge."""
+    a, b = f, np.roll(f, -1, axis=1)
+    return np.minimum(a, b) * n_vertices + np.maximum(a, b)
+
+
+def _edges_to_split(v: np.ndarray, f: np.ndarray, tex: np.ndarray, edge_mm: float) -> np.ndarray:
+    """Sorted unique keys of the longest edges of textured faces, where longer than ``edge_mm``."""
+    keys = []
+    for s in range(0, len(f), CHUNK):
+        ft = f[s:s + CHUNK][tex[s:s + CHUNK]]
+        length = np.linalg.norm(v[np.roll(ft, -1, axis=1)] - v[ft], axis=2)
+        longest = np.argmax(length, axis=1) if len(ft) else np.empty(0, dtype=np.int64)
+        rows = np.flatnonzero(length[np.arange(len(ft)), longest] > edge_mm)
+        keys.append(_edge_keys(ft[rows], len(v))[np.arange(len(rows)), longest[rows]])
+    return np.unique(np.concatenate(keys)) if keys else np.empty(0, dtype=np.int64)
+
+
+def _split(v: np.ndarray, f: np.ndarray, tex: np.ndarray, split: np.ndarray, n: int):
+    """Faces ``f`` (of a mesh of ``n`` vertices before this round; ``v`` holds the midpoints of ``split`` after them)
+    replaced by their templates, and their textured flags."""
+    keys = _edge_keys(f, n)
+    where = np.searchsorted(split, keys)
+    hit = split[np.minimum(where, len(split) - 1)] == keys
+    mid = np.where(hit, n + where, -1)  # (m, 3) new vertex on each edge, or -1
+    del keys, where
+    pattern = hit.sum(axis=1)
+    out_f, out_t = [f[pattern == 0]], [tex[pattern == 0]]
+    for count in (1, 2, 3):
+        sel = pattern == count
+        if not sel.any():
+            continue
+        fs, ms, hs = f[sel], mid[sel], hit[sel]
+        if count == 1:
+            roll = np.argmax(hs, axis=1)  # the split edge first
+        elif count == 2:
+            roll = (np.argmin(hs, axis=1) + 1) % 3  # the unsplit edge last
+        else:
+            roll = np.zeros(len(fs), dtype=np.int64)
+        idx = (np.arange(3)[None, :] + roll[:, None]) % 3
+        fs = np.take_along_axis(fs, idx, axis=1)
+        ms = np.take_along_axis(ms, idx, axis=1)
+        new = _template(v, fs, ms, count)
+        out_f.append(new)
+        out_t.append(np.tile(tex[sel], len(new) // len(fs)))
+    return np.concatenate(out_f), np.concatenate(out_t)
+
+
+def _template(v: np.ndarray, fs: np.ndarray, ms: np.ndarray, count: int) -> np.ndarray:
+    """The faces replacing faces ``fs`` (a, b, c) with midpoints ``ms`` (on ab, bc, ca), rolled so that the split
+    edge comes first (1) or the unsplit one last (2); stacked template by template."""
+    a, b, c = fs.T
+    m0, m1, m2 = ms.T
+    if count == 1:
+        return np.concatenate([np.stack([a, m0, c], 1), np.stack([m0, b, c], 1)])
+    if count == 2:
+        short = np.linalg.norm(v[a] - v[m1], axis=1) <= np.linalg.norm(v[m0] - v[c], axis=1)
+        first = np.where(short[:, None], np.stack([a, m0, m1], 1), np.stack([a, m0, c], 1))
+        second = np.where(short[:, None], np.stack([a, m1, c], 1), np.stack([m0, m1, c], 1))
+        return np.concatenate([np.stack([m0, b, m1], 1), first, second])
+    return np.concatenate([np.stack([a, m0, m2], 1), np.stack([m0, b, m1], 1), np.stack([m2, m1, c], 1),
+                           np.stack([m0, m1, m2], 1)])

@@ -1,0 +1,248 @@
+"""Put a texture on a mesh: refine the textured faces to the texture's pixel, displace them along smoothed vertex
+normals by the mapping's heights, and check the result (closed, consistently wound, not folded, not crossing
+itself).
+
+Steps, each reported in ``TexturedMesh.notes``:
+
+1. the faces of the region are refined to edges of at most ``edge_mm`` (default: sqrt(2) times the mapping's pixel
+   on the surface, so that most edges are about one pixel; ``remesh``): untextured faces stay as they were except where they border textured ones;
+2. vertex normals, area-weighted over the textured faces (``normals``; so a region's border moves along the
+   region's normals, not tilted towards the untextured faces beside it), optionally smoothed over
+   ``normal_radius_mm``;
+3. the texture's heights at the vertices of textured faces (``mapping``), bumps outwards;
+4. refused (InputError) if the texture is deeper than the surface's radius where it is concave: the offset
+   surface folds where the depth exceeds the radius at which the normals converge (estimated on every textured
+   edge from the normals at its ends: curvature = -(n_b - n_a).(b - a) / |b - a|^2);
+5. displaced, then checked: every directed edge once and its reverse once (closed and consistently wound), no
+   face turned over, no two faces crossing (``intersections``).
+"""
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from roughness.core.checks import non_negative, positive
+from roughness.core.errors import InputError
+
+from .intersections import folded_faces, self_intersections
+from .mapping import TextureMapping
+from .meshes import require_closed
+from .normals import face_normals, smoothed, vertex_normals
+from .regions import Region
+from .remesh import refine
+
+DEFAULT_NORMAL_RADIUS_MM = 0.0
+"""Normals are area-weighted vertex normals, not smoothed further, unless asked."""
+FLAT_CURVATURE = 1e-3
+"""Curvatures (1/mm) below this (radii above 1 m) are taken as flat (rounding in the normals of a flat face)."""
+CHUNK = 500_000
+"""Faces handled at once in the checks (their edges' vectors: tens of MB)."""
+
+
+@dataclass
+class TexturedMesh:
+    """A textured mesh (``mesh``, a trimesh, mm) and what was done to make it. ``mean_height_mm`` is the
+    area-weighted mean of the heights over the textured base faces, ``height_volume_mm3`` their integral: the
+    volume the texture adds to first order (exact on flat faces; on a surface of radius R the offset adds a
+    further fraction of about height / R)."""
+
+    mesh: Any  # trimesh.Trimesh
+    triangles_in: int
+    triangles_out: int
+    textured_faces_in: int
+    textured_area_mm2: float
+    edge_mm: float
+    refinement_rounds: int
+    normal_smoothing_rounds: int
+    max_height_mm: float
+    mean_height_mm: float
+    height_volume_mm3: float
+    min_concave_radius_mm: float
+    volume_in_mm3: float
+    volume_out_mm3: float
+    intersection_pairs_tested: int | None
+    notes: list[str] = field(default_factory=list)
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k != "mesh"}
+
+
+def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_mm: float | None = None,
+                 normal_radius_mm: float = DEFAULT_NORMAL_RADIUS_MM, check_intersections: bool = True,
+                 progress: Callable[[str], object] | None = None) -> TexturedMesh:
+    """``mesh`` (a closed trimesh, mm) with ``mapping``'s texture on the faces of ``region`` (module docstring).
+
+    ``edge_mm``: longest edge of a textured face (default: sqrt(2) times the mapping's ``pixel_mm``, so that the
+    right triangles bisection makes have legs of about one pixel); ``normal_radius_mm``: smooth
+    the displacement's normals over about this radius (0: area-weighted vertex normals only);
+    ``check_intersections``: test the result for faces crossing each other (the slow part of large meshes);
+    ``progress``: called with a line as each step ends (its time in ``TexturedMesh.seconds``).
+    """
+    clock = _Clock(progress)
+    require_closed(mesh, "the mesh")
+    edge = positive("edge_mm", math.sqrt(2) * mapping.pixel_mm if edge_mm is None else edge_mm)
+    radius = non_negative("normal_radius_mm", normal_radius_mm)
+    selected = np.asarray(region.faces(mesh), dtype=bool)
+    if not selected.any():
+        raise InputError(f"the region ({region.describe()}) selects no face of the mesh", parameter="region")
+    notes = [f"textured region: {region.describe()}: {int(selected.sum()):,} of {len(mesh.faces):,} faces"]
+    notes += list(getattr(mapping, "notes", lambda: [])())
+    base_vertices = np.asarray(mesh.vertices, dtype=float)
+    base_faces = np.asarray(mesh.faces, dtype=np.int64)
+    volume_in = signed_volume(base_vertices, base_faces)
+
+    refined = refine(base_vertices, base_faces, selected, edge)
+    v, f, textured = refined.vertices, refined.faces, refined.textured
+    clock.step("check input, refine", f"{len(f):,} triangles")
+    notes.append(f"remeshed the textured faces to edges of at most {edge:.4g} mm ({refined.rounds} rounds of "
+                 f"edge splitting): {len(base_faces):,} -> {len(f):,} triangles; untextured faces kept except where "
+                 "they border textured ones")
+
+    normals = vertex_normals(v, f[textured])
+    normals, rounds = smoothed(normals, f[textured], radius, edge)
+    notes.append("displaced along area-weighted vertex normals of the textured faces" +
+                 (f", smoothed over about {radius:g} mm ({rounds} rounds)" if rounds else ""))
+
+    moving = np.zeros(len(v), dtype=bool)
+    moving[f[textured].ravel()] = True
+    where = np.flatnonzero(moving)
+    clock.step("normals", f"{len(v):,} vertices")
+    heights = np.asarray(mapping.heights(v[where], normals[where]), dtype=float)
+    if heights.shape != (len(where),) or not np.all(np.isfinite(heights)):
+        raise InputError("the mapping gave heights that are not finite numbers (one per point)", parameter="mapping")
+    depth = float(heights.max())
+    clock.step("heights", f"{len(where):,} vertices")
+    concave = min_concave_radius(v, f[textured], normals)
+    clock.step("concave radius")
+    if concave.radius_mm < depth:
+        x, y, z = concave.where
+        raise InputError(f"the texture is {depth:.3g} mm deep but the surface is concave with a radius of "
+                         f"{concave.radius_mm:.3g} mm near ({x:.2f}, {y:.2f}, {z:.2f}) mm: displaced along its normals "
+                         "it would fold into itself; use a shallower texture (--height-mm), smooth the normals over a "
+                         "larger radius (--normal-radius-mm), or leave that part out of the region", parameter="mapping")
+    if math.isfinite(concave.radius_mm):
+        notes.append(f"smallest concave radius of the textured surface {concave.radius_mm:.3g} mm, above the "
+                     f"texture's depth {depth:.3g} mm")
+
+    displaced = v.copy()
+    displaced[where] += heights[:, None] * normals[where]
+    del normals
+    folded = np.concatenate([folded_faces(face_normals(v, f[s:s + CHUNK]), displaced, f[s:s + CHUNK])
+                             for s in range(0, len(f), CHUNK)])
+    if folded.any():
+        x, y, z = displaced[f[np.flatnonzero(folded)[0]]].mean(axis=0)
+        raise InputError(f"displacing by the texture turns {int(folded.sum()):,} faces over (first near ({x:.2f}, "
+                         f"{y:.2f}, {z:.2f}) mm): the texture is too deep for the mesh there; use a shallower texture, "
+                         "smooth the normals (--normal-radius-mm) or a finer mesh", parameter="mapping")
+    del folded
+    check_closed(f)
+    clock.step("displace, turned-face and closed checks")
+    notes.append("checked: closed, consistently wound, no face turned over")
+    tested = None
+    if check_intersections:
+        moved_faces = moving[f].any(axis=1)
+        crossing = self_intersections(displaced, f, moved_faces)
+        if crossing.count:
+            x, y, z = displaced[f[crossing.pairs[0, 0]]].mean(axis=0)
+            raise InputError(f"the textured mesh crosses itself: {crossing.count:,} pairs of faces intersect (first "
+                             f"near ({x:.2f}, {y:.2f}, {z:.2f}) mm): the texture is too deep where parts of the object "
+                             "are close; use a shallower texture or leave that part out of the region",
+                             parameter="mapping")
+        tested = crossing.tested
+        clock.step("self-intersection check", f"{tested:,} pairs")
+        notes.append(f"checked: no two faces cross ({tested:,} pairs of faces with overlapping boxes tested exactly)")
+    else:
+        notes.append("self-intersection NOT checked (asked not to)")
+
+    import trimesh
+
+    out = trimesh.Trimesh(displaced, f, process=False, validate=False)
+    at_vertex = np.zeros(len(v))
+    at_vertex[where] = heights
+    area, volume = _area_and_volume(v, f[textured], at_vertex)
+    return TexturedMesh(out, len(base_faces), len(f), int(selected.sum()), area, edge, refined.rounds, rounds, depth,
+                        volume / area, volume, concave.radius_mm, volume_in, signed_volume(displaced, f), tested, notes,
+                        clock.seconds)
+
+
+class _Clock:
+    """Times the steps of texture_mesh and tells ``progress`` as each ends."""
+
+    def __init__(self, progress: Callable[[str], object] | None) -> None:
+        self.progress = progress
+        self.seconds: dict[str, float] = {}
+        self.last = time.perf_counter()
+
+    def step(self, name: str, detail: str = "") -> None:
+        now = time.perf_counter()
+        self.seconds[name] = now - self.last
+        self.last = now
+        if self.progress is not None:
+            self.progress(f"  {name}: {self.seconds[name]:.1f} s" + (f" ({detail})" if detail else ""))
+
+
+@dataclass(frozen=True)
+class Concave:
+    """The smallest concave radius (mm) of a surface and where (inf, and the origin, if nowhere concave)."""
+
+    radius_mm: float
+    where: tuple[float, float, float]
+
+
+def min_concave_radius(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray) -> Concave:
+    """The smallest radius (mm) at which the vertex ``normals`` of the faces' edges converge outwards (module
+    docstring, step 4)."""
+    best, where = math.inf, (0.0, 0.0, 0.0)
+    for start in range(0, len(faces), CHUNK):
+        fs = faces[start:start + CHUNK]
+        a, b = fs.ravel(), np.roll(fs, -1, axis=1).ravel()
+        d = vertices[b] - vertices[a]
+        curvature = -np.einsum("ij,ij->i", normals[b] - normals[a], d) / np.einsum("ij,ij->i", d, d)
+        k = int(np.argmax(curvature))
+        if curvature[k] > FLAT_CURVATURE and 1 / curvature[k] < best:
+            best = float(1 / curvature[k])
+            x, y, z = (float(c) for c in (vertices[a[k]] + vertices[b[k]]) / 2)
+            where = (x, y, z)
+    return Concave(best, where)
+
+
+def check_closed(faces: np.ndarray) -> None:
+    """RuntimeError unless every directed edge occurs once and its reverse once (closed, consistently wound): the
+    refinement guarantees it, so a failure is a bug, not bad input."""
+    n = int(faces.max()) + 1
+    a, b = faces.ravel(), np.roll(faces, -1, axis=1).ravel()
+    # each undirected edge as 2 * key + direction: sorted, a closed consistently wound mesh holds every key exactly
+    # twice, once in each direction
+    code = (np.minimum(a, b) * n + np.maximum(a, b)) * 2 + (a < b)
+    del a, b
+    code.sort()
+    if len(code) % 2 or np.any(code[0::2] % 2 != 0) or np.any(code[1::2] != code[0::2] + 1):
+        raise RuntimeError("the textured mesh is not closed and consistently wound (a bug in the refinement)")
+
+
+def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """Enclosed volume (mm^3) of a closed mesh, positive if wound outwards."""
+    total = 0.0
+    for start in range(0, len(faces), CHUNK):
+        tri = vertices[faces[start:start + CHUNK]]
+        total += float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum()) / 6
+    return total
+
+
+def _area_and_volume(vertices: np.ndarray, faces: np.ndarray, heights: np.ndarray) -> tuple[float, float]:
+    """Area (mm^2) of the base faces and the integral (mm^3) over them of the heights, linear on each face."""
+    area = volume = 0.0
+    for s in range(0, len(faces), CHUNK):
+        f = faces[s:s + CHUNK]
+        a = 0.5 * np.linalg.norm(face_normals(vertices, f, unit=False), axis=1)
+        area += float(a.sum())
+        volume += float((a * heights[f].mean(axis=1)).sum())
+    return area, volume
+
+
