@@ -223,6 +223,8 @@ def _prediction_line(p) -> str:
         domain += " but " + "; ".join(p.domain_notes)
     sure = f" ± {p.roughness_stderr:.4f} (Monte Carlo)" if p.roughness_stderr is not None else ""  # FEM only
     sure += f" ± {p.roughness_std:.4f} (ensemble spread)" if p.roughness_std is not None else ""
+    if p.curvature_error is not None:
+        sure += f" ± {p.curvature_error:.4f} (curvature correction)"
     if p.discretization_error is not None:
         sure += f" ± {p.discretization_error * abs(p.roughness):.4f} (discretization)"
     return f"{p.source}: V = {p.roughness:.4f}{sure} ({p.engine}, {domain}, {1e3 * p.seconds:.1f} ms), {scale}"
