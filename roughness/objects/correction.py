@@ -93,6 +93,11 @@ def load_tables(path: str | Path = TABLE_PATH) -> dict[str, BaseTable]:
             for base, t in data["bases"].items()}
 
 
+def measured_ranges(path: str | Path = TABLE_PATH) -> str:
+    """The radii the study measured, per base, in words."""
+    return "; ".join(f"{t.base}s: {t.radii_text}" for t in load_tables(str(path)).values())
+
+
 def restable(k1: float, k2: float, footprint_mm: float = FOOTPRINT_MM) -> str:
     """Why the skin's square footprint cannot rest on a base of principal curvatures k1, k2 (1/mm; empty if it
     can): a concave radius along a principal direction must exceed half the side (the edge), along the diagonal
@@ -128,9 +133,8 @@ def correction(k1: float, k2: float = 0.0, path: str | Path = TABLE_PATH) -> Cor
             d2, e2 = tables["cylinder"].at(k2)
         diff, error = d1 + d2, e1 + e2
     except ValueError:
-        ranges = "; ".join(f"{t.base}: {t.radii_text}" for t in tables.values())
         raise InputError(f"principal radii {_radius(k1)} and {_radius(k2)} mm lie beyond the curvature study's "
-                         f"measured range ({ranges}): too curved for the 10 mm footprint's model; the curved FEM "
+                         f"measured range ({measured_ranges(path)}): too curved for the 10 mm footprint's model; the curved FEM "
                          "answers for cylinders and spheres (engine fem)", parameter="curvature_mm") from None
     note = (f"curved base ({_kind(k1, k2)}): flat V x {1 + diff:.3f} ± {error:.3f}, the curvature study's measured "
             "difference (studies/results/curvature*.md)")

@@ -1,0 +1,189 @@
+"""How each part of a textured object feels (issue 30): curvature at the footprint's scale, the roughness map,
+the curvature correction shared with predict --curvature-mm, and the object feel/tune commands."""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+trimesh = pytest.importorskip("trimesh")
+
+from roughness.core.errors import InputError  # noqa: E402
+from roughness.core.hashing import file_sha256  # noqa: E402
+from roughness.dataset.textures import standard_texture  # noqa: E402
+from roughness.engines import predict  # noqa: E402
+from roughness.objects import correction  # noqa: E402
+from roughness.objects.curvature import SurfaceSamples, principal_curvatures  # noqa: E402
+from roughness.objects.feel import CANNOT_REST, OFF_OBJECT, feel_map  # noqa: E402
+
+ROOT = Path(__file__).parents[1]
+TEXTURE = standard_texture(1.0, seed=0)  # 12 mm, periodic: one tile of 1 mm bumps
+
+
+class Planar:
+    """The texture projected straight down on faces facing up (x, y of the texture = x, y of the mesh)."""
+
+    pixel_mm = TEXTURE.pixel_mm
+
+    def heights(self, points, normals):
+        return np.where(normals[:, 2] > 0.9, TEXTURE.sample(points[:, 0], points[:, 1], periodic=True), 0.0)
+
+
+class Wrap:
+    """The texture wrapped exactly around the z axis: x = arc length R theta, y = z."""
+
+    pixel_mm = TEXTURE.pixel_mm
+
+    def __init__(self, radius_mm: float):
+        self.radius_mm = radius_mm
+
+    def heights(self, points, normals):
+        theta = np.arctan2(points[:, 1], points[:, 0])
+        return TEXTURE.sample(theta * self.radius_mm, points[:, 2], periodic=True)
+
+
+def _cylinder(radius_mm: float, height_mm: float = 50.0, inside: bool = False):
+    mesh = trimesh.creation.cylinder(radius=radius_mm, height=height_mm, sections=180)
+    if inside:  # the bore of a tube: the surface faces the axis, concave
+        mesh.invert()
+    return mesh, np.abs(mesh.face_normals[:, 2]) < 0.1
+
+
+def _plate_v(x_mm: float, y_mm: float) -> tuple[float, float]:
+    """The flat plate's spectral V (and Monte Carlo error) with the footprint centred at (x, y) of the texture."""
+    [p] = predict(TEXTURE, engine="spectral", tile=True, centre_mm=(x_mm % 12.0, y_mm % 12.0))
+    return p.roughness, p.roughness_stderr
+
+
+# Curvature at the footprint's scale
+
+def test_principal_curvatures_of_a_sphere_a_cylinder_and_a_plane_are_exact():
+    sphere = trimesh.creation.icosphere(subdivisions=5, radius=10.0)
+    p = np.array([[0, 0, 10.0], [10 / math.sqrt(3)] * 3])
+    c = principal_curvatures(SurfaceSamples.of(sphere), p, p / 10)
+    assert np.allclose(c.k1, 0.1, rtol=0.01) and np.allclose(c.k2, 0.1, rtol=0.01)  # measured: 0.2%
+    cylinder, _ = _cylinder(8.0)
+    p = np.array([[8, 0, 0.0], [0, 8, 5.0]])
+    c = principal_curvatures(SurfaceSamples.of(cylinder), p, p * [1, 1, 0] / 8)
+    assert np.allclose(c.k1, 1 / 8, rtol=0.01) and np.allclose(c.k2, 0, atol=1e-3)
+    assert np.all(np.abs(c.d2[:, 2]) > 0.999)  # the straight direction runs along the axis
+    bore, _ = _cylinder(8.0, inside=True)
+    c = principal_curvatures(SurfaceSamples.of(bore), p, -p * [1, 1, 0] / 8)
+    assert np.allclose(c.k2, -1 / 8, rtol=0.01) and np.allclose(c.k1, 0, atol=1e-3)
+    box = trimesh.creation.box([40, 40, 10])
+    c = principal_curvatures(SurfaceSamples.of(box), [[3, -2, 5.0]], [[0, 0, 1.0]])
+    assert abs(c.k1[0]) < 1e-9 and abs(c.k2[0]) < 1e-9
+    assert np.allclose(c.d1[0], [1, 0, 0]) and np.allclose(c.d2[0], [0, 1, 0])  # turned, never mirrored
+
+
+# The roughness map
+
+def test_a_large_flat_face_gives_the_flat_plates_V_within_the_monte_carlo_error():
+    box = trimesh.creation.box([40, 40, 6])
+    top = box.face_normals[:, 2] > 0.9
+    feel = feel_map(box, Planar(), {"top": top}, spacing_mm=8.0)
+    inner = [i for i, m in enumerate(feel.method) if m != "refused"]
+    assert len(inner) >= 9 and all(feel.method[i] == "flat" for i in inner)
+    for i in inner:
+        v, se = _plate_v(*feel.points[i][:2])
+        assert abs(feel.roughness[i] - v) <= 2 * math.hypot(se, feel.uncertainty[i]), (feel.points[i], v)
+    # footprints that would hang over the edge of the top face are refused as off the object
+    assert set(feel.refusals()) == {OFF_OBJECT}
+    [row] = feel.table()
+    assert row.name == "top" and row.area_mm2 == pytest.approx(1600) and 0 < row.refused_fraction < 1
+
+
+def test_on_a_cylinder_the_map_gives_the_curvature_studys_V_within_its_error():
+    study = json.loads((ROOT / "studies/results/curvature_default.json").read_text())
+    [measured] = [r for r in study["differences"]
+                  if r["lambda_mm"] == 1.0 and r["curvature_mm"] == 10.0 and r.get("texture_along") == "normal"]
+    mesh, side = _cylinder(10.0)
+    feel = feel_map(mesh, Wrap(10.0), {"side": side}, spacing_mm=10.0)
+    inner = [i for i, m in enumerate(feel.method) if m != "refused"]
+    assert len(inner) >= 8 and all(feel.method[i] == "corrected" for i in inner)
+    assert np.allclose(feel.k1[inner], 0.1, rtol=0.02)
+    for i in inner:
+        x, y, z = feel.points[i]
+        v_flat, _ = _plate_v(math.atan2(y, x) * 10.0, z)
+        expected = v_flat * (1 + measured["relative_difference"])  # the study's V on this cylinder
+        assert abs(feel.roughness[i] - expected) <= feel.uncertainty[i], (feel.points[i], expected)
+        assert feel.uncertainty[i] > feel.flat_roughness[i] * 0.01  # the correction's error is carried
+
+
+def test_concave_radius_below_the_footprints_and_too_small_objects_are_refused_with_reasons():
+    bore, inside = _cylinder(4.0, inside=True)  # a 4 mm bore: the 10 mm footprint cannot rest in it
+    feel = feel_map(bore, Wrap(4.0), {"bore": inside}, spacing_mm=10.0)
+    assert set(feel.method) == {"refused"} and set(feel.refusals()) == {CANNOT_REST}
+    assert np.all(np.isnan(feel.roughness))
+    cube = trimesh.creation.box([8, 8, 8])  # faces smaller than the footprint
+    feel = feel_map(cube, Planar(), spacing_mm=4.0)
+    assert set(feel.refusals()) == {OFF_OBJECT} and feel.table()[0].refused_fraction == 1.0
+    rod, side = _cylinder(2.0)  # convex radius 2 mm: beyond the study's measured range
+    feel = feel_map(rod, Wrap(2.0), {"rod": side}, spacing_mm=10.0)
+    reasons = set(feel.refusals())
+    assert any(r.startswith("too curved") for r in reasons), reasons
+
+
+def test_bad_regions_and_options_are_refused():
+    box = trimesh.creation.box([20, 20, 20])
+    for kwargs, parameter in (({"regions": {"top": np.zeros(len(box.faces), bool)}}, "regions"),
+                              ({"regions": {"top": np.ones(3, bool)}}, "regions"),
+                              ({"spacing_mm": 0.0}, "spacing_mm"), ({"engine": "fem"}, "engine"),
+                              ({"curved": "guess"}, "curved")):
+        with pytest.raises(InputError) as err:
+            feel_map(box, Planar(), **kwargs)
+        assert err.value.parameter == parameter
+
+
+def test_the_picture_colours_the_object_by_v_or_by_jnd_from_a_reference():
+    from matplotlib.figure import Figure
+
+    from roughness.objects.feel_figure import feel_figure
+
+    mesh, side = _cylinder(10.0, height_mm=30.0)
+    feel = feel_map(mesh, Wrap(10.0), {"side": side}, spacing_mm=10.0, reference="standard-1.0")
+    assert isinstance(feel_figure(mesh, feel, side, by="jnd"), Figure)
+    jnd = feel.jnd[~np.isnan(feel.roughness)]
+    # the same texture on a convex cylinder: a little rougher than itself flat, well within a JND or so
+    assert np.all(np.abs(jnd) < 1.5) and feel.table()[0].jnd_median is not None
+    no_reference = feel_map(mesh, Wrap(10.0), {"side": side}, spacing_mm=10.0)
+    with pytest.raises(InputError, match="reference"):
+        feel_figure(mesh, no_reference, side, by="jnd")
+    assert "FeelMap(" in repr(feel) and "refused" in repr(feel)
+
+
+# The curvature correction, shared with predict --curvature-mm
+
+def test_the_correction_table_comes_from_the_committed_study():
+    data = json.loads(correction.TABLE_PATH.read_text())
+    for base, entry in data["bases"].items():
+        assert file_sha256(ROOT / entry["results"]) == entry["results_sha256"], base
+        fresh = correction.table_from_study(json.loads((ROOT / entry["results"]).read_text()))
+        assert list(fresh.difference) == entry["difference"] and list(fresh.error) == entry["error"]
+    # a convex cylinder of 5 mm: the mean of the three textures' measured differences, its error their spread
+    fix = correction.for_base(5.0, "cylinder")
+    assert fix.factor == pytest.approx(1 + (0.144 + 0.087 + 0.064) / 3, abs=0.002)
+    assert 1 + 0.129 - 0.002 <= fix.factor + fix.error and fix.factor - fix.error <= 1 + 0.061 + 0.002
+    assert correction.correction(0.0, 0.0).factor == 1.0 and correction.correction(0.0, 0.0).error == 0.0
+    with pytest.raises(InputError, match="cannot rest"):
+        correction.for_base(-4.0, "cylinder")
+    with pytest.raises(InputError, match="beyond"):
+        correction.for_base(2.0, "cylinder")
+
+
+def test_predict_curvature_no_longer_returns_the_flat_v_and_its_uncertainty_grows(capsys):
+    from roughness.cli import main
+
+    path = ROOT / "examples" / "standard-1.0mm.png"
+    reading = ["--pixel-mm", "0.05", "--height-mm", "1", "--engine", "surrogate", "--json"]
+    assert main(["predict", str(path), *reading]) == 0
+    flat = json.loads(capsys.readouterr().out)
+    assert main(["predict", str(path), *reading, "--curvature-mm", "15"]) == 0
+    curved = json.loads(capsys.readouterr().out)
+    fix = correction.for_base(15.0, "cylinder")
+    assert curved["roughness"] == pytest.approx(flat["roughness"] * fix.factor) and fix.factor > 1.01
+    assert flat["curvature_error"] is None and curved["curvature_error"] == pytest.approx(flat["roughness"] * fix.error)
+    assert any("curvature study" in n for n in curved["domain_notes"])
