@@ -76,3 +76,8 @@ def _shown(count: float) -> str:
         return f"{count:,}"
     digits = str(count)
     return f"{digits[0]}.{digits[1:3]}e+{len(digits) - 1}"
+MAX_MESH_TRIANGLES = Limit(40_000_000, "MAX_MESH_TRIANGLES")
+"""Triangles of a mesh read or made (a textured object: a 60 mm ball at 0.05 mm is about 10 million; 40 million
+are 1.4 GB of vertices and faces)."""
+MAX_MESH_FILE_BYTES = 4_000_000_000
+"""Bytes of a mesh file read (a binary STL of 80 million triangles; checked before the file is opened)."""

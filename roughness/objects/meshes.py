@@ -1,0 +1,195 @@
+"""Meshes in and out: read STL, OBJ, PLY and 3MF through trimesh (mm), check them, write STL (streamed) and 3MF.
+
+Sizes are checked before anything is allocated: the file's bytes (MAX_MESH_FILE_BYTES), a binary STL's declared
+triangle count and every mesh's triangles (MAX_MESH_TRIANGLES). trimesh parses the files as data (no code runs).
+"""
+from __future__ import annotations
+
+import os
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from roughness.core.errors import InputError
+from roughness.core.files import atomic_write
+from roughness.core.limits import MAX_MESH_FILE_BYTES, MAX_MESH_TRIANGLES, check_size
+
+READ_SUFFIXES = (".stl", ".obj", ".ply", ".3mf")
+WRITE_SUFFIXES = (".stl", ".3mf")
+STL_CHUNK_FACES = 1_000_000
+"""Faces packed at once when writing a binary STL (50 MB)."""
+UNIT_MM = {"mm": 1.0, "millimeter": 1.0, "millimeters": 1.0, "millimetre": 1.0, "cm": 10.0, "centimeter": 10.0,
+           "m": 1000.0, "meter": 1000.0, "meters": 1000.0, "in": 25.4, "inch": 25.4, "inches": 25.4,
+           "um": 1e-3, "micron": 1e-3, "micrometer": 1e-3, "ft": 304.8, "foot": 304.8, "feet": 304.8}
+
+
+@dataclass
+class ReadMesh:
+    """A mesh read from ``path`` (a trimesh, mm) and what reading did to it (``notes``)."""
+
+    mesh: object  # trimesh.Trimesh
+    path: str
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def triangles(self) -> int:
+        return len(self.mesh.faces)
+
+
+def read_mesh(path: str | Path, watertight: bool = True, parameter: str = "mesh") -> ReadMesh:
+    """The triangle mesh in ``path`` (STL, OBJ, PLY, 3MF; several bodies are joined), in mm, with its duplicate
+    vertices merged and degenerate faces dropped (noted). InputError for a file that is missing, too large, not a
+    mesh, empty, without triangles, or (``watertight``) open or inconsistently wound; a mesh wound inside-out is
+    turned (noted)."""
+    import trimesh
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in READ_SUFFIXES:
+        raise InputError(f"cannot read {path}: unsupported mesh format {suffix or '(no suffix)'!r}; supported: "
+                         f"{', '.join(READ_SUFFIXES)}", parameter=parameter)
+    if not path.is_file():
+        raise InputError(f"cannot read {path}: no such file", parameter=parameter)
+    size = path.stat().st_size
+    if size > MAX_MESH_FILE_BYTES:
+        raise InputError(f"{path} is {size:,} bytes, above the limit of {MAX_MESH_FILE_BYTES:,} (MAX_MESH_FILE_BYTES)",
+                         parameter=parameter)
+    if size == 0:
+        raise InputError(f"{path} is empty", parameter=parameter)
+    if suffix == ".stl":
+        _check_binary_stl(path, size, parameter)
+    try:
+        loaded = trimesh.load(str(path), file_type=suffix[1:], force="mesh", process=True)
+    except Exception as err:  # trimesh raises many kinds for a malformed file
+        raise InputError(f"cannot read {path} as a {suffix[1:].upper()} mesh: {err or type(err).__name__}",
+                         parameter=parameter) from None
+    if not isinstance(loaded, trimesh.Trimesh) or len(getattr(loaded, "faces", ())) == 0:
+        raise InputError(f"{path} holds no triangles (points or lines only, or nothing)", parameter=parameter)
+    check_size(f"triangles in {path}", len(loaded.faces), MAX_MESH_TRIANGLES, parameter)
+    read = ReadMesh(loaded, str(path))
+    _to_mm(read)
+    _clean(read)
+    if watertight:
+        require_closed(read.mesh, str(path), parameter)
+        if read.mesh.volume < 0:
+            read.mesh.invert()
+            read.notes.append(f"{path}: the mesh was wound inside-out (negative volume): turned")
+    return read
+
+
+def _check_binary_stl(path: Path, size: int, parameter: str) -> None:
+    """A binary STL's declared triangle count against the limit and the file's size (ASCII STL passes)."""
+    with open(path, "rb") as f:
+        head = f.read(84)
+    if len(head) < 84:
+        return
+    (count,) = struct.unpack("<I", head[80:84])
+    if 84 + 50 * count == size:
+        check_size(f"triangles declared in {path}", count, MAX_MESH_TRIANGLES, parameter)
+
+
+def _to_mm(read: ReadMesh) -> None:
+    units = getattr(read.mesh, "units", None)
+    if not units:
+        read.notes.append(f"{read.path}: no units stated: read as mm")
+        return
+    scale = UNIT_MM.get(str(units).lower())
+    if scale is None:
+        raise InputError(f"{read.path} states units {units!r}, which are not a length this tool knows "
+                         f"({', '.join(sorted(UNIT_MM))})")
+    if scale != 1.0:
+        read.mesh.apply_scale(scale)
+        read.notes.append(f"{read.path}: units {units}: scaled by {scale:g} to mm")
+
+
+def _clean(read: ReadMesh) -> None:
+    mesh = read.mesh
+    if not np.all(np.isfinite(mesh.vertices)):
+        raise InputError(f"{read.path} has vertices that are not finite numbers")
+    keep = mesh.nondegenerate_faces()
+    if not keep.all():
+        mesh.update_faces(keep)
+        mesh.remove_unreferenced_vertices()
+        read.notes.append(f"{read.path}: dropped {int((~keep).sum()):,} degenerate (zero-area) triangles")
+    if len(mesh.faces) == 0:
+        raise InputError(f"{read.path} has only degenerate (zero-area) triangles")
+
+
+def require_closed(mesh, what: str, parameter: str | None = "mesh") -> None:
+    """InputError unless ``mesh`` is watertight (every edge shared by exactly two faces) and consistently wound."""
+    if not mesh.is_watertight:
+        open_edges = _open_edges(mesh)
+        raise InputError(f"{what} is not watertight ({open_edges:,} edges are not shared by exactly two triangles): "
+                         "a textured object must be a closed solid; repair it (e.g. in a slicer or MeshLab) first",
+                         parameter=parameter)
+    if not mesh.is_winding_consistent:
+        raise InputError(f"{what} is not consistently wound (neighbouring triangles face opposite ways): repair it "
+                         "first", parameter=parameter)
+
+
+def _open_edges(mesh) -> int:
+    import trimesh
+
+    groups = trimesh.grouping.group_rows(mesh.edges_sorted, require_count=2)
+    return len(mesh.edges_sorted) - 2 * len(groups)
+
+
+@dataclass(frozen=True)
+class Written:
+    """A mesh file written: its path, triangles and bytes."""
+
+    path: str
+    triangles: int
+    bytes: int
+
+    def line(self) -> str:
+        return f"wrote {self.path}: {self.triangles:,} triangles, {self.bytes / 1e6:.1f} MB"
+
+
+def write_mesh(mesh, path: str | Path, overwrite: bool = False, parameter: str = "out") -> Written:
+    """Write ``mesh`` as binary STL (streamed in chunks of STL_CHUNK_FACES) or 3MF (mm), atomically; refused if the
+    file exists and not ``overwrite``."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in WRITE_SUFFIXES:
+        raise InputError(f"cannot write {path}: unsupported mesh format {suffix or '(no suffix)'!r}; supported: "
+                         f"{', '.join(WRITE_SUFFIXES)}", parameter=parameter)
+    write = _write_stl if suffix == ".stl" else _write_3mf
+    atomic_write(path, lambda tmp: write(mesh, tmp), overwrite)
+    return Written(str(path), len(mesh.faces), os.path.getsize(path))
+
+
+STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
+
+
+def _write_stl(mesh, tmp: str) -> None:
+    vertices = np.asarray(mesh.vertices)
+    faces = np.asarray(mesh.faces)
+    with open(tmp, "wb") as f:
+        f.write(b"roughness textured object, mm".ljust(80, b" "))
+        f.write(struct.pack("<I", len(faces)))
+        for start in range(0, len(faces), STL_CHUNK_FACES):
+            tri = vertices[faces[start:start + STL_CHUNK_FACES]]
+            normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            length = np.linalg.norm(normal, axis=1, keepdims=True)
+            record = np.zeros(len(tri), dtype=STL_RECORD)
+            record["normal"] = normal / np.where(length > 0, length, 1.0)
+            record["vertices"] = tri
+            f.write(record.tobytes())
+
+
+def _write_3mf(mesh, tmp: str) -> None:
+    import trimesh
+
+    plain = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    plain.units = "millimeters"
+    with open(tmp, "wb") as f:
+        f.write(trimesh.exchange.threemf.export_3MF(plain))
+
+
+def stl_bytes(triangles: int) -> int:
+    """Size (bytes) of a binary STL of ``triangles``."""
+    return 84 + 50 * triangles
+

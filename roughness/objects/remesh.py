@@ -1,0 +1,124 @@
+"""Refine the textured faces of a mesh to a target edge length, conforming, so a closed mesh stays closed.
+
+Each round splits, at its midpoint, the longest edge of every textured face whose longest edge exceeds the target
+(longest-edge bisection, which keeps the triangles' angles bounded and does not over-refine long thin faces); each
+face is then replaced by the template for its split edges (one, two or three: two, three or four triangles, the quad
+of two split edges cut along its shorter diagonal). An edge is
+split for both faces that share it, so no crack opens; untextured faces are only split where they share an edge
+with a textured one (the transition), elsewhere they stay as they were. A new vertex is the midpoint of its edge,
+so flat faces stay flat. Orientation is kept, so a consistently wound mesh stays so.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughness.core.errors import InputError
+from roughness.core.limits import MAX_MESH_TRIANGLES, check_size
+
+
+@dataclass
+class Refined:
+    """A refined mesh: ``vertices`` (n, 3) mm, ``faces`` (m, 3), ``textured`` (m,) bool, the faces' ``parent``
+    face in the input, and the ``rounds`` of splitting it took."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    textured: np.ndarray
+    parent: np.ndarray
+    rounds: int
+
+
+def predicted_triangles(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_mm: float) -> float:
+    """About how many triangles refinement will make (textured area / area of a triangle of side ``edge_mm``, plus
+    the untextured faces): checked against MAX_MESH_TRIANGLES before anything is refined."""
+    tri = vertices[faces[textured]]
+    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+    return float(area / (math.sqrt(3) / 4 * (edge_mm / 2) ** 2 * 2.2) + (~textured).sum() + textured.sum())
+
+
+def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_mm: float) -> Refined:
+    """Split edges of textured faces until none is longer than ``edge_mm`` (mm) (module docstring)."""
+    if not edge_mm > 0:
+        raise InputError(f"edge length must be positive, got {edge_mm!r}", parameter="pixel_mm")
+    check_size("triangles after refinement (estimated)", predicted_triangles(vertices, faces, textured, edge_mm),
+               MAX_MESH_TRIANGLES, "pixel_mm")
+    v = np.ascontiguousarray(vertices, dtype=float)
+    f = np.ascontiguousarray(faces, dtype=np.int64)
+    tex = np.asarray(textured, dtype=bool).copy()
+    parent = np.arange(len(f), dtype=np.int64)
+    rounds = 0
+    while True:
+        split = _edges_to_split(v, f, tex, edge_mm)
+        if split.size == 0:
+            return Refined(v, f, tex, parent, rounds)
+        rounds += 1
+        v, f, tex, parent = _split(v, f, tex, parent, split)
+        check_size("triangles during refinement", len(f), MAX_MESH_TRIANGLES, "pixel_mm")
+
+
+def _edge_keys(f: np.ndarray, n_vertices: int) -> np.ndarray:
+    """(m, 3) int64 keys of each face's edges (a, b), (b, c), (c, a), the same for both faces of an edge."""
+    a, b = f, np.roll(f, -1, axis=1)
+    return np.minimum(a, b) * n_vertices + np.maximum(a, b)
+
+
+def _edges_to_split(v: np.ndarray, f: np.ndarray, tex: np.ndarray, edge_mm: float) -> np.ndarray:
+    """Sorted unique keys of the longest edges of textured faces, where longer than ``edge_mm``."""
+    ft = f[tex]
+    if len(ft) == 0:
+        return np.empty(0, dtype=np.int64)
+    length = np.linalg.norm(v[np.roll(ft, -1, axis=1)] - v[ft], axis=2)
+    longest = np.argmax(length, axis=1)
+    rows = np.flatnonzero(length[np.arange(len(ft)), longest] > edge_mm)
+    return np.unique(_edge_keys(ft[rows], len(v))[np.arange(len(rows)), longest[rows]])
+
+
+def _split(v: np.ndarray, f: np.ndarray, tex: np.ndarray, parent: np.ndarray, split: np.ndarray):
+    n = len(v)
+    keys = _edge_keys(f, n)
+    where = np.searchsorted(split, keys)
+    hit = split[np.minimum(where, len(split) - 1)] == keys
+    mid = np.where(hit, n + where, -1)  # (m, 3) new vertex on each edge, or -1
+    a, b = split // n, split % n
+    v = np.concatenate([v, 0.5 * (v[a] + v[b])])
+    pattern = hit.sum(axis=1)
+    out_f, out_t, out_p = [f[pattern == 0]], [tex[pattern == 0]], [parent[pattern == 0]]
+    for count in (1, 2, 3):
+        sel = pattern == count
+        if not sel.any():
+            continue
+        fs, ms, hs = f[sel], mid[sel], hit[sel]
+        if count == 1:
+            roll = np.argmax(hs, axis=1)  # the split edge first
+        elif count == 2:
+            roll = (np.argmin(hs, axis=1) + 1) % 3  # the unsplit edge last
+        else:
+            roll = np.zeros(len(fs), dtype=np.int64)
+        idx = (np.arange(3)[None, :] + roll[:, None]) % 3
+        fs = np.take_along_axis(fs, idx, axis=1)
+        ms = np.take_along_axis(ms, idx, axis=1)
+        new = _template(v, fs, ms, count)
+        out_f.append(new)
+        reps = len(new) // len(fs)
+        out_t.append(np.tile(tex[sel], reps))
+        out_p.append(np.tile(parent[sel], reps))
+    return v, np.concatenate(out_f), np.concatenate(out_t), np.concatenate(out_p)
+
+
+def _template(v: np.ndarray, fs: np.ndarray, ms: np.ndarray, count: int) -> np.ndarray:
+    """The faces replacing faces ``fs`` (a, b, c) with midpoints ``ms`` (on ab, bc, ca), rolled so that the split
+    edge comes first (1) or the unsplit one last (2); stacked template by template."""
+    a, b, c = fs.T
+    m0, m1, m2 = ms.T
+    if count == 1:
+        return np.concatenate([np.stack([a, m0, c], 1), np.stack([m0, b, c], 1)])
+    if count == 2:
+        short = np.linalg.norm(v[a] - v[m1], axis=1) <= np.linalg.norm(v[m0] - v[c], axis=1)
+        first = np.where(short[:, None], np.stack([a, m0, m1], 1), np.stack([a, m0, c], 1))
+        second = np.where(short[:, None], np.stack([a, m1, c], 1), np.stack([m0, m1, c], 1))
+        return np.concatenate([np.stack([m0, b, m1], 1), first, second])
+    return np.concatenate([np.stack([a, m0, m2], 1), np.stack([m0, b, m1], 1), np.stack([m2, m1, c], 1),
+                           np.stack([m0, m1, m2], 1)])

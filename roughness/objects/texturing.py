@@ -1,0 +1,203 @@
+"""Put a texture on a mesh: refine the textured faces to the texture's pixel, displace them along smoothed vertex
+normals by the mapping's heights, and check the result (closed, consistently wound, not folded, not crossing
+itself).
+
+Steps, each reported in ``TexturedMesh.notes``:
+
+1. the faces of the region are refined to edges of at most ``edge_mm`` (default: sqrt(2) times the mapping's pixel
+   on the surface, so that most edges are about one pixel; ``remesh``): untextured faces stay as they were except where they border textured ones;
+2. vertex normals, area-weighted (``normals``), optionally smoothed over ``normal_radius_mm``;
+3. the texture's heights at the vertices of textured faces (``mapping``), bumps outwards;
+4. refused (InputError) if the texture is deeper than the surface's radius where it is concave: the offset
+   surface folds where the depth exceeds the radius at which the normals converge (estimated on every textured
+   edge from the normals at its ends: curvature = -(n_b - n_a).(b - a) / |b - a|^2);
+5. displaced, then checked: every directed edge once and its reverse once (closed and consistently wound), no
+   face turned over, no two faces crossing (``intersections``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from roughness.core.checks import non_negative, positive
+from roughness.core.errors import InputError
+
+from .intersections import folded_faces, self_intersections
+from .mapping import TextureMapping
+from .meshes import require_closed
+from .normals import face_normals, smoothed, vertex_normals
+from .regions import Region
+from .remesh import refine
+
+FLAT_CURVATURE = 1e-6
+"""Curvatures (1/mm) below this (radii above 1 km) are rounding on a flat face, not concavity."""
+CHUNK = 2_000_000
+"""Edges or faces handled at once in the checks (arrays of this many vectors: tens of MB)."""
+
+
+@dataclass
+class TexturedMesh:
+    """A textured mesh (``mesh``, a trimesh, mm) and what was done to make it."""
+
+    mesh: object
+    triangles_in: int
+    triangles_out: int
+    textured_faces_in: int
+    textured_area_mm2: float
+    edge_mm: float
+    refinement_rounds: int
+    normal_smoothing_rounds: int
+    max_height_mm: float
+    mean_height_mm: float
+    min_concave_radius_mm: float
+    volume_in_mm3: float
+    volume_out_mm3: float
+    intersection_pairs_tested: int | None
+    notes: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k != "mesh"}
+
+
+def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_mm: float | None = None,
+                 normal_radius_mm: float = 0.0, check_intersections: bool = True) -> TexturedMesh:
+    """``mesh`` (a closed trimesh, mm) with ``mapping``'s texture on the faces of ``region`` (module docstring).
+
+    ``edge_mm``: longest edge of a textured face (default: sqrt(2) times the mapping's ``pixel_mm``, so that the
+    right triangles bisection makes have legs of about one pixel); ``normal_radius_mm``: smooth
+    the displacement's normals over about this radius (0: area-weighted vertex normals only);
+    ``check_intersections``: test the result for faces crossing each other (the slow part of large meshes).
+    """
+    require_closed(mesh, "the mesh")
+    edge = positive("edge_mm", math.sqrt(2) * mapping.pixel_mm if edge_mm is None else edge_mm)
+    radius = non_negative("normal_radius_mm", normal_radius_mm)
+    selected = np.asarray(region.faces(mesh), dtype=bool)
+    if not selected.any():
+        raise InputError(f"the region ({region.describe()}) selects no face of the mesh", parameter="region")
+    notes = [f"textured region: {region.describe()}: {int(selected.sum()):,} of {len(mesh.faces):,} faces"]
+    notes += list(getattr(mapping, "notes", lambda: [])())
+    base_vertices = np.asarray(mesh.vertices, dtype=float)
+    base_faces = np.asarray(mesh.faces, dtype=np.int64)
+    volume_in = signed_volume(base_vertices, base_faces)
+
+    refined = refine(base_vertices, base_faces, selected, edge)
+    v, f, textured = refined.vertices, refined.faces, refined.textured
+    notes.append(f"remeshed the textured faces to edges of at most {edge:.4g} mm ({refined.rounds} rounds of "
+                 f"edge splitting): {len(base_faces):,} -> {len(f):,} triangles; untextured faces kept except where "
+                 "they border textured ones")
+
+    normals = vertex_normals(v, f)
+    normals, rounds = smoothed(normals, f, radius, edge)
+    notes.append("displaced along area-weighted vertex normals" +
+                 (f", smoothed over about {radius:g} mm ({rounds} rounds)" if rounds else ""))
+
+    moving = np.zeros(len(v), dtype=bool)
+    moving[f[textured].ravel()] = True
+    where = np.flatnonzero(moving)
+    heights = np.asarray(mapping.heights(v[where], normals[where]), dtype=float)
+    if heights.shape != (len(where),) or not np.all(np.isfinite(heights)):
+        raise InputError("the mapping gave heights that are not finite numbers (one per point)", parameter="mapping")
+    depth = float(heights.max())
+    concave = min_concave_radius(v, f[textured], normals)
+    if concave.radius_mm < depth:
+        x, y, z = concave.where
+        raise InputError(f"the texture is {depth:.3g} mm deep but the surface is concave with a radius of "
+                         f"{concave.radius_mm:.3g} mm near ({x:.2f}, {y:.2f}, {z:.2f}) mm: displaced along its normals "
+                         "it would fold into itself; use a shallower texture (--height-mm), smooth the normals over a "
+                         "larger radius (--normal-radius-mm), or leave that part out of the region", parameter="mapping")
+    if math.isfinite(concave.radius_mm):
+        notes.append(f"smallest concave radius of the textured surface {concave.radius_mm:.3g} mm, above the "
+                     f"texture's depth {depth:.3g} mm")
+
+    base_face_normals = _face_normals_chunked(v, f)
+    v = v.copy()
+    v[where] += heights[:, None] * normals[where]
+    folded = _chunked_any(lambda s: folded_faces(base_face_normals[s], v, f[s]), len(f))
+    if folded.any():
+        x, y, z = v[f[np.flatnonzero(folded)[0]]].mean(axis=0)
+        raise InputError(f"displacing by the texture turns {int(folded.sum()):,} faces over (first near ({x:.2f}, "
+                         f"{y:.2f}, {z:.2f}) mm): the texture is too deep for the mesh there; use a shallower texture, "
+                         "smooth the normals (--normal-radius-mm) or a finer mesh", parameter="mapping")
+    check_closed(f)
+    notes.append("checked: closed, consistently wound, no face turned over")
+    tested = None
+    if check_intersections:
+        moved_faces = moving[f].any(axis=1)
+        crossing = self_intersections(v, f, moved_faces)
+        if crossing.count:
+            x, y, z = v[f[crossing.pairs[0, 0]]].mean(axis=0)
+            raise InputError(f"the textured mesh crosses itself: {crossing.count:,} pairs of faces intersect (first "
+                             f"near ({x:.2f}, {y:.2f}, {z:.2f}) mm): the texture is too deep where parts of the object "
+                             "are close; use a shallower texture or leave that part out of the region",
+                             parameter="mapping")
+        tested = crossing.tested
+        notes.append(f"checked: no two faces cross ({tested:,} pairs of faces with overlapping boxes tested exactly)")
+    else:
+        notes.append("self-intersection NOT checked (asked not to)")
+
+    import trimesh
+
+    out = trimesh.Trimesh(v, f, process=False, validate=False)
+    area = _area(refined.vertices, f[textured])
+    return TexturedMesh(out, len(base_faces), len(f), int(selected.sum()), area, edge, refined.rounds, rounds, depth,
+                        float(heights.mean()), concave.radius_mm, volume_in, signed_volume(v, f), tested, notes)
+
+
+@dataclass(frozen=True)
+class Concave:
+    """The smallest concave radius (mm) of a surface and where (inf, and the origin, if nowhere concave)."""
+
+    radius_mm: float
+    where: tuple[float, float, float]
+
+
+def min_concave_radius(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray) -> Concave:
+    """The smallest radius (mm) at which the vertex ``normals`` of the faces' edges converge outwards (module
+    docstring, step 4)."""
+    best, where = math.inf, (0.0, 0.0, 0.0)
+    for start in range(0, len(faces), CHUNK):
+        fs = faces[start:start + CHUNK]
+        a, b = fs.ravel(), np.roll(fs, -1, axis=1).ravel()
+        d = vertices[b] - vertices[a]
+        curvature = -np.einsum("ij,ij->i", normals[b] - normals[a], d) / np.einsum("ij,ij->i", d, d)
+        k = int(np.argmax(curvature))
+        if curvature[k] > FLAT_CURVATURE and 1 / curvature[k] < best:
+            best = float(1 / curvature[k])
+            where = tuple(float(c) for c in (vertices[a[k]] + vertices[b[k]]) / 2)
+    return Concave(best, where)
+
+
+def check_closed(faces: np.ndarray) -> None:
+    """RuntimeError unless every directed edge occurs once and its reverse once (closed, consistently wound): the
+    refinement guarantees it, so a failure is a bug, not bad input."""
+    n = int(faces.max()) + 1
+    a, b = faces.ravel(), np.roll(faces, -1, axis=1).ravel()
+    forward = np.sort(a * n + b)
+    backward = np.sort(b * n + a)
+    if np.any(forward[1:] == forward[:-1]) or not np.array_equal(forward, backward):
+        raise RuntimeError("the textured mesh is not closed and consistently wound (a bug in the refinement)")
+
+
+def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """Enclosed volume (mm^3) of a closed mesh, positive if wound outwards."""
+    total = 0.0
+    for start in range(0, len(faces), CHUNK):
+        tri = vertices[faces[start:start + CHUNK]]
+        total += float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum()) / 6
+    return total
+
+
+def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
+    return sum(0.5 * float(np.linalg.norm(face_normals(vertices, faces[s:s + CHUNK], unit=False), axis=1).sum())
+               for s in range(0, len(faces), CHUNK))
+
+
+def _face_normals_chunked(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    return np.concatenate([face_normals(vertices, faces[s:s + CHUNK]) for s in range(0, len(faces), CHUNK)]) \
+        if len(faces) else np.empty((0, 3))
+
+
+def _chunked_any(test, n: int) -> np.ndarray:
+    return np.concatenate([test(slice(s, s + CHUNK)) for s in range(0, n, CHUNK)]) if n else np.empty(0, dtype=bool)
