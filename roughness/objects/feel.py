@@ -84,7 +84,7 @@ class FeelMap:
     flat_roughness: np.ndarray  # the flat engine's V of the unrolled texture (nan where not computed)
     method: tuple[str, ...]  # "flat", "corrected", "fem" or "refused"
     reasons: tuple[str, ...]  # why refused, or the correction applied ("" for flat)
-    region: np.ndarray  # index into region_names
+    in_region: np.ndarray  # (regions, n) bool: which regions each point lies in (regions may overlap)
     region_names: tuple[str, ...]
     region_areas_mm2: tuple[float, ...]
     engine: str
@@ -120,7 +120,7 @@ class FeelMap:
         lams, jnds = self.lambdas_mm, self.jnd
         rows = []
         for i, (name, area) in enumerate(zip(self.region_names, self.region_areas_mm2)):
-            mine = self.region == i
+            mine = self.in_region[i]
             ok = mine & ~np.isnan(self.roughness)
             v = self.roughness[ok]
 
@@ -151,11 +151,12 @@ class FeelMap:
                 "refusals": [{"reason": why, "points": n} for why, n in self.refusals().items()],
                 "points": [{"xyz_mm": p.tolist(), "k1_per_mm": float(a), "k2_per_mm": float(b),
                             "roughness": _num(v), "uncertainty": _num(u), "flat_roughness": _num(f),
-                            "method": m, "reason": r, "region": self.region_names[g],
+                            "method": m, "reason": r,
+                            "regions": [name for name, inside in zip(self.region_names, g) if inside],
                             **({} if jnd is None else {"jnd": _num(j)})}
                            for p, a, b, v, u, f, m, r, g, j in zip(
                                self.points, self.k1, self.k2, self.roughness, self.uncertainty, self.flat_roughness,
-                               self.method, self.reasons, self.region, jnd if jnd is not None else self.k1)]}
+                               self.method, self.reasons, self.in_region.T, jnd if jnd is not None else self.k1)]}
 
 
 def _num(x: float) -> float | None:
@@ -217,9 +218,7 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
     samples = samples or SurfaceSamples.of(mesh)
     chosen = evaluation_points(samples, textured, spacing_mm)
     names = tuple(regions)
-    label_of_face = np.full(len(mesh.faces), -1)
-    for i, name in reversed(list(enumerate(names))):  # the first region listed wins a shared face
-        label_of_face[regions[name]] = i
+    in_region = np.stack([regions[name][samples.faces[chosen]] for name in names])
     curv = principal_curvatures(samples, samples.points[chosen], samples.normals[chosen], FOOTPRINT_RADIUS_MM)
     scale = load_scale("spectral" if engine == "spectral" else _surrogate_fidelity())
     n = len(chosen)
@@ -248,7 +247,7 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
         reasons[i] = why or reasons[i]
     flat, flat_error = np.full(n, np.nan), np.full(n, np.nan)
     roughness, uncertainty = np.full(n, np.nan), np.full(n, np.nan)
-    _judge_flat(maps, engine, flat, flat_error, progress, n)
+    _judge_flat(maps, engine, flat, flat_error, progress, len(maps))
     for i in maps:
         if method[i] == "fem":
             try:
@@ -261,7 +260,7 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
     ref = None if reference is None else reference_of(reference, engine, scale)
     areas = tuple(float(mesh.area_faces[mask].sum()) for mask in regions.values())
     return FeelMap(curv.points, curv.normals, curv.k1, curv.k2, roughness, uncertainty, flat, tuple(method),
-                   tuple(reasons), label_of_face[samples.faces[chosen]], names, areas, engine, curved, spacing_mm,
+                   tuple(reasons), in_region, names, areas, engine, curved, spacing_mm,
                    scale, ref, time.perf_counter() - start)
 
 
