@@ -187,3 +187,106 @@ def test_predict_curvature_no_longer_returns_the_flat_v_and_its_uncertainty_grow
     assert curved["roughness"] == pytest.approx(flat["roughness"] * fix.factor) and fix.factor > 1.01
     assert flat["curvature_error"] is None and curved["curvature_error"] == pytest.approx(flat["roughness"] * fix.error)
     assert any("curvature study" in n for n in curved["domain_notes"])
+
+
+# With the textured mesh (objgeo's texture_mesh and sample_heightmap)
+
+def test_a_textured_flat_face_sampled_back_gives_the_flat_plates_v_within_the_monte_carlo_error():
+    from roughness.objects.mapping import Triplanar
+    from roughness.objects.regions import Region
+    from roughness.objects.sampling import sample_heightmap
+    from roughness.objects.texturing import texture_mesh
+
+    box = trimesh.creation.box([14, 14, 4])
+    textured = texture_mesh(box, Triplanar(TEXTURE), Region("cone", axis=(0, 0, 1), half_angle_deg=10),
+                            check_intersections=False)
+    hm = sample_heightmap(textured, (1.3, -0.7, 2.0), (0, 0, 1), 10.0, TEXTURE.pixel_mm)
+    [sampled] = predict(hm, engine="spectral")
+    v, se = _plate_v(1.3, -0.7)
+    assert abs(sampled.roughness - v) <= 2 * math.hypot(se, sampled.roughness_stderr)  # measured: 0.01 sigma
+
+
+# The commands
+
+def _knob(path: Path) -> Path:
+    """A knob: a cylinder of radius 15 mm, 20 mm tall, its top edge rounded to 4 mm."""
+    profile = [(0, 0), (15, 0), (15, 16)] + [(11 + 4 * math.cos(a), 16 + 4 * math.sin(a))
+                                             for a in np.linspace(0, math.pi / 2, 12)[1:]] + [(0, 20)]
+    trimesh.creation.revolve(np.array(profile), sections=96).export(path)
+    return path
+
+
+def test_object_feel_reports_the_table_the_refusals_and_a_picture(tmp_path, capsys):
+    from roughness.cli import main
+
+    knob = _knob(tmp_path / "knob.stl")
+    args = ["object", "feel", str(knob), "--texture", "standard-1.0", "--mapping", "cylinder", "--region",
+            "cone:0,0,1,5", "--region", "all", "--spacing-mm", "8", "--reference", "standard-1.0"]
+    assert main([*args, "--picture", str(tmp_path / "knob.png"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert (tmp_path / "knob.png").stat().st_size > 10_000
+    top, everything = out["regions"]
+    faces = trimesh.load(knob)
+    expected = faces.area_faces[faces.face_normals[:, 2] >= math.cos(math.radians(5))].sum()
+    assert top["name"] == "cone:0,0,1,5" and top["area_mm2"] == pytest.approx(expected)
+    assert expected > math.pi * 11**2  # the flat top and the last facet of the rounded edge
+    assert everything["points"] > top["points"] > 0 and everything["jnd_median"] is not None
+    methods = {p["method"] for p in out["points"]}
+    assert {"corrected", "refused"} <= methods  # the side is curved; the rounded edge and the rims refuse
+    assert all(p["reason"] for p in out["points"] if p["method"] == "refused")
+    assert any("cylinder wrap" in n for n in out["notes"])
+    assert main([*args, "--picture", str(tmp_path / "knob.png")]) == 2  # exists: refused without --overwrite
+    assert "already exists" in capsys.readouterr().err
+
+
+def test_object_tune_meets_the_target_on_the_curved_part_and_reports_flat_and_object(tmp_path, capsys):
+    from roughness.cli import main
+    from roughness.surface.io import load_heightmap
+
+    mesh, _ = _cylinder(6.0, height_mm=30.0)  # convex radius 6 mm: V about 8% above flat
+    mesh.export(tmp_path / "rod.stl")
+    assert main(["object", "tune", str(tmp_path / "rod.stl"), "--texture", "standard-1.0", "--mapping", "cylinder",
+                 "--region", "cone:0,0,1,100", "--region", "cone:0,0,-1,100", "--spacing-mm", "10",
+                 "--target-lambda", "1.0", "--out", str(tmp_path / "tuned.npz"), "--json", "--quiet"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["on_object"]["curved"] and out["reached"]
+    assert abs(out["on_object"]["jnd_error"]) <= out["tolerance_jnd"]
+    # the flat texture is tuned smoother than the target so that the convex rod feels like it
+    assert out["flat_jnd_from_target"] < -0.1 and out["on_object"]["correction"] > 1.03
+    assert load_heightmap(tmp_path / "tuned.npz").shape == TEXTURE.shape
+
+
+@pytest.mark.parametrize("extra, flag", [
+    (["--texture", "no-such-texture"], "--texture"),
+    (["--texture", "standard-1.0", "--region", "cone:0,0,1"], "--region"),
+    (["--texture", "standard-1.0", "--region", "box:100,100,100,200,200,200"], "--region"),
+    (["--texture", "standard-1.0", "--spacing-mm", "0"], "--spacing-mm"),
+    (["--texture", "standard-1.0", "--colour-by", "jnd"], "--colour-by"),
+    (["--texture", "standard-1.0", "--reference", "standard-9"], "--reference"),
+    (["--texture", "standard-1.0", "--picture", "nowhere/p.png"], "--picture"),
+])
+def test_bad_object_feel_inputs_exit_2(tmp_path, capsys, extra, flag):
+    from roughness.cli import main
+
+    knob = _knob(tmp_path / "knob.stl")
+    code = main(["object", "feel", str(knob), *extra])
+    err = capsys.readouterr().err
+    assert code == 2 and flag in err and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("extra, flag", [
+    (["--jnd", "1"], "--jnd"),
+    (["--target-lambda", "1", "--reference", "standard-1.0"], "--reference"),
+    (["--target-lambda", "1", "--engine", "surrogate"], "--engine"),
+    (["--target-lambda", "1", "--min-factor", "2", "--max-factor", "1"], "--min-factor"),
+    (["--target-lambda", "1", "--mesh-out", "m.obj"], "--mesh-out"),
+])
+def test_bad_object_tune_inputs_exit_2(tmp_path, capsys, extra, flag, monkeypatch):
+    from roughness.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    knob = _knob(tmp_path / "knob.stl")
+    code = main(["object", "tune", str(knob), "--texture", "standard-1.0", "--out", "t.npz", *extra])
+    err = capsys.readouterr().err
+    assert code == 2 and flag in err and "Traceback" not in err, err
+    assert not (tmp_path / "t.npz").exists()

@@ -221,6 +221,7 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
     in_region = np.stack([regions[name][samples.faces[chosen]] for name in names])
     curv = principal_curvatures(samples, samples.points[chosen], samples.normals[chosen], FOOTPRINT_RADIUS_MM)
     scale = load_scale("spectral" if engine == "spectral" else _surrogate_fidelity())
+    ref = None if reference is None else reference_of(reference, engine, scale)  # a bad name refused first
     n = len(chosen)
     method, reasons = ["refused"] * n, [""] * n
     factor, factor_error = np.ones(n), np.zeros(n)
@@ -257,7 +258,6 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
             continue
         roughness[i] = flat[i] * factor[i]
         uncertainty[i] = math.hypot(factor[i] * flat_error[i], flat[i] * factor_error[i])
-    ref = None if reference is None else reference_of(reference, engine, scale)
     areas = tuple(float(mesh.area_faces[mask].sum()) for mask in regions.values())
     return FeelMap(curv.points, curv.normals, curv.k1, curv.k2, roughness, uncertainty, flat, tuple(method),
                    tuple(reasons), in_region, names, areas, engine, curved, spacing_mm,

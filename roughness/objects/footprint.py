@@ -61,8 +61,11 @@ def surface_grid(place: Placement, u: np.ndarray, v: np.ndarray) -> tuple[np.nda
 
 
 def footprint_axis(pixel_mm: float, side_mm: float = FOOTPRINT_MM) -> np.ndarray:
-    """Pixel centres (mm, from the footprint's centre) across a footprint of ``side_mm``."""
+    """Pixel centres (mm, from the footprint's centre) across at least ``side_mm``: the engines' round(side / pixel)
+    pixels, two more at a time until they cover the side (the engines' footprint then stays on the pixel grid)."""
     n = max(int(round(side_mm / pixel_mm)), 1)
+    while n * pixel_mm < side_mm:
+        n += 2
     return (np.arange(n) - (n - 1) / 2) * pixel_mm
 
 
