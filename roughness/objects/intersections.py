@@ -1,11 +1,13 @@
 """Does a mesh intersect itself? Exact triangle-pair tests on the pairs whose bounding boxes overlap.
 
-Method: the faces' axis-aligned bounding boxes are indexed in an R-tree (rtree, libspatialindex), slab by slab
-along x so the index stays small (a face crossing a slab boundary is in both; a pair is counted in the slab where
-the overlap of their boxes begins). Each pair of overlapping boxes whose faces share no vertex is tested exactly:
-two triangles in general position intersect if and only if an edge of one crosses the other (Moeller-Trumbore
-segment test, six per pair). Not seen by this test: coplanar overlaps, and pairs that share a vertex (neighbours);
-a displacement that folds neighbours over each other turns a face over, which ``folded_faces`` catches.
+Method: candidate pairs are the faces whose axis-aligned bounding boxes overlap, found on a uniform grid (cell: the
+90th percentile of the faces' box extents) where each face is entered in every cell its box touches and a pair is
+counted only in the cell holding the corner where the overlap of their boxes begins (so once); the few faces
+whose boxes span more than MAX_CELLS cells (large untextured faces, long transition slivers) are paired through an
+R-tree (rtree) of all boxes instead. Each candidate pair whose faces share no vertex is tested exactly: two
+triangles in general position intersect if and only if an edge of one crosses the other (Moeller-Trumbore segment
+test, six per pair). Not seen by this test: coplanar overlaps, and pairs that share a vertex (neighbours); a
+displacement that folds neighbours over each other turns a face over, which ``folded_faces`` catches.
 """
 from __future__ import annotations
 
@@ -13,10 +15,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-SLAB_FACES = 2_000_000
-"""Faces whose boxes start in one slab (the R-tree of a slab holds about this many: a few hundred MB)."""
+MAX_CELLS = 64
+"""Grid cells a face's box may span to be entered on the grid; larger faces go through the R-tree."""
+CHUNK_ENTRIES = 4_000_000
+"""Grid entries expanded into candidate pairs at once (a few hundred MB of pairs at most)."""
 PAIR_CHUNK = 2_000_000
-"""Pairs tested at once."""
+"""Pairs tested exactly at once."""
 
 
 @dataclass(frozen=True)
@@ -34,43 +38,101 @@ class Intersections:
 def self_intersections(vertices: np.ndarray, faces: np.ndarray, moved: np.ndarray | None = None) -> Intersections:
     """The pairs of faces of (``vertices``, ``faces``) that cross each other (module docstring). ``moved``: a mask of
     the faces that may have moved; pairs of two unmoved faces are not tested (the input mesh is taken as sound)."""
-    from rtree import index
-
+    faces = np.asarray(faces, dtype=np.int64)
+    moved = np.ones(len(faces), dtype=bool) if moved is None else np.asarray(moved, dtype=bool)
     mins = np.empty((len(faces), 3))
     maxs = np.empty((len(faces), 3))
-    for start in range(0, len(faces), SLAB_FACES):
-        tri = vertices[faces[start:start + SLAB_FACES]]
-        mins[start:start + SLAB_FACES] = tri.min(axis=1)
-        maxs[start:start + SLAB_FACES] = tri.max(axis=1)
-    moved = np.ones(len(faces), dtype=bool) if moved is None else np.asarray(moved, dtype=bool)
-    order = np.argsort(mins[:, 0], kind="stable")
-    bounds = [mins[order[k], 0] for k in range(0, len(order), SLAB_FACES)] + [np.inf]
+    for start in range(0, len(faces), PAIR_CHUNK):
+        tri = vertices[faces[start:start + PAIR_CHUNK]]
+        mins[start:start + PAIR_CHUNK] = tri.min(axis=1)
+        maxs[start:start + PAIR_CHUNK] = tri.max(axis=1)
+    extent = (maxs - mins).max(axis=1)
+    cell = max(float(np.percentile(extent, 90)), 1e-9)
+    lo = np.floor((mins - mins.min(axis=0)) / cell).astype(np.int64)
+    hi = np.floor((maxs - mins.min(axis=0)) / cell).astype(np.int64)
+    span = hi - lo + 1
+    large = span.prod(axis=1) > MAX_CELLS
     found, tested = [], 0
-    prop = index.Property()
-    prop.dimension = 3
-    for lo, hi in zip(bounds[:-1], bounds[1:]):
-        members = np.flatnonzero((mins[:, 0] < hi) & (maxs[:, 0] >= lo))
-        if len(members) < 2:
-            continue
-        tree = index.Index((np.arange(len(members), dtype=np.int64), mins[members], maxs[members]),
-                           properties=prop, interleaved=False)
-        queried = members[moved[members]]
-        hits, counts = tree.intersection_v(mins[queried], maxs[queried])
-        i = np.repeat(queried, counts.astype(np.int64))
-        j = members[hits.astype(np.int64)]
-        keep = (i != j) & ((i < j) | ~moved[j])
-        start = np.maximum(mins[i, 0], mins[j, 0])
-        keep &= (start >= lo) & (start < hi)
-        i, j = i[keep], j[keep]
-        shared = (faces[i][:, :, None] == faces[j][:, None, :]).any(axis=(1, 2))
-        i, j = i[~shared], j[~shared]
-        tested += len(i)
-        for s in range(0, len(i), PAIR_CHUNK):
-            a, b = i[s:s + PAIR_CHUNK], j[s:s + PAIR_CHUNK]
-            cross = triangles_cross(vertices[faces[a]], vertices[faces[b]])
-            found.append(np.stack([a[cross], b[cross]], axis=1))
+    for i, j in _grid_pairs(lo, hi, span, ~large, mins, maxs, cell):
+        t, hits = _test(vertices, faces, moved, mins, maxs, i, j)
+        tested, found = tested + t, found + [hits]
+    if large.any():
+        for i, j in _tree_pairs(np.flatnonzero(large), mins, maxs):
+            keep = ~large[j] | (i < j)  # a large-large pair once
+            t, hits = _test(vertices, faces, moved, mins, maxs, i[keep], j[keep])
+            tested, found = tested + t, found + [hits]
     pairs = np.concatenate(found) if found else np.empty((0, 2), dtype=np.int64)
     return Intersections(pairs, tested)
+
+
+def _grid_pairs(lo, hi, span, small, mins, maxs, cell):
+    """Chunks of (i, j), i < j, of small faces sharing a grid cell, each pair in one cell only."""
+    ids = np.flatnonzero(small)
+    if len(ids) < 2:
+        return
+    counts = span[ids].prod(axis=1)
+    # entries: (face, cell) for every cell of the face's box
+    entry_face = np.repeat(ids, counts)
+    offset = np.arange(len(entry_face)) - np.repeat(np.cumsum(counts) - counts, counts)
+    sy, sz = span[entry_face, 1], span[entry_face, 2]
+    cx = lo[entry_face, 0] + offset // (sy * sz)
+    cy = lo[entry_face, 1] + (offset // sz) % sy
+    cz = lo[entry_face, 2] + offset % sz
+    del offset, sy, sz
+    ny, nz = int(hi[:, 1].max()) + 2, int(hi[:, 2].max()) + 2
+    key = (cx * ny + cy) * nz + cz
+    del cx, cy, cz
+    order = np.argsort(key, kind="stable")
+    key, entry_face = key[order], entry_face[order]
+    del order
+    start = np.searchsorted(key, key, side="left")
+    end = np.searchsorted(key, key, side="right")
+    after = end - np.arange(len(key)) - 1  # later entries in the same cell
+    origin = mins.min(axis=0)
+    for s in range(0, len(key), CHUNK_ENTRIES):
+        positions = np.arange(s, min(s + CHUNK_ENTRIES, len(key)))
+        n_after = after[positions]
+        total = int(n_after.sum())
+        if total == 0:
+            continue
+        first = np.repeat(positions, n_after)
+        second = first + 1 + (np.arange(total) - np.repeat(np.cumsum(n_after) - n_after, n_after))
+        i, j = entry_face[first], entry_face[second]
+        # count the pair only in the cell that holds the start of the overlap of the two boxes
+        corner = np.floor((np.maximum(mins[i], mins[j]) - origin) / cell).astype(np.int64)
+        here = (corner[:, 0] * ny + corner[:, 1]) * nz + corner[:, 2] == key[first]
+        i, j = i[here], j[here]
+        yield np.minimum(i, j), np.maximum(i, j)
+    del start
+
+
+def _tree_pairs(large: np.ndarray, mins: np.ndarray, maxs: np.ndarray):
+    """Chunks of (i, j): each large face i with every face j whose box overlaps its box (R-tree)."""
+    from rtree import index
+
+    prop = index.Property()
+    prop.dimension = 3
+    tree = index.Index((np.arange(len(mins), dtype=np.int64), mins, maxs), properties=prop, interleaved=False)
+    for s in range(0, len(large), 10_000):
+        q = large[s:s + 10_000]
+        hits, counts = tree.intersection_v(mins[q], maxs[q])
+        i = np.repeat(q, counts.astype(np.int64))
+        j = hits.astype(np.int64)
+        yield i[i != j], j[i != j]
+
+
+def _test(vertices, faces, moved, mins, maxs, i, j) -> tuple[int, np.ndarray]:
+    """(pairs tested, crossing pairs) among candidates (i, j): boxes overlapping, one face moved, no shared vertex."""
+    keep = (moved[i] | moved[j]) & np.all((mins[i] <= maxs[j]) & (mins[j] <= maxs[i]), axis=1)
+    i, j = i[keep], j[keep]
+    shared = (faces[i][:, :, None] == faces[j][:, None, :]).any(axis=(1, 2))
+    i, j = i[~shared], j[~shared]
+    out = []
+    for s in range(0, len(i), PAIR_CHUNK):
+        a, b = i[s:s + PAIR_CHUNK], j[s:s + PAIR_CHUNK]
+        cross = triangles_cross(vertices[faces[a]], vertices[faces[b]])
+        out.append(np.stack([a[cross], b[cross]], axis=1))
+    return len(i), (np.concatenate(out) if out else np.empty((0, 2), dtype=np.int64))
 
 
 def triangles_cross(t1: np.ndarray, t2: np.ndarray) -> np.ndarray:

@@ -230,7 +230,7 @@ class Wrap:
         return _chunked(points, normals, one)
 
     def notes(self) -> list[str]:
-        point = ", ".join(f"{c:.3g}" for c in self.axis.point)
+        point = ", ".join(f"{c + 0.0:.3f}" for c in self.axis.point)
         direction = ", ".join(f"{c:.3f}" for c in self.axis.direction)
         what = "axis" if self.kind == "cylinder" else "centre"
         width, _ = self.texture.size_mm

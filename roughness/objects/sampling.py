@@ -14,6 +14,8 @@ from .mapping import axis_of
 
 DEFAULT_REACH_MM = 10.0
 """How far above the plane the rays start (mm): the first surface below that height is the one read."""
+CHUNK_FACES = 2_000_000
+"""Faces projected at once."""
 WINDOW = 6
 """Triangles spanning up to this many grid pixels are rasterised together; larger ones one by one."""
 
@@ -29,33 +31,51 @@ def sample_heightmap(textured, origin: object, normal: object, size_mm: float, p
     reach = positive("reach_mm", reach_mm)
     n = math.ceil(size / pixel - 1e-9)
     check_size("pixels of the sampled heightmap", float(n) ** 2, MAX_HEIGHTMAP_PIXELS, "pixel_mm")
-    o, e1, e2, a = axis_of(origin, normal).frame()
-    r = np.asarray(mesh.vertices, dtype=float) - o
-    s, t, w = r @ e1, r @ e2, r @ a
-    faces = np.asarray(mesh.faces)
-    half = n * pixel / 2
-    fs, ft, fw = s[faces], t[faces], w[faces]
-    near = ((fs.max(1) >= -half) & (fs.min(1) <= half) & (ft.max(1) >= -half) & (ft.min(1) <= half)
-            & (fw.min(1) <= reach))
-    best = np.full(n * n, -np.inf)
-    idx = np.flatnonzero(near)
-    # grid columns/rows each triangle's box covers
-    c0 = np.clip(np.ceil((fs[idx].min(1) + half) / pixel - 0.5), 0, n).astype(np.int64)
-    c1 = np.clip(np.floor((fs[idx].max(1) + half) / pixel - 0.5), -1, n - 1).astype(np.int64)
-    r0 = np.clip(np.ceil((ft[idx].min(1) + half) / pixel - 0.5), 0, n).astype(np.int64)
-    r1 = np.clip(np.floor((ft[idx].max(1) + half) / pixel - 0.5), -1, n - 1).astype(np.int64)
-    span = np.maximum(c1 - c0, r1 - r0) + 1
-    small = span <= WINDOW
-    _raster(best, n, pixel, half, fs[idx[small]], ft[idx[small]], fw[idx[small]], c0[small], r0[small],
-            c1[small], r1[small], WINDOW, reach)
-    for k in np.flatnonzero(~small & (span > 0)):
-        _raster(best, n, pixel, half, fs[idx[k:k + 1]], ft[idx[k:k + 1]], fw[idx[k:k + 1]], c0[k:k + 1], r0[k:k + 1],
-                c1[k:k + 1], r1[k:k + 1], int(span[k]), reach)
+    best = first_hits(mesh, origin, normal, n, pixel, reach)
     if not np.all(np.isfinite(best)):
         missing = int((~np.isfinite(best)).sum())
         raise InputError(f"{missing:,} of {n * n:,} rays met no surface within {reach:g} mm above the plane: the "
                          "square does not lie over the mesh", parameter="origin")
-    return Heightmap(best.reshape(n, n), pixel)
+    return Heightmap(best, pixel)
+
+
+def first_hits(mesh, origin: object, normal: object, n: int, pixel_mm: float, reach_mm: float,
+               up: object | None = None) -> np.ndarray:
+    """(n, n) heights (mm along ``normal`` above the plane through ``origin``) of the first surface of ``mesh`` met
+    by rays along -``normal`` from ``reach_mm`` above the plane, on the grid of ``sample_heightmap``; -inf where a
+    ray meets nothing. ``up``: a direction (not along ``normal``) that rows should follow (e2), instead of the frame
+    of ``Axis.frame``."""
+    pixel, reach = pixel_mm, reach_mm
+    o, e1, e2, a = axis_of(origin, normal).frame()
+    if up is not None:
+        e2 = np.asarray(up, dtype=float) - (np.asarray(up, dtype=float) @ a) * a
+        e2 /= np.linalg.norm(e2)
+        e1 = np.cross(e2, a)
+    r = np.asarray(mesh.vertices, dtype=float) - o
+    s, t, w = r @ e1, r @ e2, r @ a
+    del r
+    faces = np.asarray(mesh.faces)
+    half = n * pixel / 2
+    best = np.full(n * n, -np.inf)
+    for chunk in range(0, len(faces), CHUNK_FACES):
+        f = faces[chunk:chunk + CHUNK_FACES]
+        fs, ft, fw = s[f], t[f], w[f]
+        near = ((fs.max(1) >= -half) & (fs.min(1) <= half) & (ft.max(1) >= -half) & (ft.min(1) <= half)
+                & (fw.min(1) <= reach))
+        fs, ft, fw = fs[near], ft[near], fw[near]
+        c0 = np.clip(np.ceil((fs.min(1) + half) / pixel - 0.5), 0, n).astype(np.int64)
+        c1 = np.clip(np.floor((fs.max(1) + half) / pixel - 0.5), -1, n - 1).astype(np.int64)
+        r0 = np.clip(np.ceil((ft.min(1) + half) / pixel - 0.5), 0, n).astype(np.int64)
+        r1 = np.clip(np.floor((ft.max(1) + half) / pixel - 0.5), -1, n - 1).astype(np.int64)
+        span = np.maximum(c1 - c0, r1 - r0) + 1
+        small = span <= WINDOW
+        _raster(best, n, pixel, half, fs[small], ft[small], fw[small], c0[small], r0[small], c1[small], r1[small],
+                WINDOW, reach)
+        for k in np.flatnonzero(~small & (span > 0)):
+            one = slice(k, k + 1)
+            _raster(best, n, pixel, half, fs[one], ft[one], fw[one], c0[one], r0[one], c1[one], r1[one], int(span[k]),
+                    reach)
+    return best.reshape(n, n)
 
 
 def _raster(best: np.ndarray, n: int, pixel: float, half: float, s: np.ndarray, t: np.ndarray, w: np.ndarray,

@@ -31,8 +31,8 @@ from .normals import face_normals, smoothed, vertex_normals
 from .regions import Region
 from .remesh import refine
 
-FLAT_CURVATURE = 1e-6
-"""Curvatures (1/mm) below this (radii above 1 km) are rounding on a flat face, not concavity."""
+FLAT_CURVATURE = 1e-3
+"""Curvatures (1/mm) below this (radii above 1 m) are taken as flat (rounding in the normals of a flat face)."""
 CHUNK = 2_000_000
 """Edges or faces handled at once in the checks (arrays of this many vectors: tens of MB)."""
 
