@@ -8,30 +8,30 @@ from pathlib import Path
 
 from .common import (
     POSITIVE,
+    SEED,
     add_overwrite,
     add_quiet,
     add_reading_args,
     finish,
     json_text,
-    load_input,
     log,
     readings,
     show_notes,
 )
 
-MAPPINGS = ("triplanar", "cylinder", "sphere")
-
-
 def add_object_args(p: argparse.ArgumentParser) -> None:
     """The textured object: the mesh, the texture, its mapping and the regions (shared by feel and tune)."""
+    from roughness.objects.layout import MAPPINGS
+
     p.add_argument("mesh", metavar="MESH", help="the untextured object: STL, OBJ, PLY or 3MF (mm)")
     p.add_argument("--texture", required=True, metavar="FILE|NAME",
                    help="the texture: a heightmap file (read as in predict) or a texture name (standard-1.0, "
                         "flattop-0.3, ...: roughness texture list), laid on as one periodic tile")
+    p.add_argument("--seed", type=SEED, default=0, help="seed of a named texture (default 0)")
     p.add_argument("--mapping", choices=MAPPINGS, default="triplanar",
-                   help="how the texture lies on the surface: triplanar projection (any shape), or wrapped around "
-                        "the textured part's axis with a whole number of tiles (cylinder: knobs, handles; sphere) "
-                        "(default: triplanar)")
+                   help="how the texture lies on the surface (as object texture): triplanar projection (any shape), "
+                        "wrapped around the textured part's fitted axis with a whole number of tiles (cylinder: knobs, "
+                        "handles; sphere), or the mesh's own UVs (default: triplanar)")
     p.add_argument("--region", action="append", metavar="SPEC",
                    help="faces to texture, repeatable (each a row of the table): all, cone:AX,AY,AZ,DEG (normals within "
                         "DEG of the axis), box:X0,Y0,Z0,X1,Y1,Z1 (mm), colour:R,G,B[,TOL] (painted) (default: all)")
@@ -64,8 +64,10 @@ def read_object(args: argparse.Namespace) -> ObjectInputs:
     from roughness.objects.meshes import read_mesh
     from roughness.objects.regions import parse_region
 
+    from .object_texture import _texture  # the same texture reading as object texture
+
     read = read_mesh(args.mesh)
-    texture, name = texture_of(args, args.texture)
+    texture, texture_notes = _texture(args)
     regions = {}
     for text in args.region or ["all"]:
         mask = parse_region(text).faces(read.mesh)
@@ -74,38 +76,14 @@ def read_object(args: argparse.Namespace) -> ObjectInputs:
 
             raise InputError(f"region {text!r} selects no face of the mesh", parameter="region")
         regions[text] = mask
-    return ObjectInputs(read.mesh, texture, name, regions, list(read.notes))
-
-
-def texture_of(args: argparse.Namespace, text: str):
-    """(heightmap, name): a heightmap file if one exists at ``text`` (``FILE:units`` allowed), else a texture name."""
-    from roughness.core.errors import InputError
-    from roughness.dataset.catalogue import make_texture
-    from roughness.surface.units import split_input
-
-    if Path(split_input(text)[0]).exists():
-        return load_input(args, text), text
-    try:
-        hm, _ = make_texture(text)
-    except InputError as err:
-        raise InputError(f"{text!r} is no file, nor a texture name ({err})", parameter="texture") from None
-    return hm, text
+    return ObjectInputs(read.mesh, texture, args.texture, regions, [*read.notes, *texture_notes])
 
 
 def mapping_of(kind: str, texture, inputs: ObjectInputs):
     """The mapping of ``kind`` for ``texture`` on the textured faces (a wrap's axis and radius fitted to them)."""
-    import numpy as np
+    from roughness.objects.layout import make_mapping
 
-    from roughness.objects.fitting import centroid, principal_axis, wrap_radius
-    from roughness.objects.mapping import Triplanar, axis_of, wrap
-
-    if kind == "triplanar":
-        return Triplanar(texture)
-    vertices, faces = np.asarray(inputs.mesh.vertices, float), np.asarray(inputs.mesh.faces)[inputs.textured]
-    axis = principal_axis(vertices, faces)
-    if kind == "sphere":
-        axis = axis_of(centroid(vertices, faces), axis.direction)
-    return wrap(texture, kind, axis, wrap_radius(vertices, faces, axis, kind))
+    return make_mapping(kind, texture, inputs.mesh, inputs.textured)
 
 
 def add_parser(sub) -> None:
