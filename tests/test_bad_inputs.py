@@ -44,6 +44,8 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("tactile-image",): ["picture.png", "--out", "plate"],
     ("perception", "plan"): ["--stimuli", "stimuli.csv", "--truth", "truth.csv", "--trials", "10", "--experiments", "2",
                              "--out", "plan"],
+    ("object", "feel"): ["mesh.stl", "--texture", "standard-1.0"],
+    ("object", "tune"): ["mesh.stl", "--texture", "standard-1.0", "--target-lambda", "1.0", "--out", "new.npz"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -65,6 +67,8 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("tune",): [(0, ".npy", [])],
     ("tactile-image",): [(0, ".png", [])],
     ("perception", "plan"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
+    ("object", "feel"): [(0, ".stl", [])],
+    ("object", "tune"): [(0, ".stl", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
@@ -79,8 +83,11 @@ FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("tune",): ["--out"],
     ("palette",): ["--out"],
     ("tactile-image",): ["--out"],
+    ("object", "feel"): ["--picture"],
+    ("object", "tune"): ["--out", "--mesh-out"],
 }
-OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy"}
+OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy", "--picture": ".png",
+                 "--mesh-out": ".stl"}
 OUTPUT_SUFFIX_OF = {("homogeneity",): {"--map": ".png"}}
 
 
@@ -133,6 +140,9 @@ def workdir(tmp_path, monkeypatch):
 
     Image.fromarray(np.repeat(np.uint8([[0, 128, 255]]), 30, axis=0).repeat(3, axis=1)[..., None].repeat(3, axis=2)
                     ).save(tmp_path / "picture.png")  # three flat colours
+    import trimesh
+
+    trimesh.creation.box((20, 20, 20)).export(tmp_path / "mesh.stl")  # the object commands' mesh
     monkeypatch.chdir(tmp_path)
     _tripwires(monkeypatch)
     return tmp_path
