@@ -290,3 +290,29 @@ def test_bad_object_tune_inputs_exit_2(tmp_path, capsys, extra, flag, monkeypatc
     err = capsys.readouterr().err
     assert code == 2 and flag in err and "Traceback" not in err, err
     assert not (tmp_path / "t.npz").exists()
+
+
+def test_curved_fem_on_request_runs_the_curved_fem_on_the_cylinder_under_the_footprint(monkeypatch):
+    """--curved fem: where curvature matters each footprint goes to the curved FEM (stubbed here: seconds each) with
+    the base the principal curvatures describe; the map's x runs along the curving direction, so the cylinder is
+    straight along y."""
+    from roughness import engines
+
+    calls = []
+    flat_predict = engines.predict
+
+    def predict_stub(heightmaps, engine="auto", **kwargs):
+        if engine != "fem":
+            return flat_predict(heightmaps, engine=engine, **kwargs)
+        calls.append(kwargs)
+        [p] = flat_predict(heightmaps, engine="spectral")
+        return [p]
+
+    monkeypatch.setattr(engines, "predict", predict_stub)
+    mesh, side = _cylinder(10.0)
+    feel = feel_map(mesh, Wrap(10.0), {"side": side}, spacing_mm=10.0, curved="fem")
+    judged = [m for m in feel.method if m != "refused"]
+    assert judged and set(judged) == {"fem"} and len(calls) == len(judged)
+    for kwargs in calls:
+        assert kwargs["base"] == "cylinder" and kwargs["curvature_axis"] == "y"
+        assert kwargs["curvature_mm"] == pytest.approx(10.0, rel=0.02)

@@ -40,11 +40,6 @@ class Correction:
     error: float
     note: str
 
-    def apply(self, roughness: float, stderr: float | None = None) -> tuple[float, float]:
-        """(corrected V, its uncertainty): the flat answer's error and the correction's added in quadrature."""
-        value = roughness * self.factor
-        return value, math.hypot(self.factor * (stderr or 0.0), abs(roughness) * self.error)
-
 
 @dataclass(frozen=True)
 class BaseTable:

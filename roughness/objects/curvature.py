@@ -18,7 +18,9 @@ import numpy as np
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_MAP_POSITIONS, check_size
 
-FOOTPRINT_RADIUS_MM = 5.0
+from .correction import FOOTPRINT_MM
+
+FOOTPRINT_RADIUS_MM = FOOTPRINT_MM / 2  # the neighbourhood the curvature is fitted over (mm)
 SAMPLE_SPACING_MM = 0.4  # mean distance between surface samples: ~500 within a 5 mm neighbourhood
 MIN_NEIGHBOURS = 12
 UMBILIC_PER_MM = 1e-4  # principal curvatures closer than this: no principal direction, the fixed frame's

@@ -18,7 +18,8 @@ import numpy as np
 
 from roughness.surface.heightmap import Heightmap
 
-FOOTPRINT_MM = 10.0  # the skin footprint's side (SimConfig.width_mm)
+from .correction import FOOTPRINT_MM
+
 CHECK_POINTS = 11  # per side: the footprint points checked against the mesh
 OFF_SURFACE_MM = 0.3  # a footprint point this far from every surface sample is off the surface
 MAX_OFF_FRACTION = 0.05  # footprints with more of their points off the surface (or region) are refused
