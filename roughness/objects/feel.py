@@ -177,10 +177,13 @@ def evaluation_points(samples: SurfaceSamples, in_region: np.ndarray, spacing_mm
     return np.sort(idx[order[first]])
 
 
-def reference_of(name_or_map: str | Heightmap, engine: str, scale) -> Reference:
-    """A reference texture (a name such as ``standard-1.0``, or a heightmap) judged flat by ``engine``."""
+def reference_of(name_or_map: str | Heightmap | Reference, engine: str, scale) -> Reference:
+    """A reference texture (a name such as ``standard-1.0``, or a heightmap) judged flat by ``engine`` (a
+    ``Reference`` as it is: e.g. a target)."""
     from roughness.engines import predict
 
+    if isinstance(name_or_map, Reference):
+        return name_or_map
     if isinstance(name_or_map, Heightmap):
         name, hm = "reference", name_or_map
     else:
@@ -196,7 +199,7 @@ def reference_of(name_or_map: str | Heightmap, engine: str, scale) -> Reference:
 
 
 def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacing_mm: float = DEFAULT_SPACING_MM,
-             engine: str = "spectral", curved: str = "correction", reference: str | Heightmap | None = None,
+             engine: str = "spectral", curved: str = "correction", reference: str | Heightmap | Reference | None = None,
              samples: SurfaceSamples | None = None,
              progress: Callable[[int, int], None] | None = None) -> FeelMap:
     """The roughness map of ``mesh`` (trimesh.Trimesh, mm; the untextured base) under ``mapping`` (a

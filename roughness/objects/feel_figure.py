@@ -70,7 +70,7 @@ def feel_figure(mesh, feel: FeelMap, textured: np.ndarray | None = None, by: str
         ax.view_init(elev=25, azim=azimuth)
     fig.colorbar(ScalarMappable(norm, cmap), ax=fig.axes, shrink=0.7, label=label)
     refused = feel.method.count("refused")
-    fig.suptitle((title + ": " if title else "") + f"{len(feel.points)} footprints {feel.spacing_mm:g} mm apart, "
+    fig.suptitle((title + "\n" if title else "") + f"{len(feel.points)} footprints {feel.spacing_mm:g} mm apart, "
                  f"{refused} refused (dark grey), untextured light grey" + note)
     return fig
 
