@@ -28,6 +28,7 @@ from roughness.core.errors import InputError
 from roughness.models import MODELS_DIR
 
 TABLE_PATH = MODELS_DIR / "curvature_correction.json"
+NEARLY = 0.1  # a second principal curvature below this fraction of the first: called a cylinder (or a sphere)
 STUDY_RESULTS = {"cylinder": "studies/results/curvature_default.json", "sphere": "studies/results/curvature_sphere.json"}
 FOOTPRINT_MM = 10.0  # the skin footprint's side (SimConfig.width_mm)
 
@@ -143,14 +144,17 @@ def for_base(radius_mm: float, base: str) -> Correction:
 
 
 def _kind(k1: float, k2: float) -> str:
-    """The base in words: a flat base, a cylinder, a sphere, or principal radii and how they were counted."""
+    """The base in words: flat, a cylinder, a sphere (the other radius within ``NEARLY`` said alongside), or
+    principal radii and how they were counted."""
     small, large = sorted((k1, k2), key=abs)
     if large == 0:
         return "a flat base"
-    if abs(small) <= 1e-9 * abs(large):
-        return f"a {_side(large)} cylinder of radius {1 / abs(large):.3g} mm"
-    if abs(large - small) <= 1e-9 * abs(large):
-        return f"a {_side(large)} sphere of radius {1 / abs(large):.3g} mm"
+    if abs(small) <= NEARLY * abs(large):
+        other = f" (other principal radius {_radius(small)} mm)" if small else ""
+        return f"a {_side(large)} cylinder of radius {1 / abs(large):.3g} mm{other}"
+    if abs(large - small) <= NEARLY * abs(large):
+        other = f" (principal radii {1 / k1:.3g} and {1 / k2:.3g} mm)" if large != small else ""
+        return f"a {_side(large)} sphere of radius {2 / abs(k1 + k2):.3g} mm{other}"
     how = "a sphere plus a cylinder" if small * large > 0 else "two cylinders"
     return f"principal radii {1 / k1:.3g} and {1 / k2:.3g} mm, counted as {how}: not measured"
 

@@ -251,8 +251,10 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
         reasons[i] = why or reasons[i]
     flat, flat_error = np.full(n, np.nan), np.full(n, np.nan)
     roughness, uncertainty = np.full(n, np.nan), np.full(n, np.nan)
-    _judge_flat(maps, engine, flat, flat_error, progress, len(maps))
+    engine_notes = _judge_flat(maps, engine, flat, flat_error, progress, len(maps))
     for i in maps:
+        if engine_notes.get(i):  # e.g. the surrogate outside its training domain: said with the point
+            reasons[i] = "; ".join([*([reasons[i]] if reasons[i] else []), *engine_notes[i]])
         if method[i] == "fem":
             try:
                 roughness[i], uncertainty[i], reasons[i] = _curved_fem(maps[i], curv.k1[i], curv.k2[i])
@@ -307,24 +309,29 @@ def _refusal(samples: SurfaceSamples, place: Placement, textured: np.ndarray) ->
 
 
 def _judge_flat(maps: dict[int, Heightmap], engine: str, flat: np.ndarray, flat_error: np.ndarray,
-                progress: Callable[[int, int], None] | None, total: int) -> None:
-    """The flat engine's V and its error for each unrolled footprint, written into ``flat``/``flat_error``."""
+                progress: Callable[[int, int], None] | None, total: int) -> dict[int, list[str]]:
+    """The flat engine's V and its error for each unrolled footprint, written into ``flat``/``flat_error``; returns
+    the engine's notes by point (the surrogate: why a footprint lies outside its domain)."""
     from roughness.engines import predict
 
     keys = list(maps)
     done = 0
+    notes: dict[int, list[str]] = {}
 
     def record(p) -> None:
         nonlocal done
         i = keys[done]
         flat[i] = p.roughness
         flat_error[i] = p.roughness_stderr if p.roughness_stderr is not None else (p.roughness_std or 0.0)
+        if p.domain_notes:
+            notes[i] = [f"{p.engine}: {note}" for note in p.domain_notes]
         done += 1
         if progress:
             progress(done, total)
 
     if keys:
         predict([maps[i] for i in keys], engine=engine, on_result=record)
+    return notes
 
 
 def _curved_fem(hm: Heightmap, k1: float, k2: float) -> tuple[float, float, str]:
