@@ -46,6 +46,7 @@ BASE: dict[tuple[str, ...], list[str]] = {
                              "--out", "plan"],
     ("object", "feel"): ["mesh.stl", "--texture", "standard-1.0"],
     ("object", "tune"): ["mesh.stl", "--texture", "standard-1.0", "--target-lambda", "1.0", "--out", "new.npz"],
+    ("object", "texture"): ["mesh.stl", "--texture", "standard-1.0", "--out", "new.stl"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -67,8 +68,9 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("tune",): [(0, ".npy", [])],
     ("tactile-image",): [(0, ".png", [])],
     ("perception", "plan"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
-    ("object", "feel"): [(0, ".stl", [])],
-    ("object", "tune"): [(0, ".stl", [])],
+    ("object", "feel"): [(0, ".stl", []), ("--texture", ".npy", ["--pixel-mm", "0.05"])],
+    ("object", "tune"): [(0, ".stl", []), ("--texture", ".npy", ["--pixel-mm", "0.05"])],
+    ("object", "texture"): [(0, ".stl", []), ("--texture", ".npy", ["--pixel-mm", "0.05"])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
@@ -85,9 +87,10 @@ FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("tactile-image",): ["--out"],
     ("object", "feel"): ["--picture"],
     ("object", "tune"): ["--out", "--mesh-out"],
+    ("object", "texture"): ["--out", "--preview"],
 }
-OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy", "--picture": ".png",
-                 "--mesh-out": ".stl"}
+OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy", "--preview": ".png",
+                 "--picture": ".png", "--mesh-out": ".stl"}
 OUTPUT_SUFFIX_OF = {("homogeneity",): {"--map": ".png"}}
 
 
@@ -142,7 +145,7 @@ def workdir(tmp_path, monkeypatch):
                     ).save(tmp_path / "picture.png")  # three flat colours
     import trimesh
 
-    trimesh.creation.box((20, 20, 20)).export(tmp_path / "mesh.stl")  # the object commands' mesh
+    trimesh.creation.box((10, 10, 10)).export(tmp_path / "mesh.stl")
     monkeypatch.chdir(tmp_path)
     _tripwires(monkeypatch)
     return tmp_path
@@ -158,6 +161,9 @@ def _tripwires(monkeypatch) -> None:
     import roughness.dataset.build
 
     monkeypatch.setattr(roughness.dataset.build, "build", tripped)
+    import roughness.objects.texturing
+
+    monkeypatch.setattr(roughness.objects.texturing, "texture_mesh", tripped)
 
 
 def _snapshot(folder: Path) -> dict[str, str]:

@@ -10,7 +10,6 @@ from .common import (
     add_overwrite,
     add_quiet,
     add_reading_args,
-    defaults,
     finish,
     json_text,
     load_input,
@@ -23,9 +22,7 @@ from .common import (
 def add_parser(actions) -> None:
     from roughness.objects.layout import MAPPINGS
     from roughness.objects.mapping import BLEND_RANGE_DEG, DEFAULT_BLEND_DEG
-    from roughness.objects.texturing import texture_mesh
-
-    given = defaults(texture_mesh)
+    from roughness.objects.texturing import DEFAULT_NORMAL_RADIUS_MM
     p = actions.add_parser("texture", help="put a texture on a mesh: remesh the textured faces to the texture's pixel, "
                                            "displace them, write a watertight STL or 3MF")
     p.add_argument("mesh", metavar="MESH", help="the object: .stl, .obj, .ply or .3mf (mm unless the file states units)")
@@ -52,7 +49,7 @@ def add_parser(actions) -> None:
                         "colours, 0-255) (default: all)")
     p.add_argument("--edge-mm", type=POSITIVE, metavar="MM",
                    help="longest edge of a textured triangle (default: sqrt(2) x the texture's pixel on the surface)")
-    p.add_argument("--normal-radius-mm", type=Number(float, low=0), default=given["normal_radius_mm"], metavar="MM",
+    p.add_argument("--normal-radius-mm", type=Number(float, low=0), default=DEFAULT_NORMAL_RADIUS_MM, metavar="MM",
                    help="smooth the displacement's normals over about this radius (default 0: area-weighted vertex "
                         "normals)")
     p.add_argument("--no-intersection-check", action="store_true",

@@ -2,9 +2,10 @@
 
 Method: candidate pairs are the faces whose axis-aligned bounding boxes overlap, found on a uniform grid (cell: the
 90th percentile of the faces' box extents) where each face is entered in every cell its box touches and a pair is
-counted only in the cell holding the corner where the overlap of their boxes begins (so once); the few faces
-whose boxes span more than MAX_CELLS cells (large untextured faces, long transition slivers) are paired through an
-R-tree (rtree) of all boxes instead. Each candidate pair whose faces share no vertex is tested exactly: two
+counted only in the cell holding the corner where the overlap of their boxes begins (so once); the grid is built
+slab by slab along x, so memory stays bounded for meshes of tens of millions of faces; the few faces
+whose boxes span more than MAX_CELLS cells (large untextured faces, long transition slivers) are put in an R-tree
+(rtree) queried with every face's box instead. Each candidate pair whose faces share no vertex is tested exactly: two
 triangles in general position intersect if and only if an edge of one crosses the other (Moeller-Trumbore segment
 test, six per pair). Not seen by this test: coplanar overlaps, and pairs that share a vertex (neighbours); a
 displacement that folds neighbours over each other turns a face over, which ``folded_faces`` catches.
@@ -17,10 +18,14 @@ import numpy as np
 
 MAX_CELLS = 64
 """Grid cells a face's box may span to be entered on the grid; larger faces go through the R-tree."""
-CHUNK_ENTRIES = 4_000_000
-"""Grid entries expanded into candidate pairs at once (a few hundred MB of pairs at most)."""
+SLAB_FACES = 500_000
+"""Faces (by where their boxes begin along x) whose grid entries are made at once."""
+CHUNK_ENTRIES = 200_000
+"""Grid entries expanded into candidate pairs at once (a few million pairs)."""
 PAIR_CHUNK = 2_000_000
 """Pairs tested exactly at once."""
+QUERY_CHUNK = 500_000
+"""Boxes queried against the R-tree of large faces at once."""
 
 
 @dataclass(frozen=True)
@@ -40,55 +45,79 @@ def self_intersections(vertices: np.ndarray, faces: np.ndarray, moved: np.ndarra
     the faces that may have moved; pairs of two unmoved faces are not tested (the input mesh is taken as sound)."""
     faces = np.asarray(faces, dtype=np.int64)
     moved = np.ones(len(faces), dtype=bool) if moved is None else np.asarray(moved, dtype=bool)
-    mins = np.empty((len(faces), 3))
-    maxs = np.empty((len(faces), 3))
+    mins = np.empty((len(faces), 3), dtype=np.float32)  # rounded outwards: boxes only grow
+    maxs = np.empty((len(faces), 3), dtype=np.float32)
     for start in range(0, len(faces), PAIR_CHUNK):
         tri = vertices[faces[start:start + PAIR_CHUNK]]
-        mins[start:start + PAIR_CHUNK] = tri.min(axis=1)
-        maxs[start:start + PAIR_CHUNK] = tri.max(axis=1)
-    extent = (maxs - mins).max(axis=1)
-    cell = max(float(np.percentile(extent, 90)), 1e-9)
-    lo = np.floor((mins - mins.min(axis=0)) / cell).astype(np.int64)
-    hi = np.floor((maxs - mins.min(axis=0)) / cell).astype(np.int64)
-    span = hi - lo + 1
-    large = span.prod(axis=1) > MAX_CELLS
+        mins[start:start + PAIR_CHUNK] = np.nextafter(tri.min(axis=1).astype(np.float32), -np.inf)
+        maxs[start:start + PAIR_CHUNK] = np.nextafter(tri.max(axis=1).astype(np.float32), np.inf)
+    cell = max(float(np.percentile((maxs - mins).max(axis=1), 90)), 1e-6)
+    origin = mins.min(axis=0).astype(float)
+    grid = _Grid(origin, cell, int(np.floor((maxs[:, 1].max() - origin[1]) / cell)) + 2,
+                 int(np.floor((maxs[:, 2].max() - origin[2]) / cell)) + 2)
+    lo_x, hi_x = grid.cells(mins[:, 0], 0), grid.cells(maxs[:, 0], 0)
+    large = np.zeros(len(faces), dtype=bool)
+    for start in range(0, len(faces), PAIR_CHUNK):
+        sl = slice(start, start + PAIR_CHUNK)
+        span = [grid.cells(maxs[sl, k], k) - grid.cells(mins[sl, k], k) + 1 for k in range(3)]
+        large[sl] = span[0] * span[1] * span[2] > MAX_CELLS
     found, tested = [], 0
-    for i, j in _grid_pairs(lo, hi, span, ~large, mins, maxs, cell):
-        t, hits = _test(vertices, faces, moved, mins, maxs, i, j)
-        tested, found = tested + t, found + [hits]
+    small = np.flatnonzero(~large)
+    order = small[np.argsort(lo_x[small], kind="stable")]
+    cuts = [int(lo_x[order[k]]) for k in range(0, len(order), SLAB_FACES)] + [int(hi_x.max()) + 1]
+    for x0, x1 in zip(cuts[:-1], cuts[1:]):
+        if x1 <= x0:
+            continue
+        members = small[(lo_x[small] < x1) & (hi_x[small] >= x0)]
+        for i, j in _grid_pairs(grid, members, mins, maxs, x0, x1):
+            t, hits = _test(vertices, faces, moved, mins, maxs, i, j)
+            tested, found = tested + t, found + [hits]
     if large.any():
         for i, j in _tree_pairs(np.flatnonzero(large), mins, maxs):
-            keep = ~large[j] | (i < j)  # a large-large pair once
+            keep = ~large[i] | (i < j)  # a large-large pair once
             t, hits = _test(vertices, faces, moved, mins, maxs, i[keep], j[keep])
             tested, found = tested + t, found + [hits]
     pairs = np.concatenate(found) if found else np.empty((0, 2), dtype=np.int64)
     return Intersections(pairs, tested)
 
 
-def _grid_pairs(lo, hi, span, small, mins, maxs, cell):
-    """Chunks of (i, j), i < j, of small faces sharing a grid cell, each pair in one cell only."""
-    ids = np.flatnonzero(small)
+@dataclass(frozen=True)
+class _Grid:
+    """Cubic cells of side ``cell`` (mm) from ``origin``; ``ny``, ``nz`` cells along y and z (for keys)."""
+
+    origin: np.ndarray
+    cell: float
+    ny: int
+    nz: int
+
+    def cells(self, coordinate: np.ndarray, axis: int) -> np.ndarray:
+        return np.floor((coordinate - self.origin[axis]) / self.cell).astype(np.int64)
+
+    def key(self, cx: np.ndarray, cy: np.ndarray, cz: np.ndarray) -> np.ndarray:
+        return (cx * self.ny + cy) * self.nz + cz
+
+
+def _grid_pairs(grid: _Grid, ids: np.ndarray, mins: np.ndarray, maxs: np.ndarray, x0: int, x1: int):
+    """Chunks of (i, j), i < j, of faces ``ids`` sharing a grid cell whose x index lies in [x0, x1), each pair in
+    one cell only."""
     if len(ids) < 2:
         return
-    counts = span[ids].prod(axis=1)
+    lo = np.stack([grid.cells(mins[ids, k], k) for k in range(3)], axis=1)
+    span = np.stack([grid.cells(maxs[ids, k], k) for k in range(3)], axis=1) - lo + 1
+    counts = span.prod(axis=1)
     # entries: (face, cell) for every cell of the face's box
-    entry_face = np.repeat(ids, counts)
-    offset = np.arange(len(entry_face)) - np.repeat(np.cumsum(counts) - counts, counts)
-    sy, sz = span[entry_face, 1], span[entry_face, 2]
-    cx = lo[entry_face, 0] + offset // (sy * sz)
-    cy = lo[entry_face, 1] + (offset // sz) % sy
-    cz = lo[entry_face, 2] + offset % sz
-    del offset, sy, sz
-    ny, nz = int(hi[:, 1].max()) + 2, int(hi[:, 2].max()) + 2
-    key = (cx * ny + cy) * nz + cz
-    del cx, cy, cz
+    entry = np.repeat(np.arange(len(ids)), counts)
+    offset = np.arange(len(entry)) - np.repeat(np.cumsum(counts) - counts, counts)
+    sy, sz = span[entry, 1], span[entry, 2]
+    cx = lo[entry, 0] + offset // (sy * sz)
+    inside = (cx >= x0) & (cx < x1)
+    key = grid.key(cx[inside], (lo[entry, 1] + (offset // sz) % sy)[inside], (lo[entry, 2] + offset % sz)[inside])
+    entry_face = ids[entry[inside]]
+    del entry, offset, sy, sz, cx, inside, lo, span
     order = np.argsort(key, kind="stable")
     key, entry_face = key[order], entry_face[order]
     del order
-    start = np.searchsorted(key, key, side="left")
-    end = np.searchsorted(key, key, side="right")
-    after = end - np.arange(len(key)) - 1  # later entries in the same cell
-    origin = mins.min(axis=0)
+    after = np.searchsorted(key, key, side="right") - np.arange(len(key)) - 1  # later entries in the same cell
     for s in range(0, len(key), CHUNK_ENTRIES):
         positions = np.arange(s, min(s + CHUNK_ENTRIES, len(key)))
         n_after = after[positions]
@@ -99,25 +128,26 @@ def _grid_pairs(lo, hi, span, small, mins, maxs, cell):
         second = first + 1 + (np.arange(total) - np.repeat(np.cumsum(n_after) - n_after, n_after))
         i, j = entry_face[first], entry_face[second]
         # count the pair only in the cell that holds the start of the overlap of the two boxes
-        corner = np.floor((np.maximum(mins[i], mins[j]) - origin) / cell).astype(np.int64)
-        here = (corner[:, 0] * ny + corner[:, 1]) * nz + corner[:, 2] == key[first]
+        corner = np.maximum(mins[i], mins[j])
+        here = grid.key(*(grid.cells(corner[:, k], k) for k in range(3))) == key[first]
         i, j = i[here], j[here]
         yield np.minimum(i, j), np.maximum(i, j)
-    del start
 
 
 def _tree_pairs(large: np.ndarray, mins: np.ndarray, maxs: np.ndarray):
-    """Chunks of (i, j): each large face i with every face j whose box overlaps its box (R-tree)."""
+    """Chunks of (i, j): every face i with each large face j whose box overlaps its box (an R-tree of the large faces,
+    queried with every face's box)."""
     from rtree import index
 
     prop = index.Property()
     prop.dimension = 3
-    tree = index.Index((np.arange(len(mins), dtype=np.int64), mins, maxs), properties=prop, interleaved=False)
-    for s in range(0, len(large), 10_000):
-        q = large[s:s + 10_000]
-        hits, counts = tree.intersection_v(mins[q], maxs[q])
+    tree = index.Index((np.arange(len(large), dtype=np.int64), mins[large].astype(float), maxs[large].astype(float)),
+                       properties=prop, interleaved=False)
+    for s in range(0, len(mins), QUERY_CHUNK):
+        q = np.arange(s, min(s + QUERY_CHUNK, len(mins)))
+        hits, counts = tree.intersection_v(mins[q].astype(float), maxs[q].astype(float))
         i = np.repeat(q, counts.astype(np.int64))
-        j = hits.astype(np.int64)
+        j = large[hits.astype(np.int64)]
         yield i[i != j], j[i != j]
 
 

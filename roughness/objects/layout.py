@@ -29,7 +29,7 @@ def make_mapping(kind: str, texture: Heightmap, mesh, faces: np.ndarray | None =
     all_faces = np.asarray(mesh.faces)
     selected = all_faces if faces is None else all_faces[np.asarray(faces, dtype=bool)]
     if len(selected) == 0:
-        raise InputError("no faces to fit the mapping to", parameter="region")
+        raise InputError("the region selects no face of the mesh", parameter="region")
     if kind == "triplanar":
         return Triplanar(texture, blend_deg)
     if kind == "uv":

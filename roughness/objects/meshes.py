@@ -50,8 +50,10 @@ def read_mesh(path: str | Path, watertight: bool = True, parameter: str = "mesh"
     if suffix not in READ_SUFFIXES:
         raise InputError(f"cannot read {path}: unsupported mesh format {suffix or '(no suffix)'!r}; supported: "
                          f"{', '.join(READ_SUFFIXES)}", parameter=parameter)
-    if not path.is_file():
+    if not path.exists():
         raise InputError(f"cannot read {path}: no such file", parameter=parameter)
+    if not path.is_file():
+        raise InputError(f"cannot read {path}: not a file", parameter=parameter)
     size = path.stat().st_size
     if size > MAX_MESH_FILE_BYTES:
         raise InputError(f"{path} is {size:,} bytes, above the limit of {MAX_MESH_FILE_BYTES:,} (MAX_MESH_FILE_BYTES)",

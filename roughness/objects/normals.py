@@ -7,7 +7,7 @@ import numpy as np
 
 from roughness.core.limits import MAX_WORKING_VALUES, check_size
 
-CHUNK_FACES = 2_000_000
+CHUNK_FACES = 500_000
 
 
 def face_normals(vertices: np.ndarray, faces: np.ndarray, unit: bool = True) -> np.ndarray:

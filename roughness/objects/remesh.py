@@ -19,15 +19,18 @@ from roughness.core.errors import InputError
 from roughness.core.limits import MAX_MESH_TRIANGLES, check_size
 
 
+CHUNK = 1_000_000
+"""Faces handled at once in a round (their edges, lengths and templates: about 200 MB)."""
+
+
 @dataclass
 class Refined:
-    """A refined mesh: ``vertices`` (n, 3) mm, ``faces`` (m, 3), ``textured`` (m,) bool, the faces' ``parent``
-    face in the input, and the ``rounds`` of splitting it took."""
+    """A refined mesh: ``vertices`` (n, 3) mm, ``faces`` (m, 3), ``textured`` (m,) bool, and the ``rounds`` of
+    splitting it took."""
 
     vertices: np.ndarray
     faces: np.ndarray
     textured: np.ndarray
-    parent: np.ndarray
     rounds: int
 
 
@@ -48,14 +51,19 @@ def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_m
     v = np.ascontiguousarray(vertices, dtype=float)
     f = np.ascontiguousarray(faces, dtype=np.int64)
     tex = np.asarray(textured, dtype=bool).copy()
-    parent = np.arange(len(f), dtype=np.int64)
     rounds = 0
     while True:
         split = _edges_to_split(v, f, tex, edge_mm)
         if split.size == 0:
-            return Refined(v, f, tex, parent, rounds)
+            return Refined(v, f, tex, rounds)
         rounds += 1
-        v, f, tex, parent = _split(v, f, tex, parent, split)
+        n = len(v)
+        v = np.concatenate([v, 0.5 * (v[split // n] + v[split % n])])
+        pieces = [_split(v, f[s:s + CHUNK], tex[s:s + CHUNK], split, n) for s in range(0, len(f), CHUNK)]
+        del f, tex
+        f = np.concatenate([p[0] for p in pieces])
+        tex = np.concatenate([p[1] for p in pieces])
+        del pieces
         check_size("triangles during refinement", len(f), MAX_MESH_TRIANGLES, "pixel_mm")
 
 
@@ -67,25 +75,26 @@ def _edge_keys(f: np.ndarray, n_vertices: int) -> np.ndarray:
 
 def _edges_to_split(v: np.ndarray, f: np.ndarray, tex: np.ndarray, edge_mm: float) -> np.ndarray:
     """Sorted unique keys of the longest edges of textured faces, where longer than ``edge_mm``."""
-    ft = f[tex]
-    if len(ft) == 0:
-        return np.empty(0, dtype=np.int64)
-    length = np.linalg.norm(v[np.roll(ft, -1, axis=1)] - v[ft], axis=2)
-    longest = np.argmax(length, axis=1)
-    rows = np.flatnonzero(length[np.arange(len(ft)), longest] > edge_mm)
-    return np.unique(_edge_keys(ft[rows], len(v))[np.arange(len(rows)), longest[rows]])
+    keys = []
+    for s in range(0, len(f), CHUNK):
+        ft = f[s:s + CHUNK][tex[s:s + CHUNK]]
+        length = np.linalg.norm(v[np.roll(ft, -1, axis=1)] - v[ft], axis=2)
+        longest = np.argmax(length, axis=1) if len(ft) else np.empty(0, dtype=np.int64)
+        rows = np.flatnonzero(length[np.arange(len(ft)), longest] > edge_mm)
+        keys.append(_edge_keys(ft[rows], len(v))[np.arange(len(rows)), longest[rows]])
+    return np.unique(np.concatenate(keys)) if keys else np.empty(0, dtype=np.int64)
 
 
-def _split(v: np.ndarray, f: np.ndarray, tex: np.ndarray, parent: np.ndarray, split: np.ndarray):
-    n = len(v)
+def _split(v: np.ndarray, f: np.ndarray, tex: np.ndarray, split: np.ndarray, n: int):
+    """Faces ``f`` (of a mesh of ``n`` vertices before this round; ``v`` holds the midpoints of ``split`` after them)
+    replaced by their templates, and their textured flags."""
     keys = _edge_keys(f, n)
     where = np.searchsorted(split, keys)
     hit = split[np.minimum(where, len(split) - 1)] == keys
     mid = np.where(hit, n + where, -1)  # (m, 3) new vertex on each edge, or -1
-    a, b = split // n, split % n
-    v = np.concatenate([v, 0.5 * (v[a] + v[b])])
+    del keys, where
     pattern = hit.sum(axis=1)
-    out_f, out_t, out_p = [f[pattern == 0]], [tex[pattern == 0]], [parent[pattern == 0]]
+    out_f, out_t = [f[pattern == 0]], [tex[pattern == 0]]
     for count in (1, 2, 3):
         sel = pattern == count
         if not sel.any():
@@ -102,10 +111,8 @@ def _split(v: np.ndarray, f: np.ndarray, tex: np.ndarray, parent: np.ndarray, sp
         ms = np.take_along_axis(ms, idx, axis=1)
         new = _template(v, fs, ms, count)
         out_f.append(new)
-        reps = len(new) // len(fs)
-        out_t.append(np.tile(tex[sel], reps))
-        out_p.append(np.tile(parent[sel], reps))
-    return v, np.concatenate(out_f), np.concatenate(out_t), np.concatenate(out_p)
+        out_t.append(np.tile(tex[sel], len(new) // len(fs)))
+    return np.concatenate(out_f), np.concatenate(out_t)
 
 
 def _template(v: np.ndarray, fs: np.ndarray, ms: np.ndarray, count: int) -> np.ndarray:

@@ -6,7 +6,9 @@ Steps, each reported in ``TexturedMesh.notes``:
 
 1. the faces of the region are refined to edges of at most ``edge_mm`` (default: sqrt(2) times the mapping's pixel
    on the surface, so that most edges are about one pixel; ``remesh``): untextured faces stay as they were except where they border textured ones;
-2. vertex normals, area-weighted (``normals``), optionally smoothed over ``normal_radius_mm``;
+2. vertex normals, area-weighted over the textured faces (``normals``; so a region's border moves along the
+   region's normals, not tilted towards the untextured faces beside it), optionally smoothed over
+   ``normal_radius_mm``;
 3. the texture's heights at the vertices of textured faces (``mapping``), bumps outwards;
 4. refused (InputError) if the texture is deeper than the surface's radius where it is concave: the offset
    surface folds where the depth exceeds the radius at which the normals converge (estimated on every textured
@@ -31,15 +33,20 @@ from .normals import face_normals, smoothed, vertex_normals
 from .regions import Region
 from .remesh import refine
 
+DEFAULT_NORMAL_RADIUS_MM = 0.0
+"""Normals are area-weighted vertex normals, not smoothed further, unless asked."""
 FLAT_CURVATURE = 1e-3
 """Curvatures (1/mm) below this (radii above 1 m) are taken as flat (rounding in the normals of a flat face)."""
-CHUNK = 2_000_000
-"""Edges or faces handled at once in the checks (arrays of this many vectors: tens of MB)."""
+CHUNK = 500_000
+"""Faces handled at once in the checks (their edges' vectors: tens of MB)."""
 
 
 @dataclass
 class TexturedMesh:
-    """A textured mesh (``mesh``, a trimesh, mm) and what was done to make it."""
+    """A textured mesh (``mesh``, a trimesh, mm) and what was done to make it. ``mean_height_mm`` is the
+    area-weighted mean of the heights over the textured base faces, ``height_volume_mm3`` their integral: the
+    volume the texture adds to first order (exact on flat faces; on a surface of radius R the offset adds a
+    further fraction of about height / R)."""
 
     mesh: object
     triangles_in: int
@@ -51,6 +58,7 @@ class TexturedMesh:
     normal_smoothing_rounds: int
     max_height_mm: float
     mean_height_mm: float
+    height_volume_mm3: float
     min_concave_radius_mm: float
     volume_in_mm3: float
     volume_out_mm3: float
@@ -62,7 +70,7 @@ class TexturedMesh:
 
 
 def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_mm: float | None = None,
-                 normal_radius_mm: float = 0.0, check_intersections: bool = True) -> TexturedMesh:
+                 normal_radius_mm: float = DEFAULT_NORMAL_RADIUS_MM, check_intersections: bool = True) -> TexturedMesh:
     """``mesh`` (a closed trimesh, mm) with ``mapping``'s texture on the faces of ``region`` (module docstring).
 
     ``edge_mm``: longest edge of a textured face (default: sqrt(2) times the mapping's ``pixel_mm``, so that the
@@ -88,9 +96,9 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
                  f"edge splitting): {len(base_faces):,} -> {len(f):,} triangles; untextured faces kept except where "
                  "they border textured ones")
 
-    normals = vertex_normals(v, f)
-    normals, rounds = smoothed(normals, f, radius, edge)
-    notes.append("displaced along area-weighted vertex normals" +
+    normals = vertex_normals(v, f[textured])
+    normals, rounds = smoothed(normals, f[textured], radius, edge)
+    notes.append("displaced along area-weighted vertex normals of the textured faces" +
                  (f", smoothed over about {radius:g} mm ({rounds} rounds)" if rounds else ""))
 
     moving = np.zeros(len(v), dtype=bool)
@@ -111,23 +119,25 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
         notes.append(f"smallest concave radius of the textured surface {concave.radius_mm:.3g} mm, above the "
                      f"texture's depth {depth:.3g} mm")
 
-    base_face_normals = _face_normals_chunked(v, f)
-    v = v.copy()
-    v[where] += heights[:, None] * normals[where]
-    folded = _chunked_any(lambda s: folded_faces(base_face_normals[s], v, f[s]), len(f))
+    displaced = v.copy()
+    displaced[where] += heights[:, None] * normals[where]
+    del normals
+    folded = np.concatenate([folded_faces(face_normals(v, f[s:s + CHUNK]), displaced, f[s:s + CHUNK])
+                             for s in range(0, len(f), CHUNK)])
     if folded.any():
-        x, y, z = v[f[np.flatnonzero(folded)[0]]].mean(axis=0)
+        x, y, z = displaced[f[np.flatnonzero(folded)[0]]].mean(axis=0)
         raise InputError(f"displacing by the texture turns {int(folded.sum()):,} faces over (first near ({x:.2f}, "
                          f"{y:.2f}, {z:.2f}) mm): the texture is too deep for the mesh there; use a shallower texture, "
                          "smooth the normals (--normal-radius-mm) or a finer mesh", parameter="mapping")
+    del folded
     check_closed(f)
     notes.append("checked: closed, consistently wound, no face turned over")
     tested = None
     if check_intersections:
         moved_faces = moving[f].any(axis=1)
-        crossing = self_intersections(v, f, moved_faces)
+        crossing = self_intersections(displaced, f, moved_faces)
         if crossing.count:
-            x, y, z = v[f[crossing.pairs[0, 0]]].mean(axis=0)
+            x, y, z = displaced[f[crossing.pairs[0, 0]]].mean(axis=0)
             raise InputError(f"the textured mesh crosses itself: {crossing.count:,} pairs of faces intersect (first "
                              f"near ({x:.2f}, {y:.2f}, {z:.2f}) mm): the texture is too deep where parts of the object "
                              "are close; use a shallower texture or leave that part out of the region",
@@ -139,10 +149,12 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
 
     import trimesh
 
-    out = trimesh.Trimesh(v, f, process=False, validate=False)
-    area = _area(refined.vertices, f[textured])
+    out = trimesh.Trimesh(displaced, f, process=False, validate=False)
+    at_vertex = np.zeros(len(v))
+    at_vertex[where] = heights
+    area, volume = _area_and_volume(v, f[textured], at_vertex)
     return TexturedMesh(out, len(base_faces), len(f), int(selected.sum()), area, edge, refined.rounds, rounds, depth,
-                        float(heights.mean()), concave.radius_mm, volume_in, signed_volume(v, f), tested, notes)
+                        volume / area, volume, concave.radius_mm, volume_in, signed_volume(displaced, f), tested, notes)
 
 
 @dataclass(frozen=True)
@@ -174,9 +186,12 @@ def check_closed(faces: np.ndarray) -> None:
     refinement guarantees it, so a failure is a bug, not bad input."""
     n = int(faces.max()) + 1
     a, b = faces.ravel(), np.roll(faces, -1, axis=1).ravel()
-    forward = np.sort(a * n + b)
-    backward = np.sort(b * n + a)
-    if np.any(forward[1:] == forward[:-1]) or not np.array_equal(forward, backward):
+    # each undirected edge as 2 * key + direction: sorted, a closed consistently wound mesh holds every key exactly
+    # twice, once in each direction
+    code = (np.minimum(a, b) * n + np.maximum(a, b)) * 2 + (a < b)
+    del a, b
+    code.sort()
+    if len(code) % 2 or np.any(code[0::2] % 2 != 0) or np.any(code[1::2] != code[0::2] + 1):
         raise RuntimeError("the textured mesh is not closed and consistently wound (a bug in the refinement)")
 
 
@@ -189,15 +204,14 @@ def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
     return total
 
 
-def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
-    return sum(0.5 * float(np.linalg.norm(face_normals(vertices, faces[s:s + CHUNK], unit=False), axis=1).sum())
-               for s in range(0, len(faces), CHUNK))
+def _area_and_volume(vertices: np.ndarray, faces: np.ndarray, heights: np.ndarray) -> tuple[float, float]:
+    """Area (mm^2) of the base faces and the integral (mm^3) over them of the heights, linear on each face."""
+    area = volume = 0.0
+    for s in range(0, len(faces), CHUNK):
+        f = faces[s:s + CHUNK]
+        a = 0.5 * np.linalg.norm(face_normals(vertices, f, unit=False), axis=1)
+        area += float(a.sum())
+        volume += float((a * heights[f].mean(axis=1)).sum())
+    return area, volume
 
 
-def _face_normals_chunked(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    return np.concatenate([face_normals(vertices, faces[s:s + CHUNK]) for s in range(0, len(faces), CHUNK)]) \
-        if len(faces) else np.empty((0, 3))
-
-
-def _chunked_any(test, n: int) -> np.ndarray:
-    return np.concatenate([test(slice(s, s + CHUNK)) for s in range(0, n, CHUNK)]) if n else np.empty(0, dtype=bool)

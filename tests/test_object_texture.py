@@ -1,0 +1,396 @@
+"""Textured objects, the geometry (issue 30): meshes in and out, regions, mappings, texture_mesh, sampling back,
+and `roughness object texture`. Small meshes at coarse texture pixels, so each test takes about a second."""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+trimesh = pytest.importorskip("trimesh")
+
+from roughness.cli import main  # noqa: E402
+from roughness.core.errors import InputError  # noqa: E402
+from roughness.dataset.textures import named_texture  # noqa: E402
+from roughness.objects.intersections import self_intersections, triangles_cross  # noqa: E402
+from roughness.objects.layout import make_mapping  # noqa: E402
+from roughness.objects.mapping import Triplanar, Wrap, axis_of, blend_weights, whole_tiles, wrap  # noqa: E402
+from roughness.objects.meshes import read_mesh, write_mesh  # noqa: E402
+from roughness.objects.normals import vertex_normals  # noqa: E402
+from roughness.objects.regions import Region, parse_region  # noqa: E402
+from roughness.objects.remesh import refine  # noqa: E402
+from roughness.objects.sampling import sample_heightmap  # noqa: E402
+from roughness.objects.texturing import texture_mesh  # noqa: E402
+from roughness.surface.heightmap import Heightmap  # noqa: E402
+
+from tests.test_bad_inputs import _expect_refusal, workdir  # noqa: E402,F401
+
+PIXEL = 0.25  # mm: the texture's pixel in these tests (the product's is 0.05)
+RELIEF = 0.3  # mm
+
+
+@pytest.fixture(scope="module")
+def texture() -> Heightmap:
+    """standard-1.0 at 0.25 mm, its relief scaled to 0.3 mm (lowest point 0)."""
+    hm = named_texture("standard-1.0").resampled(PIXEL)
+    h = hm.heights - hm.heights.min()
+    return Heightmap(h * (RELIEF / h.max()), PIXEL)
+
+
+@pytest.fixture(scope="module")
+def waves() -> Heightmap:
+    """A smooth periodic 12 mm tile (waves of 3 and 4 mm, 0.3 mm relief), whose steps between neighbouring vertices
+    are small, so a seam stands out."""
+    x = (np.arange(48) + 0.5) * PIXEL
+    h = np.sin(2 * np.pi * x / 3)[None, :] * np.cos(2 * np.pi * x / 4)[:, None] + np.sin(2 * np.pi * x / 4)[None, :]
+    return Heightmap((h - h.min()) * (RELIEF / np.ptp(h)), PIXEL)
+
+
+def knob() -> trimesh.Trimesh:
+    """A cylinder of radius 8 mm, 10 mm tall, with a rounded top (a quarter circle of radius 3 mm)."""
+    arc = [(5 + 3 * math.cos(t), 10 + 3 * math.sin(t)) for t in np.linspace(0, math.pi / 2, 8)]
+    profile = np.array([(0, 0), (8, 0), *arc, (0, 13)])
+    return trimesh.creation.revolve(profile, sections=48)
+
+
+def sphere() -> trimesh.Trimesh:
+    return trimesh.creation.icosphere(3, radius=8)
+
+
+def rounded_cube(half: float = 6.0, radius: float = 2.0) -> trimesh.Trimesh:
+    """A cube of side 2 (half + radius) with edges rounded to ``radius`` (the sphere's topology, pushed out)."""
+    s = trimesh.creation.icosphere(4)
+    q = s.vertices / np.abs(s.vertices).max(axis=1, keepdims=True) * (half + radius)
+    core = np.clip(q, -half, half)
+    out = q - core
+    out = out / np.linalg.norm(out, axis=1, keepdims=True) * radius
+    return trimesh.Trimesh(core + out, s.faces, process=False)
+
+
+def scanned() -> trimesh.Trimesh:
+    """An irregular, scan-like blob: an icosphere with smooth random bumps of 10% of its radius and noise."""
+    s = trimesh.creation.icosphere(4, radius=8)
+    rng = np.random.default_rng(3)
+    u = s.vertices / 8
+    bumps = sum(a * np.sin(u @ k + p) for a, k, p in zip(rng.normal(0, 0.04, 6), rng.normal(0, 2, (6, 3)),
+                                                          rng.uniform(0, 6, 6)))
+    scale = 1 + bumps + rng.normal(0, 0.002, len(u))
+    return trimesh.Trimesh(s.vertices * scale[:, None], s.faces, process=False)
+
+
+SHAPES = {"knob": knob, "sphere": sphere, "rounded cube": rounded_cube, "scanned": scanned}
+
+
+def _closed(mesh) -> bool:
+    m = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    return bool(m.is_watertight and m.is_winding_consistent and m.volume > 0)
+
+
+# --- texture_mesh --------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("shape", SHAPES)
+def test_textured_shapes_are_closed_and_do_not_cross_themselves(shape, texture):
+    mesh = SHAPES[shape]()
+    assert _closed(mesh)
+    kind = "cylinder" if shape == "knob" else "triplanar"
+    result = texture_mesh(mesh, make_mapping(kind, texture, mesh))
+    assert _closed(result.mesh)
+    assert result.intersection_pairs_tested > 100  # the check tested close pairs (as many as brute force: below)
+    assert result.triangles_out > 2 * result.triangles_in
+    edges = result.mesh.vertices[result.mesh.edges_unique]
+    assert np.linalg.norm(edges[:, 0] - edges[:, 1], axis=1).min() > 0
+
+
+def test_the_intersection_check_finds_what_brute_force_finds():
+    a = trimesh.creation.icosphere(2, radius=5)
+    b = trimesh.creation.icosphere(2, radius=5)
+    b.apply_translation((3, 1, 0.5))
+    big = trimesh.creation.box((20, 20, 20))
+    big.apply_translation((0, 0, -8))  # large faces: through the R-tree path
+    m = trimesh.util.concatenate([a, b, big])
+    found = self_intersections(m.vertices, m.faces)
+    tri = m.triangles
+    i, j = np.triu_indices(len(tri), 1)
+    lo, hi = tri.min(1), tri.max(1)
+    keep = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
+    i, j = i[keep], j[keep]
+    apart = ~(m.faces[i][:, :, None] == m.faces[j][:, None, :]).any(axis=(1, 2))
+    brute = triangles_cross(tri[i[apart]], tri[j[apart]])
+    assert found.count == brute.sum() > 100
+    assert {tuple(p) for p in np.sort(found.pairs, axis=1)} == set(zip(i[apart][brute], j[apart][brute]))
+
+
+def test_texture_that_would_cross_a_narrow_gap_is_refused(texture):
+    left = trimesh.creation.box((5, 5, 5))
+    right = trimesh.creation.box((5, 5, 5))
+    right.apply_translation((5.2, 0, 0))  # 0.2 mm apart; the texture is 0.3 mm deep
+    two = trimesh.util.concatenate([left, right])
+    with pytest.raises(InputError, match="crosses itself"):
+        texture_mesh(two, Triplanar(texture))
+    texture_mesh(two, Triplanar(Heightmap(texture.heights / 4, PIXEL)))  # 0.075 mm on each side fits
+
+
+def test_depth_beyond_the_concave_radius_is_refused(texture):
+    cavity = trimesh.creation.icosphere(4, radius=1.0)
+    cavity.invert()
+    block = trimesh.util.concatenate([trimesh.creation.box((6, 6, 6)), cavity])
+    region = Region("box", low=(-1.5, -1.5, -1.5), high=(1.5, 1.5, 1.5))
+    deep = Heightmap(texture.heights * (1.5 / RELIEF), PIXEL)  # 1.5 mm deep in a 1 mm hollow
+    with pytest.raises(InputError, match="concave with a radius of") as err:
+        texture_mesh(block, Triplanar(deep), region)
+    assert err.value.parameter == "mapping"
+    shallow = texture_mesh(block, Triplanar(Heightmap(texture.heights / 6, PIXEL)), region)  # 0.05 mm
+    assert 0.5 < shallow.min_concave_radius_mm < 1.2
+    assert _closed(shallow.mesh)
+
+
+def test_volume_change_is_what_the_mean_height_predicts(texture):
+    box = trimesh.creation.box((20, 20, 10))
+    top = Region("cone", axis=(0, 0, 1), half_angle_deg=10)
+    result = texture_mesh(box, Triplanar(texture), top)
+    assert result.textured_area_mm2 == pytest.approx(400, rel=1e-12)
+    # on a flat face the added volume is the integral of the (piecewise linear) heights: exact
+    assert result.volume_out_mm3 - result.volume_in_mm3 == pytest.approx(result.height_volume_mm3, rel=1e-9)
+    # and the heights' mean over the face is the texture's mean within the sampling of 400 mm^2 of a 144 mm^2 tile
+    assert result.mean_height_mm == pytest.approx(float(texture.heights.mean()), rel=0.05)
+
+
+def test_volume_change_on_a_sphere_includes_the_curvature_term(texture):
+    result = texture_mesh(sphere(), Triplanar(texture))
+    added = result.volume_out_mm3 - result.volume_in_mm3
+    first_order = result.height_volume_mm3
+    # a shell of thickness h on radius R adds A h (1 + h / R + ...): the excess lies within h_max / R
+    assert first_order < added < first_order * (1 + result.max_height_mm / 8)
+
+
+def test_region_edge_moves_along_the_region_normal(texture):
+    box = trimesh.creation.box((20, 20, 10))
+    result = texture_mesh(box, Triplanar(texture), Region("cone", axis=(0, 0, 1), half_angle_deg=10))
+    v = result.mesh.vertices
+    assert np.abs(v[:, :2]).max() == pytest.approx(10, abs=1e-12)  # nothing pushed sideways out of the box
+    assert v[:, 2].max() == pytest.approx(5 + RELIEF, abs=0.02)
+
+
+# --- seams ---------------------------------------------------------------------------------------------------------
+
+def _vertex_heights(mesh, mapping, edge_mm):
+    r = refine(mesh.vertices, mesh.faces, np.ones(len(mesh.faces), bool), edge_mm)
+    normals = vertex_normals(r.vertices, r.faces)
+    h = mapping.heights(r.vertices, normals)
+    edges = np.concatenate([r.faces[:, [0, 1]], r.faces[:, [1, 2]], r.faces[:, [2, 0]]])
+    return r.vertices, normals, h, edges
+
+
+def test_triplanar_seams_are_blended(texture):
+    """Largest height jump across an edge in a seam zone (two projections mixed) <= 1.5 x the largest jump across an
+    edge inside one projection; with the blend off the seams jump by up to the texture's relief."""
+    ball = trimesh.creation.icosphere(4, radius=8)
+    bound = {}
+    for blend in (20.0, 0.0):
+        v, n, h, edges = _vertex_heights(ball, Triplanar(texture, blend), PIXEL * math.sqrt(2))
+        a = np.abs(n)
+        top2 = np.sort(a, axis=1)[:, -2:]
+        mixed = (top2[:, 1] - top2[:, 0]) < math.sqrt(2) * math.sin(math.radians(max(blend, 20.0)) / 2)
+        jump = np.abs(h[edges[:, 0]] - h[edges[:, 1]])
+        seam = mixed[edges[:, 0]] | mixed[edges[:, 1]]
+        bound[blend] = (jump[seam].max(), jump[~seam].max())
+    seam, inside = bound[20.0]
+    assert seam <= 1.5 * inside
+    assert bound[0.0][0] > 1.5 * bound[0.0][1]  # the check can fail: a hard seam
+
+
+def test_cylinder_wrap_closes_without_a_seam(waves):
+    """A whole number of tiles around: the largest jump across the wrap (angle +-pi) <= 1.2 x the largest jump
+    elsewhere on the side; with the tile laid unstretched (a fraction of a tile left over) the jumps across the wrap
+    are, in RMS, twice those elsewhere."""
+    can = trimesh.creation.cylinder(radius=7, height=8, sections=64)
+    axis = axis_of((0, 0, 0), (0, 0, 1))
+    fitted = wrap(waves, "cylinder", axis, 7.0)
+    assert fitted.tiles == 4 and fitted.stretch == pytest.approx(2 * math.pi * 7 / (4 * 12))
+    unstretched = Wrap(waves, "cylinder", axis, 7.0, 4, 1.0)
+    jumps = {}
+    for name, mapping in (("fitted", fitted), ("unstretched", unstretched)):
+        v, n, h, edges = _vertex_heights(can, mapping, PIXEL * math.sqrt(2))
+        side = np.abs(n[:, 2]) < 0.2
+        ok = side[edges[:, 0]] & side[edges[:, 1]]
+        _, e1, e2, _ = axis.frame()  # the wrap's angle 0 lies along e1
+        angle = np.arctan2(v @ e2, v @ e1)
+        across = ok & (np.abs(angle[edges[:, 0]] - angle[edges[:, 1]]) > math.pi)
+        jump = np.abs(h[edges[:, 0]] - h[edges[:, 1]])
+        assert across.sum() > 20
+        rms = [math.sqrt(np.mean(jump[k] ** 2)) for k in (across, ok & ~across)]
+        jumps[name] = (jump[across].max(), jump[ok & ~across].max(), *rms)
+    assert jumps["fitted"][0] <= 1.2 * jumps["fitted"][1]
+    assert jumps["fitted"][2] <= 1.2 * jumps["fitted"][3]
+    assert jumps["unstretched"][2] > 2 * jumps["unstretched"][3]
+
+
+def test_whole_tiles_stretch_least():
+    assert whole_tiles(50.0, 12.0) == (4, pytest.approx(50 / 48))
+    assert whole_tiles(55.0, 12.0)[0] == 5  # 55/60 is a smaller change than 55/48
+    assert whole_tiles(3.0, 12.0) == (1, 0.25)
+
+
+def test_blend_weights_meet_at_one_half():
+    assert blend_weights(np.array([0.0]), 20)[0] == 0.5
+    half = math.sqrt(2) * math.sin(math.radians(10))
+    assert list(blend_weights(np.array([-half, half]), 20)) == [0, 1]
+
+
+# --- fitting, regions, sampling ------------------------------------------------------------------------------------
+
+def test_cylinder_axis_and_radius_are_fitted(texture):
+    can = trimesh.creation.cylinder(radius=6, height=30, sections=64)
+    can.apply_transform(trimesh.transformations.rotation_matrix(0.7, (1, 1, 0)))
+    can.apply_translation((3, -2, 5))
+    mapping = make_mapping("cylinder", texture, can)
+    assert abs(np.dot(mapping.axis.direction, can.principal_inertia_vectors[0])) == pytest.approx(1, abs=1e-6) or \
+        abs(np.dot(mapping.axis.direction, trimesh.transformations.rotation_matrix(0.7, (1, 1, 0))[:3, 2])) \
+        == pytest.approx(1, abs=1e-6)
+    assert mapping.radius_mm == pytest.approx(6 * math.cos(math.pi / 64), rel=1e-3)
+    flat = trimesh.creation.cylinder(radius=20, height=4, sections=64)  # a flat knob: the axis is the odd moment
+    assert abs(make_mapping("cylinder", texture, flat).axis.direction[2]) == pytest.approx(1, abs=1e-6)
+
+
+def test_regions_select_faces():
+    box = trimesh.creation.box((10, 10, 10))
+    assert Region().faces(box).all()
+    top = parse_region("cone:0,0,1,30").faces(box)
+    assert top.sum() == 2 and np.all(box.face_normals[top][:, 2] > 0.99)
+    half = parse_region("box:-6,-6,-6,6,6,0").faces(box)
+    assert np.all(box.triangles_center[half][:, 2] <= 0) and half.sum() == 6  # the bottom, a triangle of each side
+    colours = np.full((len(box.vertices), 4), 255, dtype=np.uint8)
+    colours[box.vertices[:, 0] > 0, :3] = (200, 10, 10)
+    box.visual.vertex_colors = colours
+    red = parse_region("colour:200,10,10,5").faces(box)
+    assert red.sum() == 2 and np.all(box.face_normals[red][:, 0] > 0.99)
+    with pytest.raises(InputError, match="no vertex or face colours"):
+        parse_region("colour:1,2,3").faces(trimesh.creation.box())
+    for bad in ("cone:0,0,1", "box:1,1,1,0,0,0", "colour:300,0,0", "ring", "cone:0,0,0,30", "cone:a,b,c,d"):
+        with pytest.raises(InputError):
+            parse_region(bad).faces(box)
+
+
+def test_a_flat_face_samples_back_as_the_texture(texture):
+    box = trimesh.creation.box((30, 30, 10))
+    result = texture_mesh(box, Triplanar(texture), Region("cone", axis=(0, 0, 1), half_angle_deg=10))
+    back = sample_heightmap(result, (0, 0, 5), (0, 0, 1), 12.0, PIXEL)
+    n = back.shape[0]
+    c = (np.arange(n) + 0.5 - n / 2) * PIXEL
+    _, e1, e2, _ = axis_of((0, 0, 5), (0, 0, 1)).frame()
+    x = c[None, :] * e1[0] + c[:, None] * e2[0]
+    y = c[None, :] * e1[1] + c[:, None] * e2[1]
+    expected = texture.sample(x, y, periodic=True)
+    # the mesh interpolates the texture linearly over triangles of legs ~ one pixel: off by at most a pixel's slope
+    slope = max(np.abs(np.diff(texture.heights, axis=a)).max() for a in (0, 1))
+    assert np.abs(back.heights - expected).max() <= slope
+    assert np.abs(back.heights - expected).mean() < 0.2 * slope
+
+
+def test_sampling_outside_the_mesh_is_refused(texture):
+    with pytest.raises(InputError, match="met no surface"):
+        sample_heightmap(trimesh.creation.box((5, 5, 5)), (0, 0, 2.5), (0, 0, 1), 12.0, 0.5)
+
+
+# --- files ---------------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("suffix", [".stl", ".3mf"])
+def test_write_and_read_back(suffix, tmp_path, texture):
+    result = texture_mesh(sphere(), Triplanar(texture), check_intersections=False)
+    written = write_mesh(result.mesh, tmp_path / f"out{suffix}")
+    if suffix == ".stl":
+        assert written.bytes == 84 + 50 * written.triangles
+    back = read_mesh(written.path)
+    assert back.triangles == written.triangles == result.triangles_out
+    assert _closed(back.mesh)
+    assert back.mesh.volume == pytest.approx(result.volume_out_mm3, rel=1e-5)  # float32 vertices in STL
+    with pytest.raises(InputError, match="already exists"):
+        write_mesh(result.mesh, written.path)
+
+
+def test_bad_mesh_files_are_refused(tmp_path):
+    cases = {"missing.stl": None, "empty.stl": b"", "garbage.stl": bytes(range(256)) * 3,
+             "text.obj": b"hello\n", "mesh.xyz": b"1 2 3\n"}
+    for name, data in cases.items():
+        if data is not None:
+            (tmp_path / name).write_bytes(data)
+        with pytest.raises(InputError):
+            read_mesh(tmp_path / name)
+    open_box = trimesh.creation.box()
+    open_box.update_faces(np.arange(len(open_box.faces)) != 0)
+    open_box.export(tmp_path / "open.stl")
+    with pytest.raises(InputError, match="not watertight"):
+        read_mesh(tmp_path / "open.stl")
+    count = 50_000_000  # declared triangles, above MAX_MESH_TRIANGLES
+    big = tmp_path / "huge.stl"
+    big.write_bytes(b" " * 80 + count.to_bytes(4, "little"))
+    with open(big, "r+b") as f:
+        f.truncate(84 + 50 * count)  # sparse: the declared size, nothing allocated
+    with pytest.raises(InputError, match="MAX_MESH_TRIANGLES"):
+        read_mesh(big)
+    trimesh.PointCloud(np.random.default_rng(0).random((10, 3))).export(tmp_path / "points.ply")
+    with pytest.raises(InputError, match="no triangles"):
+        read_mesh(tmp_path / "points.ply")
+
+
+def test_inside_out_mesh_is_turned_and_noted(tmp_path):
+    box = trimesh.creation.box((2, 2, 2))
+    box.invert()
+    box.export(tmp_path / "inv.stl")
+    read = read_mesh(tmp_path / "inv.stl")
+    assert read.mesh.volume == pytest.approx(8)
+    assert any("inside-out" in n for n in read.notes)
+
+
+# --- CLI -----------------------------------------------------------------------------------------------------------
+
+@pytest.fixture()
+def knob_file(tmp_path, monkeypatch):
+    knob().export(tmp_path / "knob.stl")
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def test_cli_textures_a_knob(knob_file, capsys):
+    argv = ["object", "texture", "knob.stl", "--texture", "standard-1.0", "--height-mm", "0.3", "--mapping",
+            "cylinder", "--edge-mm", "0.5", "--out", "k.stl", "--preview", "k.png", "--json"]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["triangles"] == out["result"]["triangles_out"] > 10_000
+    assert out["bytes"] == (knob_file / "k.stl").stat().st_size == 84 + 50 * out["triangles"]
+    assert (knob_file / "k.png").stat().st_size > 10_000
+    notes = " ".join(out["notes"])
+    for said in ("read as mm", "scaled by 0.3", "whole tile(s)", "remeshed", "no two faces cross"):
+        assert said in notes
+    assert _closed(read_mesh(knob_file / "k.stl").mesh)
+    before = (knob_file / "k.stl").read_bytes()
+    assert main(argv) == 2  # never overwritten unasked
+    assert (knob_file / "k.stl").read_bytes() == before
+
+
+@pytest.mark.parametrize("extra, names", [
+    (["--texture", "nosuch"], ("nosuch",)),
+    (["--region", "cone:0,0,1"], ("--region",)),
+    (["--region", "box:100,100,100,101,101,101"], ("selects no face",)),
+    (["--axis", "0,0,0,0,0,0"], ("--axis",)),
+    (["--axis", "1,2"], ("--axis",)),
+    (["--mapping", "triplanar", "--radius-mm", "5"], ("--axis", "--radius-mm")),
+    (["--mapping", "uv"], ("UV",)),
+    (["--out", "k.obj"], ("k.obj",)),
+    (["--preview", "k.jpg"], ("--preview",)),
+    (["--texture", "standard-1.0", "--pixel-mm", "0.1"], ("--pixel-mm",)),
+])
+def test_cli_bad_input_exits_2(extra, names, knob_file, capsys):
+    argv = ["object", "texture", "knob.stl", "--texture", "standard-1.0", "--edge-mm", "1", "--out", "k.stl", *extra]
+    _expect_refusal(argv, knob_file, capsys, names)
+
+
+def test_cli_refuses_a_texture_deeper_than_a_hollow(tmp_path, monkeypatch, capsys):
+    cavity = trimesh.creation.icosphere(4, radius=1.0)
+    cavity.invert()
+    trimesh.util.concatenate([trimesh.creation.box((6, 6, 6)), cavity]).export(tmp_path / "hollow.stl")
+    monkeypatch.chdir(tmp_path)
+    argv = ["object", "texture", "hollow.stl", "--texture", "standard-1.0", "--region", "box:-1.5,-1.5,-1.5,1.5,1.5,1.5",
+            "--edge-mm", "0.3", "--out", "h.stl"]
+    _expect_refusal(argv, tmp_path, capsys, ("concave with a radius",))
