@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -197,13 +198,16 @@ def test_a_textured_flat_face_sampled_back_gives_the_flat_plates_v_within_the_mo
     from roughness.objects.sampling import sample_heightmap
     from roughness.objects.texturing import texture_mesh
 
-    box = trimesh.creation.box([14, 14, 4])
-    textured = texture_mesh(box, Triplanar(TEXTURE), Region("cone", axis=(0, 0, 1), half_angle_deg=10),
+    # the texture on the middle of a large top face (its border on the flat top, 3 mm inside the edges; the box's
+    # sharp edges themselves fold under 1 mm bumps: texture_mesh refuses that)
+    box = trimesh.creation.box([20, 20, 4])
+    box = trimesh.Trimesh(*trimesh.remesh.subdivide_to_size(box.vertices, box.faces, 1.0))
+    textured = texture_mesh(box, Triplanar(TEXTURE), Region("box", low=(-7, -7, 1.9), high=(7, 7, 2.1)),
                             check_intersections=False)
     hm = sample_heightmap(textured, (1.3, -0.7, 2.0), (0, 0, 1), 10.0, TEXTURE.pixel_mm)
     [sampled] = predict(hm, engine="spectral")
     v, se = _plate_v(1.3, -0.7)
-    assert abs(sampled.roughness - v) <= 2 * math.hypot(se, sampled.roughness_stderr)  # measured: 0.01 sigma
+    assert abs(sampled.roughness - v) <= 2 * math.hypot(se, sampled.roughness_stderr)
 
 
 # The commands
@@ -316,3 +320,34 @@ def test_curved_fem_on_request_runs_the_curved_fem_on_the_cylinder_under_the_foo
     for kwargs in calls:
         assert kwargs["base"] == "cylinder" and kwargs["curvature_axis"] == "y"
         assert kwargs["curvature_mm"] == pytest.approx(10.0, rel=0.02)
+
+
+def test_object_tune_writes_the_textured_mesh_only_when_it_can_be_built(tmp_path, capsys, monkeypatch):
+    """--mesh-out: the textured object with the tuned texture; a mesh the texture cannot be laid on writes nothing."""
+    from roughness.cli import main
+    from roughness.objects import texturing
+
+    mesh, _ = _cylinder(6.0, height_mm=30.0)
+    mesh.export(tmp_path / "rod.stl")
+    built = []
+
+    def texture_stub(base, mapping, region, *args, **kwargs):  # the real one takes a minute at 0.05 mm
+        built.append((mapping.pixel_mm, region.describe()))
+        return SimpleNamespace(mesh=base)  # object tune writes only the mesh
+
+    monkeypatch.setattr(texturing, "texture_mesh", texture_stub)
+    argv = ["object", "tune", str(tmp_path / "rod.stl"), "--texture", "standard-1.0", "--mapping", "cylinder",
+            "--region", "cone:0,0,1,100", "--spacing-mm", "10", "--target-lambda", "1.0", "--quiet",
+            "--out", str(tmp_path / "tuned.npz"), "--mesh-out", str(tmp_path / "rod_textured.stl")]
+    assert main(argv) == 0
+    assert "textured mesh: wrote" in capsys.readouterr().out and (tmp_path / "rod_textured.stl").stat().st_size > 0
+    assert built and built[0][1].startswith("faces whose normal lies within 100 degrees")
+
+    def refuse(*args, **kwargs):
+        raise InputError("the texture is too deep for the mesh there", parameter="mapping")
+
+    monkeypatch.setattr(texturing, "texture_mesh", refuse)
+    argv[argv.index("--out") + 1] = str(tmp_path / "again.npz")
+    argv[argv.index("--mesh-out") + 1] = str(tmp_path / "again.stl")
+    assert main(argv) == 2 and "too deep" in capsys.readouterr().err
+    assert not (tmp_path / "again.npz").exists() and not (tmp_path / "again.stl").exists()

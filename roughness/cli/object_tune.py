@@ -76,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
         if mesh_out.suffix.lower() not in WRITE_SUFFIXES:
             raise InputError(f"cannot write {mesh_out}: unsupported mesh format; supported: "
                              f"{', '.join(WRITE_SUFFIXES)}", "mesh_out")
+    mesh_region = _union_region(args) if args.mesh_out else None
     if args.min_factor and args.max_factor and not args.min_factor < args.max_factor:
         raise InputError(f"the factor range must rise, got {args.min_factor:g}..{args.max_factor:g}", "min_factor")
     inputs = read_object(args)
@@ -103,14 +104,16 @@ def run(args: argparse.Namespace) -> int:
                             args.spacing_mm or DEFAULT_SPACING_MM, args.tolerance_jnd,
                             progress=lambda message: log(args, message), **options)
     show_notes(args, list(getattr(mappings[-1], "notes", lambda: [])()))
-    save_heightmap(result.heightmap, out, overwrite=args.overwrite)
-    written = None
-    if args.mesh_out:
-        from roughness.objects.meshes import write_mesh
+    textured, written = None, None
+    if args.mesh_out:  # built before anything is written: a texture too deep for the mesh writes nothing
         from roughness.objects.texturing import texture_mesh
 
-        region = _union_region(args)
-        textured = texture_mesh(inputs.mesh, mappings[-1], region)
+        log(args, "texturing the mesh with the tuned texture")
+        textured = texture_mesh(inputs.mesh, mappings[-1], mesh_region)
+    save_heightmap(result.heightmap, out, overwrite=args.overwrite)
+    if textured is not None:
+        from roughness.objects.meshes import write_mesh
+
         written = write_mesh(textured.mesh, args.mesh_out, args.overwrite, "mesh_out")
     summary = {"mesh": args.mesh, "texture": inputs.texture_name, "mapping": args.mapping, "target": target_text,
                "out": args.out, "mesh_out": args.mesh_out, **result.summary(),
