@@ -125,8 +125,7 @@ def run(args: argparse.Namespace) -> int:
     show_notes(args, notes)
 
     def progress(done: int, total: int) -> None:
-        if done == total or done % 50 == 0:
-            log(args, f"feel: {done}/{total} footprints judged")
+        log(args, f"feel: {done}/{total} footprints judged")
 
     feel = feel_map(inputs.mesh, mapping, inputs.regions, args.spacing_mm or args.spacing_default, args.engine,
                     args.curved, args.reference, progress=progress)

@@ -39,6 +39,7 @@ from .footprint import FOOTPRINT_MM, MAX_OFF_FRACTION, Placement, on_surface, un
 ENGINES = ("spectral", "surrogate")
 CURVED = ("correction", "fem")
 DEFAULT_SPACING_MM = 5.0  # half a footprint: neighbouring footprints overlap by half
+BATCH_POINTS = 64  # footprints unrolled and judged at once (64 maps of 200 x 200 pixels: 20 MB)
 NEGLIGIBLE = 0.01  # |correction - 1| + its error below this (1% of V, a twentieth of a JND): the flat V stands
 CURVED_FEM_AXIS_RATIO = 0.1  # curved FEM: |k2| below this fraction of |k1| is a cylinder, |k1 - k2| a sphere
 
@@ -204,7 +205,7 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
              progress: Callable[[int, int], None] | None = None) -> FeelMap:
     """The roughness map of ``mesh`` (trimesh.Trimesh, mm; the untextured base) under ``mapping`` (a
     ``TextureMapping``) over ``regions`` (name -> bool per face; default: all of it), points about
-    ``spacing_mm`` apart (module docstring). ``progress(done, total)`` is told after each point."""
+    ``spacing_mm`` apart (module docstring). ``progress(done, total)`` is told after each batch of footprints."""
     from roughness.surrogate.calibration import load_scale
 
     start = time.perf_counter()
@@ -226,43 +227,30 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
     scale = load_scale("spectral" if engine == "spectral" else _surrogate_fidelity())
     ref = None if reference is None else reference_of(reference, engine, scale)  # a bad name refused first
     n = len(chosen)
-    method, reasons = ["refused"] * n, [""] * n
-    factor, factor_error = np.ones(n), np.zeros(n)
-    maps: dict[int, Heightmap] = {}
-    for i in range(n):
-        place = Placement(curv.points[i], curv.normals[i], curv.k1[i], curv.k2[i], curv.d1[i], curv.d2[i])
-        why = _refusal(samples, place, textured)
-        if not why:
-            try:
-                fix = correction(place.k1, place.k2)
-            except InputError:
-                fix, why = None, "" if curved == "fem" else (
-                    f"too curved: a principal radius beyond the curvature study's measured range "
-                    f"({measured_ranges()}); curved='fem' asks the curved FEM")
-            if not why:
-                if fix is not None and abs(fix.factor - 1) + fix.error < NEGLIGIBLE:
-                    method[i] = "flat"
-                elif curved == "fem":
-                    method[i], reasons[i] = "fem", ""
-                else:
-                    method[i], reasons[i] = "corrected", fix.note
-                    factor[i], factor_error[i] = fix.factor, fix.error
-                maps[i] = unrolled(mapping, place)
-        reasons[i] = why or reasons[i]
+    places = [Placement(curv.points[i], curv.normals[i], curv.k1[i], curv.k2[i], curv.d1[i], curv.d2[i])
+              for i in range(n)]
+    decided = [_decide(samples, place, textured, curved) for place in places]
+    method, reasons = [d.method for d in decided], [d.reason for d in decided]
     flat, flat_error = np.full(n, np.nan), np.full(n, np.nan)
     roughness, uncertainty = np.full(n, np.nan), np.full(n, np.nan)
-    engine_notes = _judge_flat(maps, engine, flat, flat_error, progress, len(maps))
-    for i in maps:
-        if engine_notes.get(i):  # e.g. the surrogate outside its training domain: said with the point
-            reasons[i] = "; ".join([*([reasons[i]] if reasons[i] else []), *engine_notes[i]])
-        if method[i] == "fem":
-            try:
-                roughness[i], uncertainty[i], reasons[i] = _curved_fem(maps[i], curv.k1[i], curv.k2[i])
-            except InputError as err:
-                method[i], reasons[i] = "refused", str(err)
-            continue
-        roughness[i] = flat[i] * factor[i]
-        uncertainty[i] = math.hypot(factor[i] * flat_error[i], flat[i] * factor_error[i])
+    judged = [i for i in range(n) if method[i] != "refused"]
+    for begin in range(0, len(judged), BATCH_POINTS):  # unrolled footprints held a batch at a time
+        batch = judged[begin:begin + BATCH_POINTS]
+        maps = {i: unrolled(mapping, places[i]) for i in batch}
+        for i, notes in _judge_flat(maps, engine, flat, flat_error).items():  # e.g. the surrogate out of domain
+            reasons[i] = "; ".join([*([reasons[i]] if reasons[i] else []), *notes])
+        for i in batch:
+            d = decided[i]
+            if d.method == "fem":
+                try:
+                    roughness[i], uncertainty[i], reasons[i] = _curved_fem(maps[i], curv.k1[i], curv.k2[i])
+                except InputError as err:
+                    method[i], reasons[i] = "refused", str(err)
+                continue
+            roughness[i] = flat[i] * d.factor
+            uncertainty[i] = math.hypot(d.factor * flat_error[i], flat[i] * d.error)
+        if progress:
+            progress(begin + len(batch), len(judged))
     areas = tuple(float(mesh.area_faces[mask].sum()) for mask in regions.values())
     return FeelMap(curv.points, curv.normals, curv.k1, curv.k2, roughness, uncertainty, flat, tuple(method),
                    tuple(reasons), in_region, names, areas, engine, curved, spacing_mm,
@@ -308,29 +296,49 @@ def _refusal(samples: SurfaceSamples, place: Placement, textured: np.ndarray) ->
     return ""
 
 
-def _judge_flat(maps: dict[int, Heightmap], engine: str, flat: np.ndarray, flat_error: np.ndarray,
-                progress: Callable[[int, int], None] | None, total: int) -> dict[int, list[str]]:
+@dataclass(frozen=True)
+class _Decision:
+    """What answers at one point: ``method`` (flat, corrected, fem, refused), the reason or correction note, and the
+    correction's factor and relative error."""
+
+    method: str
+    reason: str = ""
+    factor: float = 1.0
+    error: float = 0.0
+
+
+def _decide(samples: SurfaceSamples, place: Placement, textured: np.ndarray, curved: str) -> _Decision:
+    """The geometry's verdict at ``place`` (module docstring): refused and why, flat, corrected or curved FEM."""
+    why = _refusal(samples, place, textured)
+    if why:
+        return _Decision("refused", why)
+    try:
+        fix = correction(place.k1, place.k2)
+    except InputError:
+        if curved == "fem":
+            return _Decision("fem")
+        return _Decision("refused", f"too curved: a principal radius beyond the curvature study's measured range "
+                                    f"({measured_ranges()}); curved='fem' asks the curved FEM")
+    if abs(fix.factor - 1) + fix.error < NEGLIGIBLE:
+        return _Decision("flat")
+    if curved == "fem":
+        return _Decision("fem")
+    return _Decision("corrected", fix.note, fix.factor, fix.error)
+
+
+def _judge_flat(maps: dict[int, Heightmap], engine: str, flat: np.ndarray,
+                flat_error: np.ndarray) -> dict[int, list[str]]:
     """The flat engine's V and its error for each unrolled footprint, written into ``flat``/``flat_error``; returns
     the engine's notes by point (the surrogate: why a footprint lies outside its domain)."""
     from roughness.engines import predict
 
     keys = list(maps)
-    done = 0
     notes: dict[int, list[str]] = {}
-
-    def record(p) -> None:
-        nonlocal done
-        i = keys[done]
+    for i, p in zip(keys, predict([maps[i] for i in keys], engine=engine) if keys else []):
         flat[i] = p.roughness
         flat_error[i] = p.roughness_stderr if p.roughness_stderr is not None else (p.roughness_std or 0.0)
         if p.domain_notes:
             notes[i] = [f"{p.engine}: {note}" for note in p.domain_notes]
-        done += 1
-        if progress:
-            progress(done, total)
-
-    if keys:
-        predict([maps[i] for i in keys], engine=engine, on_result=record)
     return notes
 
 
