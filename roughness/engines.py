@@ -310,11 +310,14 @@ class Prediction:
     roughness_std: float | None = None  # surrogate ensemble: spread of V over its members; None: not estimated
     discretization_error: float | None = None  # FEM: estimated relative error of V from the mesh
     provenance: Provenance | None = None  # tool version, model, engine, configuration digest
+    curvature_error: float | None = None  # a flat engine's V corrected for a curved base: the correction's error (V)
 
     def __repr__(self) -> str:
         v = v_text(self.roughness, self.roughness_stderr)
         if self.roughness_std is not None:
             v += f" (ensemble spread {self.roughness_std:.2g})"
+        if self.curvature_error is not None:
+            v += f" (curvature correction ± {self.curvature_error:.2g})"
         engine = self.engine if self.fidelity == self.engine else f"{self.engine} ({self.fidelity})"
         return short_repr(self, repr(self.source), v, engine,
                           "in domain" if self.in_domain else "out of domain",
@@ -324,6 +327,7 @@ class Prediction:
     def as_dict(self) -> dict:
         return {"input": self.source, "roughness": self.roughness, "roughness_stderr": self.roughness_stderr,
                 "roughness_std": self.roughness_std, "discretization_error": self.discretization_error,
+                "curvature_error": self.curvature_error,
                 "engine": self.engine, "fidelity": self.fidelity, "in_domain": self.in_domain,
                 "seconds": self.seconds, **self.placement.as_dict(), "domain_notes": self.domain_notes,
                 "provenance": None if self.provenance is None else self.provenance.as_dict()}
@@ -432,9 +436,12 @@ def predict(heightmaps: Heightmap | np.ndarray | Iterable[Heightmap | np.ndarray
                                     fem_scale.place(r.roughness), notes, r.roughness_stderr,
                                     discretization_error=error, provenance=fem_provenance)
             else:
-                result = Prediction(source, float(v), "surrogate", model.fidelity, not why, share,
-                                    surrogate_scale.place(float(v)), notes, roughness_std=std,
-                                    provenance=surrogate_provenance)
+                v, curvature_error = float(v), None
+                if curved:  # the flat-trained answer, corrected by the curvature study's measurement
+                    v, curvature_error = _curvature_corrected(v, curvature_mm, base, texture_along, notes)
+                result = Prediction(source, v, "surrogate", model.fidelity, not why, share,
+                                    surrogate_scale.place(v), notes, roughness_std=std,
+                                    provenance=surrogate_provenance, curvature_error=curvature_error)
             results.append(result)
             if on_result:
                 on_result(result)
@@ -447,6 +454,24 @@ def predict(heightmaps: Heightmap | np.ndarray | Iterable[Heightmap | np.ndarray
     if batch:
         flush()
     return results
+
+
+def _curvature_corrected(roughness: float, radius_mm: float, base: str, texture_along: str,
+                         notes: list[str]) -> tuple[float, float | None]:
+    """A flat engine's V on a cylinder or sphere of signed radius (mm): times the curvature study's measured
+    correction (``roughness.objects.correction``), with its error (V); a note says which (or why none)."""
+    from roughness.objects.correction import for_base
+
+    if texture_along != "normal":
+        notes.append("curved base: no correction was measured for heights along z; the flat V is given")
+        return roughness, None
+    try:
+        fix = for_base(radius_mm, base)
+    except InputError as err:
+        notes.append(f"curved base: {err}; the flat V is given")
+        return roughness, None
+    notes.append(fix.note)
+    return roughness * fix.factor, abs(roughness) * fix.error
 
 
 def model_provenance(model) -> Provenance:

@@ -44,6 +44,8 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("tactile-image",): ["picture.png", "--out", "plate"],
     ("perception", "plan"): ["--stimuli", "stimuli.csv", "--truth", "truth.csv", "--trials", "10", "--experiments", "2",
                              "--out", "plan"],
+    ("object", "feel"): ["mesh.stl", "--texture", "standard-1.0"],
+    ("object", "tune"): ["mesh.stl", "--texture", "standard-1.0", "--target-lambda", "1.0", "--out", "new.npz"],
     ("object", "texture"): ["mesh.stl", "--texture", "standard-1.0", "--out", "new.stl"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
@@ -66,6 +68,8 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("tune",): [(0, ".npy", [])],
     ("tactile-image",): [(0, ".png", [])],
     ("perception", "plan"): [("--stimuli", ".csv", []), ("--truth", ".csv", [])],
+    ("object", "feel"): [(0, ".stl", []), ("--texture", ".npy", ["--pixel-mm", "0.05"])],
+    ("object", "tune"): [(0, ".stl", []), ("--texture", ".npy", ["--pixel-mm", "0.05"])],
     ("object", "texture"): [(0, ".stl", []), ("--texture", ".npy", ["--pixel-mm", "0.05"])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
@@ -81,9 +85,12 @@ FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("tune",): ["--out"],
     ("palette",): ["--out"],
     ("tactile-image",): ["--out"],
+    ("object", "feel"): ["--picture"],
+    ("object", "tune"): ["--out", "--mesh-out"],
     ("object", "texture"): ["--out", "--preview"],
 }
-OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy", "--preview": ".png"}
+OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy", "--preview": ".png",
+                 "--picture": ".png", "--mesh-out": ".stl"}
 OUTPUT_SUFFIX_OF = {("homogeneity",): {"--map": ".png"}}
 
 

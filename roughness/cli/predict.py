@@ -219,10 +219,16 @@ def _prediction_line(p) -> str:
              f"off the standard scale: ~ lambda {where.equivalent_lambda_mm:.3f} mm extrapolated by the scale's power "
              f"law, {jnd:+.1f} JND from {where.nearest_standard}")
     domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
-    if p.in_domain and p.domain_notes:  # an ensemble's answer above the spread limit (auto would run the FEM)
-        domain += " but " + "; ".join(p.domain_notes)
+    corrected = [n for n in p.domain_notes if n.startswith("curved base (")]  # the curvature correction applied
+    uncertain = [n for n in p.domain_notes if n not in corrected]
+    if p.in_domain and uncertain:  # an ensemble's answer above the spread limit (auto would run the FEM)
+        domain += " but " + "; ".join(uncertain)
+    if p.in_domain and corrected:
+        domain += "; " + "; ".join(corrected)
     sure = f" ± {p.roughness_stderr:.4f} (Monte Carlo)" if p.roughness_stderr is not None else ""  # FEM only
     sure += f" ± {p.roughness_std:.4f} (ensemble spread)" if p.roughness_std is not None else ""
+    if p.curvature_error is not None:
+        sure += f" ± {p.curvature_error:.4f} (curvature correction)"
     if p.discretization_error is not None:
         sure += f" ± {p.discretization_error * abs(p.roughness):.4f} (discretization)"
     return f"{p.source}: V = {p.roughness:.4f}{sure} ({p.engine}, {domain}, {1e3 * p.seconds:.1f} ms), {scale}"

@@ -1,0 +1,166 @@
+"""`roughness object feel MESH --texture FILE|NAME`: how each part of the textured object feels (a roughness map
+over its surface, curvature included), per region, with a picture."""
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .common import (
+    POSITIVE,
+    SEED,
+    add_overwrite,
+    add_quiet,
+    add_reading_args,
+    finish,
+    json_text,
+    log,
+    readings,
+    show_notes,
+)
+
+def add_object_args(p: argparse.ArgumentParser) -> None:
+    """The textured object: the mesh, the texture, its mapping and the regions (shared by feel and tune)."""
+    from roughness.objects.layout import MAPPINGS
+
+    p.add_argument("mesh", metavar="MESH", help="the untextured object: STL, OBJ, PLY or 3MF (mm)")
+    p.add_argument("--texture", required=True, metavar="FILE|NAME",
+                   help="the texture: a heightmap file (read as in predict) or a texture name (standard-1.0, "
+                        "flattop-0.3, ...: roughness texture list), laid on as one periodic tile")
+    p.add_argument("--seed", type=SEED, default=0, help="seed of a named texture (default 0)")
+    p.add_argument("--mapping", choices=MAPPINGS, default="triplanar",
+                   help="how the texture lies on the surface (as object texture): triplanar projection (any shape), "
+                        "wrapped around the textured part's fitted axis with a whole number of tiles (cylinder: knobs, "
+                        "handles; sphere), or the mesh's own UVs (default: triplanar)")
+    p.add_argument("--region", action="append", metavar="SPEC",
+                   help="faces to texture, repeatable (each a row of the table): all, cone:AX,AY,AZ,DEG (normals within "
+                        "DEG of the axis), box:X0,Y0,Z0,X1,Y1,Z1 (mm), colour:R,G,B[,TOL] (painted) (default: all)")
+    p.add_argument("--spacing-mm", type=POSITIVE, metavar="MM",
+                   help="distance between evaluation points (default: 5, half the 10 mm footprint)")
+    p.add_argument("--engine", choices=("spectral", "surrogate"), default="spectral",
+                   help="the flat engine judging the texture under each footprint (default: spectral)")
+    add_reading_args(p)
+
+
+@dataclass
+class ObjectInputs:
+    """What the object commands read: the mesh, the texture, the regions (name -> face mask) and notes."""
+
+    mesh: object
+    texture: object  # Heightmap
+    texture_name: str
+    regions: dict
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def textured(self):
+        import numpy as np
+
+        return np.logical_or.reduce(list(self.regions.values()))
+
+
+def read_object(args: argparse.Namespace) -> ObjectInputs:
+    """The mesh, texture and regions the options name (errors name their flags)."""
+    from roughness.objects.meshes import read_mesh
+    from roughness.objects.regions import parse_region
+
+    from .object_texture import _texture  # the same texture reading as object texture
+
+    read = read_mesh(args.mesh)
+    texture, texture_notes = _texture(args)
+    regions = {}
+    for text in args.region or ["all"]:
+        mask = parse_region(text).faces(read.mesh)
+        if not mask.any():
+            from roughness.core.errors import InputError
+
+            raise InputError(f"region {text!r} selects no face of the mesh", parameter="region")
+        regions[text] = mask
+    return ObjectInputs(read.mesh, texture, args.texture, regions, [*read.notes, *texture_notes])
+
+
+def mapping_of(kind: str, texture, inputs: ObjectInputs):
+    """The mapping of ``kind`` for ``texture`` on the textured faces (a wrap's axis and radius fitted to them)."""
+    from roughness.objects.layout import make_mapping
+
+    return make_mapping(kind, texture, inputs.mesh, inputs.textured)
+
+
+def add_parser(sub) -> None:
+    from roughness.objects.feel import DEFAULT_SPACING_MM
+
+    p = sub.add_parser("feel", help="how each part of a textured object feels: a roughness map over its surface "
+                                    "(curvature included), per-region table and picture")
+    add_object_args(p)
+    p.add_argument("--curved", choices=("correction", "fem"), default="correction",
+                   help="where curvature matters: the curvature study's measured correction, or the curved FEM "
+                        "(seconds per point; cylinders and spheres only) (default: correction)")
+    p.add_argument("--reference", metavar="NAME",
+                   help="count JNDs from this texture (a name, e.g. standard-1.0, judged flat by the same engine)")
+    p.add_argument("--colour-by", choices=("roughness", "jnd"),
+                   help="--picture: colour by V or by JND from --reference (default: jnd with --reference, else V)")
+    p.add_argument("--picture", metavar="PNG", help="write a picture of the object coloured by how it feels")
+    p.add_argument("--json", action="store_true", help="one JSON object: table, refusals, every point (default: text)")
+    add_quiet(p)
+    add_overwrite(p)
+    p.set_defaults(spacing_default=DEFAULT_SPACING_MM)
+    finish(p, run, regions="--region", spacing_mm="--spacing-mm", curved="--curved", mapping="--mapping")
+
+
+def run(args: argparse.Namespace) -> int:
+    from roughness.core.errors import InputError
+    from roughness.core.figures import save_figure
+    from roughness.core.files import check_distinct, check_output
+    from roughness.objects.feel import feel_map
+    from roughness.objects.feel_figure import feel_figure
+
+    if args.colour_by == "jnd" and not args.reference:
+        raise InputError("colouring by JND needs --reference", parameter="colour_by")
+    if args.picture:
+        check_distinct({"--picture": args.picture}, {"MESH": args.mesh, "--texture": args.texture})
+        check_output(args.picture, args.overwrite, "picture")
+    inputs = read_object(args)
+    mapping = mapping_of(args.mapping, inputs.texture, inputs)
+    notes = inputs.notes + list(getattr(mapping, "notes", lambda: [])())
+    show_notes(args, notes)
+
+    def progress(done: int, total: int) -> None:
+        log(args, f"feel: {done}/{total} footprints judged")
+
+    feel = feel_map(inputs.mesh, mapping, inputs.regions, args.spacing_mm or args.spacing_default, args.engine,
+                    args.curved, args.reference, progress=progress)
+    if args.picture:
+        by = args.colour_by or ("jnd" if args.reference else "roughness")
+        save_figure(feel_figure(inputs.mesh, feel, inputs.textured, by, Path(args.mesh).name), args.picture, 120,
+                    args.overwrite)
+    if args.json:
+        print(json_text({"mesh": args.mesh, "texture": inputs.texture_name, "mapping": args.mapping, "notes": notes,
+                         "picture": args.picture, "readings": readings(args), **feel.as_dict()}))
+    else:
+        print("\n".join(feel_lines(feel, args.mesh, args.picture)))
+    return 0
+
+
+def feel_lines(feel, mesh: str, picture: str | None = None) -> list[str]:
+    """The map in words: a summary, the per-region table and each reason for refusing."""
+    ref = feel.reference
+    head = (f"{mesh}: {len(feel.points)} footprints {feel.spacing_mm:g} mm apart, {feel.engine} engine, curvature by "
+            f"{feel.curved}; {feel.method.count('flat')} flat, {feel.method.count('corrected')} corrected, "
+            f"{feel.method.count('fem')} curved FEM, {feel.method.count('refused')} refused; {feel.seconds:.1f} s")
+    lines = [head, f"{'region':<28} {'area mm2':>9} {'points':>6} {'refused':>7} {'V median':>9} {'V range':>17} "
+                   f"{'± V':>7} {'lambda mm':>9}" + (f" {'JND from ' + ref.name:>22}" if ref else "")]
+    for row in feel.table():
+        if row.roughness_median is None:
+            values = f"{'-':>9} {'-':>17} {'-':>7} {'-':>9}" + (f" {'-':>22}" if ref else "")
+        else:
+            values = (f"{row.roughness_median:>9.4f} {row.roughness_min:>8.4f}..{row.roughness_max:<7.4f} "
+                      f"{row.uncertainty_median:>7.4f} {row.lambda_median_mm:>9.3f}"
+                      + (f" {row.jnd_median:>+22.2f}" if ref else ""))
+        lines.append(f"{row.name[:28]:<28} {row.area_mm2:>9.0f} {row.points:>6} {100 * row.refused_fraction:>6.0f}% "
+                     + values)
+    if ref:
+        lines.append(f"reference {ref.name}: V {ref.roughness:.4f} flat, lambda {ref.lambda_mm:.3f} mm")
+    lines += [f"refused at {n} point(s): {why}" for why, n in feel.refusals().items()]
+    if picture:
+        lines.append(f"picture written to {picture}")
+    return lines

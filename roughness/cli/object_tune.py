@@ -1,0 +1,152 @@
+"""`roughness object tune MESH --texture FILE|NAME --target-lambda L | --jnd N --reference NAME --out TEXTURE`: scale
+a texture so that it feels as wanted on the object's curved parts."""
+from __future__ import annotations
+
+import argparse
+
+from .common import (
+    POSITIVE,
+    Number,
+    add_overwrite,
+    add_quiet,
+    finish,
+    json_text,
+    log,
+    readings,
+    show_notes,
+)
+from .object_feel import add_object_args, feel_lines, mapping_of, read_object
+
+
+def add_parser(sub) -> None:
+    from roughness.design.tune import FACTOR_RANGE, KNOBS, MAX_RELATIVE_JND
+    from roughness.objects.tuning import TOLERANCE_JND
+
+    p = sub.add_parser("tune", help="scale a texture so that the object's curved parts feel like the target "
+                                    "(not only the flat texture); reports both")
+    add_object_args(p)
+    target = p.add_mutually_exclusive_group(required=True)
+    target.add_argument("--target-lambda", type=POSITIVE, metavar="MM",
+                        help="target equivalent wavelength on the standard scale (mm)")
+    target.add_argument("--jnd", type=Number(float, low=-MAX_RELATIVE_JND, high=MAX_RELATIVE_JND), metavar="N",
+                        help="N JNDs rougher than --reference (negative: smoother)")
+    p.add_argument("--reference", metavar="NAME", help="--jnd: the texture the JNDs count from (e.g. standard-1.0)")
+    p.add_argument("--by", choices=KNOBS, default="height",
+                   help="scale the heights or the lateral size (default: height)")
+    ranges = ", ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in FACTOR_RANGE.items())
+    p.add_argument("--min-factor", type=POSITIVE, help=f"smallest scale factor searched (default: {ranges})")
+    p.add_argument("--max-factor", type=POSITIVE, help="largest scale factor searched (default: see --min-factor)")
+    p.add_argument("--tolerance-jnd", type=POSITIVE, default=TOLERANCE_JND,
+                   help=f"stop when the curved parts are this close to the target, in JND (default {TOLERANCE_JND:g})")
+    p.add_argument("--out", required=True, metavar="FILE",
+                   help="the tuned texture: .npz, .npy, .h5 (mm), .png (16-bit), .tif")
+    p.add_argument("--mesh-out", metavar="FILE", help="also the textured object with the tuned texture: .stl or .3mf")
+    p.add_argument("--json", action="store_true", help="one JSON object (default: text)")
+    add_quiet(p)
+    add_overwrite(p)
+    finish(p, run, regions="--region", spacing_mm="--spacing-mm", target_lambda="--target-lambda",
+           min_factor="--min-factor")
+
+
+def run(args: argparse.Namespace) -> int:
+    from roughness.core.errors import InputError
+    from roughness.core.files import check_distinct, check_output
+    from roughness.objects.feel import DEFAULT_SPACING_MM, reference_of
+    from roughness.objects.tuning import tune_on_object
+    from roughness.surface.io import SAVE_SUFFIXES, save_heightmap
+    from roughness.surrogate.calibration import WEBER_FRACTION, load_scale
+
+    if args.engine != "spectral":
+        raise InputError("object tune judges and verifies with the spectral engine (the surrogate searches inside "
+                         "design.tune)", parameter="engine")
+    if args.jnd is not None and not args.reference:
+        raise InputError("--jnd counts from a texture: give --reference NAME", parameter="jnd")
+    if args.reference and args.jnd is None:
+        raise InputError("--reference is what --jnd counts from; with --target-lambda leave it out",
+                         parameter="reference")
+    check_distinct({"--out": args.out, "--mesh-out": args.mesh_out}, {"MESH": args.mesh, "--texture": args.texture})
+    out = check_output(args.out, args.overwrite, "out")
+    if out.suffix.lower() not in SAVE_SUFFIXES or out.suffix.lower() == ".stl":
+        raise InputError(f"cannot save {out}: unsupported format {out.suffix or '(no suffix)'!r}; supported: "
+                         f"{', '.join(s for s in SAVE_SUFFIXES if s != '.stl')}", "out")
+    if args.mesh_out:
+        from roughness.objects.meshes import WRITE_SUFFIXES
+
+        mesh_out = check_output(args.mesh_out, args.overwrite, "mesh_out")
+        if mesh_out.suffix.lower() not in WRITE_SUFFIXES:
+            raise InputError(f"cannot write {mesh_out}: unsupported mesh format; supported: "
+                             f"{', '.join(WRITE_SUFFIXES)}", "mesh_out")
+    mesh_region = _union_region(args) if args.mesh_out else None
+    if args.min_factor and args.max_factor and not args.min_factor < args.max_factor:
+        raise InputError(f"the factor range must rise, got {args.min_factor:g}..{args.max_factor:g}", "min_factor")
+    inputs = read_object(args)
+    scale = load_scale("spectral")
+    if args.jnd is not None:
+        ref = reference_of(args.reference, "spectral", scale)
+        target = ref.lambda_mm * (1 + WEBER_FRACTION) ** args.jnd
+        target_text = f"{args.jnd:+g} JND from {ref.name} (lambda {ref.lambda_mm:.3f} mm)"
+    else:
+        target, target_text = args.target_lambda, "given"
+    mappings = []
+
+    def mapping_for(texture):
+        mappings.append(mapping_of(args.mapping, texture, inputs))
+        return mappings[-1]
+
+    options = {}
+    if args.min_factor or args.max_factor:
+        from roughness.design.tune import FACTOR_RANGE
+
+        lo, hi = FACTOR_RANGE[args.by]
+        options["factor_range"] = (args.min_factor or lo, args.max_factor or hi)
+    show_notes(args, inputs.notes)
+    result = tune_on_object(inputs.mesh, inputs.texture, mapping_for, target, inputs.regions, args.by,
+                            args.spacing_mm or DEFAULT_SPACING_MM, args.tolerance_jnd,
+                            progress=lambda message: log(args, message), **options)
+    show_notes(args, list(getattr(mappings[-1], "notes", lambda: [])()))
+    textured, written = None, None
+    if args.mesh_out:  # built before anything is written: a texture too deep for the mesh writes nothing
+        from roughness.objects.texturing import texture_mesh
+
+        log(args, "texturing the mesh with the tuned texture")
+        textured = texture_mesh(inputs.mesh, mappings[-1], mesh_region)
+    save_heightmap(result.heightmap, out, overwrite=args.overwrite)
+    if textured is not None:
+        from roughness.objects.meshes import write_mesh
+
+        written = write_mesh(textured.mesh, args.mesh_out, args.overwrite, "mesh_out")
+    summary = {"mesh": args.mesh, "texture": inputs.texture_name, "mapping": args.mapping, "target": target_text,
+               "out": args.out, "mesh_out": args.mesh_out, **result.summary(),
+               "regions": [row.as_dict() for row in result.feel.table()], "readings": readings(args)}
+    if args.json:
+        print(json_text(summary))
+        return 0
+    flat, o = result.flat, result.on_object
+    where = "curved parts" if o.curved else "judged parts (none curved)"
+    lines = [f"target lambda {target:.3f} mm ({target_text}), V {result.target_roughness:.4f} (spectral scale)",
+             f"flat texture: {flat.by} x {flat.factor:.4g} (aimed at lambda {flat.target.lambda_mm:.3f} mm flat so that "
+             f"the object meets the target): V {flat.achieved.roughness:.4f}, lambda "
+             f"{flat.achieved.equivalent_lambda_mm:.3f} mm, {result.flat_jnd_error:+.2f} JND from the target as a flat "
+             "plate",
+             f"on the object ({o.points} footprints on its {where}): median V {o.roughness:.4f}, lambda "
+             f"{o.lambda_mm:.3f} mm, {o.jnd_error:+.2f} JND from the target "
+             f"({'reached' if result.reached else 'NOT reached'} within {result.tolerance_jnd:g} JND, "
+             f"{result.rounds} round(s))",
+             *feel_lines(result.feel, args.mesh)[1:],
+             *(f"note: {n}" for n in result.notes), f"tuned texture written to {args.out}"]
+    if written is not None:
+        lines.append(f"textured mesh: {written.line()}")
+    print("\n".join(lines))
+    return 0
+
+
+def _union_region(args: argparse.Namespace):
+    """The one region texture_mesh takes: the --region given (one), else all faces."""
+    from roughness.core.errors import InputError
+    from roughness.objects.regions import Region, parse_region
+
+    if not args.region:
+        return Region()
+    if len(args.region) > 1:
+        raise InputError("--mesh-out textures one region: give one --region", parameter="regions")
+    return parse_region(args.region[0])
