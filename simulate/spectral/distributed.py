@@ -4,8 +4,9 @@ Where: a local cluster of ``workers`` processes, one thread and one BLAS thread 
 cluster named by its scheduler's address, its scheduler file or a connected ``Client``. Its workers must run
 this process's roughness and engine versions (checked before anything is sent, and by each task, for workers
 that join later); a window whose worker dies is solved again, up to the scheduler's allowed failures. Windows
-are sent as earlier ones finish, ``IN_FLIGHT_PER_THREAD`` per worker thread ahead, so the scheduler holds
-the heights of a few windows, not of the whole map.
+are sent as earlier ones finish, ``IN_FLIGHT_PER_THREAD`` per worker thread ahead, so the scheduler holds a few
+windows' heights at a time. The heights travel inside the task (128 MB at the limit), not scattered to a
+worker: scattered data dies with its worker, and the window could not be solved again on another.
 """
 from __future__ import annotations
 
@@ -20,12 +21,14 @@ if TYPE_CHECKING:
     from roughness.dataset.cluster import ClusterChoice
 
 IN_FLIGHT_PER_THREAD = 2  # windows sent ahead per worker thread: none waits, and few heights are held
+LARGE_TASK_BYTES = "1GiB"  # a window's task carries its heights: distributed's warning about large graphs is not news
 
 
 def dask_runner(where: ClusterChoice, workers: int, quiet: bool = False) -> Runner:
     """A ``maps.Runner`` that solves the windows on the Dask cluster ``where`` (``workers``: of a local one)."""
 
     def run(tasks: list[MapTask], report: Callable[[int, MapAnswer], None]) -> None:
+        import dask
         from dask.distributed import as_completed
         from distributed import KilledWorker
 
@@ -40,7 +43,8 @@ def dask_runner(where: ClusterChoice, workers: int, quiet: bool = False) -> Runn
                 item = next(queue, None)
                 if item is None:
                     return None
-                future = client.submit(solve_on_worker, item[1], expected, pure=False)
+                with dask.config.set({"distributed.admin.large-graph-warning-threshold": LARGE_TASK_BYTES}):
+                    future = client.submit(solve_on_worker, item[1], expected, pure=False)
                 futures[future] = item[0]
                 return future
 

@@ -34,8 +34,10 @@ from .flat_state import block_flat_state
 from .modes import GridKey, modes
 from .windows import GUARD_TISSUES, Window, plan_windows
 
-MAX_MAP_PIXELS = Limit(4096 * 4096, "MAX_MAP_PIXELS")  # pixels of one solve (at the limit about 3 GB of fields, 2.4 GB
-# more for the real contact operators in partial contact); larger maps are solved in windows of at most this many
+MAX_MAP_PIXELS = Limit(2048 * 2048, "MAX_MAP_PIXELS")  # pixels of one solve: larger maps are solved in windows of at
+# most this many. A solve's peak memory grows by about 580 bytes per pixel in full contact (measured: +0.63 GB at 1024^2,
+# +2.4 GB at 2048^2 pixels, 2.8 GB in all; 4096^2, the limit before windows, passed 11 GB), more for the real contact
+# operators in partial contact.
 SAMPLE_CHUNK = 1 << 21  # values interpolated at once (16 MB per float64 array)
 MIN_PAIRS_PER_CHUNK = 256  # position rows per chunk are chosen to leave at least this many pairs
 
@@ -83,32 +85,31 @@ def spectral_map(heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False,
     xs, ys = centres(width, config.width_mm, step_mm, tile), centres(height, config.width_mm, step_mm, tile)
     check_size("pixels of the map (resample it to a coarser pixel)", heightmap.heights.size, MAX_HEIGHTMAP_PIXELS,
                "pixel_mm")
-    if heightmap.heights.size <= MAX_MAP_PIXELS:
-        windows = [Window.whole(heightmap.shape, len(xs), len(ys))]
-    else:
-        windows = plan_windows(heightmap.shape, pixel, xs, ys, guard_mm(config, pixel), MAX_MAP_PIXELS, tile)
     one = heightmap.heights.size <= MAX_MAP_PIXELS
+    windows = [Window.whole(heightmap.shape, len(xs), len(ys))] if one else \
+        plan_windows(heightmap.shape, pixel, xs, ys, guard_mm(config, pixel), MAX_MAP_PIXELS, tile)
     tasks = [MapTask(w.heights(heightmap.heights), pixel, xs[w.cols.first:w.cols.stop] - w.cols.start * pixel,
                      ys[w.rows.first:w.rows.stop] - w.rows.start * pixel, tile and one, config) for w in windows]
     total = np.full((len(ys), len(xs)), np.nan)
-    answers: list[MapAnswer | None] = [None] * len(tasks)
-    done = 0
+    answers: dict[int, MapAnswer] = {}
 
     def stitch(i: int, answer: MapAnswer) -> None:
-        nonlocal done
         w = windows[i]
         total[w.rows.first:w.rows.stop, w.cols.first:w.cols.stop] = answer.sums
         answers[i] = answer
-        done += w.positions
         if progress:
-            progress(done, total.size)
+            progress(sum(windows[j].positions for j in answers), total.size)
+
+    def within(done: int) -> Callable[[int, int], None] | None:
+        """``progress`` during a solve here that follows ``done`` positions."""
+        return None if progress is None else (lambda d, _: progress(done + d, total.size))
 
     if runner is not None and not one:
         runner(tasks, stitch)
     for i, task in enumerate(tasks):  # here, one after the other, with progress within each solve
-        if answers[i] is None:
-            stitch(i, solve(task, progress and (lambda d, t: progress(done + d, total.size))))
-    notes = _contact_notes([a for a in answers if a is not None], block_flat_state(config).pressure_mpa, config)
+        if i not in answers:
+            stitch(i, solve(task, within(sum(windows[j].positions for j in answers))))
+    notes = _contact_notes([answers[i] for i in range(len(tasks))], block_flat_state(config).pressure_mpa, config)
     if not one:
         notes.insert(0, f"{heightmap.shape[1]} x {heightmap.shape[0]} pixels are more than one solve's "
                         f"{MAX_MAP_PIXELS:,} ({MAX_MAP_PIXELS.name}): solved in {len(windows)} overlapping windows of "
