@@ -4,8 +4,10 @@ A printed texture (standard 1.5 mm bumps) of ``--size-mm`` square at ``--pixel-m
 solve's MAX_MAP_PIXELS, so ``roughness.predict_map`` cuts it into overlapping windows
 (simulate/spectral/windows.py) and solves them on ``--workers`` local worker processes of one thread each
 (dataset/cluster.py ``local_cluster``, as ``roughness predict --map --engine spectral`` does by default).
-Peak memory is each process's maximum resident set (getrusage): the calling process (the map, the stitched
-result) and every worker (one window's fields at a time). Run it once: it takes minutes and gigabytes.
+Peak memory is each process's resident high-water mark (VmHWM; getrusage's maximum would be the calling
+process's, inherited across the workers' exec): the calling process's from after the texture is made (the map,
+the scheduler, the stitched result) and every worker's (one window's fields at a time). Run it once: it takes
+minutes and gigabytes.
 
     python benchmarks/spectral_map_distributed.py [--size-mm 150] [--pixel-mm 0.025] [--workers 2]
     # writes benchmarks/results/spectral_map_distributed.{md,json}
@@ -16,7 +18,7 @@ import argparse
 import json
 import os
 import platform
-import resource
+import re
 import time
 from pathlib import Path
 
@@ -28,8 +30,13 @@ OUT = Path(__file__).parent / "results"
 
 
 def peak_rss_gb() -> float:
-    """This process's peak resident set (GB; Linux reports KB)."""
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6
+    """This process's resident high-water mark (GB): VmHWM, which is its own memory's (reset by exec)."""
+    return int(re.search(r"VmHWM:\s+(\d+) kB", Path("/proc/self/status").read_text()).group(1)) / 1e6
+
+
+def reset_peak() -> None:
+    """Start this process's high-water mark again from its present resident set (Linux 4.0 and later)."""
+    Path("/proc/self/clear_refs").write_text("5")
 
 
 def main() -> int:
@@ -51,6 +58,7 @@ def main() -> int:
     start = time.perf_counter()
     hm = standard_texture(1.5, seed=1, size_mm=args.size_mm, pixel_mm=args.pixel_mm)
     made = time.perf_counter() - start
+    reset_peak()  # making the texture is not the map's memory
     with local_cluster(args.workers) as cluster, Client(cluster) as client:
         start = time.perf_counter()
         cpu = time.process_time()
