@@ -33,6 +33,16 @@ PERIODIC_WINDOW = Limit(330 * 330, "MAX_MAP_PIXELS")  # a periodic map's windows
 WINDOWED_RTOL = 1e-3
 
 
+def _die_on_the_next_window() -> None:
+    """Run on a worker: its next window kills it (as the kernel's OOM killer would); the nanny starts a new one."""
+    from roughness.simulate.spectral import distributed
+
+    def die(*_):
+        os._exit(1)
+
+    distributed.solve = die
+
+
 @pytest.fixture(scope="module")
 def rough():
     """A 34 mm fBm map at 0.1 mm (periodic, as spectral synthesis makes it): in full contact at 10 N."""
@@ -112,8 +122,9 @@ def test_partial_contact_in_windows_says_the_load_is_shared_per_window(small_win
 
 def test_the_windows_of_a_map_on_a_two_worker_cluster_equal_the_map_solved_here(rough, small_windows, tmp_path,
                                                                                  capsys, monkeypatch):
-    """A scheduler and two single-threaded workers started as the README says; the map from Python (client=)
-    and from the CLI (--scheduler-file) equals the windows solved one after the other here, bit for bit."""
+    """A scheduler and two single-threaded workers started as the README says; the map from Python (client=),
+    again after the workers die on their next window (solved again by the restarted ones), and from the CLI
+    (--scheduler-file) equals the windows solved one after the other here, bit for bit."""
     from distributed import Client
 
     import roughness
@@ -136,6 +147,18 @@ def test_the_windows_of_a_map_on_a_two_worker_cluster_equal_the_map_solved_here(
             client.wait_for_workers(2, timeout=DEADLINE_S)
             there = roughness.predict_map(rough, "spectral", step_mm=2.0, client=client)
             assert client.status == "running"  # the caller's client is left open
+            import cloudpickle
+
+            cloudpickle.register_pickle_by_value(sys.modules[__name__])  # the workers cannot import this module
+            try:
+                before = set(client.run(os.getpid).values())
+                client.run(_die_on_the_next_window)
+            finally:
+                cloudpickle.unregister_pickle_by_value(sys.modules[__name__])
+            retried = roughness.predict_map(rough, "spectral", step_mm=2.0, client=client)
+            assert before - set(client.run(os.getpid).values())  # a worker died and its window was solved again
+            np.testing.assert_array_equal(retried.map.roughness, here.map.roughness)
+            client.wait_for_workers(2, timeout=DEADLINE_S)
         np.testing.assert_array_equal(there.map.roughness, here.map.roughness)
         assert there.notes == here.notes and there.provenance == here.provenance
         monkeypatch.chdir(tmp_path)
