@@ -224,3 +224,15 @@ def test_predict_map_checks_its_arguments(rough):
         roughness.predict_map(rough, "spectral", client="tcp://127.0.0.1:1")
     with pytest.raises(InputError, match="pixel_mm"):
         roughness.predict_map(np.zeros((200, 200)), "spectral")
+
+
+def test_windows_too_narrow_for_their_guard_bands_are_a_clear_input_error():
+    """At the finest pixel the footprint allows (1,024 across), a 2048-pixel window is 20 mm: less than its two
+    guard bands of 11.5 mm."""
+    from roughness.simulate.footprints import centres
+
+    pixel = 10.0 / 1024
+    xs = centres(6000 * pixel, 10.0, 1.0, False)
+    with pytest.raises(InputError, match="answers no footprint position beyond its guard bands") as err:
+        plan_windows((6000, 6000), pixel, xs, xs, maps.guard_mm(SimConfig(), pixel), 2048 * 2048, False)
+    assert err.value.parameter == "pixel_mm"
