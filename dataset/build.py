@@ -14,18 +14,14 @@ A cluster of others is reached by ``scheduler`` (its address), ``scheduler_file`
 --scheduler-file`` writes) or ``client`` (a connected ``dask.distributed.Client``, left open). Before any work is
 submitted, every worker is asked for its roughness and engine versions, which must equal this process's. A task
 whose worker dies is run again by the scheduler, up to its ``distributed.scheduler.allowed-failures`` times
-(``ALLOWED_FAILURES`` on the local cluster); the build reports that number and the dashboard's address.
+(``cluster.ALLOWED_FAILURES`` on the local cluster); the build reports that number and the dashboard's address.
 Tasks are submitted as earlier ones finish, IN_FLIGHT_PER_THREAD per worker thread ahead, so a build of 100,000
 samples starts at once and the scheduler holds a few hundred tasks, not all of them.
 """
 from __future__ import annotations
 
-import contextlib
 import functools
 import json
-import logging
-import os
-import signal
 import sys
 import threading
 import time
@@ -56,8 +52,6 @@ BUILD_CONFIG = SimConfig(fidelity="coarse")  # how the project's training sets a
 ENGINES = ("fem", "spectral")
 MESH_FIELDS = ("fidelity", "tolerance", "element", "h_contact_mm", "max_rounds")  # not in a spectral configuration
 WORKERS = 2  # local Dask worker processes
-ALLOWED_FAILURES = 3  # local cluster: worker deaths a task survives before it is reported as killing workers
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration, shared by its threads
 _SIMULATORS_LOCK = threading.Lock()
 PREPARATION_PROGRESS_SECONDS = 5.0  # a line on stderr this often while records are made
@@ -241,22 +235,13 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
 
 def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config: dict, workers: int,
          where: ClusterChoice, counts: dict, quiet: bool) -> None:
-    from dask.distributed import Client, Future, as_completed
+    from dask.distributed import Future, as_completed
     from distributed import KilledWorker
 
-    from .cluster import announce, check_workers, versions, worker_threads
+    from .cluster import session, versions, worker_threads
 
-    cluster = client = None
     progress = Progress(total=len(pending), start=time.perf_counter())
-    try:
-        if where.local:
-            cluster = _local_cluster(workers)
-            client = Client(cluster)
-        else:
-            client = where.client or where.connect()
-        found = check_workers(client)
-        if not quiet:
-            announce(client, found)
+    with session(where, workers, quiet) as client:
         expected = versions()
         queue = iter(pending)
         futures: dict = {}  # in flight: future -> record
@@ -299,41 +284,3 @@ def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config
                 counts["written"] += 1
             if not quiet:
                 progress.update("error" in res, "label" in res)
-    except KeyboardInterrupt:
-        # The workers are closed mid-task: distributed's warnings about it (tasks cancelled, workers killed
-        # after a grace period) are expected, not news; a cluster of others is left alone.
-        _quiet_distributed()
-        if cluster is not None and client is not None:
-            with contextlib.suppress(Exception):  # quieter if it works; the interrupt goes on either way
-                client.run(_quiet_distributed, on_error="ignore")
-        raise
-    finally:
-        if client is not None and client is not where.client:
-            client.close()
-        if cluster is not None:
-            cluster.close()
-
-
-def _quiet_distributed() -> None:
-    """Only errors from distributed's loggers in this process."""
-    logging.getLogger("distributed").setLevel(logging.ERROR)
-
-
-def _local_cluster(workers: int):
-    """A local Dask cluster of ``workers`` processes, one thread and one BLAS thread each (the
-    environment, inherited), started ignoring SIGINT (also inherited), so that a Ctrl-C interrupts
-    only this process, which closes them; from a thread other than the main one, signals stay as they are."""
-    import dask
-    from dask.distributed import LocalCluster
-
-    for name in THREAD_VARIABLES:
-        os.environ[name] = "1"
-    main = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
-    try:
-        with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
-            return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
-

@@ -1,4 +1,5 @@
-"""Reaching a running Dask cluster the way Dask users do, and checking its workers before work is sent.
+"""Reaching a running Dask cluster the way Dask users do (or starting a local one), and checking its workers
+before work is sent: ``session``, used by the dataset build and the spectral maps' windows.
 
 A cluster is named by its scheduler's address, by the file ``dask scheduler --scheduler-file FILE`` writes,
 or by a connected ``dask.distributed.Client``. Its workers must run this process's roughness and engine
@@ -7,8 +8,13 @@ would be mislabelled.
 """
 from __future__ import annotations
 
+import contextlib
+import logging
 import os
+import signal
 import sys
+import threading
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -20,6 +26,7 @@ if TYPE_CHECKING:
 
 CONNECT_TIMEOUT_S = 30  # to reach a scheduler and read its scheduler file
 BLAS_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")  # one BLAS thread per task thread
+ALLOWED_FAILURES = 3  # local cluster: worker deaths a task survives before it is reported as killing workers
 
 
 @dataclass(frozen=True)
@@ -149,3 +156,59 @@ def one_blas_thread(variables: dict[str, str | None]) -> bool:
     """Whether OpenMP, OpenBLAS and MKL each run one thread with these variables (the library's own variable,
     else OMP_NUM_THREADS)."""
     return all((variables.get(name) or variables.get("OMP_NUM_THREADS")) == "1" for name in BLAS_VARIABLES)
+
+
+@contextlib.contextmanager
+def session(where: ClusterChoice, workers: int, quiet: bool) -> Iterator[Client]:
+    """A Client of ``where`` whose workers were checked (``check_workers``) and, unless ``quiet``, announced: a
+    local cluster of ``workers`` processes (``local_cluster``), closed after; a running cluster's new Client,
+    closed after; or the caller's ``client``, left open. On Ctrl-C, distributed's expected warnings about the
+    tasks cancelled and the local workers closed mid-task are silenced (a cluster of others is left alone)."""
+    from dask.distributed import Client
+
+    cluster = client = None
+    try:
+        if where.local:
+            cluster = local_cluster(workers)
+            client = Client(cluster)
+        else:
+            client = where.client or where.connect()
+        found = check_workers(client)
+        if not quiet:
+            announce(client, found)
+        yield client
+    except KeyboardInterrupt:
+        quiet_distributed()
+        if cluster is not None and client is not None:
+            with contextlib.suppress(Exception):  # quieter if it works; the interrupt goes on either way
+                client.run(quiet_distributed, on_error="ignore")
+        raise
+    finally:
+        if client is not None and client is not where.client:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def quiet_distributed() -> None:
+    """Only errors from distributed's loggers in this process."""
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+
+
+def local_cluster(workers: int):
+    """A local Dask cluster of ``workers`` processes, one thread and one BLAS thread each (the
+    environment, inherited), started ignoring SIGINT (also inherited), so that a Ctrl-C interrupts
+    only this process, which closes them; from a thread other than the main one, signals stay as they are."""
+    import dask
+    from dask.distributed import LocalCluster
+
+    for name in BLAS_VARIABLES:
+        os.environ[name] = "1"
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
+            return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)

@@ -11,6 +11,7 @@ import pytest
 
 from roughness.cli import main
 from roughness.dataset import build
+from roughness.dataset.cluster import local_cluster
 from roughness.dataset.recipe import Recipe
 from roughness.dataset.store import open_dataset
 from roughness.engines import ClassicalEngine
@@ -126,7 +127,7 @@ def test_local_workers_ignore_sigint_and_the_caller_keeps_its_handler():
     from dask.distributed import Client
 
     handler = signal.getsignal(signal.SIGINT)
-    with build._local_cluster(1) as cluster, Client(cluster) as client:
+    with local_cluster(1) as cluster, Client(cluster) as client:
         assert signal.getsignal(signal.SIGINT) is handler
         assert list(client.run(signal.getsignal, signal.SIGINT).values()) == [signal.SIG_IGN]
 

@@ -370,16 +370,6 @@ def test_the_maps_separable_sampler_is_map_coordinates_bilinear(wrap):
     assert np.abs(got - expected).max() <= 1e-12
 
 
-def test_a_map_too_large_for_one_solve_is_refused_before_its_transfer_functions_are_built(monkeypatch):
-    from roughness.core.limits import Limit
-    from roughness.simulate.spectral import maps
-
-    monkeypatch.setattr(maps, "MAX_MAP_PIXELS", Limit(400 * 400, "MAX_MAP_PIXELS"))
-    monkeypatch.setattr(maps, "modes", lambda *a: pytest.fail("transfer functions built before the size was checked"))
-    with pytest.raises(InputError, match="MAX_MAP_PIXELS"):
-        maps.spectral_map(Heightmap(np.zeros((480, 480)), 0.05))
-
-
 def test_predict_and_jnd_answer_with_the_spectral_engine(capsys):
     import json
 

@@ -176,6 +176,22 @@ def readings(args: argparse.Namespace) -> list[dict]:
     return [loaded.as_dict() for loaded in getattr(args, "readings", [])]
 
 
+def add_cluster_args(p: argparse.ArgumentParser, what: str, workers: int, default: int | None) -> None:
+    """Where the command does ``what`` (a verb phrase) on Dask (roughness.dataset.cluster): ``--workers`` local
+    processes (argparse ``default``; ``workers``: the number shown), or a running cluster's ``--scheduler`` or
+    ``--scheduler-file``."""
+    p.add_argument("--workers", type=PARALLEL, default=default,
+                   help=f"local Dask worker processes to {what}, one thread each (default {workers}; ignored with "
+                        "--scheduler or --scheduler-file)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", metavar="ADDRESS",
+                       help=f"{what} on the running Dask scheduler at ADDRESS, e.g. tcp://host:8786 (default: a "
+                            "local cluster)")
+    where.add_argument("--scheduler-file", metavar="FILE",
+                       help=f"{what} on the cluster whose scheduler wrote FILE (dask scheduler --scheduler-file "
+                            "FILE); its workers must run this roughness version (checked)")
+
+
 def add_quiet(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress messages on stderr")
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import COUNT, FRACTION, PARALLEL, SEED, add_overwrite, finish, json_text, write_stdout
+from .common import COUNT, FRACTION, SEED, add_cluster_args, add_overwrite, finish, json_text, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -27,15 +27,7 @@ def add_parser(sub) -> None:
     b.add_argument("--tolerance", type=FRACTION, default=BUILD_CONFIG.tolerance,
                    help=f"--fidelity converged: target relative discretization error of V "
                         f"(default {BUILD_CONFIG.tolerance})")
-    b.add_argument("--workers", type=PARALLEL, default=WORKERS,
-                   help=f"local Dask worker processes, one thread each (default {WORKERS}; ignored with --scheduler "
-                        "or --scheduler-file)")
-    where = b.add_mutually_exclusive_group()
-    where.add_argument("--scheduler", metavar="ADDRESS",
-                   help="address of a running Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
-    where.add_argument("--scheduler-file", metavar="FILE",
-                   help="the file a running Dask scheduler wrote (dask scheduler --scheduler-file FILE); "
-                        "its workers must run this roughness version (checked)")
+    add_cluster_args(b, "simulate the samples", WORKERS, WORKERS)
     b.add_argument("--seed", type=SEED, help="replace the recipe's seed (default: the recipe's)")
     b.add_argument("--labels", metavar="LABELS", help="labels file of an earlier build of this configuration "
                    "(roughness dataset labels): samples whose remade texture matches take its results, without FEM")

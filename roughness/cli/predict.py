@@ -12,6 +12,7 @@ from .common import (
     PARALLEL,
     FRACTION,
     POSITIVE,
+    add_cluster_args,
     add_overwrite,
     add_quiet,
     add_reading_args,
@@ -34,6 +35,7 @@ MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
 
 def add_parser(sub) -> None:
     from roughness.engines import PREDICT_ENGINES, SurrogateEngine, predict
+    from roughness.maps import WORKERS
     from roughness.surrogate.roughness_map import roughness_map
 
     given, mapping, threads = defaults(predict), defaults(roughness_map), defaults(SurrogateEngine)["threads"]
@@ -68,6 +70,7 @@ def add_parser(sub) -> None:
                     "unless --overwrite")
     pr.add_argument("--step-mm", type=POSITIVE, default=mapping["step_mm"],
                     help=f"--map: distance between footprint positions in mm (default: {mapping['step_mm']:g})")
+    add_cluster_args(pr, "solve the windows of a spectral --map", WORKERS, None)
     add_printer_arg(pr, "the digital texture's V and the difference in JND are reported too")
     add_quiet(pr)
     add_overwrite(pr)
@@ -75,6 +78,7 @@ def add_parser(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from roughness.core.errors import InputError
     from roughness.engines import predict
     from roughness.simulate.config import SimConfig
     from roughness.surrogate.inputs import InputReader
@@ -82,13 +86,17 @@ def run(args: argparse.Namespace) -> int:
 
     from .printer import PrintPairs, printer_of
 
+    cluster = next((name for name in ("workers", "scheduler", "scheduler_file") if getattr(args, name) is not None),
+                   None)
+    if cluster and not args.map:
+        raise InputError("Dask solves the windows of a spectral --map; without --map there are none",
+                         parameter=cluster)
     if args.map:
-        from roughness.core.errors import InputError
         from roughness.core.files import check_distinct
         from roughness.surrogate.roughness_map import check_map_path
 
-        check_distinct({"--map": args.map},
-                       {"HEIGHTMAP": args.inputs, "--model": args.model, "--printer": args.printer})
+        check_distinct({"--map": args.map}, {"HEIGHTMAP": args.inputs, "--model": args.model,
+                                             "--printer": args.printer, "--scheduler-file": args.scheduler_file})
         if args.printer:
             raise InputError("--map maps the digital object; a map of the printed one is not supported yet "
                              "(predict the printed texture without --map)", "printer")
@@ -147,14 +155,14 @@ def run(args: argparse.Namespace) -> int:
 
 def _predict_map(args: argparse.Namespace, model) -> int:
     from roughness.core.errors import InputError
-    from roughness.engines import model_provenance, spectral_provenance
-    from roughness.surrogate.roughness_map import roughness_map, save_map
+    from roughness.maps import predict_map
+    from roughness.surrogate.roughness_map import save_map
 
     if len(args.inputs) != 1 or os.path.isdir(args.inputs[0]):
         raise InputError("--map takes exactly one heightmap file")
     if args.engine == "fem":
-        raise InputError("--map needs thousands of footprints: use --engine spectral (one solve over the whole map), "
-                         "surrogate or auto")
+        raise InputError("--map needs thousands of footprints: use --engine spectral (one solve over the whole map, "
+                         "or overlapping windows of a larger one), surrogate or auto")
     hm = load_input(args, args.inputs[0])
     start = last = time.perf_counter()
 
@@ -166,15 +174,10 @@ def _predict_map(args: argparse.Namespace, model) -> int:
             eta = (now - start) / done * (total - done)
             log(args, f"map: {done:,}/{total:,} footprint positions, {now - start:.0f} s, ETA {eta:.0f} s")
 
-    notes = []
-    if args.engine == "spectral":  # one solve over the whole map
-        from roughness.simulate.spectral.maps import spectral_map
-
-        result, notes = spectral_map(hm, args.step_mm, args.tile, progress=progress)
-        provenance = spectral_provenance()
-    else:
-        result = roughness_map(model, hm, args.step_mm, args.tile, args.batch_size, progress=progress)
-        provenance = model_provenance(model)
+    made = predict_map(hm, args.engine, args.step_mm, args.tile, model, args.batch_size, progress=progress,
+                       workers=args.workers, scheduler=args.scheduler, scheduler_file=args.scheduler_file,
+                       quiet=args.quiet)
+    result, notes, provenance = made.map, made.notes, made.provenance
     save_map(result, args.map, args.overwrite)
     summary = {"input": args.inputs[0], "map": args.map, "engine": args.engine, **result.summary(), "notes": notes,
                "seconds": time.perf_counter() - start, "readings": readings(args), "provenance": provenance.as_dict()}

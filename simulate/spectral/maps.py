@@ -1,4 +1,4 @@
-"""Roughness maps of whole objects from one spectral solve.
+"""Roughness maps of whole objects from spectral solves: one over the whole map, or one per window of a larger map.
 
 The whole heightmap, mirrored across its edges (or periodic with ``tile``), is pressed at the
 footprint's mean pressure in one contact solve, the strain
@@ -8,14 +8,21 @@ contact (the usual case at 10 N) the texture's strain is a linear, local respons
 about a tissue thickness), so the one field is what each footprint would see on its own; in partial
 contact the pressure is shared over the whole map instead of 10 N per footprint, which the result
 notes. Positions follow ``simulate.footprints.centres`` (the same grid as the surrogate's ``predict --map``).
+
+A map of more than ``MAX_MAP_PIXELS`` pixels is solved in overlapping windows of at most that many
+(``windows``): each window, mirrored across its edges, answers the positions a guard band inside them, and
+the answers are stitched. In full contact the stitched map equals the one solve's within the error the
+guard band leaves (``windows.GUARD_TISSUES``); in partial contact each window shares the pressure over
+itself, which the notes say. Windows run one after the other here, or on Dask (``distributed``).
 """
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from roughness.core.checks import positive
-from roughness.core.limits import MAX_MAP_POSITIONS, Limit, check_size
+from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, MAX_MAP_POSITIONS, Limit, check_size
 
 from ..config import SimConfig
 from ..footprints import RoughnessMap, centre_count, centres
@@ -25,17 +32,49 @@ from .contact import solve_contact
 from .engine import fluctuation, lambda3, tissue_of
 from .flat_state import block_flat_state
 from .modes import GridKey, modes
+from .windows import GUARD_TISSUES, Window, plan_windows
 
-MAX_MAP_PIXELS = Limit(4096 * 4096, "MAX_MAP_PIXELS")  # the map's pixels (at the limit about 3 GB of fields, 2.4 GB more
-# for the real contact operators in partial contact)
+MAX_MAP_PIXELS = Limit(2048 * 2048, "MAX_MAP_PIXELS")  # pixels of one solve: larger maps are solved in windows of at
+# most this many. A solve's peak memory grows by about 580 bytes per pixel in full contact (measured: +0.63 GB at 1024^2,
+# +2.4 GB at 2048^2 pixels, 2.8 GB in all; 4096^2, the limit before windows, passed 11 GB), more for the real contact
+# operators in partial contact.
 SAMPLE_CHUNK = 1 << 21  # values interpolated at once (16 MB per float64 array)
 MIN_PAIRS_PER_CHUNK = 256  # position rows per chunk are chosen to leave at least this many pairs
 
 
+@dataclass(frozen=True)
+class MapTask:
+    """One solve of a map: heights (mm) of the map or of a window, the positions it answers in its own
+    coordinates (mm from its corner), and how it is mirrored (``periodic``: a whole tiled map)."""
+
+    heights: np.ndarray
+    pixel_mm: float
+    xs: np.ndarray
+    ys: np.ndarray
+    periodic: bool
+    config: SimConfig
+
+
+@dataclass(frozen=True)
+class MapAnswer:
+    """A solve's sum over disk pairs of |fluctuation difference| at its positions (rows = y), and its contact."""
+
+    sums: np.ndarray
+    contact_fraction: float
+    message: str
+
+
+Runner = Callable[[list[MapTask], Callable[[int, MapAnswer], None]], None]  # solves the tasks, reports each answer
+
+
 def spectral_map(heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False, config: SimConfig | None = None,
-                 progress: Callable[[int, int], None] | None = None) -> tuple[RoughnessMap, list[str]]:
+                 progress: Callable[[int, int], None] | None = None,
+                 runner: Runner | None = None) -> tuple[RoughnessMap, list[str]]:
     """V at footprint centres ``step_mm`` apart over the whole map, and notes on how it was obtained
-    (the flat state: ``flat_state.block_flat_state``, as the engine's default)."""
+    (the flat state: ``flat_state.block_flat_state``, as the engine's default). A map of more than
+    ``MAX_MAP_PIXELS`` pixels is solved in windows, by ``runner`` (default: here, one after the other;
+    ``distributed.dask_runner``: on Dask; a map of one solve is solved here); ``progress(done, total)`` counts
+    positions."""
     config = config or SimConfig()
     step_mm = positive("step_mm", step_mm)
     heightmap.require_footprint(config.width_mm, None, tile)
@@ -44,20 +83,72 @@ def spectral_map(heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False,
     count = centre_count(width, config.width_mm, step_mm, tile) * centre_count(height, config.width_mm, step_mm, tile)
     check_size("footprint positions", count, MAX_MAP_POSITIONS, "step_mm")  # before the positions are made
     xs, ys = centres(width, config.width_mm, step_mm, tile), centres(height, config.width_mm, step_mm, tile)
-    check_size("pixels of the map (resample it to a coarser pixel)", heightmap.heights.size, MAX_MAP_PIXELS,
+    check_size("pixels of the map (resample it to a coarser pixel)", heightmap.heights.size, MAX_HEIGHTMAP_PIXELS,
                "pixel_mm")
-    grid = modes(GridKey(heightmap.shape, pixel, tissue_of(config), config.depth_mm, "periodic" if tile else "mirror"))
+    one = heightmap.heights.size <= MAX_MAP_PIXELS
+    windows = [Window.whole(heightmap.shape, len(xs), len(ys))] if one else \
+        plan_windows(heightmap.shape, pixel, xs, ys, guard_mm(config, pixel), MAX_MAP_PIXELS, tile)
+    tasks = [MapTask(w.heights(heightmap.heights), pixel, xs[w.cols.first:w.cols.stop] - w.cols.start * pixel,
+                     ys[w.rows.first:w.rows.stop] - w.rows.start * pixel, tile and one, config) for w in windows]
+    total = np.full((len(ys), len(xs)), np.nan)
+    answers: dict[int, MapAnswer] = {}
+
+    def stitch(i: int, answer: MapAnswer) -> None:
+        w = windows[i]
+        total[w.rows.first:w.rows.stop, w.cols.first:w.cols.stop] = answer.sums
+        answers[i] = answer
+        if progress:
+            progress(sum(windows[j].positions for j in answers), total.size)
+
+    def within(done: int) -> Callable[[int, int], None] | None:
+        """``progress`` during a solve here that follows ``done`` positions."""
+        return None if progress is None else (lambda d, _: progress(done + d, total.size))
+
+    if runner is not None and not one:
+        runner(tasks, stitch)
+    for i, task in enumerate(tasks):  # here, one after the other, with progress within each solve
+        if i not in answers:
+            stitch(i, solve(task, within(sum(windows[j].positions for j in answers))))
+    notes = _contact_notes([answers[i] for i in range(len(tasks))], block_flat_state(config).pressure_mpa, config)
+    if not one:
+        notes.insert(0, f"{heightmap.shape[1]} x {heightmap.shape[0]} pixels are more than one solve's "
+                        f"{MAX_MAP_PIXELS:,} ({MAX_MAP_PIXELS.name}): solved in {len(windows)} overlapping windows of "
+                        f"{tasks[0].heights.shape[1]} x {tasks[0].heights.shape[0]} pixels, each answering the "
+                        f"positions at least {guard_mm(config, pixel):.3g} mm inside its edges that cut the map")
+    return RoughnessMap(xs, ys, total / config.pairs, np.ones(total.shape, bool)), notes
+
+
+def guard_mm(config: SimConfig, pixel_mm: float) -> float:
+    """How far inside a window's edge its positions lie (mm): their sampled strain's reach (half the
+    sampling window and a pixel) and the guard band of ``GUARD_TISSUES`` tissue thicknesses."""
+    return config.window_mm / 2 + pixel_mm + GUARD_TISSUES * config.tissue_mm
+
+
+def solve(task: MapTask, progress: Callable[[int, int], None] | None = None) -> MapAnswer:
+    """One contact solve over ``task``'s heights and the pair sums at its positions (``progress(done, total)``
+    counts them)."""
+    config, pixel = task.config, task.pixel_mm
+    grid = modes(GridKey(task.heights.shape, pixel, tissue_of(config), config.depth_mm,
+                         "periodic" if task.periodic else "mirror"))
     flat = block_flat_state(config)
-    state = solve_contact(grid, heightmap.heights, flat.pressure_mpa, config.contact == "frictionless")
-    strain = grid.strain(state.face)
-    field = fluctuation(lambda3(strain, flat.strain), flat.strain)
-    notes = [] if state.message == "full contact" else [
-        f"partial contact ({100 * state.in_contact.mean():.1f}% of the map touches): the load is shared over the "
-        f"whole map at {flat.pressure_mpa:.3g} MPa, not {config.force_n:g} N per footprint; {state.message}"]
+    state = solve_contact(grid, task.heights, flat.pressure_mpa, config.contact == "frictionless")
+    field = fluctuation(lambda3(grid.strain(state.face), flat.strain), flat.strain)
     p1, p2 = PairSampling(config.window_mm, config.pair_distance_mm, config.disk_radius_mm, config.pairs,
                           config.seed).points()
-    total = _sum_of_differences(field, xs, ys, p1, p2, pixel, tile, progress)
-    return RoughnessMap(xs, ys, total / len(p1), np.ones(total.shape, bool)), notes
+    sums = _sum_of_differences(field, task.xs, task.ys, p1, p2, pixel, task.periodic, progress)
+    return MapAnswer(sums, float(state.in_contact.mean()), state.message)
+
+
+def _contact_notes(answers: list[MapAnswer], pressure_mpa: float, config: SimConfig) -> list[str]:
+    """A note on the solves in partial contact: the load is shared over the map, or over each window."""
+    partial = [a for a in answers if a.message != "full contact"]
+    if not partial:
+        return []
+    count = len(answers)
+    where = "the whole map" if count == 1 else f"each window ({len(partial)} of {count} windows in partial contact)"
+    return [f"partial contact ({100 * min(a.contact_fraction for a in partial):.1f}% of the "
+            f"{'map' if count == 1 else 'least touching window'} touches): the load is shared over {where} at "
+            f"{pressure_mpa:.3g} MPa, not {config.force_n:g} N per footprint; {partial[0].message}"]
 
 
 def _sum_of_differences(field: np.ndarray, xs: np.ndarray, ys: np.ndarray, p1: np.ndarray, p2: np.ndarray,
