@@ -457,3 +457,20 @@ def test_smoothed_normals_spread_the_turn_of_a_crease(texture):
     assert smooth.min_concave_radius_mm > 1.5 * plain.min_concave_radius_mm
     assert any("smoothed over about 1 mm" in n for n in smooth.notes)
     assert _closed(smooth.mesh)
+
+
+def test_a_region_border_stays_put_so_the_faces_beside_it_are_not_turned_over():
+    """A box's top alone, textured with standard-1.0 (1 mm relief) at 0.05 mm: with the border ramp the top's edge
+    does not move (the side faces keep their shape) and the mesh is closed; without it the long thin side faces the
+    refinement makes at the edge turn over."""
+    box = trimesh.creation.box((8.0, 8.0, 8.0))
+    top = Region("cone", axis=(0.0, 0.0, 1.0), half_angle_deg=10.0)
+    deep = named_texture("standard-1.0")
+    result = texture_mesh(box, Triplanar(deep), top, border_mm=0.5, check_intersections=False)
+    v = np.asarray(result.mesh.vertices)
+    edge = (np.abs(np.abs(v[:, 0]) - 4) < 1e-9) | (np.abs(np.abs(v[:, 1]) - 4) < 1e-9)
+    assert np.abs(v[edge & (v[:, 2] > 3.9), 2] - 4.0).max() < 1e-12  # the top's border: not displaced
+    assert result.mesh.is_watertight and result.mesh.is_winding_consistent
+    assert v[:, 2].max() > 4.0 + 0.9  # the texture's full height away from the border
+    with pytest.raises(InputError, match="turns .* faces over"):
+        texture_mesh(box, Triplanar(deep), top, border_mm=0.0, check_intersections=False)

@@ -22,7 +22,7 @@ from .common import (
 def add_parser(actions) -> None:
     from roughness.objects.layout import MAPPINGS
     from roughness.objects.mapping import BLEND_RANGE_DEG, DEFAULT_BLEND_DEG
-    from roughness.objects.texturing import DEFAULT_NORMAL_RADIUS_MM
+    from roughness.objects.texturing import DEFAULT_BORDER_MM, DEFAULT_NORMAL_RADIUS_MM
     p = actions.add_parser("texture", help="put a texture on a mesh: remesh the textured faces to the texture's pixel, "
                                            "displace them, write a watertight STL or 3MF")
     p.add_argument("mesh", metavar="MESH", help="the object: .stl, .obj, .ply or .3mf (mm unless the file states units)")
@@ -52,6 +52,9 @@ def add_parser(actions) -> None:
     p.add_argument("--normal-radius-mm", type=Number(float, low=0), default=DEFAULT_NORMAL_RADIUS_MM, metavar="MM",
                    help="smooth the displacement's normals over about this radius (default 0: area-weighted vertex "
                         "normals)")
+    p.add_argument("--border-mm", type=Number(float, low=0), default=DEFAULT_BORDER_MM, metavar="MM",
+                   help="the heights ramp from 0 on the region's border to full height over this distance, so the "
+                        f"border and the faces beside it keep their shape (0: no ramp) (default {DEFAULT_BORDER_MM:g})")
     p.add_argument("--no-intersection-check", action="store_true",
                    help="skip the test for faces crossing each other (the slowest step on large meshes; reported)")
     p.add_argument("--out", required=True, metavar="FILE", help="the textured mesh: .stl (binary) or .3mf")
@@ -93,7 +96,8 @@ def run(args: argparse.Namespace) -> int:
                            args.blend_deg, args.uv_mm)
     log(args, f"object texture: {read.triangles:,} triangles in {args.mesh}; texturing")
     result = texture_mesh(read.mesh, mapping, region, args.edge_mm, args.normal_radius_mm,
-                          check_intersections=not args.no_intersection_check, progress=lambda line: log(args, line))
+                          check_intersections=not args.no_intersection_check, progress=lambda line: log(args, line),
+                          border_mm=args.border_mm)
     written = write_mesh(result.mesh, out, args.overwrite)
     if preview is not None:
         from roughness.core.figures import save_figure

@@ -9,7 +9,10 @@ Steps, each reported in ``TexturedMesh.notes``:
 2. vertex normals, area-weighted over the textured faces (``normals``; so a region's border moves along the
    region's normals, not tilted towards the untextured faces beside it), optionally smoothed over
    ``normal_radius_mm``;
-3. the texture's heights at the vertices of textured faces (``mapping``), bumps outwards;
+3. the texture's heights at the vertices of textured faces (``mapping``), bumps outwards, ramped from 0 on the
+   region's border to full height over ``border_mm`` (a smoothstep of the distance to the nearest border vertex),
+   so the border stays where it was: the untextured faces beside it keep their shape, and the long thin faces the
+   refinement leaves there are not turned over;
 4. refused (InputError) if the texture is deeper than the surface's radius where it is concave: the offset
    surface folds where the depth exceeds the radius at which the normals converge (estimated on every textured
    edge from the normals at its ends: curvature = -(n_b - n_a).(b - a) / |b - a|^2);
@@ -37,6 +40,8 @@ from .regions import Region
 from .remesh import refine
 
 DEFAULT_NORMAL_RADIUS_MM = 0.0
+DEFAULT_BORDER_MM = 0.5
+"""Heights ramp from 0 on a region's border to full height over this distance (mm)."""
 """Normals are area-weighted vertex normals, not smoothed further, unless asked."""
 FLAT_CURVATURE = 1e-3
 """Curvatures (1/mm) below this (radii above 1 m) are taken as flat (rounding in the normals of a flat face)."""
@@ -75,19 +80,22 @@ class TexturedMesh:
 
 def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_mm: float | None = None,
                  normal_radius_mm: float = DEFAULT_NORMAL_RADIUS_MM, check_intersections: bool = True,
-                 progress: Callable[[str], object] | None = None) -> TexturedMesh:
+                 progress: Callable[[str], object] | None = None,
+                 border_mm: float = DEFAULT_BORDER_MM) -> TexturedMesh:
     """``mesh`` (a closed trimesh, mm) with ``mapping``'s texture on the faces of ``region`` (module docstring).
 
     ``edge_mm``: longest edge of a textured face (default: sqrt(2) times the mapping's ``pixel_mm``, so that the
     right triangles bisection makes have legs of about one pixel); ``normal_radius_mm``: smooth
     the displacement's normals over about this radius (0: area-weighted vertex normals only);
     ``check_intersections``: test the result for faces crossing each other (the slow part of large meshes);
-    ``progress``: called with a line as each step ends (its time in ``TexturedMesh.seconds``).
+    ``progress``: called with a line as each step ends (its time in ``TexturedMesh.seconds``); ``border_mm``: the
+    heights ramp from 0 on the region's border to full height over this distance (0: no ramp, the border moves).
     """
     clock = _Clock(progress)
     require_closed(mesh, "the mesh")
     edge = positive("edge_mm", math.sqrt(2) * mapping.pixel_mm if edge_mm is None else edge_mm)
     radius = non_negative("normal_radius_mm", normal_radius_mm)
+    border = non_negative("border_mm", border_mm)
     selected = np.asarray(region.faces(mesh), dtype=bool)
     if not selected.any():
         raise InputError(f"the region ({region.describe()}) selects no face of the mesh", parameter="region")
@@ -116,6 +124,11 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     heights = np.asarray(mapping.heights(v[where], normals[where]), dtype=float)
     if heights.shape != (len(where),) or not np.all(np.isfinite(heights)):
         raise InputError("the mapping gave heights that are not finite numbers (one per point)", parameter="mapping")
+    ramped = border_ramp(v, f, textured, where, border)
+    if ramped is not None:
+        heights *= ramped
+        notes.append(f"heights ramp from 0 on the region's border to full over {border:g} mm "
+                     f"({int(np.count_nonzero(ramped < 1)):,} vertices within it)")
     depth = float(heights.max())
     clock.step("heights", f"{len(where):,} vertices")
     concave = min_concave_radius(v, f[textured], normals)
@@ -169,6 +182,25 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     return TexturedMesh(out, len(base_faces), len(f), int(selected.sum()), area, edge, refined.rounds, rounds, depth,
                         volume / area, volume, concave.radius_mm, volume_in, signed_volume(displaced, f), tested, notes,
                         clock.seconds)
+
+
+def border_ramp(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, where: np.ndarray,
+                border_mm: float) -> np.ndarray | None:
+    """Factors in [0, 1] for the heights at vertices ``where``: 0 on the border of the textured faces (vertices
+    shared with untextured faces), a smoothstep of the distance to the nearest border vertex, 1 from ``border_mm``
+    on; None if the region has no border (the whole closed mesh) or ``border_mm`` is 0."""
+    if border_mm == 0 or textured.all():
+        return None
+    from scipy.spatial import cKDTree
+
+    on_border = np.zeros(len(vertices), dtype=bool)
+    on_border[faces[~textured].ravel()] = True
+    in_region = np.zeros(len(vertices), dtype=bool)
+    in_region[faces[textured].ravel()] = True
+    border = np.flatnonzero(on_border & in_region)
+    distance, _ = cKDTree(vertices[border]).query(vertices[where], distance_upper_bound=border_mm)
+    t = np.clip(distance / border_mm, 0.0, 1.0)  # inf (beyond border_mm) -> 1
+    return t * t * (3 - 2 * t)
 
 
 class _Clock:
