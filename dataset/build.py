@@ -20,6 +20,7 @@ samples starts at once and the scheduler holds a few hundred tasks, not all of t
 """
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import sys
@@ -235,52 +236,39 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
 
 def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config: dict, workers: int,
          where: ClusterChoice, counts: dict, quiet: bool) -> None:
-    from dask.distributed import Future, as_completed
     from distributed import KilledWorker
 
-    from .cluster import session, versions, worker_threads
+    from .cluster import as_finished, session, versions, worker_threads
 
     progress = Progress(total=len(pending), start=time.perf_counter())
     with session(where, workers, quiet) as client:
         expected = versions()
-        queue = iter(pending)
-        futures: dict = {}  # in flight: future -> record
+        ahead = max(MIN_IN_FLIGHT, IN_FLIGHT_PER_THREAD * sum(worker_threads(client).values()))
 
-        def submit_next() -> Future | None:
-            item = next(queue, None)
-            if item is None:
-                return None
-            future = client.submit(simulate_record, item[0], config, item[1], expected, pure=False)
-            futures[future] = item[0]
-            return future
+        def submit(item: tuple[dict, Label | None]):
+            return client.submit(simulate_record, item[0], config, item[1], expected, pure=False)
 
-        window = max(MIN_IN_FLIGHT, IN_FLIGHT_PER_THREAD * sum(worker_threads(client).values()))
-        completed = as_completed([f for f in (submit_next() for _ in range(window)) if f is not None])
-        for future in completed:
-            record = futures.pop(future)
-            following = submit_next()
-            if following is not None:
-                completed.add(following)
-            try:
-                res = future.result()
-            except KilledWorker as err:  # the sample's workers died more often than the scheduler allows
-                res = {"record": record, "heights": None, "pixel_mm": record["pixel_mm"],
-                       "error": f"KilledWorker: the {err.allowed_failures + 1} workers that ran it all died "
-                                "(out of memory, or killed?)"}
-            if "versions" in res:
-                client.cancel(list(futures))
-                raise InputError(f"a Dask worker that joined during the build runs other versions "
-                                 f"({res['versions']}) than this process ({expected}); start the workers from the "
-                                 "same installation (the samples written so far are kept)")
-            if "label" in res:
-                writer.write_labelled(res["record"], res["heights"], res["pixel_mm"], res["label"].values)
-                counts["restored"] += 1
-            elif "error" in res:
-                writer.write_failure(res["record"], res["heights"], res["pixel_mm"], res["error"])
-                counts["failed"] += 1
-            else:
-                writer.write_result(res["record"], res["heights"], res["pixel_mm"], res["fields"],
-                                    res["fluctuation"])
-                counts["written"] += 1
-            if not quiet:
-                progress.update("error" in res, "label" in res)
+        with contextlib.closing(as_finished(client, pending, submit, ahead)) as finished:  # the rest cancelled on exit
+            for (record, _), future in finished:
+                try:
+                    res = future.result()
+                except KilledWorker as err:  # the sample's workers died more often than the scheduler allows
+                    res = {"record": record, "heights": None, "pixel_mm": record["pixel_mm"],
+                           "error": f"KilledWorker: the {err.allowed_failures + 1} workers that ran it all died "
+                                    "(out of memory, or killed?)"}
+                if "versions" in res:
+                    raise InputError(f"a Dask worker that joined during the build runs other versions "
+                                     f"({res['versions']}) than this process ({expected}); start the workers from the "
+                                     "same installation (the samples written so far are kept)")
+                if "label" in res:
+                    writer.write_labelled(res["record"], res["heights"], res["pixel_mm"], res["label"].values)
+                    counts["restored"] += 1
+                elif "error" in res:
+                    writer.write_failure(res["record"], res["heights"], res["pixel_mm"], res["error"])
+                    counts["failed"] += 1
+                else:
+                    writer.write_result(res["record"], res["heights"], res["pixel_mm"], res["fields"],
+                                        res["fluctuation"])
+                    counts["written"] += 1
+                if not quiet:
+                    progress.update("error" in res, "label" in res)

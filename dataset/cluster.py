@@ -14,15 +14,17 @@ import os
 import signal
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from roughness.core.errors import InputError
 
 if TYPE_CHECKING:
-    from dask.distributed import Client
+    from dask.distributed import Client, Future
+
+T = TypeVar("T")
 
 CONNECT_TIMEOUT_S = 30  # to reach a scheduler and read its scheduler file
 BLAS_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")  # one BLAS thread per task thread
@@ -124,6 +126,37 @@ def check_workers(client: Client) -> dict[str, dict[str, Any]]:
 def worker_threads(client: Client) -> dict[str, int]:
     """Each worker's number of task threads."""
     return {w: info["nthreads"] for w, info in client.scheduler_info()["workers"].items()}
+
+
+def as_finished(client: Client, tasks: Iterable[T], submit: Callable[[T], Future], ahead: int
+                ) -> Iterator[tuple[T, Future]]:
+    """(task, its finished future) for every task, in the order they finish; ``submit(task)`` is called as earlier
+    ones finish, with ``ahead`` tasks (or at least one per worker thread) submitted and unfinished at a time, so the
+    scheduler holds few tasks however many there are. The tasks still unfinished when the caller stops (an error,
+    a break) are cancelled."""
+    from dask.distributed import as_completed
+
+    queue, unfinished = iter(tasks), {}
+
+    def submit_next() -> Future | None:
+        for task in queue:  # at most one
+            future = submit(task)
+            unfinished[future] = task
+            return future
+        return None
+
+    ahead = max(ahead, sum(worker_threads(client).values()), 1)
+    completed = as_completed([f for f in (submit_next() for _ in range(ahead)) if f is not None])
+    try:
+        for future in completed:
+            task = unfinished.pop(future)
+            following = submit_next()
+            if following is not None:
+                completed.add(following)
+            yield task, future
+    finally:
+        if unfinished:
+            client.cancel(list(unfinished))
 
 
 def allowed_failures(client: Client) -> int:

@@ -10,6 +10,8 @@ worker: scattered data dies with its worker, and the window could not be solved 
 """
 from __future__ import annotations
 
+import contextlib
+
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -29,33 +31,20 @@ def dask_runner(where: ClusterChoice, workers: int, quiet: bool = False) -> Runn
 
     def run(tasks: list[MapTask], report: Callable[[int, MapAnswer], None]) -> None:
         import dask
-        from dask.distributed import as_completed
         from distributed import KilledWorker
 
-        from roughness.dataset.cluster import session, versions, worker_threads
+        from roughness.dataset.cluster import as_finished, session, versions, worker_threads
 
         with session(where, workers, quiet) as client:
             expected = versions()
-            queue = iter(enumerate(tasks))
-            futures: dict = {}  # in flight: future -> task index
 
-            def submit_next():
-                item = next(queue, None)
-                if item is None:
-                    return None
+            def submit(item: tuple[int, MapTask]):
                 with dask.config.set({"distributed.admin.large-graph-warning-threshold": LARGE_TASK_BYTES}):
-                    future = client.submit(solve_on_worker, item[1], expected, pure=False)
-                futures[future] = item[0]
-                return future
+                    return client.submit(solve_on_worker, item[1], expected, pure=False)
 
-            ahead = max(1, IN_FLIGHT_PER_THREAD * sum(worker_threads(client).values()))
-            completed = as_completed([f for f in (submit_next() for _ in range(ahead)) if f is not None])
-            try:
-                for future in completed:
-                    index = futures.pop(future)
-                    following = submit_next()
-                    if following is not None:
-                        completed.add(following)
+            ahead = IN_FLIGHT_PER_THREAD * sum(worker_threads(client).values())
+            with contextlib.closing(as_finished(client, enumerate(tasks), submit, ahead)) as finished:
+                for (index, _), future in finished:
                     try:
                         answer = future.result()
                     except KilledWorker as err:  # its workers died more often than the scheduler allows
@@ -63,8 +52,6 @@ def dask_runner(where: ClusterChoice, workers: int, quiet: bool = False) -> Runn
                                               f"{err.allowed_failures + 1} workers that solved it all died (out of "
                                               "memory, or killed?)") from None
                     report(index, answer)
-            finally:
-                client.cancel(list(futures))
 
     return run
 
