@@ -268,6 +268,10 @@ def test_object_tune_meets_the_target_on_the_curved_part_and_reports_flat_and_ob
     (["--texture", "standard-1.0", "--colour-by", "jnd"], "--colour-by"),
     (["--texture", "standard-1.0", "--reference", "standard-9"], "--reference"),
     (["--texture", "standard-1.0", "--picture", "nowhere/p.png"], "--picture"),
+    # the mapping's options are object texture's, checked alike
+    (["--texture", "standard-1.0", "--axis", "0,0,0,0,0,1"], "--axis"),  # triplanar has no axis
+    (["--texture", "standard-1.0", "--mapping", "cylinder", "--axis", "0,0,1"], "--axis"),
+    (["--texture", "standard-1.0", "--mapping", "cylinder", "--uv-mm", "2"], "--uv-mm"),
 ])
 def test_bad_object_feel_inputs_exit_2(tmp_path, capsys, extra, flag):
     from roughness.cli import main

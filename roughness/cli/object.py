@@ -12,10 +12,4 @@ def add_parser(sub) -> None:
                                       "tune the texture to a target on the object")
     actions = p.add_subparsers(dest="action", required=True)
     for module in ACTIONS.values():
-        try:
-            add = import_module(f"roughness.cli.{module}").add_parser
-        except ModuleNotFoundError as err:
-            if err.name != f"roughness.cli.{module}":
-                raise
-            continue  # an action still being built
-        add(actions)
+        import_module(f"roughness.cli.{module}").add_parser(actions)

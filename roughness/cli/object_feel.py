@@ -8,7 +8,6 @@ from pathlib import Path
 
 from .common import (
     POSITIVE,
-    SEED,
     add_overwrite,
     add_quiet,
     add_reading_args,
@@ -18,20 +17,13 @@ from .common import (
     readings,
     show_notes,
 )
+from .object_inputs import MAPPING_FLAGS, add_mesh_and_texture_args, check_mapping_args, mapping_for, read_texture
+
 
 def add_object_args(p: argparse.ArgumentParser) -> None:
-    """The textured object: the mesh, the texture, its mapping and the regions (shared by feel and tune)."""
-    from roughness.objects.layout import MAPPINGS
-
-    p.add_argument("mesh", metavar="MESH", help="the untextured object: STL, OBJ, PLY or 3MF (mm)")
-    p.add_argument("--texture", required=True, metavar="FILE|NAME",
-                   help="the texture: a heightmap file (read as in predict) or a texture name (standard-1.0, "
-                        "flattop-0.3, ...: roughness texture list), laid on as one periodic tile")
-    p.add_argument("--seed", type=SEED, default=0, help="seed of a named texture (default 0)")
-    p.add_argument("--mapping", choices=MAPPINGS, default="triplanar",
-                   help="how the texture lies on the surface (as object texture): triplanar projection (any shape), "
-                        "wrapped around the textured part's fitted axis with a whole number of tiles (cylinder: knobs, "
-                        "handles; sphere), or the mesh's own UVs (default: triplanar)")
+    """The textured object: the mesh, the texture, its mapping (as object texture's) and the regions (shared by feel
+    and tune)."""
+    add_mesh_and_texture_args(p, "the untextured object: STL, OBJ, PLY or 3MF (mm unless the file states units)")
     p.add_argument("--region", action="append", metavar="SPEC",
                    help="faces to texture, repeatable (each a row of the table): all, cone:AX,AY,AZ,DEG (normals within "
                         "DEG of the axis), box:X0,Y0,Z0,X1,Y1,Z1 (mm), colour:R,G,B[,TOL] (painted) (default: all)")
@@ -64,10 +56,9 @@ def read_object(args: argparse.Namespace) -> ObjectInputs:
     from roughness.objects.meshes import read_mesh
     from roughness.objects.regions import parse_region
 
-    from .object_texture import _texture  # the same texture reading as object texture
-
+    check_mapping_args(args)
     read = read_mesh(args.mesh)
-    texture, texture_notes = _texture(args)
+    texture, texture_notes = read_texture(args)
     regions = {}
     for text in args.region or ["all"]:
         mask = parse_region(text).faces(read.mesh)
@@ -79,11 +70,10 @@ def read_object(args: argparse.Namespace) -> ObjectInputs:
     return ObjectInputs(read.mesh, texture, args.texture, regions, [*read.notes, *texture_notes])
 
 
-def mapping_of(kind: str, texture, inputs: ObjectInputs):
-    """The mapping of ``kind`` for ``texture`` on the textured faces (a wrap's axis and radius fitted to them)."""
-    from roughness.objects.layout import make_mapping
-
-    return make_mapping(kind, texture, inputs.mesh, inputs.textured)
+def mapping_of(args: argparse.Namespace, texture, inputs: ObjectInputs):
+    """The mapping the options name for ``texture`` on the textured faces (a wrap's axis and radius fitted to them
+    unless given)."""
+    return mapping_for(args, texture, inputs.mesh, inputs.textured)
 
 
 def add_parser(sub) -> None:
@@ -104,7 +94,7 @@ def add_parser(sub) -> None:
     add_quiet(p)
     add_overwrite(p)
     p.set_defaults(spacing_default=DEFAULT_SPACING_MM)
-    finish(p, run, regions="--region", spacing_mm="--spacing-mm", curved="--curved", mapping="--mapping")
+    finish(p, run, regions="--region", spacing_mm="--spacing-mm", curved="--curved", **MAPPING_FLAGS)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -120,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         check_distinct({"--picture": args.picture}, {"MESH": args.mesh, "--texture": args.texture})
         check_output(args.picture, args.overwrite, "picture")
     inputs = read_object(args)
-    mapping = mapping_of(args.mapping, inputs.texture, inputs)
+    mapping = mapping_of(args, inputs.texture, inputs)
     notes = inputs.notes + list(getattr(mapping, "notes", lambda: [])())
     show_notes(args, notes)
 

@@ -5,44 +5,25 @@ import argparse
 
 from .common import (
     POSITIVE,
-    SEED,
     Number,
     add_overwrite,
     add_quiet,
     add_reading_args,
     finish,
     json_text,
-    load_input,
     log,
     readings,
     write_stdout,
 )
+from .object_inputs import MAPPING_FLAGS, add_mesh_and_texture_args, check_mapping_args, mapping_for, read_texture
 
 
 def add_parser(actions) -> None:
-    from roughness.objects.layout import MAPPINGS
-    from roughness.objects.mapping import BLEND_RANGE_DEG, DEFAULT_BLEND_DEG
     from roughness.objects.texturing import DEFAULT_BORDER_MM, DEFAULT_NORMAL_RADIUS_MM
+
     p = actions.add_parser("texture", help="put a texture on a mesh: remesh the textured faces to the texture's pixel, "
                                            "displace them, write a watertight STL or 3MF")
-    p.add_argument("mesh", metavar="MESH", help="the object: .stl, .obj, .ply or .3mf (mm unless the file states units)")
-    p.add_argument("--texture", required=True, metavar="FILE|NAME",
-                   help="heightmap file (as for predict) or a named texture (standard-<lambda>, flattop-<d>: see "
-                        "roughness texture list); it is tiled periodically, its lowest point on the surface")
-    p.add_argument("--seed", type=SEED, default=0, help="seed of a named texture (default 0)")
-    p.add_argument("--mapping", choices=MAPPINGS, default="triplanar",
-                   help="how the texture lies on the surface: triplanar projection (any shape), cylinder or sphere "
-                        "wrap with a whole number of tiles around, or the mesh's own UVs (default: triplanar)")
-    p.add_argument("--axis", metavar="PX,PY,PZ,DX,DY,DZ",
-                   help="cylinder: its axis (a point and a direction, mm); sphere: its centre and polar axis "
-                        "(default: fitted to the textured faces)")
-    p.add_argument("--radius-mm", type=POSITIVE, metavar="MM",
-                   help="cylinder/sphere: the radius to fit whole tiles around (default: fitted)")
-    p.add_argument("--blend-deg", type=Number(float, *BLEND_RANGE_DEG), default=DEFAULT_BLEND_DEG, metavar="DEG",
-                   help=f"width (degrees of the normal) over which two projections are blended at a seam "
-                        f"(default {DEFAULT_BLEND_DEG:g})")
-    p.add_argument("--uv-mm", type=POSITIVE, metavar="MM",
-                   help="uv: mm per UV unit (default: the texture at its own size on average)")
+    add_mesh_and_texture_args(p, "the object: .stl, .obj, .ply or .3mf (mm unless the file states units)")
     p.add_argument("--region", default="all", metavar="REGION",
                    help="faces to texture: all, cone:AX,AY,AZ,DEG (normal within DEG of the axis), "
                         "box:X0,Y0,Z0,X1,Y1,Z1 (centre in the box, mm), colour:R,G,B[,TOL] (painted vertex or face "
@@ -63,15 +44,12 @@ def add_parser(actions) -> None:
     add_reading_args(p)
     add_quiet(p)
     add_overwrite(p)
-    finish(p, run, edge_mm="--edge-mm", mesh="MESH", texture="--texture", region="--region", mapping="--mapping",
-           axis="--axis", blend_deg="--blend-deg", radius_mm="--radius-mm", uv_mm="--uv-mm", origin="--axis")
+    finish(p, run, edge_mm="--edge-mm", region="--region", **MAPPING_FLAGS)
 
 
 def run(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
     from roughness.core.files import check_distinct, check_output
-    from roughness.objects.layout import make_mapping
-    from roughness.objects.mapping import axis_of
     from roughness.objects.meshes import WRITE_SUFFIXES, read_mesh, write_mesh
     from roughness.objects.regions import parse_region
     from roughness.objects.texturing import texture_mesh
@@ -85,15 +63,10 @@ def run(args: argparse.Namespace) -> int:
     if preview is not None and preview.suffix.lower() != ".png":
         raise InputError(f"the preview is a PNG picture, got {preview.name}", "preview")
     region = parse_region(args.region)
-    axis = _axis(args.axis, axis_of) if args.axis else None
-    if args.mapping in ("triplanar", "uv") and (axis is not None or args.radius_mm is not None):
-        raise InputError("--axis and --radius-mm apply to the cylinder and sphere mappings only", "axis")
-    if args.mapping != "uv" and args.uv_mm is not None:
-        raise InputError("applies to the uv mapping only", "uv_mm")
-    texture, texture_notes = _texture(args)
+    check_mapping_args(args)
+    texture, texture_notes = read_texture(args)
     read = read_mesh(args.mesh)
-    mapping = make_mapping(args.mapping, texture, read.mesh, region.faces(read.mesh), axis, args.radius_mm,
-                           args.blend_deg, args.uv_mm)
+    mapping = mapping_for(args, texture, read.mesh, region.faces(read.mesh))
     log(args, f"object texture: {read.triangles:,} triangles in {args.mesh}; texturing")
     result = texture_mesh(read.mesh, mapping, region, args.edge_mm, args.normal_radius_mm,
                           check_intersections=not args.no_intersection_check, progress=lambda line: log(args, line),
@@ -121,49 +94,3 @@ def run(args: argparse.Namespace) -> int:
             lines.append(f"wrote {preview}")
         write_stdout("\n".join(lines))
     return 0
-
-
-def _axis(text: str, axis_of):
-    from roughness.core.errors import InputError
-
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        values = []
-    if len(values) != 6:
-        raise InputError(f"expected PX,PY,PZ,DX,DY,DZ (six numbers), got {text!r}", "axis")
-    return axis_of(values[:3], values[3:])
-
-
-def _texture(args: argparse.Namespace):
-    """The texture heightmap (a file, else a named texture) and notes on what was done to it."""
-    from pathlib import Path
-
-    from roughness.core.errors import InputError
-    from roughness.dataset.textures import named_texture, texture_names
-    from roughness.surface.heightmap import Heightmap
-
-    text = args.texture
-    path = text.split(":", 1)[0] if ":" in text and not Path(text).exists() else text
-    if Path(path).exists() or text not in texture_names():
-        if not Path(path).exists():
-            raise InputError(f"{text!r} is neither a file nor a named texture ({', '.join(texture_names())})",
-                             "texture")
-        hm = load_input(args, text)
-        notes = []
-    else:
-        if args.pixel_mm is not None:
-            raise InputError("applies to a texture file; a named texture has its own pixel", "pixel_mm")
-        hm = named_texture(text, args.seed)
-        notes = [f"texture {text} (seed {args.seed}): {hm.size_mm[0]:g} mm tile, pixel {hm.pixel_mm:g} mm, relief "
-                 f"{hm.heights.max() - hm.heights.min():.3g} mm"]
-        if args.height_mm is not None:
-            relief = float(hm.heights.max() - hm.heights.min())
-            if relief > 0:
-                hm = Heightmap((hm.heights - hm.heights.min()) * (args.height_mm / relief), hm.pixel_mm)
-                notes.append(f"texture {text}: heights scaled by {args.height_mm / relief:.4g} to a relief of "
-                             f"{args.height_mm:g} mm (--height-mm)")
-    low = float(hm.heights.min())
-    notes.append(f"texture {text}: tiled periodically, its lowest point laid on the surface"
-                 + (f" (heights shifted by {-low:+.4g} mm)" if low != 0 else ""))
-    return hm, notes

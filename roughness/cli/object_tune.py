@@ -16,6 +16,7 @@ from .common import (
     show_notes,
 )
 from .object_feel import add_object_args, feel_lines, mapping_of, read_object
+from .object_inputs import MAPPING_FLAGS
 
 
 def add_parser(sub) -> None:
@@ -45,7 +46,7 @@ def add_parser(sub) -> None:
     add_quiet(p)
     add_overwrite(p)
     finish(p, run, regions="--region", spacing_mm="--spacing-mm", target_lambda="--target-lambda",
-           min_factor="--min-factor")
+           min_factor="--min-factor", **MAPPING_FLAGS)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -90,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     mappings = []
 
     def mapping_for(texture):
-        mappings.append(mapping_of(args.mapping, texture, inputs))
+        mappings.append(mapping_of(args, texture, inputs))
         return mappings[-1]
 
     options = {}
