@@ -54,7 +54,7 @@ def table(feel) -> list[str]:
             continue
         lines.append(f"| `{r.name}` | {r.area_mm2:.0f} | {r.points} | {100 * r.refused_fraction:.0f}% | "
                      f"{r.roughness_median:.4f} | {r.roughness_min:.4f}..{r.roughness_max:.4f} | "
-                     f"{r.uncertainty_median:.4f} | {r.lambda_median_mm:.3f} | "
+                     f"{r.uncertainty_median:.4f} | {'below' if r.lambda_median_mm is None else f'{r.lambda_median_mm:.3f}'} | "
                      + (f"{r.jnd_median:+.2f} |" if r.jnd_median is not None else "- |"))
     return lines
 

@@ -12,6 +12,7 @@ the Monte Carlo error of V (a few percent) and the one-solve map's own agreement
 """
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import sys
@@ -51,7 +52,8 @@ def errors(hm) -> tuple[list[float], str]:
     return [float(r) for r in rel], f"{whole.message}; window: {half.message}"
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args(argv)
     sys.path.insert(0, str(ROOT))
     from roughness.simulate.config import SimConfig
     from roughness.simulate.spectral.windows import GUARD_TISSUES

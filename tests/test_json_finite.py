@@ -195,6 +195,14 @@ def _check_simulate(objects):
     assert "discretization_error_undefined" in [n["code"] for n in o["notes"]]
 
 
+def _check_object_feel(objects):
+    """V 0 on the box's top: below the scale (no lambda), the JND from the reference a bound."""
+    [o] = objects
+    [row] = o["regions"]
+    assert row["roughness_median"] == 0.0 and row["lambda_median_mm"] is None and row["below_scale_fraction"] == 1.0
+    assert row["jnd_is_bound"] and row["jnd_median"] < 0
+
+
 # path -> [(arguments, expected exit code, check of the parsed stdout objects)]; exit 2: a clear refusal.
 # The 1 um relief needs --units-ok: without it, it is refused as implausible for mm (tests/test_cleanup.py)
 CASES = {
@@ -212,6 +220,13 @@ CASES = {
     ("palette",): [(["--k", "2", "--family", "flat", "--out", "pal", "--json", "--quiet"], 2, None)],
     ("tactile-image",): [(["picture.png", "--family", "flat", "--out", "plate", "--json", "--quiet"], 2, None)],
     ("dataset", "info"): [(["zero.h5", "--json"], 0, None)],
+    # a flat texture on a 30 mm box: nothing displaced; the top's footprints below the scale; nothing to tune
+    ("object", "texture"): [(["box.stl", "--texture", "flat.npy", *MAP, "--edge-mm", "3", "--out", "t.stl", "--json",
+                              "--quiet"], 0, None)],
+    ("object", "feel"): [(["box.stl", "--texture", "flat.npy", *MAP, "--region", "cone:0,0,1,10", "--spacing-mm", "10",
+                           "--reference", "standard-1.0", "--json", "--quiet"], 0, _check_object_feel)],
+    ("object", "tune"): [(["box.stl", "--texture", "flat.npy", *MAP, "--target-lambda", "1.0", "--out", "t.npz",
+                           "--json", "--quiet"], 2, None)],
 }
 
 
@@ -233,6 +248,9 @@ def near_zero(tmp_path, monkeypatch):
     np.save(tmp_path / "flat.npy", np.zeros((240, 240)))
     np.save(tmp_path / "relief.npy", 0.0005 * (1 + np.sin(2 * np.pi * x)[None, :] * np.sin(2 * np.pi * x)[:, None]))
     np.save(tmp_path / "bumps.npy", standard_texture(1.0).heights)
+    import trimesh
+
+    trimesh.creation.box((30.0, 30.0, 30.0)).export(tmp_path / "box.stl")
     from PIL import Image
 
     Image.fromarray(np.repeat(np.uint8([[0, 128, 255]]), 30, axis=0).repeat(3, axis=1)[..., None].repeat(3, axis=2)

@@ -68,6 +68,9 @@ LIBRARY_ONLY = {
     "checkpoints": "python -m surrogate.ensemble CHECKPOINTS (a script, not a roughness subcommand)",
     # fields of a recipe file (load_recipe names the file and drops the parameter) or of --param KEY=VALUE
     "families": "recipe field", "ranges": "recipe field", "perturb_probability": "recipe field",
+    "print_probability": "recipe field", "printers": "recipe field",
+    "half_angle_deg": "objects.regions.Region field (the CLI's --region cone:AX,AY,AZ,DEG is parsed into it)",
+    "reach_mm": "objects.sampling.sample_heightmap(reach_mm): a library function the CLI does not call",
     "max_perturb_steps": "recipe field", "test_fraction": "recipe field", "max_steps": "perturbation (recipe)",
     "hurst": "texture parameter (--param)", "rms_mm": "texture parameter (--param)",
     "lambda_mm": "texture parameter (--param)", "base_diameter_mm": "texture parameter (--param)",

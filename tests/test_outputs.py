@@ -39,7 +39,7 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
     ("dataset", "verify"): ([0], []),
     ("train",): ([0, "--extra-data"], ["--out"]),
     ("export",): ([0], ["--out", "--int8"]),
-    ("predict",): ([0, "--model", "--printer"], ["--map"]),
+    ("predict",): ([0, "--model", "--printer", "--scheduler-file"], ["--map"]),
     ("compare",): ([0], ["--out"]),
     ("jnd",): ([0, 1, "--model"], []),
     ("perception", "embed"): ([0, "--stimuli"], ["--out"]),
@@ -51,11 +51,14 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
     ("tune",): ([0, "--like", "--model", "--printer"], ["--out"]),
     ("palette",): (["--from", "--model", "--printer"], ["--out"]),
     ("tactile-image",): ([0, "--palette", "--model"], ["--out"]),
+    ("object", "texture"): ([0, "--texture"], ["--out", "--preview"]),
+    ("object", "feel"): ([0, "--texture"], ["--picture"]),
+    ("object", "tune"): ([0, "--texture"], ["--out", "--mesh-out"]),
 }
 # String options that are not files: names, lists of names, addresses; --cache is a folder of FEM
 # results that a run reads and adds to (never replaces).
 NOT_PATHS = {"NAME", "--param", "--scheduler", "--holdout-family", "--engines", "--reference", "--roughest",
-             "--family", "--cache"}
+             "--family", "--cache", "--axis", "--region"}
 INPUT_VALUE = {"--recipe": "recipe.json", "--labels": "labels.jsonl.gz", "--extra-data": "data.h5",
                "--model": "model.onnx", "--like": "map.npy", "--from": "maps", "--palette": "maps",
                "--stimuli": "stimuli.csv", "--printer": "printer.json", "--scheduler-file": "scheduler.json"}

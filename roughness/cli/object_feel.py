@@ -143,11 +143,15 @@ def feel_lines(feel, mesh: str, picture: str | None = None) -> list[str]:
         if row.roughness_median is None:
             values = f"{'-':>9} {'-':>17} {'-':>7} {'-':>9}" + (f" {'-':>22}" if ref else "")
         else:
+            lam = "below" if row.lambda_median_mm is None else f"{row.lambda_median_mm:.3f}"
+            jnd = f"{'<= ' if row.jnd_is_bound else ''}{row.jnd_median:+.2f}" if ref else ""
             values = (f"{row.roughness_median:>9.4f} {row.roughness_min:>8.4f}..{row.roughness_max:<7.4f} "
-                      f"{row.uncertainty_median:>7.4f} {row.lambda_median_mm:>9.3f}"
-                      + (f" {row.jnd_median:>+22.2f}" if ref else ""))
+                      f"{row.uncertainty_median:>7.4f} {lam:>9}" + (f" {jnd:>22}" if ref else ""))
         lines.append(f"{row.name[:28]:<28} {row.area_mm2:>9.0f} {row.points:>6} {100 * row.refused_fraction:>6.0f}% "
                      + values)
+    if any(row.below_scale_fraction for row in feel.table()):
+        lines.append(f"below: the region's judged points are all below the standard scale (V < {feel.scale.floor:.4f}),"
+                     " too smooth for an equivalent lambda; '<=': most are, counted at the floor, so the JND is a bound")
     if ref:
         lines.append(f"reference {ref.name}: V {ref.roughness:.4f} flat, lambda {ref.lambda_mm:.3f} mm")
     lines += [f"refused at {n} point(s): {why}" for why, n in feel.refusals().items()]

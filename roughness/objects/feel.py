@@ -55,7 +55,11 @@ class Reference:
 
 @dataclass(frozen=True)
 class RegionFeel:
-    """One region's row: area (mm^2), points, refused fraction, V median and range, lambda and JND medians."""
+    """One region's row: area (mm^2), points, refused fraction, V median and range, lambda and JND medians.
+
+    Points whose V is below the standard scale's floor have no equivalent wavelength (``below_scale_fraction`` of
+    the judged points): the lambda median is over the others (None if none); JNDs count them at the floor, so
+    where they are the median's side, the JND median is a bound (``jnd_is_bound``: at least that far below)."""
 
     name: str
     area_mm2: float
@@ -67,6 +71,8 @@ class RegionFeel:
     uncertainty_median: float | None
     lambda_median_mm: float | None
     jnd_median: float | None  # from the reference, if any
+    below_scale_fraction: float = 0.0
+    jnd_is_bound: bool = False
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -105,20 +111,29 @@ class FeelMap:
                           f"reference {self.reference.name}" if self.reference else "")
 
     @property
+    def below_scale(self) -> np.ndarray:
+        """Points judged with a V below the standard scale's floor (no equivalent wavelength)."""
+        return np.array([math.isfinite(v) and v < self.scale.floor for v in self.roughness], dtype=bool)
+
+    @property
     def lambdas_mm(self) -> np.ndarray:
-        """Equivalent wavelength (mm) of each V on the engine's standard scale (nan where refused)."""
+        """Equivalent wavelength (mm) of each V on the engine's standard scale (nan where refused or below it)."""
+        return np.where(self.below_scale, np.nan, self._floored_lambdas_mm())
+
+    def _floored_lambdas_mm(self) -> np.ndarray:
         return np.array([self.scale.floored_lambda(v) if math.isfinite(v) else np.nan for v in self.roughness])
 
     @property
     def jnd(self) -> np.ndarray | None:
-        """JNDs of each point from the reference (positive: rougher), or None without one."""
+        """JNDs of each point from the reference (positive: rougher), or None without one; a V below the scale is
+        counted at its floor (the distance is then a bound: at least that far below)."""
         if self.reference is None:
             return None
-        return np.log(self.lambdas_mm / self.reference.lambda_mm) / math.log(1.19)
+        return np.log(self._floored_lambdas_mm() / self.reference.lambda_mm) / math.log(1.19)
 
     def table(self) -> tuple[RegionFeel, ...]:
         """One row per region."""
-        lams, jnds = self.lambdas_mm, self.jnd
+        lams, jnds, below = self.lambdas_mm, self.jnd, self.below_scale
         rows = []
         for i, (name, area) in enumerate(zip(self.region_names, self.region_areas_mm2)):
             mine = self.in_region[i]
@@ -128,10 +143,13 @@ class FeelMap:
             def median(values) -> float | None:
                 return float(np.median(values)) if len(values) else None
 
+            placed = ok & ~below
+            below_fraction = float(below[ok].mean()) if ok.any() else 0.0
             rows.append(RegionFeel(name, area, int(mine.sum()), float(1 - ok.sum() / mine.sum()) if mine.any() else 0.0,
                                    median(v), float(v.min()) if len(v) else None, float(v.max()) if len(v) else None,
-                                   median(self.uncertainty[ok]), median(lams[ok]),
-                                   None if jnds is None else median(jnds[ok])))
+                                   median(self.uncertainty[ok]), median(lams[placed]),
+                                   None if jnds is None else median(jnds[ok]), below_fraction,
+                                   jnds is not None and below_fraction >= 0.5))
         return tuple(rows)
 
     def refusals(self) -> dict[str, int]:

@@ -75,7 +75,11 @@ class TexturedMesh:
     seconds: dict[str, float] = field(default_factory=dict)
 
     def as_dict(self) -> dict:
-        return {k: v for k, v in self.__dict__.items() if k != "mesh"}
+        """JSON-ready; ``min_concave_radius_mm`` is null where no textured part is concave (an infinite radius)."""
+        out = {k: v for k, v in self.__dict__.items() if k != "mesh"}
+        if not math.isfinite(self.min_concave_radius_mm):
+            out["min_concave_radius_mm"] = None
+        return out
 
 
 def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_mm: float | None = None,

@@ -85,7 +85,8 @@ def object_result(feel: FeelMap, target_lambda_mm: float) -> ObjectResult:
                          "on this object", parameter="regions")
     v = float(np.median(feel.roughness[use]))
     lam = feel.scale.floored_lambda(v)
-    ratio = float(np.median(feel.roughness[use] / feel.flat_roughness[use]))
+    judged = use & (feel.flat_roughness > 0)  # a zero flat V has no ratio
+    ratio = float(np.median(feel.roughness[judged] / feel.flat_roughness[judged])) if judged.any() else math.nan
     return ObjectResult(int(use.sum()), bool(curved.any()), v, lam, math.log(lam / target_lambda_mm) / math.log(1.19),
                         ratio)
 
@@ -103,11 +104,18 @@ def tune_on_object(mesh, texture: Heightmap, mapping_for: Callable[[Heightmap], 
     evaluator = Evaluator(fidelity="spectral")
     scale = evaluator.scale
     target_v = scale.roughness_at(target_lambda_mm)
+    flat_tile = evaluator.verify(texture, tile=True).roughness
+    if not flat_tile > 0:
+        raise InputError(f"the texture has no roughness to scale (V {flat_tile:.3g} as a flat tile, spectral engine): "
+                         "tuning scales a texture's relief or size, so give one with relief", parameter="texture")
     feel = feel_map(mesh, mapping_for(texture), regions, spacing_mm, "spectral")
     before = object_result(feel, target_lambda_mm)
+    if not before.roughness > 0:
+        raise InputError("the texture has no roughness on the object's judged parts (V 0 under every footprint): "
+                         "nothing to scale", parameter="texture")
     # the object's correction as tune sees the texture: the curved parts' median over the flat tile's V (at its
     # centre, as tune verifies it): curvature and the texture's own variation over the object together
-    correction, notes = before.roughness / evaluator.verify(texture, tile=True).roughness, []
+    correction, notes = before.roughness / flat_tile, []
     if not before.curved:
         notes.append("no judged part of the object is curved enough to need the correction: tuned as flat")
     say = progress or (lambda message: None)
