@@ -14,13 +14,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_build_distributed import start, wait_for
 
 from roughness.core.errors import InputError
 from roughness.dataset import build
 from roughness.dataset.cluster import ClusterChoice, versions
 from roughness.dataset.recipe import Recipe, expand, realise
 from roughness.dataset.store import open_dataset, sample_id, verify
-from test_build_distributed import start, wait_for
 
 ROOT = Path(__file__).parents[1]
 SEED = 3  # the CLI's default recipe (bump textures) with this seed
@@ -72,12 +72,12 @@ def _pretend_another_version() -> None:
     version.package_version = lambda: "0.0.0-other"
 
 
-@pytest.fixture(scope="module")
-def cluster(tmp_path_factory):
-    """The scheduler file of a scheduler and one single-threaded worker, started as the README says."""
+@contextlib.contextmanager
+def documented_cluster(folder: Path, workers: int):
+    """The scheduler file of a ``dask scheduler`` and ``dask worker --nthreads 1 --nworkers N`` started as the README
+    says (logs in ``folder``), once all workers have joined; every process is killed on exit."""
     from distributed import Client
 
-    folder = tmp_path_factory.mktemp("cluster")
     scheduler_file = folder / "scheduler.json"
     deadline = time.monotonic() + DEADLINE_S
     processes = [start([sys.executable, "-m", "dask", "scheduler", "--scheduler-file", str(scheduler_file),
@@ -87,16 +87,23 @@ def cluster(tmp_path_factory):
         wait_for(lambda: scheduler_file.exists() and scheduler_file.stat().st_size > 0, "the scheduler file",
                  deadline)
         processes.append(start([sys.executable, "-m", "dask", "worker", "--scheduler-file", str(scheduler_file),
-                                "--nthreads", "1", "--nworkers", "1", "--host", "127.0.0.1", "--no-dashboard"],
-                               ENV, folder / "worker.log"))
+                                "--nthreads", "1", "--nworkers", str(workers), "--host", "127.0.0.1",
+                                "--no-dashboard"], ENV, folder / "worker.log"))
         with Client(scheduler_file=str(scheduler_file), timeout=30) as client:
-            client.wait_for_workers(1, timeout=DEADLINE_S)
+            client.wait_for_workers(workers, timeout=DEADLINE_S)
         yield scheduler_file
     finally:
         for proc in processes:
             if proc.poll() is None:
                 os.killpg(proc.pid, signal.SIGKILL)
             proc.wait(timeout=30)
+
+
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    """The scheduler file of a scheduler and one single-threaded worker, started as the README says."""
+    with documented_cluster(tmp_path_factory.mktemp("cluster"), 1) as scheduler_file:
+        yield scheduler_file
 
 
 def test_a_build_on_a_cluster_started_the_documented_way(cluster, tmp_path):

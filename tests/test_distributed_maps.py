@@ -6,24 +6,20 @@ from __future__ import annotations
 import json
 import math
 import os
-import signal
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
+from test_dask_cluster import documented_cluster
 
 from roughness.core.errors import InputError
 from roughness.core.limits import Limit
 from roughness.simulate.config import SimConfig
 from roughness.simulate.spectral import maps
 from roughness.simulate.spectral.windows import plan_windows
-from test_build_distributed import start, wait_for
 
 ROOT = Path(__file__).parents[1]
-ENV = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-       "MKL_NUM_THREADS": "1"}
 DEADLINE_S = 120  # a bound on every wait; the cluster test takes a few seconds on an idle 2-core machine
 WINDOW = Limit(300 * 300, "MAX_MAP_PIXELS")  # 30 mm windows of a 34 mm map at 0.1 mm: 2 x 2 of them
 PERIODIC_WINDOW = Limit(330 * 330, "MAX_MAP_PIXELS")  # a periodic map's windows have guard bands on every side: 4 x 4
@@ -132,19 +128,8 @@ def test_the_windows_of_a_map_on_a_two_worker_cluster_equal_the_map_solved_here(
 
     here = roughness.predict_map(rough, "spectral", step_mm=2.0, workers=1)
     assert len(small_windows) == 4
-    scheduler_file = tmp_path / "scheduler.json"
-    deadline = time.monotonic() + DEADLINE_S
-    processes = [start([sys.executable, "-m", "dask", "scheduler", "--scheduler-file", str(scheduler_file),
-                        "--host", "127.0.0.1", "--port", "0", "--dashboard-address", "127.0.0.1:0"],
-                       ENV, tmp_path / "scheduler.log")]
-    try:
-        wait_for(lambda: scheduler_file.exists() and scheduler_file.stat().st_size > 0, "the scheduler file",
-                 deadline)
-        processes.append(start([sys.executable, "-m", "dask", "worker", "--scheduler-file", str(scheduler_file),
-                                "--nthreads", "1", "--nworkers", "2", "--host", "127.0.0.1", "--no-dashboard"],
-                               ENV, tmp_path / "worker.log"))
+    with documented_cluster(tmp_path, 2) as scheduler_file:
         with Client(scheduler_file=str(scheduler_file), timeout=30) as client:
-            client.wait_for_workers(2, timeout=DEADLINE_S)
             there = roughness.predict_map(rough, "spectral", step_mm=2.0, client=client)
             assert client.status == "running"  # the caller's client is left open
             import cloudpickle
@@ -171,11 +156,6 @@ def test_the_windows_of_a_map_on_a_two_worker_cluster_equal_the_map_solved_here(
         summary = json.loads(out)
         assert summary["notes"] == here.notes and summary["positions"] == here.map.roughness.size
         assert "Dask workers: 2 (2 threads)" in err and "Dask dashboard: http://127.0.0.1:" in err
-    finally:
-        for proc in processes:
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait(timeout=30)
 
 
 def test_a_worker_of_other_versions_solves_no_window(rough):
