@@ -474,3 +474,17 @@ def test_a_region_border_stays_put_so_the_faces_beside_it_are_not_turned_over():
     assert v[:, 2].max() > 4.0 + 0.9  # the texture's full height away from the border
     with pytest.raises(InputError, match="turns .* faces over"):
         texture_mesh(box, Triplanar(deep), top, border_mm=0.0, check_intersections=False)
+
+
+def test_needle_shaped_input_faces_are_noted():
+    """A capsule's cylinder band is one ring of 80 x 1.2 mm faces: the notes say they refine into slivers; an
+    icosphere's faces are not needles."""
+    from roughness.objects.texturing import needle_faces
+
+    capsule = trimesh.creation.capsule(height=80.0, radius=12.0, count=[64, 64])
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=30.0)
+    assert needle_faces(np.asarray(capsule.vertices), np.asarray(capsule.faces), 0.3) >= 128  # the band's faces
+    assert needle_faces(np.asarray(ball.vertices), np.asarray(ball.faces), 0.3) == 0
+    flat = Heightmap(np.zeros((40, 40)), 1.0)
+    result = texture_mesh(capsule, Triplanar(flat), check_intersections=False)
+    assert any("needle-shaped" in note for note in result.notes)
