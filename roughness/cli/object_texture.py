@@ -50,15 +50,12 @@ def add_parser(actions) -> None:
 def run(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
     from roughness.core.files import check_distinct, check_output
-    from roughness.objects.meshes import WRITE_SUFFIXES, read_mesh, write_mesh
+    from roughness.objects.meshes import read_mesh, require_mesh_format, write_mesh
     from roughness.objects.regions import parse_region
     from roughness.objects.texturing import texture_mesh
 
     check_distinct({"--out": args.out, "--preview": args.preview}, {"MESH": args.mesh, "--texture": args.texture})
-    out = check_output(args.out, args.overwrite, "out")
-    if out.suffix.lower() not in WRITE_SUFFIXES:
-        raise InputError(f"cannot write {out}: unsupported mesh format {out.suffix or '(no suffix)'!r}; supported: "
-                         f"{', '.join(WRITE_SUFFIXES)}", "out")
+    out = require_mesh_format(check_output(args.out, args.overwrite, "out"), "out")
     preview = check_output(args.preview, args.overwrite, "preview") if args.preview else None
     if preview is not None and preview.suffix.lower() != ".png":
         raise InputError(f"the preview is a PNG picture, got {preview.name}", "preview")

@@ -71,12 +71,9 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"cannot save {out}: unsupported format {out.suffix or '(no suffix)'!r}; supported: "
                          f"{', '.join(s for s in SAVE_SUFFIXES if s != '.stl')}", "out")
     if args.mesh_out:
-        from roughness.objects.meshes import WRITE_SUFFIXES
+        from roughness.objects.meshes import require_mesh_format
 
-        mesh_out = check_output(args.mesh_out, args.overwrite, "mesh_out")
-        if mesh_out.suffix.lower() not in WRITE_SUFFIXES:
-            raise InputError(f"cannot write {mesh_out}: unsupported mesh format; supported: "
-                             f"{', '.join(WRITE_SUFFIXES)}", "mesh_out")
+        require_mesh_format(check_output(args.mesh_out, args.overwrite, "mesh_out"), "mesh_out")
     mesh_region = _union_region(args) if args.mesh_out else None
     if args.min_factor and args.max_factor and not args.min_factor < args.max_factor:
         raise InputError(f"the factor range must rise, got {args.min_factor:g}..{args.max_factor:g}", "min_factor")

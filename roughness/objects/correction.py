@@ -26,11 +26,11 @@ import numpy as np
 
 from roughness.core.errors import InputError
 from roughness.models import MODELS_DIR
+from roughness.surrogate.patch import FOOTPRINT_MM  # the skin footprint's side (mm)
 
 TABLE_PATH = MODELS_DIR / "curvature_correction.json"
 NEARLY = 0.1  # a second principal curvature below this fraction of the first: called a cylinder (or a sphere)
 STUDY_RESULTS = {"cylinder": "studies/results/curvature_default.json", "sphere": "studies/results/curvature_sphere.json"}
-FOOTPRINT_MM = 10.0  # the skin footprint's side (SimConfig.width_mm)
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,7 @@ from roughness.core.errors import InputError
 from roughness.core.limits import MAX_MAP_POSITIONS, check_size
 from roughness.core.reprs import short_repr
 from roughness.surface.heightmap import Heightmap
+from roughness.surrogate.calibration import jnd, load_scale
 
 from .correction import correction, measured_ranges, restable
 from .curvature import FOOTPRINT_RADIUS_MM, SurfaceSamples, principal_curvatures
@@ -129,7 +130,8 @@ class FeelMap:
         counted at its floor (the distance is then a bound: at least that far below)."""
         if self.reference is None:
             return None
-        return np.log(self._floored_lambdas_mm() / self.reference.lambda_mm) / math.log(1.19)
+        return np.array([jnd(lam, self.reference.lambda_mm) if math.isfinite(lam) else np.nan
+                         for lam in self._floored_lambdas_mm()])
 
     def table(self) -> tuple[RegionFeel, ...]:
         """One row per region."""
@@ -224,8 +226,6 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
     """The roughness map of ``mesh`` (trimesh.Trimesh, mm; the untextured base) under ``mapping`` (a
     ``TextureMapping``) over ``regions`` (name -> bool per face; default: all of it), points about
     ``spacing_mm`` apart (module docstring). ``progress(done, total)`` is told after each batch of footprints."""
-    from roughness.surrogate.calibration import load_scale
-
     start = time.perf_counter()
     spacing_mm = positive("spacing_mm", spacing_mm)
     if engine not in ENGINES:

@@ -169,15 +169,21 @@ class Written:
         return f"wrote {self.path}: {self.triangles:,} triangles, {self.bytes / 1e6:.1f} MB"
 
 
-def write_mesh(mesh, path: str | Path, overwrite: bool = False, parameter: str = "out") -> Written:
-    """Write ``mesh`` as binary STL (streamed in chunks of STL_CHUNK_FACES) or 3MF (mm), atomically; refused if the
-    file exists and not ``overwrite``."""
+def require_mesh_format(path: str | Path, parameter: str = "out") -> Path:
+    """``path`` if its suffix names a mesh format ``write_mesh`` writes (WRITE_SUFFIXES); InputError otherwise."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in WRITE_SUFFIXES:
         raise InputError(f"cannot write {path}: unsupported mesh format {suffix or '(no suffix)'!r}; supported: "
                          f"{', '.join(WRITE_SUFFIXES)}", parameter=parameter)
-    write = _write_stl if suffix == ".stl" else _write_3mf
+    return path
+
+
+def write_mesh(mesh, path: str | Path, overwrite: bool = False, parameter: str = "out") -> Written:
+    """Write ``mesh`` as binary STL (streamed in chunks of STL_CHUNK_FACES) or 3MF (mm), atomically; refused if the
+    file exists and not ``overwrite``."""
+    path = require_mesh_format(path, parameter)
+    write = _write_stl if path.suffix.lower() == ".stl" else _write_3mf
     atomic_write(path, lambda tmp: write(mesh, tmp), overwrite)
     return Written(str(path), len(mesh.faces), os.path.getsize(path))
 

@@ -17,7 +17,6 @@ import numpy as np
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_MESH_TRIANGLES, check_size
 
-
 CHUNK = 1_000_000
 """Faces handled at once in a round (their edges, lengths and templates: about 200 MB)."""
 

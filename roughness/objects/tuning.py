@@ -19,6 +19,7 @@ import numpy as np
 from roughness.core.errors import InputError
 from roughness.core.reprs import short_repr
 from roughness.surface.heightmap import Heightmap
+from roughness.surrogate.calibration import jnd
 
 from .feel import FeelMap, feel_map
 
@@ -63,7 +64,7 @@ class ObjectTuneResult:
     @property
     def flat_jnd_error(self) -> float:
         """The tuned texture as a flat plate, in JND from the object's target (what tuning it flat would aim at)."""
-        return math.log(self.flat.achieved.equivalent_lambda_mm / self.target_lambda_mm) / math.log(1.19)
+        return jnd(self.flat.achieved.equivalent_lambda_mm, self.target_lambda_mm)
 
     def summary(self) -> dict:
         o = self.on_object
@@ -87,7 +88,7 @@ def object_result(feel: FeelMap, target_lambda_mm: float) -> ObjectResult:
     lam = feel.scale.floored_lambda(v)
     judged = use & (feel.flat_roughness > 0)  # a zero flat V has no ratio
     ratio = float(np.median(feel.roughness[judged] / feel.flat_roughness[judged])) if judged.any() else math.nan
-    return ObjectResult(int(use.sum()), bool(curved.any()), v, lam, math.log(lam / target_lambda_mm) / math.log(1.19),
+    return ObjectResult(int(use.sum()), bool(curved.any()), v, lam, jnd(lam, target_lambda_mm),
                         ratio)
 
 
