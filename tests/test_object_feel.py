@@ -97,6 +97,32 @@ def test_a_large_flat_face_gives_the_flat_plates_V_within_the_monte_carlo_error(
     assert row.name == "top" and row.area_mm2 == pytest.approx(1600) and 0 < row.refused_fraction < 1
 
 
+def test_with_the_surrogate_the_map_loads_the_model_once_and_answers_as_the_surrogate_flat(monkeypatch):
+    """engine="surrogate": each footprint's V is the surrogate's answer for the unrolled texture, from one model
+    loaded once for the whole map (not once per batch of footprints)."""
+    from roughness.surrogate import predictor
+
+    loads = []
+    original = predictor.SurrogateModel.__init__
+
+    def counted(self, *args, **kwargs):
+        loads.append(1)
+        original(self, *args, **kwargs)
+
+    monkeypatch.setattr(predictor.SurrogateModel, "__init__", counted)
+    monkeypatch.setattr("roughness.objects.feel.BATCH_POINTS", 2)  # several batches
+    box = trimesh.creation.box([40, 40, 6])
+    feel = feel_map(box, Planar(), {"top": box.face_normals[:, 2] > 0.9}, spacing_mm=8.0, engine="surrogate",
+                    reference="standard-1.0")
+    inner = [i for i, m in enumerate(feel.method) if m != "refused"]
+    assert len(inner) >= 9 and len(loads) == 1
+    for i in inner:  # the unrolled footprint is the plate's, sampled at the same points up to float round-off
+        x, y = feel.points[i][:2]
+        [p] = predict(TEXTURE, engine="surrogate", tile=True, centre_mm=(x % 12.0, y % 12.0))
+        assert feel.roughness[i] == pytest.approx(p.roughness, rel=1e-5)
+        assert feel.uncertainty[i] == pytest.approx(p.roughness_std, rel=1e-5)
+
+
 def test_on_a_cylinder_the_map_gives_the_curvature_studys_V_within_its_error():
     study = json.loads((ROOT / "studies/results/curvature_default.json").read_text())
     [measured] = [r for r in study["differences"]

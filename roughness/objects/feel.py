@@ -198,9 +198,9 @@ def evaluation_points(samples: SurfaceSamples, in_region: np.ndarray, spacing_mm
     return np.sort(idx[order[first]])
 
 
-def reference_of(name_or_map: str | Heightmap | Reference, engine: str, scale) -> Reference:
-    """A reference texture (a name such as ``standard-1.0``, or a heightmap) judged flat by ``engine`` (a
-    ``Reference`` as it is: e.g. a target)."""
+def reference_of(name_or_map: str | Heightmap | Reference, engine: str, scale, model=None) -> Reference:
+    """A reference texture (a name such as ``standard-1.0``, or a heightmap) judged flat by ``engine`` (``model``:
+    the surrogate's, default the shipped one; a ``Reference`` as it is: e.g. a target)."""
     from roughness.engines import predict
 
     if isinstance(name_or_map, Reference):
@@ -215,7 +215,7 @@ def reference_of(name_or_map: str | Heightmap | Reference, engine: str, scale) -
         except InputError as err:
             raise InputError(f"reference {name_or_map!r}: {err}", parameter="reference") from None
         name = name_or_map
-    [p] = predict(hm, engine=engine)
+    [p] = predict(hm, engine=engine, model=model)
     return Reference(name, p.roughness, scale.floored_lambda(p.roughness))
 
 
@@ -242,8 +242,9 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
     names = tuple(regions)
     in_region = np.stack([regions[name][samples.faces[chosen]] for name in names])
     curv = principal_curvatures(samples, samples.points[chosen], samples.normals[chosen], FOOTPRINT_RADIUS_MM)
-    scale = load_scale("spectral" if engine == "spectral" else _surrogate_fidelity())
-    ref = None if reference is None else reference_of(reference, engine, scale)  # a bad name refused first
+    model = _shipped_surrogate() if engine == "surrogate" else None  # loaded once for the whole map
+    scale = load_scale("spectral" if model is None else model.fidelity)
+    ref = None if reference is None else reference_of(reference, engine, scale, model)  # a bad name refused first
     n = len(chosen)
     places = [Placement(curv.points[i], curv.normals[i], curv.k1[i], curv.k2[i], curv.d1[i], curv.d2[i])
               for i in range(n)]
@@ -255,7 +256,7 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
     for begin in range(0, len(judged), BATCH_POINTS):  # unrolled footprints held a batch at a time
         batch = judged[begin:begin + BATCH_POINTS]
         maps = {i: unrolled(mapping, places[i]) for i in batch}
-        for i, notes in _judge_flat(maps, engine, flat, flat_error).items():  # e.g. the surrogate out of domain
+        for i, notes in _judge_flat(maps, engine, model, flat, flat_error).items():  # e.g. the surrogate out of domain
             reasons[i] = "; ".join([*([reasons[i]] if reasons[i] else []), *notes])
         for i in batch:
             d = decided[i]
@@ -344,7 +345,7 @@ def _decide(samples: SurfaceSamples, place: Placement, textured: np.ndarray, cur
     return _Decision("corrected", fix.note, fix.factor, fix.error)
 
 
-def _judge_flat(maps: dict[int, Heightmap], engine: str, flat: np.ndarray,
+def _judge_flat(maps: dict[int, Heightmap], engine: str, model, flat: np.ndarray,
                 flat_error: np.ndarray) -> dict[int, list[str]]:
     """The flat engine's V and its error for each unrolled footprint, written into ``flat``/``flat_error``; returns
     the engine's notes by point (the surrogate: why a footprint lies outside its domain)."""
@@ -352,7 +353,7 @@ def _judge_flat(maps: dict[int, Heightmap], engine: str, flat: np.ndarray,
 
     keys = list(maps)
     notes: dict[int, list[str]] = {}
-    for i, p in zip(keys, predict([maps[i] for i in keys], engine=engine) if keys else []):
+    for i, p in zip(keys, predict([maps[i] for i in keys], engine=engine, model=model) if keys else []):
         flat[i] = p.roughness
         flat_error[i] = p.roughness_stderr if p.roughness_stderr is not None else (p.roughness_std or 0.0)
         if p.domain_notes:
@@ -377,8 +378,8 @@ def _curved_fem(hm: Heightmap, k1: float, k2: float) -> tuple[float, float, str]
     return p.roughness, p.roughness_stderr or 0.0, f"curved FEM on a {base} of radius {1 / k:.3g} mm"
 
 
-def _surrogate_fidelity() -> str:
-    """The fidelity of the shipped surrogate's training labels (its standard scale)."""
+def _shipped_surrogate():
+    """The shipped surrogate (``SurrogateModel``); its training labels' fidelity names its standard scale."""
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
-    return SurrogateModel(DEFAULT_MODEL).fidelity
+    return SurrogateModel(DEFAULT_MODEL)
