@@ -7,7 +7,8 @@
 # DATA holds training-v3.h5 and training-v3-printed.h5 (110,000 spectral labels) and training-v2-default.h5,
 # training-v2-fine.h5 (FEM labels): datasets/build-v3.sh. Members are trained one after another (2 torch
 # threads each; MEMBERS, MINUTES, WIDTHS, HIDDEN, FEM_WEIGHT override the defaults below); a member whose
-# checkpoint exists is kept, so an interrupted run goes on where it stopped. Multi-fidelity: the spectral
+# checkpoint exists is kept and an interrupted member resumes from its last finished epoch (--resume), so the
+# script run again goes on where it stopped. Multi-fidelity: the spectral
 # labels teach the shared features; the FEM labels converged to 3% (their estimate), each at its finest level,
 # teach the finite block's departure; the graph answers as the FEM at fine (h = 0.14 mm). knit and waffle are
 # held out entirely (the out-of-family scores). Targets log(V + 1e-4): V resolved down to ~1e-4 (v2: 1e-3).
@@ -25,7 +26,7 @@ for ((k = 0; k < MEMBERS; k++)); do
     [[ -f "$RUNS/m$k/checkpoint.pt" ]] && continue
     roughness train "$DATA/training-v3.h5" --extra-data "${EXTRA[@]}" --levels all --max-label-error 0.03 \
         --query-h-mm 0.14 --fem-weight "$FEM_WEIGHT" --log-offset 1e-4 --holdout-family knit,waffle --seed "$k" \
-        --max-minutes "$MINUTES" --widths "$WIDTHS" --hidden "$HIDDEN" --threads 2 --out "$RUNS/m$k" --overwrite
+        --max-minutes "$MINUTES" --widths "$WIDTHS" --hidden "$HIDDEN" --threads 2 --out "$RUNS/m$k" --resume
 done
 members=()
 for ((k = 0; k < MEMBERS; k++)); do members+=("$RUNS/m$k/checkpoint.pt"); done

@@ -33,7 +33,7 @@ import math
 import sys
 import time
 from contextlib import ExitStack
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -53,6 +53,7 @@ from .metadata import ModelMetadata
 from .metrics import scores
 from .network import RoughnessNet, parameter_count
 from .patch import FOOTPRINT_MM, PATCH_PIXEL_MM
+from .resume import RESUME_FILE, Progress, fingerprint, restore, snapshot
 from .target import LOG_OFFSET, roughness_from_log, target
 
 
@@ -83,26 +84,29 @@ def format_scores(values: dict) -> str:
                      for k, v in values.items())
 
 
-def train(cfg: TrainConfig, overwrite: bool = False) -> Path:
+def train(cfg: TrainConfig, overwrite: bool = False, resume: bool = False) -> Path:
     """Train, evaluate and write the run folder ``cfg.out``; returns the checkpoint's path.
 
-    On any error or interruption the intermediate best.pt is removed, and a folder this call
-    created is removed again if nothing else was written into it.
+    Every finished epoch is saved to ``resume.pt`` in the folder: an interrupted run leaves it, and
+    ``resume=True`` continues from it (same configuration and data; ``threads`` may differ) instead
+    of starting over (without one, ``resume`` starts a new run). A finished run removes it, and a
+    folder this call created is removed again if nothing was written into it.
     """
-    out = check_output_folder(cfg.out, overwrite)
+    resuming = resume and (Path(cfg.out) / RESUME_FILE).is_file()
+    out = Path(cfg.out) if resuming else check_output_folder(cfg.out, overwrite)
     created = not out.exists()
     try:
-        return _train(cfg, out)
+        return _train(cfg, out, resuming)
     finally:
-        (out / "best.pt").unlink(missing_ok=True)
         if created and out.is_dir() and not any(out.iterdir()):
             out.rmdir()
 
 
-def _train(cfg: TrainConfig, out: Path) -> Path:
+def _train(cfg: TrainConfig, out: Path, resuming: bool) -> Path:
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(cfg.threads)
     start = time.monotonic()
+    data_sha256 = [inputs_sha256(path) for path in (cfg.data, *cfg.extra_data)]
 
     # data: patches in mm (max 0) and log-V targets (one row per label level), split by base texture
     with ExitStack() as stack:
@@ -155,13 +159,17 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
     optimizer = torch.optim.AdamW(model.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
     steps_per_epoch = math.ceil(len(tr) / cfg.batch_size)
     total_steps, warmup = cfg.max_epochs * steps_per_epoch, 3 * steps_per_epoch
+    progress, key = Progress(), fingerprint(cfg, data_sha256)
     epochs_start = time.monotonic()
     schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, lambda s: lr_factor(
         s, total_steps, warmup, (time.monotonic() - epochs_start) / (60 * cfg.max_minutes)))
     generator = torch.Generator().manual_seed(cfg.seed)
+    if resuming:
+        progress = restore(out / RESUME_FILE, key, model, optimizer, schedule, generator)
+        epochs_start = time.monotonic() - progress.epochs_seconds  # the budget's clock goes on where it stopped
+        log(f"resuming at epoch {progress.epoch} ({progress.epochs_seconds / 60:.1f} min of the budget used)")
 
-    best_val, best_epoch, history = math.inf, -1, []
-    for epoch in range(cfg.max_epochs):
+    for epoch in range(progress.epoch, cfg.max_epochs):
         model.train()
         order, train_loss = torch.randperm(len(tr), generator=generator), 0.0
         for i in range(0, len(tr), cfg.batch_size):
@@ -177,24 +185,29 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         model.eval()
         with torch.no_grad():
             val_loss = weighted_mse(model(x_val, h_val)[0], y_val, w_val).item()
-        minutes = (time.monotonic() - start) / 60
-        history.append((epoch, train_loss, val_loss, schedule.get_last_lr()[0], minutes))
-        improved = val_loss < best_val
+        progress.epoch, progress.epochs_seconds = epoch + 1, time.monotonic() - epochs_start
+        minutes = (progress.seconds + time.monotonic() - start) / 60
+        progress.history.append((epoch, train_loss, val_loss, schedule.get_last_lr()[0], minutes))
+        improved = val_loss < progress.best_val
         if improved:
-            best_val, best_epoch = val_loss, epoch
-            save_torch(model.state_dict(), out / "best.pt")
-        log(f"epoch {epoch:3d}  train {train_loss:.4f}  val {val_loss:.4f}  lr {history[-1][3]:.2e}  "
+            progress.best_val, progress.best_epoch = val_loss, epoch
+            progress.best_state = {k: v.clone() for k, v in model.state_dict().items()}
+        session = time.monotonic() - start  # this session's share of the totals, saved with them
+        totals = replace(progress, seconds=progress.seconds + session,
+                         core_seconds=progress.core_seconds + session * cfg.threads)
+        save_torch(snapshot(key, totals, model, optimizer, schedule, generator), out / RESUME_FILE)
+        log(f"epoch {epoch:3d}  train {train_loss:.4f}  val {val_loss:.4f}  lr {progress.history[-1][3]:.2e}  "
             f"{minutes:5.1f} min{'  *' if improved else ''}")
-        if epoch - best_epoch >= cfg.patience:
+        if epoch - progress.best_epoch >= cfg.patience:
             log(f"early stop: no better validation loss for {cfg.patience} epochs")
             break
-        if time.monotonic() - epochs_start > 60 * cfg.max_minutes:
+        if progress.epochs_seconds > 60 * cfg.max_minutes:
             log(f"time budget of {cfg.max_minutes} min reached")
             break
 
     # evaluate the best model on every split (multi-fidelity: its answers against the labels at the
     # query spacing); fit its input domain on the training inputs (each texture once)
-    model.load_state_dict(torch.load(out / "best.pt", weights_only=True))
+    model.load_state_dict(progress.best_state)
     ids, first = np.unique(samples.ids, return_index=True)  # rows of one texture share its patch
     answers, codes = infer(model, samples.patches[first], cfg.log_offset)  # at the query spacing
     trained = samples.split[first] == "train"
@@ -218,13 +231,15 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
         label_fidelity=_fidelity_name(query) if multi else simulation.get("fidelity", "default"),
         domain=domain.to_dict(), metrics=metrics, test_by_family=by_family, holdout_family=holdout,
         test_fraction=test_fraction,
-        data={"file": Path(cfg.data).name, "recipe": recipe.get("name"), "inputs_sha256": inputs_sha256(cfg.data)},
+        data={"file": Path(cfg.data).name, "recipe": recipe.get("name"), "inputs_sha256": data_sha256[0]},
         train_config=asdict(cfg) | {"widths": list(cfg.widths), "extra_data": list(cfg.extra_data)},
-        best_epoch=best_epoch, epochs=len(history),
-        minutes=(time.monotonic() - start) / 60, parameters=parameter_count(model),
-        cost_core_seconds={"data_fem": data_fem_seconds, "training": (time.monotonic() - start) * cfg.threads},
+        best_epoch=progress.best_epoch, epochs=len(progress.history),
+        minutes=(progress.seconds + time.monotonic() - start) / 60, parameters=parameter_count(model),
+        cost_core_seconds={"data_fem": data_fem_seconds,
+                           "training": progress.core_seconds + (time.monotonic() - start) * cfg.threads},
         multi_fidelity={"query_h_mm": query, "rows_by_h_mm": _rows_by_level(samples), "engines": engines,
-                        "extra_data": [{"file": Path(p).name, "inputs_sha256": inputs_sha256(p)} for p in cfg.extra_data]}
+                        "extra_data": [{"file": Path(p).name, "inputs_sha256": sha}
+                                       for p, sha in zip(cfg.extra_data, data_sha256[1:])]}
         if multi else None)
     plain = json.loads(meta.to_json())  # plain types only (no numpy scalars): export loads it with weights_only
     save_torch({"state_dict": model.state_dict(), **plain}, out / "checkpoint.pt")
@@ -235,11 +250,12 @@ def _train(cfg: TrainConfig, out: Path) -> Path:
     write_text(out / "metrics.json", json.dumps({k: v for k, v in meta.to_dict().items() if k != "domain"}
                                                 | {"provenance": provenance.as_dict()}, indent=1))
     write_text(out / "history.csv", "epoch,train_loss,val_loss,lr,minutes\n" + "".join(
-        ",".join(f"{v:.6g}" for v in row) + "\n" for row in history))
+        ",".join(f"{v:.6g}" for v in row) + "\n" for row in progress.history))
     write_text(out / "predictions.csv", "id,family,split,V_fem,V_predicted,out_of_domain,h_mm\n" + "".join(
         f"{i},{f},{s},{v:.6g},{p:.6g},{int(o)},{h:g}\n" for i, f, s, v, p, o, h in zip(
             scored.ids, scored.family, scored.split, scored.roughness, predicted, flagged, scored.h_mm)))
-    log(f"wrote {out / 'checkpoint.pt'} (best epoch {best_epoch}, {meta.minutes:.1f} min)")
+    (out / RESUME_FILE).unlink(missing_ok=True)
+    log(f"wrote {out / 'checkpoint.pt'} (best epoch {progress.best_epoch}, {meta.minutes:.1f} min)")
     return out / "checkpoint.pt"
 
 

@@ -289,7 +289,7 @@ def test_full_disk_during_train_is_exit_2_and_leaves_no_run_folder(tmp_path, cap
     code, err = _run(["train", str(data), "--out", str(tmp_path / "run"), "--max-epochs", "1", "--batch-size", "8",
                       "--threads", "1", "--holdout-family", "knurl"], capsys)
     assert code == 2 and "Traceback" not in err, err
-    assert "cannot write " in err and "best.pt: no space left on device" in err
+    assert "cannot write " in err and "resume.pt: no space left on device" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["small.h5"]
 
 

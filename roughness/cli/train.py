@@ -53,6 +53,9 @@ def add_parser(sub) -> None:
     tr.add_argument("--log-offset", type=POSITIVE, default=d["log_offset"],
                     help="the network predicts log(V + offset); a smaller offset resolves smaller V (default: "
                          f"{d['log_offset']:g})")
+    tr.add_argument("--resume", action="store_true",
+                    help="continue the interrupted run in --out from its last finished epoch (its resume.pt; the "
+                         "same options and data, --threads aside); without a resume.pt, start a new run")
     add_overwrite(tr)
     finish(tr, train, data="DATASET")
     ex = sub.add_parser("export", help="export a training checkpoint to ONNX, checked against PyTorch")
@@ -74,10 +77,12 @@ def train(args: argparse.Namespace) -> int:
 
     _require_torch("train")
     from roughness.core.files import check_distinct, check_output_folder
+    from roughness.surrogate.resume import RESUME_FILE
     from roughness.surrogate.train import TrainConfig, train
 
     check_distinct({"--out": args.out}, {"DATASET": args.data, "--extra-data": args.extra_data})
-    check_output_folder(args.out, args.overwrite)
+    if not (args.resume and os.path.isfile(os.path.join(args.out, RESUME_FILE))):
+        check_output_folder(args.out, args.overwrite)
     for path, flag in [(args.data, "DATASET"), *((p, "--extra-data") for p in args.extra_data)]:
         if not os.path.isfile(path):
             raise InputError(f"{flag}: dataset file not found: {path}")
@@ -88,7 +93,7 @@ def train(args: argparse.Namespace) -> int:
                       threads=args.threads, extra_data=tuple(args.extra_data), levels=args.levels,
                       query_h_mm=args.query_h_mm, widths=args.widths, hidden=args.hidden,
                       max_label_error=args.max_label_error, fem_weight=args.fem_weight, log_offset=args.log_offset),
-          overwrite=args.overwrite)
+          overwrite=args.overwrite, resume=args.resume)
     return 0
 
 

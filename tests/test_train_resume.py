@@ -1,0 +1,84 @@
+"""Training resumes: an interrupted run continues from its last finished epoch to the run it would have been."""
+from __future__ import annotations
+
+import json
+
+import pytest
+import torch
+
+from roughness.cli import main
+from roughness.core.errors import InputError
+from roughness.surrogate import train as train_module
+from roughness.surrogate.resume import RESUME_FILE
+from roughness.surrogate.train import TrainConfig, train
+from tests.test_surrogate import write_tiny_dataset
+
+# max_minutes: a budget that never binds, so the learning rate follows the steps alone (its time fraction, ~1e-9 of
+# the cosine, moves nothing at float32)
+SETTINGS = dict(max_epochs=4, batch_size=8, val_fraction=0.2, max_minutes=1e6, threads=1)
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory):
+    path = tmp_path_factory.mktemp("resume") / "tiny.h5"
+    write_tiny_dataset(path)
+    return path
+
+
+def interrupt_after_epoch(monkeypatch, epoch: int) -> None:
+    """Stop the run as a session's end would, right after ``epoch`` is logged (and saved)."""
+    log = train_module.log
+
+    def stopping_log(message: str) -> None:
+        log(message)
+        if message.startswith(f"epoch {epoch:3d}"):
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(train_module, "log", stopping_log)
+
+
+def test_an_interrupted_run_resumed_is_the_run_that_was_never_interrupted(data, tmp_path, monkeypatch):
+    whole = train(TrainConfig(data=str(data), out=str(tmp_path / "whole"), **SETTINGS))
+    cfg = TrainConfig(data=str(data), out=str(tmp_path / "cut"), **SETTINGS)
+    with monkeypatch.context() as patch:
+        interrupt_after_epoch(patch, 1)
+        with pytest.raises(KeyboardInterrupt):
+            train(cfg)
+    assert (tmp_path / "cut" / RESUME_FILE).is_file() and not (tmp_path / "cut" / "checkpoint.pt").exists()
+    resumed = train(cfg, resume=True)
+
+    assert not (tmp_path / "cut" / RESUME_FILE).exists()  # a finished run leaves no state behind
+    a, b = (torch.load(path, weights_only=True) for path in (whole, resumed))
+    assert a["best_epoch"] == b["best_epoch"] and a["epochs"] == b["epochs"] == 4
+    for name, weights in a["state_dict"].items():
+        torch.testing.assert_close(b["state_dict"][name], weights, rtol=1e-5, atol=1e-6)
+    history = [(tmp_path / run / "history.csv").read_text().splitlines() for run in ("whole", "cut")]
+    losses = [[float(v) for row in h[1:] for v in row.split(",")[1:3]] for h in history]
+    assert losses[0] == pytest.approx(losses[1], rel=1e-4)  # written to 6 digits
+    metrics = json.loads((tmp_path / "cut" / "metrics.json").read_text())
+    assert metrics["cost_core_seconds"]["training"] > 0
+
+
+def test_resume_refuses_a_state_saved_with_other_settings_and_a_damaged_one(data, tmp_path, monkeypatch):
+    cfg = TrainConfig(data=str(data), out=str(tmp_path / "run"), **SETTINGS)
+    with monkeypatch.context() as patch:
+        interrupt_after_epoch(patch, 0)
+        with pytest.raises(KeyboardInterrupt):
+            train(cfg)
+    other = TrainConfig(data=str(data), out=str(tmp_path / "run"), **{**SETTINGS, "seed": 3, "hidden": 8})
+    with pytest.raises(InputError, match="other settings or data .*hidden, seed"):
+        train(other, resume=True)
+    threads = TrainConfig(data=str(data), out=str(tmp_path / "run"), **{**SETTINGS, "threads": 2})
+    (tmp_path / "run" / RESUME_FILE).write_bytes(b"not a torch file")
+    with pytest.raises(InputError, match="not a saved training state"):
+        train(threads, resume=True)
+
+
+def test_resume_cli_starts_a_new_run_where_there_is_nothing_to_resume(data, tmp_path, capsys):
+    out = tmp_path / "run"
+    args = ["train", str(data), "--out", str(out), "--max-epochs", "2", "--batch-size", "8", "--threads", "1",
+            "--resume"]
+    assert main(args) == 0
+    assert (out / "checkpoint.pt").is_file() and not (out / RESUME_FILE).exists()
+    assert main(args) == 2  # a finished run is not overwritten by --resume
+    assert "exists" in capsys.readouterr().err
