@@ -60,9 +60,6 @@ class Samples:
     h_mm: np.ndarray  # contact spacing (mm) of each row's FEM label (nan: a spectral label, or not recorded)
     engine: np.ndarray  # the engine of each row's label: "fem" or "spectral"
 
-    def subset(self, split: str) -> Samples:
-        return self.where(self.split == split)
-
     def where(self, keep: np.ndarray) -> Samples:
         """The rows where ``keep`` is true."""
         return Samples(*(getattr(self, f.name)[keep] for f in fields(self)))

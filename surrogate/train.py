@@ -136,18 +136,17 @@ def _train(cfg: TrainConfig, out: Path, resuming: bool) -> Path:
     if multi and not np.isclose(samples.h_mm, query).any():
         raise InputError(f"no label at the query spacing {query} mm (labels at "
                          f"{', '.join(f'{h:g}' for h in np.unique(samples.h_mm))} mm)", parameter="query_h_mm")
-    tr, va = samples.subset("train"), samples.subset("val")
+    # rows of the training and validation splits; batches are gathered from the patches in place (no copy per split)
+    tr, va = (torch.from_numpy(np.flatnonzero(samples.split == split)) for split in ("train", "val"))
     if len(tr) < cfg.batch_size or len(va) == 0:
         raise InputError(f"{cfg.data}: {len(tr)} training and {len(va)} validation samples are too few to train on: "
                          f"training needs at least {cfg.batch_size} training samples (the batch size) and one "
                          f"validation sample, about {cfg.minimum_samples(test_fraction)} ok samples in the dataset",
                          parameter="data")
     out.mkdir(parents=True, exist_ok=True)
-    x_train, y_train = torch.from_numpy(tr.patches[:, None]), torch.from_numpy(target(tr.roughness, cfg.log_offset))
-    x_val, y_val = torch.from_numpy(va.patches[:, None]), torch.from_numpy(target(va.roughness, cfg.log_offset))
-    h_train, h_val = (torch.from_numpy(part.h_mm.astype(np.float32)) if multi else None for part in (tr, va))
-    w_train, w_val = (torch.from_numpy(np.where(part.engine == "fem", cfg.fem_weight, 1.0).astype(np.float32))
-                      for part in (tr, va))
+    x, y = torch.from_numpy(samples.patches[:, None]), torch.from_numpy(target(samples.roughness, cfg.log_offset))
+    h = torch.from_numpy(samples.h_mm.astype(np.float32)) if multi else None
+    w = torch.from_numpy(np.where(samples.engine == "fem", cfg.fem_weight, 1.0).astype(np.float32))
     log(f"samples: {', '.join(f'{s} {int((samples.split == s).sum())}' for s in ('train', 'val', 'test', 'ood'))}")
     if multi:
         log(f"labels per contact spacing: {_rows_by_level(samples)}; the model answers at h = {query:g} mm")
@@ -173,18 +172,16 @@ def _train(cfg: TrainConfig, out: Path, resuming: bool) -> Path:
         model.train()
         order, train_loss = torch.randperm(len(tr), generator=generator), 0.0
         for i in range(0, len(tr), cfg.batch_size):
-            idx = order[i:i + cfg.batch_size]
-            pred, _ = model(augment(x_train[idx], generator), None if h_train is None else h_train[idx])
-            loss = weighted_mse(pred, y_train[idx], w_train[idx])
+            idx = tr[order[i:i + cfg.batch_size]]
+            pred, _ = model(augment(x[idx], generator), None if h is None else h[idx])
+            loss = weighted_mse(pred, y[idx], w[idx])
             optimizer.zero_grad(set_to_none=True)
             loss.backward()
             optimizer.step()
             schedule.step()
             train_loss += loss.item() * len(idx) / len(tr)
 
-        model.eval()
-        with torch.no_grad():
-            val_loss = weighted_mse(model(x_val, h_val)[0], y_val, w_val).item()
+        val_loss = validation_loss(model, x, y, h, w, va)
         progress.epoch, progress.epochs_seconds = epoch + 1, time.monotonic() - epochs_start
         minutes = (progress.seconds + time.monotonic() - start) / 60
         progress.history.append((epoch, train_loss, val_loss, schedule.get_last_lr()[0], minutes))
@@ -257,6 +254,19 @@ def _train(cfg: TrainConfig, out: Path, resuming: bool) -> Path:
     (out / RESUME_FILE).unlink(missing_ok=True)
     log(f"wrote {out / 'checkpoint.pt'} (best epoch {progress.best_epoch}, {meta.minutes:.1f} min)")
     return out / "checkpoint.pt"
+
+
+@torch.no_grad()
+def validation_loss(model: RoughnessNet, x: torch.Tensor, y: torch.Tensor, h: torch.Tensor | None, w: torch.Tensor,
+                    rows: torch.Tensor, batch: int = 512) -> float:
+    """``weighted_mse`` over ``rows``, in batches (a whole validation split at once is gigabytes of activations)."""
+    model.eval()
+    total = 0.0
+    for i in range(0, len(rows), batch):
+        idx = rows[i:i + batch]
+        pred, _ = model(x[idx], None if h is None else h[idx])
+        total += float((w[idx] * (pred - y[idx]) ** 2).sum())
+    return total / float(w[rows].sum())
 
 
 def weighted_mse(predicted: torch.Tensor, target_: torch.Tensor, weight: torch.Tensor) -> torch.Tensor:
