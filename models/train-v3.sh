@@ -6,17 +6,18 @@
 #
 # DATA holds training-v3.h5 and training-v3-printed.h5 (110,000 spectral labels) and training-v2-default.h5,
 # training-v2-fine.h5 (FEM labels): datasets/build-v3.sh. Members are trained one after another (2 torch
-# threads each; MEMBERS, MINUTES, WIDTHS, HIDDEN, FEM_WEIGHT override the defaults below); a member whose
+# threads each; MEMBERS, EPOCHS, MINUTES, WIDTHS, HIDDEN, FEM_WEIGHT override the defaults below; the epochs bind,
+# not the minutes, so the learning-rate schedule does not depend on how loaded the machine is); a member whose
 # checkpoint exists is kept and an interrupted member resumes from its last finished epoch (--resume), so the
-# script run again goes on where it stopped. Multi-fidelity: the spectral
-# labels teach the shared features; the FEM labels converged to 3% (their estimate), each at its finest level,
+# script run again goes on where it stopped. Multi-fidelity: the spectral labels teach the shared features; the FEM labels converged to 3% (their estimate), each at its finest level,
 # teach the finite block's departure; the graph answers as the FEM at fine (h = 0.14 mm). knit and waffle are
 # held out entirely (the out-of-family scores). Targets log(V + 1e-4): V resolved down to ~1e-4 (v2: 1e-3).
 set -euo pipefail
 DATA=${1:?usage: train-v3.sh DATA RUNS}
 RUNS=${2:?usage: train-v3.sh DATA RUNS}
 MEMBERS=${MEMBERS:-5}
-MINUTES=${MINUTES:-120}
+EPOCHS=${EPOCHS:-40}
+MINUTES=${MINUTES:-600}
 WIDTHS=${WIDTHS:-8,16,32,64}
 HIDDEN=${HIDDEN:-32}
 FEM_WEIGHT=${FEM_WEIGHT:-4}
@@ -26,7 +27,8 @@ for ((k = 0; k < MEMBERS; k++)); do
     [[ -f "$RUNS/m$k/checkpoint.pt" ]] && continue
     roughness train "$DATA/training-v3.h5" --extra-data "${EXTRA[@]}" --levels all --max-label-error 0.03 \
         --query-h-mm 0.14 --fem-weight "$FEM_WEIGHT" --log-offset 1e-4 --holdout-family knit,waffle --seed "$k" \
-        --max-minutes "$MINUTES" --widths "$WIDTHS" --hidden "$HIDDEN" --threads 2 --out "$RUNS/m$k" --resume
+        --max-epochs "$EPOCHS" --max-minutes "$MINUTES" --widths "$WIDTHS" --hidden "$HIDDEN" --threads 2 \
+        --out "$RUNS/m$k" --resume
 done
 members=()
 for ((k = 0; k < MEMBERS; k++)); do members+=("$RUNS/m$k/checkpoint.pt"); done
