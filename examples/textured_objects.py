@@ -67,8 +67,8 @@ def main(argv: list[str] | None = None) -> None:
     from roughness.objects.layout import make_mapping
     from roughness.objects.regions import parse_region
     from roughness.objects.tuning import tune_on_object
+    from roughness.perceptual_scale import WEBER_FRACTION, load_scale
     from roughness.surface.io import save_heightmap
-    from roughness.surrogate.calibration import WEBER_FRACTION, load_scale
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default=str(Path(__file__).parent / "objects"))

@@ -36,7 +36,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load
     from roughness.simulate.model import roughness as fem_roughness
     from roughness.surface.heightmap import Heightmap, as_heightmap
     from roughness.surface.io import load_heightmap, save_heightmap
-    from roughness.surrogate.calibration import StandardScale, load_scale
+    from roughness.perceptual_scale import StandardScale, load_scale
 
     __version__: str
 
@@ -62,8 +62,8 @@ _HOMES = {
     "Prediction": "roughness.engines",
     "predict_map": "roughness.maps",
     "MapPrediction": "roughness.maps",
-    "StandardScale": "roughness.surrogate.calibration",
-    "load_scale": "roughness.surrogate.calibration",
+    "StandardScale": "roughness.perceptual_scale",
+    "load_scale": "roughness.perceptual_scale",
     "standard_texture": "roughness.dataset.textures",
     "named_texture": "roughness.dataset.textures",
     "open_dataset": "roughness.dataset.store",

@@ -35,16 +35,16 @@ import numpy as np
 
 from roughness.core.checks import integer
 from roughness.core.errors import InputError
-from roughness.core.reprs import short_repr, v_text
 from roughness.core.hashing import digest, file_sha256
 from roughness.core.provenance import Provenance, make_provenance
+from roughness.core.reprs import short_repr, v_text
 from roughness.models import MODELS_DIR
 from roughness.surface.heightmap import Heightmap, heightmaps_of
 
 from .classical import MEASURES, footprint
 
 if TYPE_CHECKING:
-    from roughness.surrogate.calibration import Placement
+    from roughness.perceptual_scale import Placement
 
 FEM_FIDELITIES = ("coarse", "default", "fine", "converged")
 PREDICT_ENGINES = ("surrogate", "spectral", "fem", "auto")
@@ -381,7 +381,7 @@ def predict(heightmaps: Heightmap | np.ndarray | Iterable[Heightmap | np.ndarray
     InputError
         A bad option or input (an array without ``pixel_mm``, NaN/Inf heights, not 2-D).
     """
-    from roughness.surrogate.calibration import load_scale
+    from roughness.perceptual_scale import load_scale
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
     if engine not in PREDICT_ENGINES:
@@ -512,7 +512,7 @@ def _spectral_prediction(source: str, result, in_domain: bool, notes: list[str],
     """A ``SpectralResult`` as a prediction, placed on the spectral standard scale; ``notes`` come before its own.
 
     ``identity`` is the engine's configuration digest; ``model`` the surrogate consulted first (``auto``), if any."""
-    from roughness.surrogate.calibration import load_scale
+    from roughness.perceptual_scale import load_scale
 
     return Prediction(source, result.roughness, "spectral", "spectral", in_domain, result.seconds,
                       load_scale("spectral").place(result.roughness), notes + result.notes, result.roughness_stderr,

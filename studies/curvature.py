@@ -105,7 +105,7 @@ def run(fidelity: str, seeds: int, path: Path, base: str = "cylinder", along: tu
 
 def differences(rows: list[dict], fidelity: str, base: str = "cylinder") -> list[dict]:
     """Per (lambda, curvature, along) on ``base``: mean and range over seeds of the relative difference from flat, and JND."""
-    from roughness.surrogate.calibration import jnd, load_scale
+    from roughness.perceptual_scale import jnd, load_scale
 
     scale = load_scale(fidelity)
     flat = {(r["lambda_mm"], r["seed"]): r["V"] for r in rows if r["curvature_mm"] is None and "V" in r}

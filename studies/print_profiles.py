@@ -56,10 +56,10 @@ def main(argv: list[str] | None = None) -> int:
     from roughness.dataset.catalogue import make_texture
     from roughness.dataset.textures import STANDARD_LAMBDAS_MM, standard_texture
     from roughness.design.tune import scaled
+    from roughness.perceptual_scale import jnd, load_scale
     from roughness.simulate.config import SimConfig
     from roughness.simulate.spectral.engine import SpectralSimulator
     from roughness.surface.printing import printed
-    from roughness.surrogate.calibration import jnd, load_scale
 
     engine, scale = SpectralSimulator(SimConfig()), load_scale("spectral")
     lam = lambda v: scale.equivalent_lambda(v)[0]  # noqa: E731 (continuous: beyond the ends, the power law)
@@ -125,14 +125,14 @@ def _table(result: dict) -> None:
         lines.append("| " + " | ".join(cells) + " |")
     mean = ["**all**", ""] + [c for n in names for c in ("", f"{np.mean([r['jnd'][n] for r in result['rows']]):+.2f}")]
     lines.append("| " + " | ".join(mean) + " |")
-    from roughness.surrogate.calibration import load_scale
+    from roughness.perceptual_scale import LOG_JND, load_scale
 
     b = load_scale("spectral").power_law[1]
     change = {n: float(np.mean([r["printed"][n] / r["designed"] - 1 for r in result["rows"]])) for n in names}
     lines += ["", f"Mean relative change of V over all 65 textures, and the JNDs it makes on the scale's fitted power "
               f"law V ~ lambda^{b:.2f} (smoother than the per-row JNDs, which follow the tabulated scale's local "
               "slope between its points): " + "; ".join(
-                  f"{n}: {100 * change[n]:+.1f}% = {np.log1p(change[n]) / (b * np.log(1.19)):+.2f} JND" for n in names)
+                  f"{n}: {100 * change[n]:+.1f}% = {np.log1p(change[n]) / (b * LOG_JND):+.2f} JND" for n in names)
               + "."]
     fdm = [n for n, p in result["profiles"].items() if p["kind"] == "fdm" and n != "nozzle disk only"]
     sla = [n for n, p in result["profiles"].items() if p["kind"] == "sla" and n != "0.2 mm layers only"]

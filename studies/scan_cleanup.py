@@ -11,7 +11,6 @@ The table goes to results/scan_cleanup.md and is copied into the README.
 from __future__ import annotations
 
 import argparse
-import math
 import os
 from pathlib import Path
 
@@ -51,7 +50,9 @@ def rows(height_mm: float) -> list[tuple[str, str, str, str]]:
 
     from roughness.core.errors import InputError
     from roughness.engines import predict
-    from roughness.surface.cleanup import Cleanup, clean as cleanup
+    from roughness.perceptual_scale import jnd
+    from roughness.surface.cleanup import Cleanup
+    from roughness.surface.cleanup import clean as cleanup
     from roughness.surface.heightmap import Heightmap
     from roughness.surface.loading import load_surface
     from roughness.surface.units import FileUnits
@@ -63,7 +64,7 @@ def rows(height_mm: float) -> list[tuple[str, str, str, str]]:
         p = predict([hm], engine="spectral")[0]
         lam, ref = p.placement.equivalent_lambda_mm, reference.placement.equivalent_lambda_mm
         return f"{p.roughness:.4f}", ("below the scale" if lam is None or ref is None else
-                                      f"{math.log(lam / ref) / math.log(1.19):+.2f}")
+                                      f"{jnd(lam, ref):+.2f}")
 
     out = [("the clean texture (reference)", "-", f"{reference.roughness:.4f}", "0")]
     with tempfile.TemporaryDirectory() as folder:  # as read: micrometres, through the CLI's reading

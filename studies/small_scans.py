@@ -32,11 +32,10 @@ OUT = Path(__file__).parent / "results" / "small_scans"
 LAMBDAS_MM = (0.75, 1.0, 1.25)
 SEEDS = (0, 1, 2, 3)
 SIDES_MM = (1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0)
-WEBER = 1.19
+def jnd_from(lam: float | None, reference: float) -> float | None:
+    from roughness.perceptual_scale import jnd
 
-
-def jnd(lam: float | None, reference: float) -> float | None:
-    return None if lam is None else math.log(lam / reference) / math.log(WEBER)
+    return None if lam is None else jnd(lam, reference)
 
 
 def measure() -> list[dict]:
@@ -54,7 +53,7 @@ def measure() -> list[dict]:
         full_lam = {seed: lam_of(hm, False) for seed, hm in fulls.items()}
         typical = statistics.median(full_lam.values())
         rows += [{"kind": "full", "lambda_mm": lam, "seed": seed, "side_mm": 12.0, "place": "-", "periods": math.nan,
-                  "seam": math.nan, "jnd": jnd(value, typical)} for seed, value in full_lam.items()]
+                  "seam": math.nan, "jnd": jnd_from(value, typical)} for seed, value in full_lam.items()]
         for seed, full in fulls.items():
             n_full = full.shape[0]
             for side in SIDES_MM:
@@ -64,13 +63,13 @@ def measure() -> list[dict]:
                     fit = tile_fit(patch)
                     rows.append({"kind": "cut", "lambda_mm": lam, "seed": seed, "side_mm": side, "place": place,
                                  "periods": fit.periods, "seam": fit.seam,
-                                 "jnd": jnd(lam_of(patch, True), full_lam[seed])})
+                                 "jnd": jnd_from(lam_of(patch, True), full_lam[seed])})
                 if side >= 2 * lam and side > 1.9:  # the generator needs two wavelengths and one whole bump
                     tile = standard_texture(lam, seed=seed, size_mm=side)
                     fit = tile_fit(tile)
                     rows.append({"kind": "seamless", "lambda_mm": lam, "seed": seed, "side_mm": side, "place": "-",
                                  "periods": fit.periods, "seam": fit.seam,
-                                 "jnd": jnd(lam_of(tile, True), typical)})
+                                 "jnd": jnd_from(lam_of(tile, True), typical)})
             print(f"lambda {lam}, seed {seed}: done", flush=True)
     return rows
 

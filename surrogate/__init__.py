@@ -4,7 +4,7 @@ Prediction with engine choice is ``roughness.predict`` (roughness.engines); name
 """
 from importlib import import_module
 
-_HOMES = {"SurrogateModel": "predictor", "DEFAULT_MODEL": "predictor", "ModelMetadata": "metadata", "StandardScale": "calibration", "load_scale": "calibration"}
+_HOMES = {"SurrogateModel": "predictor", "DEFAULT_MODEL": "predictor", "ModelMetadata": "metadata"}
 
 __all__ = sorted(_HOMES)
 

@@ -12,9 +12,10 @@ import math
 import numpy as np
 
 from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
+from roughness.simulate.config import SimConfig
 from roughness.surface.heightmap import Heightmap, bracket
 
-FOOTPRINT_MM = 10.0  # the skin block's width (simulate.config default)
+FOOTPRINT_MM = SimConfig.width_mm  # the skin block's width (mm) that the surrogate was trained for
 PATCH_PIXEL_MM = 0.1  # model pixel size
 PATCH_SIZE = round(FOOTPRINT_MM / PATCH_PIXEL_MM)
 ON_CENTRE = 1e-9  # a sample this close to a pixel centre (in pixels) reads that pixel

@@ -17,9 +17,10 @@ from roughness.cli import main
 from roughness.core.errors import InputError
 from roughness.dataset.textures import standard_texture
 from roughness.design.colours import TOLERANCE, cluster_colours, lab
-from roughness.design.evaluation import Evaluator, jnd_between
+from roughness.design.evaluation import Evaluator
 from roughness.design.tactile_image import read_image
 from roughness.design.tune import target_of, tune
+from roughness.perceptual_scale import jnd
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import save_heightmap
 
@@ -160,7 +161,7 @@ def test_a_relative_target_counts_jnds_from_the_inputs_verified_lambda(steps, st
     start = SPECTRAL.verify(standard)
     target = target_of(SPECTRAL, jnd=steps, heightmap=standard)
     assert target.lambda_mm == pytest.approx(start.equivalent_lambda_mm * 1.19**steps, rel=1e-12)
-    assert jnd_between(target.lambda_mm, start.equivalent_lambda_mm) == pytest.approx(steps, abs=1e-9)
+    assert jnd(target.lambda_mm, start.equivalent_lambda_mm) == pytest.approx(steps, abs=1e-9)
     assert target.reference.roughness == start.roughness and target.parameter == "jnd"
     assert f"{steps:+g} JND from the input: V {start.roughness:.4f}" in target.describe()
     assert (target.roughness > start.roughness) == (steps > 0)
@@ -188,7 +189,7 @@ def test_tune_cli_one_jnd_rougher_says_the_input_and_the_target(tmp_path, capsys
     summary = json.loads(capsys.readouterr().out)
     assert code == 0 and summary["reached"] and summary["target_given_as"] == "jnd" and summary["target_jnd"] == 1
     assert summary["target_lambda_mm"] == pytest.approx(summary["input_lambda_mm"] * 1.19, rel=1e-9)
-    assert abs(jnd_between(summary["achieved_lambda_mm"], summary["input_lambda_mm"]) - 1) <= 0.1  # the tolerance
+    assert abs(jnd(summary["achieved_lambda_mm"], summary["input_lambda_mm"]) - 1) <= 0.1  # the tolerance
     assert summary["factor"] > 1 and summary["input_roughness"] > 0 and summary["input_roughness_stderr"] > 0
     code = main(["tune", str(path), "--jnd", "-0.5", "--out", str(tmp_path / "smoother.npz"), "--verify", "spectral",
                  "--quiet"])

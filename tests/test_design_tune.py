@@ -10,7 +10,7 @@ from roughness.cli import main
 from roughness.core.errors import InputError
 from roughness.dataset.natural import grating
 from roughness.dataset.textures import standard_texture
-from roughness.design.evaluation import Evaluator, roughness_of_lambda
+from roughness.design.evaluation import Evaluator
 from roughness.design.tune import scaled, target_of, tune
 from roughness.surface.io import save_heightmap
 
@@ -35,7 +35,7 @@ def test_lateral_scaling_stretches_the_period():
 def test_scale_inverse_round_trips():
     scale = EVALUATOR.scale
     for lam in (0.5, 0.7, 1.0, 1.6, 2.0):  # on the scale and extrapolated beyond both ends
-        assert scale.equivalent_lambda(roughness_of_lambda(scale, lam))[0] == pytest.approx(lam, rel=1e-9)
+        assert scale.equivalent_lambda(scale.roughness_at(lam))[0] == pytest.approx(lam, rel=1e-9)
 
 
 def test_texture_tuned_like_itself_keeps_its_scale():

@@ -9,8 +9,8 @@ import pytest
 
 from roughness.cli import main
 from roughness.dataset.textures import standard_texture
+from roughness.perceptual_scale import StandardScale, jnd_distance, load_scale
 from roughness.surface.io import save_heightmap
-from roughness.surrogate.calibration import StandardScale, jnd_distance, load_scale
 
 SCALE = StandardScale((0.5, 1.0, 2.0), (0.025, 0.1, 0.4), "test")  # V = 0.1 lambda^2 exactly
 STEP = math.log(1.19)

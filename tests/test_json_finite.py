@@ -20,8 +20,8 @@ from roughness.cli import main
 from roughness.dataset.grid import PIXEL_MM
 from roughness.dataset.textures import MIN_PIXELS_PER_LAMBDA, standard_texture
 from roughness.design.homogeneity import homogeneity
+from roughness.perceptual_scale import FLOOR_LAMBDA_MM, StandardScale, jnd_distance, load_scale
 from roughness.surface.heightmap import Heightmap
-from roughness.surrogate.calibration import FLOOR_LAMBDA_MM, StandardScale, jnd_distance, load_scale
 
 SCALE = StandardScale((0.5, 1.0, 2.0), (0.025, 0.1, 0.4), "test")  # V = 0.1 lambda^2: floor 0.1 * 0.2^2 = 0.004
 STEP = math.log(1.19)

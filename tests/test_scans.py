@@ -405,8 +405,8 @@ def test_resampling_recovers_the_roughness_that_one_size_for_both_axes_loses():
     Monte Carlo error about 0.02 JND); read as if its pixels were square it is 0.34 JND smoother (spectral engine)."""
     from roughness.dataset.catalogue import make_texture
     from roughness.engines import predict
+    from roughness.perceptual_scale import jnd_distance, load_scale
     from roughness.surface.pixels import square
-    from roughness.surrogate.calibration import jnd_distance, load_scale
 
     hm = make_texture("standard-1.0")[0]
     ny, nx = int(hm.size_mm[1] / 0.06), hm.shape[1]

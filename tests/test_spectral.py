@@ -9,12 +9,11 @@ import pytest
 
 from roughness.core.errors import InputError
 from roughness.simulate.config import SimConfig
-from roughness.surface.heightmap import Heightmap, flat
 from roughness.simulate.spectral.contact import GAP_TOLERANCE, solve_contact
-from roughness.simulate.spectral.engine import (MAX_FOOTPRINT_PIXELS, SpectralSimulator, lambda3,
-                                                layer_flat_state)
+from roughness.simulate.spectral.engine import MAX_FOOTPRINT_PIXELS, SpectralSimulator, lambda3, layer_flat_state
 from roughness.simulate.spectral.layer import Tissue, mode_response
 from roughness.simulate.spectral.modes import GridKey, modes
+from roughness.surface.heightmap import Heightmap, flat
 
 TISSUE = Tissue()
 DEPTH = 0.75
@@ -401,8 +400,8 @@ def test_design_tools_verify_with_the_spectral_engine(tmp_path, capsys):
                  "spectral", "--out", str(tmp_path / "tuned.npz"), "--json", "--quiet"])
     summary = json.loads(capsys.readouterr().out)
     assert code in (0, 1) and summary["verifier"] == "spectral"
+    from roughness.perceptual_scale import load_scale
     from roughness.surface.io import load_heightmap
-    from roughness.surrogate.calibration import load_scale
 
     achieved = SpectralSimulator().run(load_heightmap(tmp_path / "tuned.npz")).roughness
     lam = load_scale("spectral").equivalent_lambda(achieved)[0]

@@ -25,8 +25,9 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     from roughness.core.files import atomic_write
     from roughness.dataset.textures import standard_texture
-    from roughness.design.evaluation import Evaluator, jnd_between
+    from roughness.design.evaluation import Evaluator
     from roughness.design.tune import target_of, tune
+    from roughness.perceptual_scale import jnd
     from roughness.surface.heightmap import Heightmap
 
     evaluator = Evaluator()
@@ -39,11 +40,11 @@ def main(argv: list[str] | None = None) -> None:
         deeper = Heightmap(np.where(hm.heights < level, hm.heights - DEEPEN_MM, hm.heights), hm.pixel_mm)
         fem = evaluator.verify(deeper)
         rows.append(f"| lowest {100 * q:.0f}% of pixels (below {level:.3f} mm) deepened by {DEEPEN_MM} mm | "
-                    f"{fem.roughness:.4f} | {jnd_between(fem.equivalent_lambda_mm, base.equivalent_lambda_mm):+.2f} |")
+                    f"{fem.roughness:.4f} | {jnd(fem.equivalent_lambda_mm, base.equivalent_lambda_mm):+.2f} |")
     felt = tune(hm, target_of(evaluator, lambda_mm=base.equivalent_lambda_mm * 1.19), "height", evaluator)
     rows.append(f"| heights x {felt.factor:.3f} (relief {np.ptp(hm.heights):.2f} -> {np.ptp(felt.heightmap.heights):.2f}"
                 f" mm), tuned to +1 JND | {felt.achieved.roughness:.4f} | "
-                f"{jnd_between(felt.achieved.equivalent_lambda_mm, base.equivalent_lambda_mm):+.2f} |")
+                f"{jnd(felt.achieved.equivalent_lambda_mm, base.equivalent_lambda_mm):+.2f} |")
     text = "\n".join([
         "# Seen but not felt, felt but not seen (standard-1.0, seed 0, coarse FEM, 10 N)", "",
         f"The skin touches {100 * contact:.1f}% of the footprint; unchanged V = {base.roughness:.4f} "

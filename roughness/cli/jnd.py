@@ -26,7 +26,7 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     from roughness.core.provenance import combined
     from roughness.engines import predict
-    from roughness.surrogate.calibration import jnd_distance, load_scale
+    from roughness.perceptual_scale import jnd_distance, load_scale
 
     maps = [load_input(args, path, several=True) for path in (args.a, args.b)]
     pa, pb = predict(maps, engine=args.engine, model=args.model, sources=[args.a, args.b])

@@ -54,8 +54,8 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
     from roughness.objects.feel import DEFAULT_SPACING_MM, reference_of
     from roughness.objects.tuning import tune_on_object
+    from roughness.perceptual_scale import WEBER_FRACTION, load_scale
     from roughness.surface.io import SAVE_SUFFIXES, save_heightmap
-    from roughness.surrogate.calibration import WEBER_FRACTION, load_scale
 
     if args.engine != "spectral":
         raise InputError("object tune judges and verifies with the spectral engine (the surrogate searches inside "

@@ -9,8 +9,8 @@ import time
 
 from .common import (
     BATCH,
-    PARALLEL,
     FRACTION,
+    PARALLEL,
     POSITIVE,
     add_cluster_args,
     add_overwrite,

@@ -33,7 +33,7 @@ class PrintDifference:
     @property
     def jnd(self) -> float | None:
         """Signed JNDs of equivalent wavelength, printed against digital (None if either is below the scale)."""
-        from roughness.surrogate.calibration import jnd
+        from roughness.perceptual_scale import jnd
 
         if self.digital_lambda_mm is None or self.printed_lambda_mm is None:
             return None

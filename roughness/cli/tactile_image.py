@@ -54,9 +54,9 @@ def run(args: argparse.Namespace) -> int:
 
     from roughness.core.errors import InputError
     from roughness.core.files import atomic_write, check_distinct, check_output_folder
+    from roughness.design.colours import cluster_colours
     from roughness.design.evaluation import Evaluator
     from roughness.design.palette import family_palette, load_palette, save_palette
-    from roughness.design.colours import cluster_colours
     from roughness.design.tactile_image import (
         describe_picture,
         hex_colour,

@@ -4,7 +4,7 @@ The surrogate runs through ``roughness.engines.predict``. The verifier is the en
 the model's simulation parameters at the fidelity of its training labels (prepared once, reused for
 every verification), or at another FEM fidelity, or the ``SpectralEngine`` (``VERIFIERS``); its answers
 are placed on its own standard scale, and distances are JNDs of the equivalent wavelength
-(``roughness.surrogate.calibration``).
+(``roughness.perceptual_scale``).
 """
 from __future__ import annotations
 
@@ -78,7 +78,7 @@ class Evaluator:
     @property
     def scale(self):
         """The standard scale of the verifier (the surrogate's labels share the default one)."""
-        from roughness.surrogate.calibration import load_scale
+        from roughness.perceptual_scale import load_scale
 
         return load_scale(self.fidelity or self.model.fidelity)
 
@@ -122,13 +122,3 @@ class Evaluator:
         return self.scale.equivalent_lambda(max(float(roughness), 1e-12))[0]
 
 
-def roughness_of_lambda(scale, lambda_mm: float) -> float:
-    """Inverse of ``StandardScale.equivalent_lambda``: V at an equivalent wavelength (mm)."""
-    return scale.roughness_at(lambda_mm)
-
-
-def jnd_between(lambda_a_mm: float, lambda_b_mm: float) -> float:
-    """Signed JNDs of equivalent wavelength: ln(lambda_a / lambda_b) / ln(1.19)."""
-    from roughness.surrogate.calibration import jnd
-
-    return jnd(lambda_a_mm, lambda_b_mm)

@@ -28,7 +28,6 @@ to place), 0.1 JND. The surrogate adds its own position-to-position error (about
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -40,6 +39,7 @@ from roughness.core.errors import InputError
 from roughness.core.figures import new_figure, save_figure
 from roughness.core.limits import MAX_WINDOWS, MAX_WORKING_VALUES, check_size
 from roughness.core.reprs import short_repr
+from roughness.perceptual_scale import LOG_JND
 from roughness.surface.heightmap import Heightmap
 
 from .evaluation import ENGINES, Evaluator
@@ -191,7 +191,7 @@ def homogeneity(heightmap: Heightmap, engine: str = "surrogate", window_mm: floa
     scale = evaluator.scale
     floor, below = scale.floor, int(np.sum(v < scale.floor))
     lam = np.array([scale.floored_lambda(float(x)) for x in v])  # below the scale: at its floor
-    steps = np.log(lam) / math.log(1.19)
+    steps = np.log(lam) / LOG_JND
     mean = float(v.mean())
     relative_variance = float(v.var(ddof=1) / mean**2) if mean >= floor else None
     spread = range_ = None

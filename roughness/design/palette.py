@@ -28,9 +28,10 @@ from roughness.core.errors import InputError
 from roughness.core.figures import new_figure, save_figure
 from roughness.core.provenance import Provenance
 from roughness.core.reprs import short_repr, v_text
+from roughness.perceptual_scale import LOG_JND, WEBER_FRACTION, jnd
 from roughness.surface.heightmap import Heightmap
 
-from .evaluation import Evaluator, Verified, jnd_between
+from .evaluation import Evaluator, Verified
 from .tune import FACTOR_RANGE, GRID, TOLERANCE_JND, scaled, target_of, tune
 
 if TYPE_CHECKING:
@@ -93,7 +94,7 @@ class Palette:
 
 def _distances(members: list[Member]) -> np.ndarray:
     lam = [m.fem.equivalent_lambda_mm for m in members]
-    return np.array([[jnd_between(a, b) for b in lam] for a in lam])
+    return np.array([[jnd(a, b) for b in lam] for a in lam])
 
 
 def _check(k: int, min_jnd: float) -> tuple[int, float]:
@@ -114,7 +115,7 @@ def family_palette(k: int, min_jnd: float = 2.0, family: str = DEFAULT_FAMILY, b
     lo, hi = FACTOR_RANGE[by]
     v, _ = evaluator.surrogate([scaled(base, by, f) for f in np.geomspace(lo, hi, GRID)])
     lam_lo, lam_hi = evaluator.lambda_of(float(v.min())), evaluator.lambda_of(float(v.max()))
-    span = jnd_between(lam_hi, lam_lo) - 2 * margin_jnd
+    span = jnd(lam_hi, lam_lo) - 2 * margin_jnd
     spacing = span / (k - 1)
     need = min_jnd + 2 * tolerance_jnd
     if spacing < need:
@@ -124,7 +125,7 @@ def family_palette(k: int, min_jnd: float = 2.0, family: str = DEFAULT_FAMILY, b
                          f"room for {fits} at {need:g} JND planned spacing (min_jnd + 2 x tolerance)", parameter="k")
     members = []
     for i in range(k):
-        lam = lam_lo * 1.19 ** (margin_jnd + i * spacing)
+        lam = lam_lo * (1 + WEBER_FRACTION) ** (margin_jnd + i * spacing)
         result = tune(base, target_of(evaluator, lambda_mm=lam), by, evaluator, tolerance_jnd=tolerance_jnd)
         members.append(Member(f"texture-{i + 1}", result.heightmap, result.achieved, result.surrogate_roughness,
                               {**recipe, "by": by, "factor": result.factor, "target_lambda_mm": lam}))
@@ -194,7 +195,7 @@ def folder_palette(candidates: list[tuple[str, Heightmap]], k: int, min_jnd: flo
         raise InputError(f"{len(candidates)} candidate textures, fewer than k={k}", parameter="k")
     evaluator = evaluator or Evaluator()
     v_sur, _ = evaluator.surrogate([hm for _, hm in candidates], tile=tile)
-    log_lam = np.log([evaluator.lambda_of(v) for v in v_sur]) / math.log(1.19)
+    log_lam = np.log([evaluator.lambda_of(v) for v in v_sur]) / LOG_JND
     fem: dict[int, Verified] = {}
     for _ in range(MAX_ROUNDS):
         chosen, gap = widest_selection(log_lam, k)
@@ -205,7 +206,7 @@ def folder_palette(candidates: list[tuple[str, Heightmap]], k: int, min_jnd: flo
             break
         for i in todo:
             fem[i] = evaluator.verify(candidates[i][1], tile=tile)
-            log_lam[i] = math.log(fem[i].equivalent_lambda_mm) / math.log(1.19)
+            log_lam[i] = math.log(fem[i].equivalent_lambda_mm) / LOG_JND
             if progress:
                 progress(f"FEM {candidates[i][0]}: V {fem[i].roughness:.4f}, lambda {fem[i].equivalent_lambda_mm:.3f} mm")
     chosen, gap = widest_selection(log_lam, k)

@@ -32,10 +32,11 @@ from roughness.core.errors import InputError
 from roughness.core.figures import new_figure, save_figure
 from roughness.core.limits import MAX_IMAGE_PIXELS, MAX_MAP_POSITIONS, MAX_PLATE_PIXELS, check_size
 from roughness.core.reprs import short_repr
+from roughness.perceptual_scale import jnd
 from roughness.surface.heightmap import Heightmap
 
 from .colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
-from .evaluation import Evaluator, jnd_between
+from .evaluation import Evaluator
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -80,7 +81,7 @@ class TactilePlate:
     def distances_jnd(self, which: str = "plate") -> np.ndarray:
         """Signed pairwise distances of the regions (JND): on the plate's map ("plate") or of the textures (FEM)."""
         lam = [r.plate_lambda_mm if which == "plate" else r.fem_lambda_mm for r in self.regions]
-        return np.array([[jnd_between(a, b) if a and b else np.nan for b in lam] for a in lam])
+        return np.array([[jnd(a, b) if a and b else np.nan for b in lam] for a in lam])
 
     def summary(self) -> dict:
         width, height = self.heightmap.size_mm

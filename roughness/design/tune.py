@@ -27,9 +27,10 @@ import numpy as np
 from roughness.core.checks import in_range, integer, positive
 from roughness.core.errors import InputError
 from roughness.core.reprs import short_repr, v_text
+from roughness.perceptual_scale import LOG_JND, WEBER_FRACTION, jnd
 from roughness.surface.heightmap import Heightmap
 
-from .evaluation import Evaluator, Verified, jnd_between, roughness_of_lambda
+from .evaluation import Evaluator, Verified
 
 KNOBS = ("height", "lateral")
 FACTOR_RANGE = {"height": (0.1, 3.0), "lateral": (0.4, 2.5)}  # default search range of the scale factor
@@ -152,8 +153,6 @@ def target_of(evaluator: Evaluator, lambda_mm: float | None = None, roughness: f
                          "from the input" + (f" (got {', '.join(given)})" if given else ""),
                          parameter=given[-1] if given else None)
     if jnd is not None:
-        from roughness.surrogate.calibration import WEBER_FRACTION
-
         steps = in_range("jnd", jnd, -MAX_RELATIVE_JND, MAX_RELATIVE_JND)
         if heightmap is None:
             raise InputError("a relative target (jnd) needs the texture it is relative to", parameter="jnd")
@@ -163,10 +162,10 @@ def target_of(evaluator: Evaluator, lambda_mm: float | None = None, roughness: f
                              f"floor {evaluator.scale.floor:.4g}: it has no equivalent wavelength to count JNDs from; "
                              "give an absolute target (--target-lambda or --target-v)", parameter="jnd")
         lam = fem.equivalent_lambda_mm * (1 + WEBER_FRACTION) ** steps
-        return Target(roughness_of_lambda(evaluator.scale, lam), lam, "jnd", fem, steps)
+        return Target(evaluator.scale.roughness_at(lam), lam, "jnd", fem, steps)
     if lambda_mm is not None:
         lam = positive("target_lambda", lambda_mm)
-        return Target(roughness_of_lambda(evaluator.scale, lam), lam, "lambda")
+        return Target(evaluator.scale.roughness_at(lam), lam, "lambda")
     if roughness is not None:
         v = positive("target_v", roughness)
         return Target(v, evaluator.lambda_of(v), "roughness")
@@ -253,7 +252,7 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
         v_sur = float(surrogate([factor])[0][0])
         v_search = v_sur if engine == "surrogate" else float(search([factor])[0])
         fem = evaluator.verify(scaled(heightmap, by, factor), tile=tile)
-        error = jnd_between(fem.equivalent_lambda_mm, target.lambda_mm)
+        error = jnd(fem.equivalent_lambda_mm, target.lambda_mm)
         steps.append(Step(factor, v_sur, v_search, fem, error))
         if progress:
             progress(f"{evaluator.verifier} at {by} factor {factor:.4f}: V {fem.roughness:.4f} (surrogate {v_sur:.4f}"
@@ -266,7 +265,7 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
             notes.append(f"the {by} factor cannot move closer to the target within {lo:g}..{hi:g}")
             break
     best = min(steps, key=lambda s: abs(s.jnd_error))
-    se = best.fem.roughness_stderr / best.fem.roughness / evaluator.scale.power_law[1] / math.log(1.19)
+    se = best.fem.roughness_stderr / best.fem.roughness / evaluator.scale.power_law[1] / LOG_JND
     if not best.fem.on_scale:
         notes.append("the achieved V lies off the standard scale: its equivalent lambda is extrapolated")
     in_domain = bool(surrogate([best.factor])[1][0])
@@ -298,7 +297,7 @@ def _spectral_search(heightmap: Heightmap, by: str, evaluator: Evaluator, tile: 
 
     def search(factors) -> np.ndarray:
         lams = [spectral.verify(scaled(heightmap, by, float(f)), tile=tile).equivalent_lambda_mm for f in factors]
-        return np.array([roughness_of_lambda(evaluator.scale, lam) for lam in lams])
+        return np.array([evaluator.scale.roughness_at(lam) for lam in lams])
 
     return search
 

@@ -18,8 +18,8 @@ import numpy as np
 
 from roughness.core.errors import InputError
 from roughness.core.reprs import short_repr
+from roughness.perceptual_scale import jnd
 from roughness.surface.heightmap import Heightmap
-from roughness.surrogate.calibration import jnd
 
 from .feel import FeelMap, feel_map
 

@@ -22,11 +22,11 @@ import numpy as np
 
 from roughness.core.checks import in_range, non_negative
 from roughness.core.errors import InputError
+from roughness.perceptual_scale import LOG_JND
 
 from .trials import listed
 
-WEBER_FRACTION = 0.19
-DEFAULT_SIGMA = math.log(1 + WEBER_FRACTION) / (0.6744897501960817 * math.sqrt(2))  # 0.182
+DEFAULT_SIGMA = LOG_JND / (0.6744897501960817 * math.sqrt(2))  # 0.182
 
 
 def perceptual_coordinate(roughness: np.ndarray, stimuli: Sequence[str] | None = None) -> np.ndarray:
