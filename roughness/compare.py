@@ -109,7 +109,7 @@ def recipe_textures(path: Path, n: int | None) -> list[Texture]:
     from roughness.dataset.store import sample_id
 
     if n is None:
-        raise InputError("a recipe input needs --n, the number of its samples to compare on", parameter="n")
+        raise InputError("a recipe input needs n, the number of its samples to compare on", parameter="n")
     check_size("samples of a recipe to compare on", n, MAX_DATASET_SAMPLES, "n")
     return [Texture(sample_id(r), r["family"], lambda r=r: realise(r)) for r in expand(load_recipe(path), n)]
 

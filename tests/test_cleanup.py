@@ -148,10 +148,10 @@ def test_fill_is_exact_on_a_plane_and_reports_its_fraction():
 def test_holes_need_fill_and_a_limit():
     holey = np.ones((40, 40)) + np.arange(40) * 0.01
     holey[:5] = np.nan  # 12.5%
-    with pytest.raises(InputError, match="pass --fill") as err:
+    with pytest.raises(InputError, match="pass fill=True") as err:
         clean(holey, 0.05, Cleanup())
     assert err.value.parameter == "fill"
-    with pytest.raises(InputError, match="more than --max-fill 10%") as err:
+    with pytest.raises(InputError, match="more than max_fill, 10%") as err:
         clean(holey, 0.05, Cleanup(fill=True, max_fill=0.1))
     assert err.value.parameter == "max_fill"
     assert clean(holey, 0.05, Cleanup(fill=True, max_fill=0.2))[1].steps[0].fraction == 0.125

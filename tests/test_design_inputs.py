@@ -209,9 +209,9 @@ def test_a_target_beyond_the_surrogates_reach_within_the_range_is_searched_with_
 
 def test_a_refused_target_names_the_factor_that_reaches_it(standard):
     """lambda 2 mm lies beyond the default factors (about x3.4 on the spectral scale)."""
-    with pytest.raises(InputError, match=r"about (\d+\.\d+): widen the range \(--max-factor (\d+\.?\d*)\)") as err:
+    with pytest.raises(InputError, match=r"about (\d+\.\d+): widen the range \(max_factor=(\d+\.?\d*)\)") as err:
         tune(standard, target_of(SPECTRAL, lambda_mm=2.0), "height", SPECTRAL)
-    about, flag = (float(x) for x in re.search(r"about (\d+\.\d+).*--max-factor (\d+\.?\d*)", str(err.value)).groups())
+    about, flag = (float(x) for x in re.search(r"about (\d+\.\d+).*max_factor=(\d+\.?\d*)", str(err.value)).groups())
     assert 3.0 < about < flag
     result = tune(standard, target_of(SPECTRAL, lambda_mm=2.0), "height", SPECTRAL, factor_range=(3.0, flag))
     assert result.reached and result.factor == pytest.approx(about, rel=0.05)

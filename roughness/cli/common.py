@@ -245,15 +245,20 @@ def error_message(err: InputError, flags: dict[str, str]) -> str:
     if isinstance(err, OutputExists):
         return f"{err.path} already exists; pass --overwrite to replace it"
     flag = flags.get(err.parameter or "")
-    message = in_flags(str(err), {err.parameter: flag} if flag else {})
+    message = in_flags(str(err), flags)
     return f"{flag}: {message}" if flag and flag not in message else message
 
 
 def in_flags(text: str, flags: dict[str, str]) -> str:
-    """``text`` with the Python names of parameters (pixel_mm) as their flags (--pixel-mm)."""
+    """``text`` with the library's Python names of parameters as the command's flags: ``fill=True`` as ``--fill``,
+    ``max_factor=2.5`` or ``engine='fem'`` as ``--max-factor 2.5``, ``--engine fem``, and a name with an underscore
+    (``pixel_mm``) as ``--pixel-mm``."""
     for name, flag in flags.items():
+        before, after = r"(?<![\w.-])", r"(?![\w-])"
+        text = re.sub(rf"{before}{re.escape(name)}=True{after}", flag, text)
+        text = re.sub(rf"{before}{re.escape(name)}=(['\"]?)([\w.+-]+)\1", lambda m: f"{flag} {m.group(2)}", text)
         if "_" in name:
-            text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, text)
+            text = re.sub(rf"{before}{re.escape(name)}{after}", flag, text)
     return text
 
 

@@ -318,8 +318,8 @@ def _out_of_reach(target: Target, by: str, evaluator: Evaluator, factors: tuple[
     k = int(crossings[0]) + 1  # interpolate the first crossing in log V over log factor
     t = (math.log(target.roughness) - math.log(v_wide[k - 1])) / (math.log(v_wide[k]) - math.log(v_wide[k - 1]))
     factor = math.exp(math.log(wide[k - 1]) + t * (math.log(wide[k]) - math.log(wide[k - 1])))
-    flag = f"--max-factor {_two_digits(factor * 1.1, True)}" if factor > hi else \
-        f"--min-factor {_two_digits(factor / 1.1, False)}"
+    flag = f"max_factor={_two_digits(factor * 1.1, True)}" if factor > hi else \
+        f"min_factor={_two_digits(factor / 1.1, False)}"
     return (f"{text}; the spectral engine reaches it at a {by} factor of about {factor:.2f}: widen the range "
             f"({flag}) to search there, the verifier checks the result")
 

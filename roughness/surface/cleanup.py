@@ -117,9 +117,9 @@ def clean(heights: np.ndarray, pixel_mm: float, spec: Cleanup, source: str = "he
         fraction = float(holes.mean())
         if not spec.fill:
             raise InputError(f"{source}: {int(holes.sum()):,} missing points (NaN), {100 * fraction:.2f}% of the "
-                             "map; pass --fill to interpolate them", parameter="fill")
+                             "map; pass fill=True to interpolate them", parameter="fill")
         if fraction > spec.max_fill:
-            raise InputError(f"{source}: {100 * fraction:.2f}% of the map is missing (NaN), more than --max-fill "
+            raise InputError(f"{source}: {100 * fraction:.2f}% of the map is missing (NaN), more than max_fill, "
                              f"{100 * spec.max_fill:g}%: filling would invent most of what is felt",
                              parameter="max_fill")
         heights = fill_holes(heights)
