@@ -96,7 +96,7 @@ def parse_args() -> argparse.Namespace:
 def main() -> None:
     from roughness.dataset.recipe import Recipe, realise, sample_record
     from roughness.dataset.textures import standard_texture
-    from roughness.engines import predict
+    from roughness.prediction import PredictOptions, predict
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator
     from roughness.surrogate.predictor import INPUT, SurrogateModel
@@ -120,7 +120,7 @@ def main() -> None:
         seconds = min(timed(lambda: model.session.run(None, {INPUT: batch}), 5))
         batched[threads] = len(batch) / seconds
     e2e_batched = len(maps) / min(timed(lambda: predict(maps, engine="surrogate", model=SurrogateModel(
-        args.model, threads=2), batch_size=64), 3))
+        args.model, threads=2), options=PredictOptions(batch_size=64)), 3))
     int8 = {}
     int8_path = Path(args.model).with_name(Path(args.model).stem + "-int8.onnx")
     if int8_path.exists():

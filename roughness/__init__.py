@@ -8,6 +8,7 @@ no FEM stack and no torch)::
     [p] = roughness.predict(hm)                  # surrogate, FEM where out of domain
     r = roughness.fem_roughness(hm)              # FEM reference: r.roughness, r.roughness_stderr
     [q] = roughness.predict(heights, pixel_mm=0.05)  # any 2-D array of heights (mm) with its pixel size (mm)
+    ps = roughness.predict({"a": hm, "b": q_map}, options=roughness.PredictOptions(tile=True))  # named, periodic
     m = roughness.predict_map(hm, engine="spectral", client=client)  # a large object's map, windows on Dask
 
 Design tools and perception analysis with plain arguments: ``tune``, ``palette``, ``tactile_image``,
@@ -28,7 +29,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load
     from roughness.dataset.store import open_dataset
     from roughness.dataset.textures import named_texture, standard_texture
     from roughness.design.api import homogeneity, palette, tactile_image, tune
-    from roughness.engines import Prediction, predict
+    from roughness.prediction import CurvedBase, Prediction, PredictOptions, predict
     from roughness.maps import MapPrediction, predict_map
     from roughness.perception.api import embed_trials, fit_embedding
     from roughness.simulate.config import SimConfig
@@ -58,8 +59,10 @@ _HOMES = {
     "Simulator": "roughness.simulate.model",
     "Result": "roughness.simulate.model",
     "fem_roughness": "roughness.simulate.model:roughness",
-    "predict": "roughness.engines",
-    "Prediction": "roughness.engines",
+    "predict": "roughness.prediction",
+    "PredictOptions": "roughness.prediction",
+    "CurvedBase": "roughness.prediction",
+    "Prediction": "roughness.prediction",
     "predict_map": "roughness.maps",
     "MapPrediction": "roughness.maps",
     "StandardScale": "roughness.perceptual_scale",

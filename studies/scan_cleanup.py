@@ -49,7 +49,7 @@ def rows(height_mm: float) -> list[tuple[str, str, str, str]]:
     import tempfile
 
     from roughness.core.errors import InputError
-    from roughness.engines import predict
+    from roughness.prediction import predict
     from roughness.perceptual_scale import jnd
     from roughness.surface.cleanup import Cleanup
     from roughness.surface.cleanup import clean as cleanup

@@ -40,12 +40,12 @@ def jnd_from(lam: float | None, reference: float) -> float | None:
 
 def measure() -> list[dict]:
     from roughness.dataset.textures import standard_texture
-    from roughness.engines import predict
+    from roughness.prediction import PredictOptions, predict
     from roughness.surface.heightmap import Heightmap
     from roughness.surface.tiling import tile_fit
 
     def lam_of(hm: Heightmap, tile: bool) -> float | None:
-        return predict([hm], engine="spectral", tile=tile)[0].placement.equivalent_lambda_mm
+        return predict([hm], engine="spectral", options=PredictOptions(tile=tile))[0].placement.equivalent_lambda_mm
 
     rows = []
     for lam in LAMBDAS_MM:

@@ -4,7 +4,7 @@
     v, reasons = model.run(np.stack([model.patch(hm)]))
     estimate = model.evaluate(np.stack([model.patch(hm)]))  # also the uncertainty of an ensemble model
 
-Prediction with engine choice and FEM fallback is roughness.engines.predict (``roughness.predict``).
+Prediction with engine choice and FEM fallback is ``roughness.predict`` (roughness.prediction).
 """
 from __future__ import annotations
 

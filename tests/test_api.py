@@ -50,7 +50,7 @@ print(json.dumps({{"heavy": heavy, "dir": names, "all": roughness.__all__, "help
     for name in got["all"]:
         if name != "__version__":
             assert re.search(rf"\b{name}\b", help_text), f"help(roughness) does not show {name}"
-    assert "predict(heightmaps" in help_text  # the function's signature, not just its name
+    assert "predict(inputs" in help_text  # the function's signature, not just its name
     assert "class Heightmap" in help_text
 
 
@@ -114,13 +114,29 @@ def test_predict_takes_an_array_with_its_pixel_size(texture):
     assert spectral.engine == "spectral"
 
 
+def test_predict_names_its_answers_after_named_inputs_and_takes_options(texture):
+    """A mapping or (name, heightmap) pairs name the answers; PredictOptions carries the footprint's placement."""
+    by_mapping = roughness.predict({"left": texture, "right": texture.heights}, pixel_mm=texture.pixel_mm,
+                                   engine="surrogate")
+    by_pairs = roughness.predict([("left", texture), ("right", texture)], engine="surrogate")
+    assert [p.source for p in by_mapping] == [p.source for p in by_pairs] == ["left", "right"]
+    assert [p.source for p in roughness.predict([texture, texture], engine="surrogate")] == ["heightmap 0",
+                                                                                            "heightmap 1"]
+    tiled = roughness.PredictOptions(tile=True, centre_mm=(1.0, 2.0))
+    [moved] = roughness.predict(texture, engine="surrogate", options=tiled)
+    assert moved.roughness != by_pairs[0].roughness  # another footprint of the texture
+    with pytest.raises(InputError) as err:
+        roughness.predict(texture, engine="spectral", options=roughness.PredictOptions(fidelity="fine"))
+    assert err.value.parameter == "fidelity"
+
+
 @pytest.mark.parametrize("heights, kwargs, parameter, message", [
     ("array", {}, "pixel_mm", "without a pixel size: pass pixel_mm="),
-    ("3d", {"pixel_mm": 0.05}, "heightmaps", "must be 2-D"),
-    ("nan", {"pixel_mm": 0.05}, "heightmaps", "NaN/Inf"),
-    ("inf", {"pixel_mm": 0.05}, "heightmaps", "NaN/Inf"),
-    ("text", {"pixel_mm": 0.05}, "heightmaps", "must be a Heightmap, a 2-D array"),
-    ("number", {"pixel_mm": 0.05}, "heightmaps", "must be a Heightmap, a 2-D array"),
+    ("3d", {"pixel_mm": 0.05}, "inputs", "must be 2-D"),
+    ("nan", {"pixel_mm": 0.05}, "inputs", "NaN/Inf"),
+    ("inf", {"pixel_mm": 0.05}, "inputs", "NaN/Inf"),
+    ("text", {"pixel_mm": 0.05}, "inputs", "must be a Heightmap, a 2-D array"),
+    ("number", {"pixel_mm": 0.05}, "inputs", "must be a Heightmap, a 2-D array"),
     ("map", {"pixel_mm": 0.1}, "pixel_mm", "contradicts the heightmap's own pixel"),
     ("array", {"pixel_mm": float("nan")}, "pixel_mm", "pixel_mm"),
 ])

@@ -168,7 +168,7 @@ def test_detrend_spec_parsing():
 # The flat-trained surrogate on curved bases
 
 def test_shipped_curvature_range_comes_from_the_committed_study():
-    from roughness.engines import CURVATURE_RANGE_PATH
+    from roughness.prediction import CURVATURE_RANGE_PATH
 
     data = json.loads(CURVATURE_RANGE_PATH.read_text())
     assert "cylinder" in data["bases"]
@@ -181,27 +181,31 @@ def test_shipped_curvature_range_comes_from_the_committed_study():
 
 
 def test_predict_routes_curved_bases_by_the_range(tmp_path, monkeypatch):
-    from roughness import engines
+    from roughness import prediction
     from roughness.objects import correction
+    from roughness.prediction import CurvedBase, PredictOptions, predict
+
+    def on(radius_mm: float, shape: str = "cylinder", tile: bool = False) -> PredictOptions:
+        return PredictOptions(tile=tile, curved=CurvedBase(radius_mm, shape))
 
     path = tmp_path / "range.json"
     path.write_text(json.dumps({"tolerance": 0.19, "bases": {
         "cylinder": {"min_convex_radius_mm": 10.0, "min_concave_radius_mm": 20.0}}}))
-    monkeypatch.setattr(engines, "CURVATURE_RANGE_PATH", path)
+    monkeypatch.setattr(prediction, "CURVATURE_RANGE_PATH", path)
     hm = standard_texture(1.0, seed=0)
-    [flat_answer] = engines.predict(hm, engine="surrogate")
-    [inside] = engines.predict(hm, engine="surrogate", curvature_mm=40.0)
+    [flat_answer] = predict(hm, engine="surrogate")
+    [inside] = predict(hm, engine="surrogate", options=on(40.0))
     # inside the range the flat answer is corrected by the study's measurement (roughness.objects.correction)
     fix = correction.for_base(40.0, "cylinder")
     assert inside.engine == "surrogate" and inside.roughness == pytest.approx(flat_answer.roughness * fix.factor)
     assert inside.domain_notes == flat_answer.domain_notes + [fix.note] and inside.in_domain
     for radius, base in ((5.0, "cylinder"), (-15.0, "cylinder"), (40.0, "sphere")):
-        [outside] = engines.predict(hm, engine="surrogate", curvature_mm=radius, base=base)
+        [outside] = predict(hm, engine="surrogate", options=on(radius, base))
         assert outside.engine == "surrogate" and not outside.in_domain
         assert any(n.startswith("curved base") for n in outside.domain_notes), (radius, base)
     with pytest.raises(InputError, match="narrower"):
-        engines.predict(hm, engine="surrogate", curvature_mm=-4.0)
-    [fem] = engines.predict(hm, engine="auto", curvature_mm=5.0, tile=True)  # outside: auto runs the curved FEM
+        predict(hm, engine="surrogate", options=on(-4.0))
+    [fem] = predict(hm, engine="auto", options=on(5.0, tile=True))  # outside: auto runs the curved FEM
     assert fem.engine == "fem" and not fem.in_domain and fem.roughness > 0
     assert any(n.startswith("curved base") for n in fem.domain_notes)
 

@@ -120,7 +120,8 @@ def test_errors_in_v_still_make_a_verdict_borderline():
 
 def test_fem_prediction_at_zero_has_no_infinite_error(monkeypatch):
     """richardson() says inf when V is 0 at one mesh only; a prediction says null, with a note."""
-    from roughness.engines import FemEngine, predict
+    from roughness.engines import FemEngine
+    from roughness.prediction import predict
 
     fake = SimpleNamespace(roughness=0.0, seconds=0.0, roughness_stderr=0.0, discretization_error=math.inf)
     monkeypatch.setattr(FemEngine, "simulate", lambda self, hm: fake)

@@ -49,11 +49,11 @@ def test_centre_off_the_map_names_the_centre(path, flag, workdir, capsys):
 @pytest.mark.parametrize("centre", [(np.nan, 5.0), (np.inf, np.inf), (1e300, 1e300)], ids=str)
 @pytest.mark.parametrize("tile", [False, True])
 def test_library_refuses_a_bad_centre(centre, tile):
-    from roughness import predict
+    from roughness import PredictOptions, predict
 
     hm = Heightmap(np.random.default_rng(0).random((240, 240)) * 0.5, 0.05)
     with pytest.raises(InputError) as err:
-        predict([hm], engine="surrogate", centre_mm=centre, tile=tile)
+        predict([hm], engine="surrogate", options=PredictOptions(centre_mm=centre, tile=tile))
     assert err.value.parameter == "centre_mm"
     with pytest.raises(InputError):
         hm.require_footprint(10.0, centre, tile)

@@ -15,7 +15,7 @@ trimesh = pytest.importorskip("trimesh")
 from roughness.core.errors import InputError  # noqa: E402
 from roughness.core.hashing import file_sha256  # noqa: E402
 from roughness.dataset.textures import standard_texture  # noqa: E402
-from roughness.engines import predict  # noqa: E402
+from roughness.prediction import PredictOptions, predict  # noqa: E402
 from roughness.objects import correction  # noqa: E402
 from roughness.objects.curvature import SurfaceSamples, principal_curvatures  # noqa: E402
 from roughness.objects.feel import CANNOT_REST, OFF_OBJECT, feel_map  # noqa: E402
@@ -55,7 +55,7 @@ def _cylinder(radius_mm: float, height_mm: float = 50.0, inside: bool = False):
 
 def _plate_v(x_mm: float, y_mm: float) -> tuple[float, float]:
     """The flat plate's spectral V (and Monte Carlo error) with the footprint centred at (x, y) of the texture."""
-    [p] = predict(TEXTURE, engine="spectral", tile=True, centre_mm=(x_mm % 12.0, y_mm % 12.0))
+    [p] = predict(TEXTURE, engine="spectral", options=PredictOptions(tile=True, centre_mm=(x_mm % 12.0, y_mm % 12.0)))
     return p.roughness, p.roughness_stderr
 
 
@@ -118,7 +118,7 @@ def test_with_the_surrogate_the_map_loads_the_model_once_and_answers_as_the_surr
     assert len(inner) >= 9 and len(loads) == 1
     for i in inner:  # the unrolled footprint is the plate's, sampled at the same points up to float round-off
         x, y = feel.points[i][:2]
-        [p] = predict(TEXTURE, engine="surrogate", tile=True, centre_mm=(x % 12.0, y % 12.0))
+        [p] = predict(TEXTURE, engine="surrogate", options=PredictOptions(tile=True, centre_mm=(x % 12.0, y % 12.0)))
         assert feel.roughness[i] == pytest.approx(p.roughness, rel=1e-5)
         assert feel.uncertainty[i] == pytest.approx(p.roughness_std, rel=1e-5)
 
@@ -330,26 +330,26 @@ def test_curved_fem_on_request_runs_the_curved_fem_on_the_cylinder_under_the_foo
     """--curved fem: where curvature matters each footprint goes to the curved FEM (stubbed here: seconds each) with
     the base the principal curvatures describe; the map's x runs along the curving direction, so the cylinder is
     straight along y."""
-    from roughness import engines
+    from roughness import prediction
 
     calls = []
-    flat_predict = engines.predict
+    flat_predict = prediction.predict
 
     def predict_stub(heightmaps, engine="auto", **kwargs):
         if engine != "fem":
             return flat_predict(heightmaps, engine=engine, **kwargs)
-        calls.append(kwargs)
+        calls.append(kwargs["options"].curved)
         [p] = flat_predict(heightmaps, engine="spectral")
         return [p]
 
-    monkeypatch.setattr(engines, "predict", predict_stub)
+    monkeypatch.setattr(prediction, "predict", predict_stub)
     mesh, side = _cylinder(10.0)
     feel = feel_map(mesh, Wrap(10.0), {"side": side}, spacing_mm=10.0, curved="fem")
     judged = [m for m in feel.method if m != "refused"]
     assert judged and set(judged) == {"fem"} and len(calls) == len(judged)
-    for kwargs in calls:
-        assert kwargs["base"] == "cylinder" and kwargs["curvature_axis"] == "y"
-        assert kwargs["curvature_mm"] == pytest.approx(10.0, rel=0.02)
+    for curved in calls:
+        assert curved.shape == "cylinder" and curved.axis == "y"
+        assert curved.radius_mm == pytest.approx(10.0, rel=0.02)
 
 
 def test_object_tune_writes_the_textured_mesh_only_when_it_can_be_built(tmp_path, capsys, monkeypatch):

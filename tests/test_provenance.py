@@ -17,7 +17,8 @@ import roughness
 from roughness.cli import main
 from roughness.core.provenance import Provenance, combined, model_id
 from roughness.core.version import RELEASE
-from roughness.engines import FemEngine, SpectralEngine, predict
+from roughness.engines import FemEngine, SpectralEngine
+from roughness.prediction import predict
 from roughness.models import MODELS_DIR
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import save_heightmap

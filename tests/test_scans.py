@@ -404,7 +404,7 @@ def test_resampling_recovers_the_roughness_that_one_size_for_both_axes_loses():
     """A texture scanned on 0.05 x 0.06 mm pixels: resampled to square it feels as the texture (measured -0.01 JND,
     Monte Carlo error about 0.02 JND); read as if its pixels were square it is 0.34 JND smoother (spectral engine)."""
     from roughness.dataset.catalogue import make_texture
-    from roughness.engines import predict
+    from roughness.prediction import predict
     from roughness.perceptual_scale import jnd_distance, load_scale
     from roughness.surface.pixels import square
 

@@ -19,7 +19,7 @@ from roughness.dataset.digest import inputs_sha256
 from roughness.dataset.recipe import Recipe, realise, sample_record
 from roughness.dataset.store import DatasetWriter, open_dataset
 from roughness.dataset.textures import standard_texture
-from roughness.engines import predict
+from roughness.prediction import PredictOptions, predict
 from roughness.perceptual_scale import StandardScale, load_scale
 from roughness.simulate.linsolve import CG_RTOL
 from roughness.surface.heightmap import Heightmap
@@ -247,8 +247,8 @@ print(code, sorted(m for m in sys.modules if m in heavy or m.startswith(tuple(h 
 
 def test_batch_and_single_predictions_agree(tiny):
     maps = [realise(sample_record(Recipe(seed=11, families={"bumps": 1, "woven": 1}), i)) for i in range(6)]
-    one = predict(maps, engine="surrogate", model=tiny.model, batch_size=1)
-    many = predict(maps, engine="surrogate", model=tiny.model, batch_size=4)
+    one = predict(maps, engine="surrogate", model=tiny.model, options=PredictOptions(batch_size=1))
+    many = predict(maps, engine="surrogate", model=tiny.model, options=PredictOptions(batch_size=4))
     np.testing.assert_allclose([p.roughness for p in one], [p.roughness for p in many], rtol=1e-5)
     assert [p.source for p in many] == [f"heightmap {i}" for i in range(6)]
 
@@ -272,7 +272,7 @@ def test_shipped_model_flags_inputs_it_cannot_answer_well():
 
 def test_auto_runs_fem_outside_the_domain():
     tall = Heightmap(standard_texture(1.0, seed=21).heights * 3, 0.05)
-    [p] = predict(tall, engine="auto", fidelity="coarse")  # the shipped model's own fidelity (fine) takes 10 s
+    [p] = predict(tall, engine="auto", options=PredictOptions(fidelity="coarse"))  # the shipped model's own fidelity (fine) takes 10 s
     assert p.engine == "fem" and not p.in_domain and p.fidelity == "coarse" and 0 < p.roughness < 1
 
 
@@ -424,7 +424,8 @@ def test_roughness_map_matches_single_predictions(tmp_path, capsys):
     result = roughness_map(model, hm, step_mm=2.0)
     assert result.roughness.shape == (3, 3) and list(result.x_mm) == [5.0, 7.0, 9.0]
     for (i, j), v in np.ndenumerate(result.roughness):
-        [p] = predict(hm, engine="surrogate", model=model, centre_mm=(result.x_mm[j], result.y_mm[i]))
+        [p] = predict(hm, engine="surrogate", model=model,
+                      options=PredictOptions(centre_mm=(result.x_mm[j], result.y_mm[i])))
         assert v == pytest.approx(p.roughness, rel=1e-5) and result.in_domain[i, j] == p.in_domain
     path = tmp_path / "t.npy"
     save_heightmap(hm, path)
@@ -716,7 +717,8 @@ def test_default_threshold_counts_out_of_domain_inputs_in_the_budget(outside_sha
 
 def test_auto_sends_uncertain_inputs_to_the_spectral_engine_then_fem(ensemble, tiny, monkeypatch):
     """auto climbs surrogate -> spectral (where its contact fraction allows) -> FEM; a FEM fidelity skips spectral."""
-    from roughness.engines import SPECTRAL_MIN_CONTACT, FemEngine, SpectralEngine
+    from roughness.engines import FemEngine, SpectralEngine
+    from roughness.prediction import SPECTRAL_MIN_CONTACT
 
     monkeypatch.setattr(FemEngine, "simulate", lambda self, hm: SimpleNamespace(
         roughness=0.123, seconds=0.0, roughness_stderr=1e-3, discretization_error=0.01))
@@ -726,13 +728,13 @@ def test_auto_sends_uncertain_inputs_to_the_spectral_engine_then_fem(ensemble, t
         message="contact conditions hold"))
     maps = [realise(sample_record(Recipe(name="tiny", seed=9, families={"bumps": 1, "fbm": 1}), i)) for i in range(4)]
     model = SurrogateModel(ensemble.model)
-    strict = predict(maps, engine="auto", model=model, max_std=1e-9)
+    strict = predict(maps, engine="auto", model=model, options=PredictOptions(max_std=1e-9))
     assert [p.engine for p in strict] == ["spectral", "spectral", "fem", "fem"]
     assert all(any("uncertain" in n for n in p.domain_notes) for p in strict)
     assert any("where its error grows" in n for n in strict[2].domain_notes)
-    asked = predict(maps, engine="auto", model=model, max_std=1e-9, fidelity="coarse")
+    asked = predict(maps, engine="auto", model=model, options=PredictOptions(max_std=1e-9, fidelity="coarse"))
     assert all(p.engine == "fem" for p in asked)
-    loose = predict(maps, engine="auto", model=model, max_std=1e9)
+    loose = predict(maps, engine="auto", model=model, options=PredictOptions(max_std=1e9))
     assert all((p.engine == "surrogate") == p.in_domain for p in loose)
     assert all(p.roughness_std > 0 for p in loose if p.engine == "surrogate")
     default = predict(maps, engine="surrogate", model=model)
@@ -740,7 +742,7 @@ def test_auto_sends_uncertain_inputs_to_the_spectral_engine_then_fem(ensemble, t
     [single] = predict(maps[0], engine="surrogate", model=SurrogateModel(tiny.model))
     assert single.roughness_std is None and single.as_dict()["roughness_std"] is None
     with pytest.raises(InputError, match="single network without an uncertainty"):
-        predict(maps[0], engine="auto", model=SurrogateModel(tiny.model), max_std=0.1)
+        predict(maps[0], engine="auto", model=SurrogateModel(tiny.model), options=PredictOptions(max_std=0.1))
 
 
 def test_predict_cli_prints_the_spread_and_checks_max_std(ensemble, tiny, tmp_path, capsys):
@@ -780,7 +782,7 @@ def test_ensemble_map_has_a_spread_beside_v(ensemble, tmp_path):
     hm = standard_texture(1.0, seed=5, size_mm=14.0)
     result = roughness_map(model, hm, step_mm=2.0)
     assert result.roughness_std.shape == result.roughness.shape and np.all(result.roughness_std > 0)
-    [p] = predict(hm, engine="surrogate", model=model, centre_mm=(result.x_mm[1], result.y_mm[2]))
+    [p] = predict(hm, engine="surrogate", model=model, options=PredictOptions(centre_mm=(result.x_mm[1], result.y_mm[2])))
     assert result.roughness_std[2, 1] == pytest.approx(p.roughness_std, rel=1e-5)
     assert result.summary()["roughness_std_median"] > 0
     save_map(result, tmp_path / "m.png")

@@ -6,7 +6,6 @@ recorded in ``errors`` with its reason and skipped; the others are still predict
 """
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -34,7 +33,6 @@ class InputReader:
             self._items += [(name + tail if sid is None else name, Path(f"{f}{tail}") if sid is None else f, sid)
                             for name, f, sid in self._expand(Path(path))]
         self.total = len(self._items)
-        self._names: deque[str] = deque()
 
     def _expand(self, path: Path) -> list[tuple[str, Path, str | None]]:
         if path.is_dir():
@@ -47,8 +45,8 @@ class InputReader:
             return [(f"{path}:{sid}", path, sid) for sid in ids]
         return [(str(path), path, None)]
 
-    def heightmaps(self) -> Iterator[Heightmap]:
-        """The usable heightmaps; the name of each is queued for ``sources``."""
+    def named(self) -> Iterator[tuple[str, Heightmap]]:
+        """(name, heightmap) of each usable input, in order."""
         datasets: dict[Path, object] = {}
         try:
             for name, path, sid in self._items:
@@ -59,16 +57,10 @@ class InputReader:
                     named = err if str(path) in str(err) else InputError(f"{name}: {err}", err.parameter)
                     self.errors.append((name, named))
                     continue
-                self._names.append(name)
-                yield hm
+                yield name, hm
         finally:
             for data in datasets.values():
                 data.close()
-
-    def sources(self) -> Iterator[str]:
-        """Names of the heightmaps yielded so far, in order (consume in step with ``heightmaps``)."""
-        while True:
-            yield self._names.popleft()
 
     def _load(self, name: str, path: Path, sid: str | None, datasets: dict) -> Heightmap:
         if sid is None:

@@ -7,7 +7,7 @@ from .common import add_reading_args, defaults, finish, json_text, load_input, r
 
 
 def add_parser(sub) -> None:
-    from roughness.engines import PREDICT_ENGINES, predict
+    from roughness.prediction import PREDICT_ENGINES, predict
 
     given = defaults(predict)
     p = sub.add_parser("jnd", help="tell two textures apart? their V, equivalent lambda and distance in JNDs")
@@ -25,11 +25,11 @@ def add_parser(sub) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from roughness.core.provenance import combined
-    from roughness.engines import predict
     from roughness.perceptual_scale import jnd_distance, load_scale
+    from roughness.prediction import predict
 
     maps = [load_input(args, path, several=True) for path in (args.a, args.b)]
-    pa, pb = predict(maps, engine=args.engine, model=args.model, sources=[args.a, args.b])
+    pa, pb = predict(list(zip([args.a, args.b], maps)), engine=args.engine, model=args.model)
     scale = load_scale(pa.fidelity)
     distance = jnd_distance(scale, pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
     if args.json:

@@ -28,17 +28,19 @@ from .common import (
     show_notes,
 )
 from .printer import add_printer_arg
-from .simulate import add_curvature_args, curvature_fields
+from .simulate import add_curvature_args, curved_base
 
 MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
 
 
 def add_parser(sub) -> None:
-    from roughness.engines import PREDICT_ENGINES, SurrogateEngine, predict
+    from roughness.engines import SurrogateEngine
     from roughness.maps import WORKERS
+    from roughness.prediction import PREDICT_ENGINES, PredictOptions, predict
     from roughness.surrogate.roughness_map import roughness_map
 
-    given, mapping, threads = defaults(predict), defaults(roughness_map), defaults(SurrogateEngine)["threads"]
+    given, options = defaults(predict), defaults(PredictOptions)
+    mapping, threads = defaults(roughness_map), defaults(SurrogateEngine)["threads"]
     pr = sub.add_parser("predict", help="roughness in milliseconds (surrogate), FEM where out of domain")
     pr.add_argument("inputs", nargs="+", metavar="HEIGHTMAP",
                     help="heightmap files, folders of them, or roughness dataset files (.h5); "
@@ -61,8 +63,8 @@ def add_parser(sub) -> None:
     pr.add_argument("--tile", action="store_true", help="repeat small heightmaps as periodic textures (default: off)")
     pr.add_argument("--centre", type=float_pair, metavar="X,Y", help="footprint centre in mm (default: map centre)")
     add_curvature_args(pr)
-    pr.add_argument("--batch-size", type=BATCH, default=given["batch_size"],
-                    help=f"heightmaps per surrogate batch (default: {given['batch_size']})")
+    pr.add_argument("--batch-size", type=BATCH, default=options["batch_size"],
+                    help=f"heightmaps per surrogate batch (default: {options['batch_size']})")
     pr.add_argument("--threads", type=PARALLEL, default=threads, help=f"onnxruntime threads (default: {threads})")
     pr.add_argument("--json", action="store_true", help="one JSON object per input and line (default: text)")
     pr.add_argument("--map", metavar="FILE", help="roughness map of a whole object (one input): the footprint slid "
@@ -74,16 +76,16 @@ def add_parser(sub) -> None:
     add_printer_arg(pr, "the digital texture's V and the difference in JND are reported too")
     add_quiet(pr)
     add_overwrite(pr)
-    finish(pr, run, centre_mm="--centre")
+    finish(pr, run, centre_mm="--centre", curved="--curvature-mm")
 
 
 def run(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
-    from roughness.engines import predict
+    from roughness.prediction import PredictOptions, predict
     from roughness.simulate.config import SimConfig
-    from roughness.surrogate.inputs import InputReader
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
+    from .inputs import InputReader
     from .printer import PrintPairs, printer_of
 
     cluster = next((name for name in ("workers", "scheduler", "scheduler_file") if getattr(args, name) is not None),
@@ -118,10 +120,7 @@ def run(args: argparse.Namespace) -> int:
         return hm
 
     reader = InputReader(args.inputs, footprint_mm, args.centre, args.tile, load_one)
-    heightmaps, sources = reader.heightmaps(), reader.sources()
-    if printer is not None:  # each input, then its print
-        pairs = PrintPairs(reader, printer, args.tile)
-        heightmaps, sources = pairs.heightmaps(), pairs.sources()
+    pairs = PrintPairs(reader, printer, args.tile) if printer is not None else None  # each input, then its print
     start, done, digital = time.monotonic(), 0, []
 
     def show(p) -> None:
@@ -142,9 +141,10 @@ def run(args: argparse.Namespace) -> int:
         if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 
-    predict(heightmaps, engine=args.engine, model=model, centre_mm=args.centre, tile=args.tile,
-            fidelity=args.fidelity, tolerance=args.tolerance, batch_size=args.batch_size,
-            sources=sources, on_result=show, max_std=args.max_std, **curvature_fields(args))
+    options = PredictOptions(centre_mm=args.centre, tile=args.tile, fidelity=args.fidelity, tolerance=args.tolerance,
+                             max_std=args.max_std, batch_size=args.batch_size, curved=curved_base(args))
+    predict(reader.named() if pairs is None else pairs.named(), engine=args.engine, model=model, options=options,
+            on_result=show)
     for source, error in reader.errors:
         message = error_message(error, args.flags)
         print(f"roughness: error: {message}", file=sys.stderr)

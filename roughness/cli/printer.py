@@ -65,7 +65,7 @@ def difference(digital_roughness: float, printed_roughness: float, scale) -> Pri
 
 
 class PrintPairs:
-    """The usable heightmaps of an ``InputReader``, each followed by its print (``printed``), named alike.
+    """The usable (name, heightmap) of an ``InputReader``, each followed by its print (``printed``), named alike.
 
     A heightmap that cannot be printed at its resolution is recorded in the reader's ``errors`` and skipped.
     ``prints`` holds the ``PrintResult`` of each pair yielded, for the caller to take in order.
@@ -76,29 +76,21 @@ class PrintPairs:
 
         self.reader, self.profile, self.tile = reader, profile, tile
         self.prints: deque = deque()
-        self._names: deque[str] = deque()
 
-    def heightmaps(self):
+    def named(self):
+        """(name, heightmap) of each usable input, then (name, its print)."""
         from roughness.core.errors import InputError
         from roughness.surface.printing import printed
 
-        names = self.reader.sources()
-        for hm in self.reader.heightmaps():
-            name = next(names)
+        for name, hm in self.reader.named():
             try:
                 result = printed(hm, self.profile, self.tile)
             except InputError as err:
                 self.reader.errors.append((name, InputError(f"{name}: {err}", err.parameter)))
                 continue
             self.prints.append(result)
-            self._names.extend((name, name))
-            yield hm
-            yield result.heightmap
-
-    def sources(self):
-        """Names of the heightmaps yielded so far, in order (consume in step with ``heightmaps``)."""
-        while True:
-            yield self._names.popleft()
+            yield name, hm
+            yield name, result.heightmap
 
 
 class PrintReport:

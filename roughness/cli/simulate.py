@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from typing import TYPE_CHECKING
 
 from . import common
 from .common import (
@@ -18,6 +19,9 @@ from .common import (
     log,
     readings,
 )
+
+if TYPE_CHECKING:
+    from roughness.prediction import CurvedBase
 
 SIGNED_RADIUS = Number(float)  # a signed radius in mm; 0 is refused by SimConfig (not a radius)
 
@@ -79,6 +83,15 @@ def curvature_fields(args: argparse.Namespace) -> dict:
     """The SimConfig fields of the curvature options."""
     return {"curvature_mm": args.curvature_mm, "base": args.base, "curvature_axis": args.curvature_axis,
             "texture_along": args.texture_along}
+
+
+def curved_base(args: argparse.Namespace) -> CurvedBase | None:
+    """The curvature options as ``predict``'s ``CurvedBase`` (None: a flat base)."""
+    from roughness.prediction import CurvedBase
+
+    if args.curvature_mm is None:
+        return None
+    return CurvedBase(args.curvature_mm, args.base, args.curvature_axis, args.texture_along)
 
 
 def _detrend_spec(text: str):

@@ -1,6 +1,6 @@
 """One evaluator for the design tools: the surrogate for searches, a physics engine to verify, on one standard scale.
 
-The surrogate runs through ``roughness.engines.predict``. The verifier is the engines' ``FemEngine`` with
+The surrogate runs through ``roughness.predict``. The verifier is the engines' ``FemEngine`` with
 the model's simulation parameters at the fidelity of its training labels (prepared once, reused for
 every verification), or at another FEM fidelity, or the ``SpectralEngine`` (``VERIFIERS``); its answers
 are placed on its own standard scale, and distances are JNDs of the equivalent wavelength
@@ -89,11 +89,12 @@ class Evaluator:
     def surrogate(self, heightmaps: Sequence[Heightmap], tile: bool = False,
                   centres_mm: Sequence[tuple[float, float]] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Surrogate V of each heightmap (at each centre, if given) and whether it was in the model's domain."""
-        from roughness.engines import predict
+        from roughness.prediction import PredictOptions, predict
 
         heightmaps = [self.as_printed(hm, tile) for hm in heightmaps]
         if centres_mm is None or all(c is None for c in centres_mm):
-            results = predict(list(heightmaps), engine="surrogate", model=self.model, tile=tile)
+            results = predict(list(heightmaps), engine="surrogate", model=self.model,
+                              options=PredictOptions(tile=tile))
         else:  # one footprint centre per map: batched through the model directly
             model = self.model
             values, reasons = model.run(np.stack([model.patch(hm, c, tile) for hm, c in zip(heightmaps, centres_mm)]))
