@@ -47,7 +47,7 @@ if TYPE_CHECKING:  # the texture generators load on first use (the CLI reads thi
 
     from .labels import Label, LabelSet
     from .recipe import Recipe
-    from .store import DatasetWriter
+    from .writer import DatasetWriter
 
 BUILD_CONFIG = SimConfig(fidelity="coarse")  # how the project's training sets are simulated
 ENGINES = ("fem", "spectral")
@@ -201,7 +201,7 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
     engine version differs from this process's are refused (``InputError``) before anything is submitted.
     """
     from .recipe import sample_record
-    from .store import DatasetWriter
+    from .writer import DatasetWriter
 
     n = check_size("samples of one build", integer("n", n, minimum=1), MAX_DATASET_SAMPLES, "n")
     integer("workers", workers, minimum=1)

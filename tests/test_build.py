@@ -13,8 +13,10 @@ import pytest
 
 from roughness import dataset
 from roughness.dataset.build import build
+from roughness.dataset.inspection import verify
+from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe, expand, realise
-from roughness.dataset.store import open_dataset, sample_id, verify
+from roughness.dataset.schema import sample_id
 from roughness.simulate.config import SimConfig
 
 # A 6 mm block at the paper's contact pressure (10 N on 10 x 10 mm -> 3.6 N on 6 x 6 mm): at 10 N the

@@ -19,8 +19,10 @@ from test_build_distributed import start, wait_for
 from roughness.core.errors import InputError
 from roughness.dataset import build
 from roughness.dataset.cluster import ClusterChoice, versions
+from roughness.dataset.inspection import verify
+from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe, expand, realise
-from roughness.dataset.store import open_dataset, sample_id, verify
+from roughness.dataset.schema import sample_id
 
 ROOT = Path(__file__).parents[1]
 SEED = 3  # the CLI's default recipe (bump textures) with this seed

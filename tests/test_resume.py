@@ -12,8 +12,8 @@ import pytest
 from roughness.cli import main
 from roughness.dataset import build
 from roughness.dataset.cluster import local_cluster
+from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe
-from roughness.dataset.store import open_dataset
 from roughness.engines import ClassicalEngine
 from roughness.simulate.config import SimConfig
 

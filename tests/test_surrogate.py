@@ -16,13 +16,14 @@ import torch
 
 from roughness.core.errors import InputError
 from roughness.dataset.digest import inputs_sha256
+from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe, realise, sample_record
-from roughness.dataset.store import DatasetWriter, open_dataset
 from roughness.dataset.textures import standard_texture
+from roughness.dataset.writer import DatasetWriter
 from roughness.engines import predict
+from roughness.simulate.linsolve import CG_RTOL
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import save_heightmap
-from roughness.simulate.linsolve import CG_RTOL
 from roughness.surrogate.calibration import StandardScale, load_scale
 from roughness.surrogate.data import split_of
 from roughness.surrogate.export import (
@@ -279,8 +280,8 @@ def test_auto_runs_fem_outside_the_domain():
 def test_shipped_model_agrees_with_fem_on_the_bundled_example(capsys):
     from roughness.cli import main
     from roughness.simulate.config import SimConfig
-    from roughness.surface.io import load_heightmap
     from roughness.simulate.model import Simulator
+    from roughness.surface.io import load_heightmap
 
     assert main(["predict", str(EXAMPLE), "--pixel-mm", "0.05", "--height-mm", "1", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)

@@ -73,7 +73,8 @@ def test_a_dask_worker_with_several_threads_builds_the_sequential_dataset(record
     """``build`` on a cluster whose one worker runs THREADS threads (in this process, sharing its simulators)."""
     from dask.distributed import LocalCluster
 
-    from roughness.dataset.store import open_dataset, sample_id
+    from roughness.dataset.reader import open_dataset
+    from roughness.dataset.schema import sample_id
 
     monkeypatch.setattr(build, "_SIMULATORS", {})
     out = tmp_path / "threads.h5"
