@@ -194,11 +194,13 @@ def test_labels_of_another_configuration_or_damaged_are_refused(tmp_path):
 
 
 def test_a_texture_that_cannot_be_made_takes_a_label_only_if_its_labelled_run_could_not_make_it_either():
-    from roughness.dataset.build import simulate_record
     from roughness.dataset.labels import Label
+    from roughness.dataset.worker import Failed, Job, Restored, simulate_sample
 
     record = dict(expand(RECIPE, 1)[0], family="no-such-family")
     failed = Label("", {"status": "failed", "error": "InputError: no such family"})
-    assert simulate_record(record, SMALL.as_dict(), failed)["label"] is failed
+    restored = simulate_sample(Job(record, failed), SMALL.as_dict())
+    assert isinstance(restored, Restored) and restored.label is failed and restored.heights is None
     made = Label("0123456789abcdef", {"status": "ok"})  # labelled on a texture that was made: not this run's
-    assert "no-such-family" in simulate_record(record, SMALL.as_dict(), made)["error"]
+    refused = simulate_sample(Job(record, made), SMALL.as_dict())
+    assert isinstance(refused, Failed) and "no-such-family" in refused.error
