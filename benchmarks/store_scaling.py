@@ -28,7 +28,7 @@ RESULTS = ROOT / "benchmarks" / "results" / "store_scaling.md"
 CONFIG = {"simulation": {"fidelity": "coarse", "force_n": 10.0}, "recipe": {"name": "synthetic"}}
 READ = """
 import sys, time
-from roughness.dataset.store import open_dataset
+from roughness.dataset.reader import open_dataset
 t = time.perf_counter()
 ds = open_dataset(sys.argv[1]); n = len(ds)
 t_open = time.perf_counter() - t
@@ -46,14 +46,14 @@ def fields(i: int) -> dict:
 
 
 def write(path: Path, n: int, side: int, strain_side: int) -> float:
-    from roughness.dataset.store import DatasetWriter
+    from roughness.dataset.writer import DatasetWriter
 
     rng = np.random.default_rng(0)
     start = time.perf_counter()
     with DatasetWriter(path, CONFIG, "benchmark") as writer:
         for i in range(n):
-            recipe = {"family": "fbm", "params": {"hurst": 0.5}, "seed": i, "perturbation": None}
-            writer.write_result(recipe, rng.random((side, side)), 0.05, fields(i),
+            texture_record = {"family": "fbm", "params": {"hurst": 0.5}, "seed": i, "perturbation": None}
+            writer.write_result(texture_record, rng.random((side, side)), 0.05, fields(i),
                                 rng.normal(size=(strain_side, strain_side)))
     return time.perf_counter() - start
 

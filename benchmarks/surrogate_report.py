@@ -64,7 +64,7 @@ def run(script: str, *args: str) -> None:
 
 def validation_predictions(labels: Path, model_path: str) -> dict[str, np.ndarray]:
     """Reference V, predicted V, its relative spread and domain flag for every ok texture of the labels file."""
-    from roughness.dataset.store import open_dataset
+    from roughness.dataset.reader import open_dataset
     from roughness.surrogate.predictor import SurrogateModel
 
     model = SurrogateModel(model_path, threads=1)
@@ -72,7 +72,7 @@ def validation_predictions(labels: Path, model_path: str) -> dict[str, np.ndarra
     with open_dataset(labels) as data:
         for sample in data.iter_samples("ok"):
             ids.append(sample.id)
-            families.append(sample.recipe["family"])
+            families.append(sample.texture_record["family"])
             reference.append(float(sample.values["V"]))
             patches.append(model.patch(sample.heightmap))
     estimate = model.evaluate(np.stack(patches))

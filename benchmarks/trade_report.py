@@ -34,7 +34,7 @@ ENGINES = ("fem:coarse", "fem:default", "fem:fine", "spectral", "surrogate", "su
 
 def reference_of(labels: Path) -> str:
     """The engine spec whose results a labels file stores (``fem:fine``, ``fem:converged@0.01``, ...)."""
-    from roughness.dataset.store import open_dataset
+    from roughness.dataset.reader import open_dataset
     from roughness.engines import fem_spec
 
     with open_dataset(labels) as data:

@@ -5,9 +5,9 @@ __all__ = ["open", "open_dataset"]
 
 
 def __getattr__(name: str):
-    """``open``/``open_dataset`` load the store (h5py) on first use, not with every dataset module."""
+    """``open``/``open_dataset`` load the reader (h5py) on first use, not with every dataset module."""
     if name in __all__:
-        from .store import open_dataset
+        from .reader import open_dataset
 
         return open_dataset
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

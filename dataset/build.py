@@ -2,10 +2,8 @@
 
 Samples already in the file are skipped, so an interrupted build resumes where it
 stopped. With a labels file (``labels``), a sample whose remade heightmap matches its label
-takes the stored result instead of the FEM. Each worker process runs one BLAS/OpenMP thread and keeps one prepared
-``Simulator`` per configuration, so the block is meshed and assembled once per worker; the threads of a
-worker (a cluster's workers may run several) share it, and get the answers of a sequential run bit for bit
-(``Simulator`` is thread-safe and history-free).
+takes the stored result instead of the FEM. What a worker runs is in ``worker``: one ``Job`` (a sample's texture
+record and label) in, one ``Outcome`` out, which this process writes.
 
 Ctrl-C, which a terminal sends to every process of its foreground group, stops only the calling
 process: the local workers are started ignoring SIGINT, and are closed by it (``Interrupted``).
@@ -21,10 +19,8 @@ samples starts at once and the scheduler holds a few hundred tasks, not all of t
 from __future__ import annotations
 
 import contextlib
-import functools
 import json
 import sys
-import threading
 import time
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -40,21 +36,20 @@ from roughness.core.version import package_version
 from roughness.simulate.config import SimConfig
 
 from .cluster import ClusterChoice
-from .schema import DatasetConfig, result_fields, sample_id
+from .schema import DatasetConfig, sample_id
+from .worker import Failed, Job, OtherVersions, Outcome, Restored, Simulated, simulate_sample
 
 if TYPE_CHECKING:  # the texture generators load on first use (the CLI reads this module's defaults)
     from dask.distributed import Client
 
-    from .labels import Label, LabelSet
+    from .labels import LabelSet
     from .recipe import Recipe
-    from .store import DatasetWriter
+    from .writer import DatasetWriter
 
 BUILD_CONFIG = SimConfig(fidelity="coarse")  # how the project's training sets are simulated
 ENGINES = ("fem", "spectral")
 MESH_FIELDS = ("fidelity", "tolerance", "element", "h_contact_mm", "max_rounds")  # not in a spectral configuration
 WORKERS = 2  # local Dask worker processes
-_SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration, shared by its threads
-_SIMULATORS_LOCK = threading.Lock()
 PREPARATION_PROGRESS_SECONDS = 5.0  # a line on stderr this often while records are made
 IN_FLIGHT_PER_THREAD = 8  # tasks submitted ahead per worker thread: workers never wait, the scheduler holds few
 MIN_IN_FLIGHT = 64  # (workers that join later still find work)
@@ -85,58 +80,6 @@ def simulation_config(config: SimConfig, engine: str = "fem") -> dict:
 
     fields = {k: v for k, v in config.as_dict().items() if k not in MESH_FIELDS}
     return {**fields, "engine": "spectral", "engine_version": ENGINE_VERSION}
-
-
-def simulator(config: dict):
-    """This process's prepared simulator for a ``simulation_config`` record, made once."""
-    key = json.dumps(config, sort_keys=True)
-    with _SIMULATORS_LOCK:
-        if key not in _SIMULATORS:
-            if config.get("engine") == "spectral":
-                from roughness.simulate.spectral.engine import SpectralSimulator
-
-                fields = {k: v for k, v in config.items() if k not in ("engine", "engine_version")}
-                _SIMULATORS[key] = SpectralSimulator(SimConfig(**fields))
-            else:
-                from roughness.simulate.model import Simulator
-
-                _SIMULATORS[key] = Simulator(SimConfig(**config))
-        return _SIMULATORS[key]
-
-
-@functools.cache
-def worker_versions() -> dict:
-    """``cluster.versions()`` of this process, read once."""
-    from .cluster import versions
-
-    return versions()
-
-
-def simulate_record(record: dict, config: dict, label: Label | None = None, expected: dict | None = None) -> dict:
-    """Run the FEM for one sample record (on a worker), or take ``label`` if its heightmap digest matches
-    the remade texture's (result key "label"); failures come back as data. With ``expected`` (the caller's
-    ``cluster.versions()``), a worker of other versions simulates nothing and returns its own ("versions"):
-    workers that join a cluster after the build's check are checked too."""
-    from .labels import heights_digest
-    from .recipe import realise
-
-    out: dict = {"record": record, "heights": None, "pixel_mm": record["pixel_mm"]}
-    if expected is not None and (mine := worker_versions()) != expected:
-        return {**out, "versions": mine}
-    try:  # a failure is recorded with its reason, never stops the run
-        hm = realise(record)
-        out.update(heights=hm.heights.astype(np.float32), pixel_mm=hm.pixel_mm)
-    except Exception as err:
-        if label is not None and not label.heights:  # the labelled run could not make this texture either
-            return {**out, "label": label}
-        return {**out, "error": f"{type(err).__name__}: {err}"}
-    if label is not None and label.heights == heights_digest(out["heights"], hm.pixel_mm):
-        return {**out, "label": label}
-    try:
-        result = simulator(config).run(hm)
-    except Exception as err:
-        return {**out, "error": f"{type(err).__name__}: {err}"}
-    return {**out, "fields": result_fields(result), "fluctuation": result.fluctuation.astype(np.float32)}
 
 
 @dataclass
@@ -201,7 +144,7 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
     engine version differs from this process's are refused (``InputError``) before anything is submitted.
     """
     from .recipe import sample_record
-    from .store import DatasetWriter
+    from .writer import DatasetWriter
 
     n = check_size("samples of one build", integer("n", n, minimum=1), MAX_DATASET_SAMPLES, "n")
     integer("workers", workers, minimum=1)
@@ -216,9 +159,9 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
                          parameter="labels")
     known = {} if labels is None else labels.labels
     with DatasetWriter(out, file_config, package_version(), build_provenance(config, engine)) as writer:
-        pending = [(r, known.get(i)) for r, i in zip(records, ids) if i not in writer.ids]  # (record, label or None)
+        pending = [Job(r, known.get(i)) for r, i in zip(records, ids) if i not in writer.ids]
         counts = {"requested": n, "already_done": n - len(pending), "written": 0, "failed": 0, "restored": 0}
-        labelled = sum(label is not None for _, label in pending)
+        labelled = sum(job.label is not None for job in pending)
         if not quiet:
             print(f"{out}: {counts['already_done']} of {n} samples present; "
                   f"{f'{labelled} labelled (restored if their textures match), ' if labels is not None else ''}"
@@ -234,8 +177,8 @@ def build(out: str, n: int, recipe: Recipe, config: SimConfig = BUILD_CONFIG, wo
     return counts
 
 
-def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config: dict, workers: int,
-         where: ClusterChoice, counts: dict, quiet: bool) -> None:
+def _run(writer: DatasetWriter, pending: list[Job], config: dict, workers: int, where: ClusterChoice,
+         counts: dict, quiet: bool) -> None:
     from distributed import KilledWorker
 
     from .cluster import as_finished, session, versions, worker_threads
@@ -245,30 +188,37 @@ def _run(writer: DatasetWriter, pending: list[tuple[dict, Label | None]], config
         expected = versions()
         ahead = max(MIN_IN_FLIGHT, IN_FLIGHT_PER_THREAD * sum(worker_threads(client).values()))
 
-        def submit(item: tuple[dict, Label | None]):
-            return client.submit(simulate_record, item[0], config, item[1], expected, pure=False)
+        def submit(job: Job):
+            return client.submit(simulate_sample, job, config, expected, pure=False)
 
         with contextlib.closing(as_finished(client, pending, submit, ahead)) as finished:  # the rest cancelled on exit
-            for (record, _), future in finished:
+            for job, future in finished:
                 try:
-                    res = future.result()
+                    outcome = future.result()
                 except KilledWorker as err:  # the sample's workers died more often than the scheduler allows
-                    res = {"record": record, "heights": None, "pixel_mm": record["pixel_mm"],
-                           "error": f"KilledWorker: the {err.allowed_failures + 1} workers that ran it all died "
-                                    "(out of memory, or killed?)"}
-                if "versions" in res:
+                    record = job.texture_record
+                    outcome = Failed(record, None, record["pixel_mm"],
+                                     f"KilledWorker: the {err.allowed_failures + 1} workers that ran it all died "
+                                     "(out of memory, or killed?)")
+                if isinstance(outcome, OtherVersions):
                     raise InputError(f"a Dask worker that joined during the build runs other versions "
-                                     f"({res['versions']}) than this process ({expected}); start the workers from the "
-                                     "same installation (the samples written so far are kept)")
-                if "label" in res:
-                    writer.write_labelled(res["record"], res["heights"], res["pixel_mm"], res["label"].values)
-                    counts["restored"] += 1
-                elif "error" in res:
-                    writer.write_failure(res["record"], res["heights"], res["pixel_mm"], res["error"])
-                    counts["failed"] += 1
-                else:
-                    writer.write_result(res["record"], res["heights"], res["pixel_mm"], res["fields"],
-                                        res["fluctuation"])
-                    counts["written"] += 1
+                                     f"({outcome.versions}) than this process ({expected}); start the workers from "
+                                     "the same installation (the samples written so far are kept)")
+                counts[_store(writer, outcome)] += 1
                 if not quiet:
-                    progress.update("error" in res, "label" in res)
+                    progress.update(isinstance(outcome, Failed), isinstance(outcome, Restored))
+
+
+def _store(writer: DatasetWriter, outcome: Outcome) -> str:
+    """Write a worker's ``outcome``; the count it adds to ("written", "failed" or "restored")."""
+    if isinstance(outcome, Restored):
+        writer.write_labelled(outcome.texture_record, outcome.heights, outcome.pixel_mm, outcome.label.values)
+        return "restored"
+    if isinstance(outcome, Failed):
+        writer.write_failure(outcome.texture_record, outcome.heights, outcome.pixel_mm, outcome.error)
+        return "failed"
+    if isinstance(outcome, Simulated):
+        writer.write_result(outcome.texture_record, outcome.heights, outcome.pixel_mm, outcome.fields,
+                            outcome.fluctuation)
+        return "written"
+    raise TypeError(f"no way to store a {type(outcome).__name__}")

@@ -1,9 +1,9 @@
 """Labels files: a dataset's FEM results without its maps, small enough to commit beside the recipe.
 
 A build's cost is its FEM runs; its heightmaps are made again from the recipe in milliseconds.
-A labels file keeps what the FEM computed (every index entry but the recipe text) with a digest
+A labels file keeps what the FEM computed (every index entry but the texture record) with a digest
 of each sample's heightmap, so ``build(..., labels=...)`` remakes a dataset without the FEM:
-a sample whose id (the hash of its recipe record), configuration and remade heightmap all match
+a sample whose id (the hash of its texture record), configuration and remade heightmap all match
 a label takes it; any other sample is simulated. Restored samples have no strain fluctuation map
 (``Entry.restored``); nothing in training reads it.
 
@@ -29,8 +29,8 @@ from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output
 from roughness.core.hashing import array_digest
 
+from .reader import open_dataset
 from .schema import ENTRY_FIELDS, TUPLE_FIELDS, DatasetConfig
-from .store import open_dataset
 
 SCHEMA = "roughness.labels"
 VERSION = 1

@@ -1,6 +1,6 @@
 """Dataset recipes: which texture families, parameter ranges, perturbations and seeds.
 
-A recipe is a JSON file (see ``datasets/training.json``). ``expand`` turns it into sample
+A recipe is a JSON file (see ``datasets/training.json``). ``expand`` turns it into texture
 records deterministically: sample i depends only on (recipe seed, i), so a larger ``n``
 extends a dataset instead of reshuffling it. Each record holds everything that makes
 the heightmap (family, parameters, texture seed, map size, perturbation pipeline) and is
@@ -169,7 +169,7 @@ def _draw(rng: np.random.Generator, spec: tuple | list) -> float | str:
 
 
 def sample_record(recipe: Recipe, index: int) -> dict:
-    """The generator record of sample ``index`` (deterministic)."""
+    """The texture record of sample ``index`` (deterministic): a dict, whose ``sample_id`` is the sample's id."""
     rng = np.random.default_rng([recipe.seed, index])
     names = sorted(recipe.families)
     weights = np.array([recipe.families[n] for n in names], dtype=float)
@@ -189,13 +189,13 @@ def sample_record(recipe: Recipe, index: int) -> dict:
 
 
 def expand(recipe: Recipe, n: int) -> list[dict]:
-    """The first ``n`` sample records of the recipe."""
+    """The first ``n`` texture records of the recipe."""
     integer("n", n, minimum=1)
     return [sample_record(recipe, i) for i in range(n)]
 
 
 def realise(record: dict) -> Heightmap:
-    """The heightmap (mm) a sample record describes."""
+    """The heightmap (mm) a texture record describes."""
     hm, _ = make_texture(record["family"], seed=record["seed"], size_mm=record["size_mm"],
                          pixel_mm=record["pixel_mm"], params=record["params"])
     if record["perturbation"]:

@@ -7,7 +7,7 @@ Layout ("roughness.dataset", version 2)
 ``/index/<field>``       one 1-D column per ``Entry`` field, one row per sample, sorted by id: opening
                          a dataset reads these columns, never the sample groups (columns added later,
                          ``ADDED_FIELDS``, may be absent from older files: read as their defaults)
-``/samples/<id>``        ``<id> = sample_id(recipe)``, 16 hex digits
+``/samples/<id>``        ``<id> = sample_id(texture record)``, 16 hex digits
   ``heightmap``          float32 (ny, nx) heights in mm, one gzip chunk; shapes may differ between samples;
                          absent for a failed sample whose texture could not be made
   ``fluctuation``        float32 strain fluctuation map at receptor depth (ok samples that were simulated,
@@ -54,11 +54,11 @@ RESULT_ARRAYS = ("contact_history", "grid_axis_mm", "ladder")
 TUPLE_FIELDS = {"contact_history": int, "ladder_h_mm": float, "ladder_V": float}
 
 
-def sample_id(recipe: dict) -> str:
-    """16 hex digits of the SHA-1 of the recipe's canonical JSON: independent of key order."""
-    if not isinstance(recipe, dict):
-        raise TypeError(f"a recipe is a dict, got {type(recipe).__name__}")
-    return digest(recipe)
+def sample_id(texture_record: dict) -> str:
+    """16 hex digits of the SHA-1 of the texture record's canonical JSON: independent of key order."""
+    if not isinstance(texture_record, dict):
+        raise TypeError(f"a texture record is a dict, got {type(texture_record).__name__}")
+    return digest(texture_record)
 
 
 def result_fields(result: object) -> dict:
@@ -144,7 +144,7 @@ class Entry:
     """One sample's row of the index: everything about it except its maps (lengths in mm, times in s)."""
 
     id: str
-    recipe: str  # canonical JSON
+    recipe: str  # canonical JSON of the texture record (the file's column name)
     family: str
     status: str  # "ok" | "failed"
     pixel_mm: float

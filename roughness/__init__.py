@@ -26,7 +26,7 @@ from pathlib import Path
 TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (type checkers take this name as True)
 if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load on first use (``__getattr__``)
     from roughness.core.errors import InputError, SimulationError
-    from roughness.dataset.store import open_dataset
+    from roughness.dataset.reader import open_dataset
     from roughness.dataset.textures import named_texture, standard_texture
     from roughness.design.api import homogeneity, palette, tactile_image, tune
     from roughness.prediction import CurvedBase, Prediction, PredictOptions, predict
@@ -69,7 +69,7 @@ _HOMES = {
     "load_scale": "roughness.perceptual_scale",
     "standard_texture": "roughness.dataset.textures",
     "named_texture": "roughness.dataset.textures",
-    "open_dataset": "roughness.dataset.store",
+    "open_dataset": "roughness.dataset.reader",
     "tune": "roughness.design.api",
     "palette": "roughness.design.api",
     "tactile_image": "roughness.design.api",

@@ -59,16 +59,16 @@ def content_key(heightmap: Heightmap) -> str:
 
 def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dict]]]:
     """Samples of a dataset file, and its stored FEM results (by sample id) if they are reusable."""
-    from roughness.dataset.store import open_dataset
+    from roughness.dataset.reader import open_dataset
     from roughness.simulate.config import SimConfig
 
     with open_dataset(path) as data:
-        table, recipes, simulation = data.table(), data.recipes, data.config.simulation
+        table, records, simulation = data.table(), data.texture_records, data.config.simulation
     fidelity = simulation.get("fidelity")
     ok = [i for i, status in enumerate(table["status"]) if status == "ok"]
 
     samples = _DatasetSamples(path)
-    textures = [Texture(str(table["id"][i]), recipes[i]["family"], partial(samples.heightmap, str(table["id"][i])))
+    textures = [Texture(str(table["id"][i]), records[i]["family"], partial(samples.heightmap, str(table["id"][i])))
                 for i in ok]
     stored: dict[str, dict[str, dict]] = {}
     if fidelity in FEM_FIDELITIES and fem_identity(simulation) == fem_identity(SimConfig(
@@ -89,7 +89,7 @@ class _DatasetSamples:
 
     def heightmap(self, sid: str) -> Heightmap:
         if self._data is None:
-            from roughness.dataset.store import open_dataset
+            from roughness.dataset.reader import open_dataset
 
             self._data = open_dataset(self.path)
             weakref.finalize(self, self._data.close)
@@ -106,7 +106,7 @@ def folder_textures(path: Path, load: Callable[[Path], Heightmap]) -> list[Textu
 def recipe_textures(path: Path, n: int | None) -> list[Texture]:
     from roughness.core.limits import MAX_DATASET_SAMPLES, check_size
     from roughness.dataset.recipe import expand, load_recipe, realise
-    from roughness.dataset.store import sample_id
+    from roughness.dataset.schema import sample_id
 
     if n is None:
         raise InputError("a recipe input needs n, the number of its samples to compare on", parameter="n")

@@ -54,7 +54,7 @@ def _keep(jsonl: Path, row: dict) -> dict:
 
 
 def validation_rows(labels: Path, jsonl: Path) -> list[dict]:
-    from roughness.dataset.store import Dataset
+    from roughness.dataset.reader import Dataset
 
     rows, done = [], _stored(jsonl)
     with Dataset(labels) as data:
@@ -62,7 +62,7 @@ def validation_rows(labels: Path, jsonl: Path) -> list[dict]:
             if ("validation", sample.id) in done:
                 rows.append(done["validation", sample.id])
                 continue
-            row = {"set": "validation", "id": sample.id, "family": sample.recipe.get("family", "?"),
+            row = {"set": "validation", "id": sample.id, "family": sample.texture_record.get("family", "?"),
                    "V_ref": sample.values["V"], "contact_fraction_ref": sample.values["contact_fraction"]}
             for variant in VARIANTS:
                 row[variant] = _spectral(sample.heightmap, variant)

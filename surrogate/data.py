@@ -23,7 +23,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from roughness.core.errors import InputError
-from roughness.dataset.store import Dataset, Sample
+from roughness.dataset.reader import Dataset, Sample
 
 from .patch import descriptors, footprint_patch
 
@@ -113,14 +113,14 @@ def load_samples(data: Dataset | list[Dataset], test_fraction: float = 0.1, val_
                 patch = footprint_patch(sample.heightmap)
                 made[sample.id] = patch, descriptors(patch)
             patch, descr = made[sample.id]
-            split = split_of(sample.recipe, test_fraction, val_fraction, holdout_family)
+            split = split_of(sample.texture_record, test_fraction, val_fraction, holdout_family)
             for h_mm, v in rows_of:
                 level = (sample.id, engine, None if math.isnan(h_mm) else round(h_mm, 6))
                 if level in seen:
                     continue
                 seen.add(level)
                 for key, value in (("ids", sample.id), ("patches", patch), ("roughness", v), ("split", split),
-                                   ("family", sample.recipe["family"]), ("descriptors", descr), ("h_mm", h_mm),
+                                   ("family", sample.texture_record["family"]), ("descriptors", descr), ("h_mm", h_mm),
                                    ("engine", engine)):
                     rows[key].append(value)
             if progress and (i + 1) % 250 == 0:

@@ -39,11 +39,11 @@ from .domain import Domain
 from .export import RTOL, ExportError, check_patches, load_checkpoint
 from .metadata import METADATA_KEY, ModelMetadata
 from .metrics import scores
-from .versioning import set_version
 from .network import RoughnessNet
 from .patch import batch_descriptors
 from .predictor import EMBEDDING_OUTPUT, INPUT, LOG_OUTPUT, STD_OUTPUT
 from .target import roughness_from_log
+from .versioning import set_version
 
 MIN_MEMBERS = 2
 COVERAGE = 0.95  # share of validation samples within 2 sigma after scaling
@@ -191,7 +191,7 @@ def _samples(data: str | Path | list[str | Path], meta: ModelMetadata):
     from contextlib import ExitStack
 
     from roughness.dataset.digest import inputs_sha256
-    from roughness.dataset.store import open_dataset
+    from roughness.dataset.reader import open_dataset
 
     from .data import load_samples
 

@@ -44,7 +44,7 @@ from roughness.core.files import atomic_write, check_output_folder
 from roughness.core.hashing import digest
 from roughness.core.provenance import make_provenance
 from roughness.dataset.digest import inputs_sha256
-from roughness.dataset.store import Dataset, open_dataset
+from roughness.dataset.reader import Dataset, open_dataset
 
 from .config import TrainConfig
 from .data import load_samples

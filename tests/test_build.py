@@ -13,8 +13,10 @@ import pytest
 
 from roughness import dataset
 from roughness.dataset.build import build
+from roughness.dataset.inspection import verify
+from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe, expand, realise
-from roughness.dataset.store import open_dataset, sample_id, verify
+from roughness.dataset.schema import sample_id
 from roughness.simulate.config import SimConfig
 
 # A 6 mm block at the paper's contact pressure (10 N on 10 x 10 mm -> 3.6 N on 6 x 6 mm): at 10 N the
@@ -192,11 +194,13 @@ def test_labels_of_another_configuration_or_damaged_are_refused(tmp_path):
 
 
 def test_a_texture_that_cannot_be_made_takes_a_label_only_if_its_labelled_run_could_not_make_it_either():
-    from roughness.dataset.build import simulate_record
     from roughness.dataset.labels import Label
+    from roughness.dataset.worker import Failed, Job, Restored, simulate_sample
 
     record = dict(expand(RECIPE, 1)[0], family="no-such-family")
     failed = Label("", {"status": "failed", "error": "InputError: no such family"})
-    assert simulate_record(record, SMALL.as_dict(), failed)["label"] is failed
+    restored = simulate_sample(Job(record, failed), SMALL.as_dict())
+    assert isinstance(restored, Restored) and restored.label is failed and restored.heights is None
     made = Label("0123456789abcdef", {"status": "ok"})  # labelled on a texture that was made: not this run's
-    assert "no-such-family" in simulate_record(record, SMALL.as_dict(), made)["error"]
+    refused = simulate_sample(Job(record, made), SMALL.as_dict())
+    assert isinstance(refused, Failed) and "no-such-family" in refused.error

@@ -14,8 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from roughness.core.errors import InputError
+from roughness.dataset.inspection import verify
+from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe, expand
-from roughness.dataset.store import open_dataset, sample_id, verify
+from roughness.dataset.schema import sample_id
 
 ROOT = Path(__file__).parents[1]
 N = 4

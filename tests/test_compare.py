@@ -14,7 +14,7 @@ from roughness.cli import main
 from roughness.compare import SETUP_KEY
 from roughness.core.errors import InputError
 from roughness.dataset.recipe import Recipe, realise, sample_record
-from roughness.dataset.store import DatasetWriter
+from roughness.dataset.writer import DatasetWriter
 from roughness.engines import make_engine
 from roughness.report import break_even, pareto_front
 from roughness.simulate.config import SimConfig
@@ -257,7 +257,8 @@ def test_cached_results_follow_the_engine_identity(tiny_set, tmp_path, capsys):
 
 def test_a_dataset_sample_has_the_content_key_of_its_texture(tiny_set):
     from roughness.compare import content_key
-    from roughness.dataset.store import open_dataset, sample_id
+    from roughness.dataset.reader import open_dataset
+    from roughness.dataset.schema import sample_id
 
     recipe = Recipe(name="tiny", seed=8, families={"bumps": 1, "fbm": 1, "woven": 1, "grating": 1})
     with open_dataset(tiny_set) as data:

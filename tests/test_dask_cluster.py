@@ -17,10 +17,12 @@ import pytest
 from test_build_distributed import start, wait_for
 
 from roughness.core.errors import InputError
-from roughness.dataset import build
+from roughness.dataset import build, worker
 from roughness.dataset.cluster import ClusterChoice, versions
+from roughness.dataset.inspection import verify
+from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe, expand, realise
-from roughness.dataset.store import open_dataset, sample_id, verify
+from roughness.dataset.schema import sample_id
 
 ROOT = Path(__file__).parents[1]
 SEED = 3  # the CLI's default recipe (bump textures) with this seed
@@ -49,12 +51,12 @@ def by_value():
 
 def _die_on_the_next_sample() -> None:
     """Run on a worker: its next sample kills it (as the kernel's OOM killer would); the nanny starts a new one."""
-    from roughness.dataset import build as worker_build
+    from roughness.dataset import worker
 
     def die(*_):
         os._exit(1)
 
-    worker_build.simulate_record = die
+    worker.simulate_sample = die
 
 
 def _allowing(n: int):
@@ -176,9 +178,9 @@ def test_a_worker_of_other_versions_simulates_nothing():
     """Each task checks its worker (workers may join after the build's check)."""
     record = expand(Recipe(seed=SEED), 1)[0]
     config = build.simulation_config(build.BUILD_CONFIG, "spectral")
-    res = build.simulate_record(record, config, None, {**versions(), "roughness": "0.0.0-other"})
-    assert res["versions"] == versions() and "fields" not in res and "error" not in res
-    assert "fields" in build.simulate_record(record, config, None, versions())
+    res = worker.simulate_sample(worker.Job(record), config, {**versions(), "roughness": "0.0.0-other"})
+    assert isinstance(res, worker.OtherVersions) and res.versions == versions()
+    assert isinstance(worker.simulate_sample(worker.Job(record), config, versions()), worker.Simulated)
 
 
 def test_workers_of_another_version_are_refused_before_any_work(cluster, tmp_path):
@@ -238,7 +240,7 @@ def test_a_spectral_build_on_a_worker_with_two_threads_equals_the_sequential_ans
     sim = SpectralSimulator(config)
     sequential = [sim.run(realise(r)) for r in records]
     for attempt in range(2):
-        monkeypatch.setattr(build, "_SIMULATORS", {})
+        monkeypatch.setattr(worker, "_SIMULATORS", {})
         out = tmp_path / f"t{attempt}.h5"
         with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=":0") as local:
             counts = build.build(str(out), len(records), recipe, config, scheduler=local.scheduler_address,

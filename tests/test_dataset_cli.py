@@ -15,7 +15,7 @@ import pytest
 
 from roughness.cli import main
 from roughness.dataset.recipe import Recipe
-from roughness.dataset.store import DatasetWriter
+from roughness.dataset.writer import DatasetWriter
 
 ROOT = Path(__file__).parents[1]
 GOOD_RECIPE = json.loads(Recipe(name="sweep", families={"bumps": 1.0, "fbm": 1.0}).to_json())

@@ -256,13 +256,13 @@ def near_zero(tmp_path, monkeypatch):
 
     Image.fromarray(np.repeat(np.uint8([[0, 128, 255]]), 30, axis=0).repeat(3, axis=1)[..., None].repeat(3, axis=2)
                     ).save(tmp_path / "picture.png")
-    from test_store import CONFIG, fields, recipe
+    from test_store import CONFIG, fields, texture_record
 
-    from roughness.dataset.store import DatasetWriter
+    from roughness.dataset.writer import DatasetWriter
 
     with DatasetWriter(tmp_path / "zero.h5", CONFIG, "test") as writer:
         for i in range(2):
-            writer.write_result(recipe(i), np.zeros((40, 40)), 0.05,
+            writer.write_result(texture_record(i), np.zeros((40, 40)), 0.05,
                                 {**fields(i), "roughness": 0.0, "roughness_stderr": 0.0, "discretization_error": 0.0},
                                 np.zeros((40, 40)))
     monkeypatch.chdir(tmp_path)

@@ -143,13 +143,13 @@ def test_tactile_image_picture_bomb(width, height, workdir, capsys):
 
 
 def test_dataset_map_bomb_is_refused_before_reading(tmp_path):
-    from roughness.dataset.store import _group_maps
+    from roughness.dataset.layout import group_maps
 
     with h5py.File(tmp_path / "d.h5", "w") as f:
         group = f.create_group("samples/x")
         group.create_dataset("heightmap", shape=(HUGE, HUGE), dtype="f4", chunks=(1000, 1000), compression="gzip")
         with pytest.raises(InputError, match="MAX_HEIGHTMAP_PIXELS"):
-            _group_maps(group)
+            group_maps(group)
 
 
 # --- options that imply huge arrays or loops --------------------------------------------------------

@@ -21,11 +21,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_bad_inputs import BASE, PARSERS, _expect_refusal, _run, workdir  # noqa: F401 (workdir: a fixture)
 
 from roughness.core.errors import InputError, OutputExists
 from roughness.core.files import atomic_write, check_distinct
-
-from test_bad_inputs import BASE, PARSERS, _expect_refusal, _run, workdir  # noqa: F401 (workdir: a fixture)
 
 # Every path option of every subcommand: (inputs it reads, outputs it writes). An input is a position
 # in BASE's argv or a flag; a flag absent from BASE gets INPUT_VALUE's file.
@@ -275,7 +274,7 @@ def test_full_disk_during_train_is_exit_2_and_leaves_no_run_folder(tmp_path, cap
     from test_surrogate import CONFIG, fake_fields
 
     from roughness.dataset.recipe import Recipe, realise, sample_record
-    from roughness.dataset.store import DatasetWriter
+    from roughness.dataset.writer import DatasetWriter
     from roughness.surrogate.patch import descriptors, footprint_patch
 
     data = tmp_path / "small.h5"

@@ -12,8 +12,8 @@ import pytest
 from roughness.cli import main
 from roughness.dataset import build
 from roughness.dataset.cluster import local_cluster
+from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe
-from roughness.dataset.store import open_dataset
 from roughness.engines import ClassicalEngine
 from roughness.simulate.config import SimConfig
 
@@ -98,8 +98,8 @@ def fake_run(stop_after: int):
     then Ctrl-C."""
 
     def run(writer, pending, config, workers, scheduler, counts, quiet):
-        for record, _ in pending[:stop_after]:
-            writer.write_failure(record, None, record["pixel_mm"], "stand-in")
+        for job in pending[:stop_after]:
+            writer.write_failure(job.texture_record, None, job.texture_record["pixel_mm"], "stand-in")
             counts["failed"] += 1
         raise KeyboardInterrupt
 

@@ -305,16 +305,17 @@ def test_variation_interpolates_as_map_coordinates():
 
 def test_dataset_workers_label_with_the_spectral_engine():
     """A spectral dataset's record names its engine (no mesh fields) and the workers' answer is the engine's."""
-    from roughness.dataset.build import BUILD_CONFIG, simulate_record, simulation_config
+    from roughness.dataset.build import BUILD_CONFIG, simulation_config
     from roughness.dataset.recipe import Recipe, expand, realise
+    from roughness.dataset.worker import Job, simulate_sample
 
     config = simulation_config(BUILD_CONFIG, "spectral")
     assert config["engine"] == "spectral" and "fidelity" not in config and "h_contact_mm" not in config
     record = expand(Recipe(), 1)[0]
-    out = simulate_record(record, config)
+    out = simulate_sample(Job(record), config)
     expected = SpectralSimulator(SimConfig(**{k: v for k, v in config.items() if not k.startswith("engine")}))
-    assert out["fields"]["roughness"] == expected.run(realise(record)).roughness
-    assert out["fields"]["discretization_error"] is None and out["fields"]["unresolved_nodes"] == 0
+    assert out.fields["roughness"] == expected.run(realise(record)).roughness
+    assert out.fields["discretization_error"] is None and out.fields["unresolved_nodes"] == 0
     with pytest.raises(InputError, match="engine must be one of"):
         simulation_config(BUILD_CONFIG, "magic")
 

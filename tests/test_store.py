@@ -15,25 +15,20 @@ import numpy as np
 import pytest
 
 from roughness.core.errors import InputError
-from roughness.dataset import store
+from roughness.dataset import writer as dataset_writer
 from roughness.dataset.digest import inputs_sha256
-from roughness.dataset.schema import DatasetConfig
-from roughness.dataset.store import (
-    DatasetWriter,
-    info,
-    open_dataset,
-    parts_folder,
-    result_fields,
-    sample_id,
-    verify,
-)
+from roughness.dataset.inspection import info, verify
+from roughness.dataset.layout import parts_folder
+from roughness.dataset.reader import open_dataset
+from roughness.dataset.schema import DatasetConfig, result_fields, sample_id
+from roughness.dataset.writer import DatasetWriter
 
 ROOT = Path(__file__).parents[1]
 CONFIG = {"simulation": {"force_n": 10.0, "fidelity": "coarse", "h_contact_mm": None}, "recipe": {"seed": 0}}
 N = 12
 
 
-def recipe(i: int) -> dict:
+def texture_record(i: int) -> dict:
     return {"family": "fbm" if i % 3 else "woven", "params": {"hurst": 0.5 + i / 100}, "seed": i,
             "perturbation": {"tilt_deg": 0.0}}
 
@@ -49,7 +44,7 @@ def fields(i: int) -> dict:
 def sample(i: int) -> tuple:
     """write_result arguments of test sample ``i``: 40x40 maps (ok samples' heights differ in shape)."""
     rng = np.random.default_rng(i)
-    return recipe(i), rng.random((40, 40 + i % 2)), 0.05, fields(i), rng.normal(size=(40, 40))
+    return texture_record(i), rng.random((40, 40 + i % 2)), 0.05, fields(i), rng.normal(size=(40, 40))
 
 
 def fill(path: Path, indices) -> list[bool]:
@@ -68,9 +63,9 @@ def test_round_trip_of_results_and_failures(tmp_path):
     assert not parts_folder(path).exists()
     with open_dataset(path) as ds:
         assert len(ds) == 5 and ds.ids == sorted(ds.ids)
-        assert sorted(ds.ids) == sorted([sample_id(recipe(i)) for i in range(3)]
+        assert sorted(ds.ids) == sorted([sample_id(texture_record(i)) for i in range(3)]
                                         + [sample_id(bad), sample_id({"family": "woven", "seed": 8})])
-        assert recipe(1) in ds.recipes and bad in ds.recipes
+        assert texture_record(1) in ds.texture_records and bad in ds.texture_records
         assert ds.config == DatasetConfig(**CONFIG) and ds.header.roughness_version == "1.2.3"
         assert ds.header.schema_version == 2
         rec, heights, pixel, values, strain = sample(1)
@@ -114,12 +109,12 @@ def test_writes_are_idempotent(tmp_path):
     path = tmp_path / "d.h5"
     with DatasetWriter(path, CONFIG, "test") as writer:
         assert writer.write_result(*sample(0))
-        shuffled = dict(reversed(list(recipe(0).items())))
+        shuffled = dict(reversed(list(texture_record(0).items())))
         assert not writer.write_result(shuffled, *sample(0)[1:])
-        assert not writer.write_failure(recipe(0), None, 0.05, "late failure")
-        assert writer.write_failure(recipe(1), None, 0.05, "failed")
+        assert not writer.write_failure(texture_record(0), None, 0.05, "late failure")
+        assert writer.write_failure(texture_record(1), None, 0.05, "failed")
         assert not writer.write_result(*sample(1))
-        assert writer.ids == {sample_id(recipe(0)), sample_id(recipe(1))}
+        assert writer.ids == {sample_id(texture_record(0)), sample_id(texture_record(1))}
     with open_dataset(path) as ds:
         assert len(ds) == 2 and ds.table()["status"].tolist().count("ok") == 1
 
@@ -164,7 +159,7 @@ def test_reading_while_the_writer_appends(tmp_path):
             assert len(ds) == 1
             for i in range(1, 4):
                 writer.write_result(*sample(i))
-            assert ds.heightmap(sample_id(recipe(0))).shape == (40, 40)
+            assert ds.heightmap(sample_id(texture_record(0))).shape == (40, 40)
         with open_dataset(path) as ds:
             assert len(ds) == 4
 
@@ -183,12 +178,12 @@ def test_an_exception_mid_sample_rolls_back(tmp_path, monkeypatch):
         with pytest.raises(KeyboardInterrupt):
             writer.write_result(*sample(1))
         monkeypatch.setattr(np, "savez_compressed", real)
-        assert writer.ids == {sample_id(recipe(0))}
-        assert os.listdir(parts_folder(path)) == [f"{sample_id(recipe(0))}.npz"]
+        assert writer.ids == {sample_id(texture_record(0))}
+        assert os.listdir(parts_folder(path)) == [f"{sample_id(texture_record(0))}.npz"]
         assert writer.write_result(*sample(1))
     assert verify(path) == []
     with h5py.File(path, "r") as f:
-        assert sorted(f["samples"]) == sorted(f["index"]["id"].asstr()[()]) == sorted(sample_id(recipe(i))
+        assert sorted(f["samples"]) == sorted(f["index"]["id"].asstr()[()]) == sorted(sample_id(texture_record(i))
                                                                                         for i in range(2))
 
 
@@ -209,7 +204,7 @@ def test_invalid_samples_are_refused_before_writing(tmp_path):
 def test_verify_catches_tampering(tmp_path):
     path = tmp_path / "d.h5"
     fill(path, range(3))
-    ids = sorted(sample_id(recipe(i)) for i in range(3))
+    ids = sorted(sample_id(texture_record(i)) for i in range(3))
     with h5py.File(path, "r+") as f:
         f["index"]["V"][0] = np.nan
         f["index"]["status"][1] = "maybe"
@@ -298,7 +293,7 @@ def test_version_1_files_are_read_and_converted_by_the_next_writer(tmp_path):
     assert stored_indices(path) == [0, 1, 2, 3, 4]
     new = tmp_path / "new.h5"
     fill(new, range(3))
-    assert inputs_sha256(new) == checksum  # ids, recipes and heightmaps read alike from both layouts
+    assert inputs_sha256(new) == checksum  # ids, texture records and heightmaps read alike from both layouts
 
 
 def test_the_dataset_layer_imports_no_upper_layer():
@@ -313,7 +308,7 @@ def test_the_dataset_layer_imports_no_upper_layer():
 
 
 def values_of(sid: str) -> float:
-    return next(fields(i)["roughness"] for i in range(N) if sample_id(recipe(i)) == sid)
+    return next(fields(i)["roughness"] for i in range(N) if sample_id(texture_record(i)) == sid)
 
 
 def test_opening_reads_the_index_not_the_sample_groups(tmp_path, monkeypatch):
@@ -325,7 +320,7 @@ def test_opening_reads_the_index_not_the_sample_groups(tmp_path, monkeypatch):
 
     monkeypatch.setattr(h5py.Group, "items", walked)
     with open_dataset(path) as ds:
-        assert len(ds) == 4 and len(ds.table()["V"]) == 4 and len(ds.recipes) == 4
+        assert len(ds) == 4 and len(ds.table()["V"]) == 4 and len(ds.texture_records) == 4
 
 
 def test_reading_while_the_writer_packs(tmp_path):
@@ -339,7 +334,7 @@ def test_reading_while_the_writer_packs(tmp_path):
             assert len(during) == 3 and len(before) == 2
             maps = [s.fluctuation.shape for s in during.iter_samples()]  # the part is packed by now
             assert maps == [(40, 40)] * 3
-        assert before.heightmap(sample_id(recipe(0))).shape == (40, 40)  # the replaced file stays readable
+        assert before.heightmap(sample_id(texture_record(0))).shape == (40, 40)  # the replaced file stays readable
 
 
 # --- crash safety: writer processes that die ------------------------------------------------------
@@ -351,7 +346,7 @@ CHILD = """
 import sys, time
 sys.path[:0] = [{root!r}, {tests!r}]
 import test_store as t
-from roughness.dataset.store import DatasetWriter
+from roughness.dataset.writer import DatasetWriter
 path, n = sys.argv[1], int(sys.argv[2])
 with DatasetWriter(path, t.CONFIG, "test") as writer:
     for i in range(n):
@@ -380,11 +375,11 @@ def stored_indices(path: Path, unfinished_ok: bool = False) -> list[int]:
     problems = verify(path)
     assert problems == [] or (unfinished_ok and all("unfinished" in p for p in problems)), problems
     with open_dataset(path) as ds:
-        by_id = {sample_id(recipe(i)): i for i in range(N)}
+        by_id = {sample_id(texture_record(i)): i for i in range(N)}
         assert set(ds.ids) <= set(by_id) and len(set(ds.ids)) == len(ds)
         for s in ds.iter_samples(None):
             rec, heights, _, values, strain = sample(by_id[s.id])
-            assert s.recipe == rec and s.values["V"] == values["roughness"]
+            assert s.texture_record == rec and s.values["V"] == values["roughness"]
             assert np.array_equal(s.heightmap.heights, heights.astype(np.float32))
             assert np.array_equal(s.fluctuation, strain.astype(np.float32))
         return sorted(by_id[sid] for sid in ds.ids)
@@ -407,7 +402,7 @@ def test_killed_writers_lose_and_duplicate_nothing(tmp_path):
 
 
 STEPS = [(os, "replace"), (os, "unlink"), (os, "rmdir"), (shutil, "copyfile"), (np, "savez_compressed"),
-         (store, "_put_maps"), (store, "_write_index")]
+         (dataset_writer, "_put_maps"), (dataset_writer, "_write_index")]
 
 
 def run_until_step(path: Path, k: int, indices: range) -> tuple[int, list[int]]:

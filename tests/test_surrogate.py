@@ -16,11 +16,12 @@ import torch
 
 from roughness.core.errors import InputError
 from roughness.dataset.digest import inputs_sha256
+from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe, realise, sample_record
-from roughness.dataset.store import DatasetWriter, open_dataset
 from roughness.dataset.textures import standard_texture
-from roughness.prediction import PredictOptions, predict
+from roughness.dataset.writer import DatasetWriter
 from roughness.perceptual_scale import StandardScale, load_scale
+from roughness.prediction import PredictOptions, predict
 from roughness.simulate.linsolve import CG_RTOL
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import save_heightmap

@@ -7,7 +7,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pytest
 
-from roughness.dataset import build
+from roughness.dataset import build, worker
 from roughness.dataset.recipe import Recipe, expand, realise
 from roughness.simulate.config import SimConfig
 from roughness.simulate.model import Simulator
@@ -57,25 +57,27 @@ def test_an_answer_does_not_depend_on_what_was_solved_before(records, sequential
 
 
 def test_the_build_workers_function_from_threads_equals_the_sequential_build(records, sequential, monkeypatch):
-    """``simulate_record``, what the Dask workers run, from threads sharing the worker's simulators."""
-    monkeypatch.setattr(build, "_SIMULATORS", {})
+    """``simulate_sample``, what the Dask workers run, from threads sharing the worker's simulators."""
+    monkeypatch.setattr(worker, "_SIMULATORS", {})
     config = CONFIG.as_dict()
     with ThreadPoolExecutor(THREADS) as pool:
-        results = list(pool.map(lambda record: build.simulate_record(record, config), records * REPEATS))
-    assert len(build._SIMULATORS) == 1  # one simulator per configuration and process, shared by the threads
+        results = list(pool.map(lambda record: worker.simulate_sample(worker.Job(record), config),
+                                records * REPEATS))
+    assert len(worker._SIMULATORS) == 1  # one simulator per configuration and process, shared by the threads
     for res, (v, fluctuation) in zip(results, sequential * REPEATS):
-        assert "error" not in res
-        assert res["fields"]["roughness"] == v
-        assert np.array_equal(res["fluctuation"], fluctuation.astype(np.float32))
+        assert isinstance(res, worker.Simulated)
+        assert res.fields["roughness"] == v
+        assert np.array_equal(res.fluctuation, fluctuation.astype(np.float32))
 
 
 def test_a_dask_worker_with_several_threads_builds_the_sequential_dataset(records, sequential, tmp_path, monkeypatch):
     """``build`` on a cluster whose one worker runs THREADS threads (in this process, sharing its simulators)."""
     from dask.distributed import LocalCluster
 
-    from roughness.dataset.store import open_dataset, sample_id
+    from roughness.dataset.reader import open_dataset
+    from roughness.dataset.schema import sample_id
 
-    monkeypatch.setattr(build, "_SIMULATORS", {})
+    monkeypatch.setattr(worker, "_SIMULATORS", {})
     out = tmp_path / "threads.h5"
     with LocalCluster(n_workers=1, threads_per_worker=THREADS, processes=False, dashboard_address=":0") as cluster:
         counts = build.build(str(out), len(records), RECIPE, CONFIG, scheduler=cluster.scheduler_address,

@@ -93,14 +93,14 @@ def labels(args: argparse.Namespace) -> int:
 
 
 def info(args: argparse.Namespace) -> int:
-    from roughness.dataset.store import info
+    from roughness.dataset.inspection import info
 
     write_stdout(json_text(info(args.dataset), indent=None if args.json else 1, default=str))
     return 0
 
 
 def verify(args: argparse.Namespace) -> int:
-    from roughness.dataset.store import verify
+    from roughness.dataset.inspection import verify
 
     problems = verify(args.dataset)
     lines = [f"problem: {p}" for p in problems] + [f"{args.dataset}: {f'{len(problems)} problem(s)' if problems else 'OK'}"]

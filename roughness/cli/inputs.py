@@ -38,7 +38,7 @@ class InputReader:
         if path.is_dir():
             return [item for f in heightmap_files(path) for item in self._expand(f)]
         if path.suffix.lower() in (".h5", ".hdf5") and _is_dataset(path):
-            from roughness.dataset.store import open_dataset
+            from roughness.dataset.reader import open_dataset
 
             with open_dataset(path) as data:
                 ids = [sid for sid, status in zip(data.ids, data.table()["status"]) if status == "ok"]
@@ -66,7 +66,7 @@ class InputReader:
         if sid is None:
             return self._load_file(str(path), self.total > 1)
         if path not in datasets:
-            from roughness.dataset.store import open_dataset
+            from roughness.dataset.reader import open_dataset
 
             datasets[path] = open_dataset(path)
         return datasets[path].heightmap(sid)
