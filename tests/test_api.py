@@ -1,4 +1,4 @@
-"""The public Python API as notebook users meet it: dir(), help(), type checking of the README's examples,
+"""The public Python API as notebook users meet it: dir(), help(), type checking of the documented examples,
 NumPy arrays wherever a heightmap is taken, short reprs, and plots that return Figures and leave the backend."""
 from __future__ import annotations
 
@@ -15,7 +15,10 @@ from matplotlib.figure import Figure
 
 import roughness
 from roughness.core.errors import InputError
-from tests.test_packaging import installed  # noqa: F401 (the fixture: the wheel in a fresh environment)
+from tests.test_packaging import (
+    doc_python_blocks,
+    installed,  # noqa: F401 (the fixture: the wheel in a fresh environment)
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 LIBRARY = ("roughness", "simulate", "dataset", "surrogate", "models")  # installed as roughness.*
@@ -54,10 +57,9 @@ print(json.dumps({{"heavy": heavy, "dir": names, "all": roughness.__all__, "help
     assert "class Heightmap" in help_text
 
 
-def _readme_examples() -> list[str]:
-    """The README's Python examples: its ```python blocks that start with ``import roughness``."""
-    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
-    return [b for b in blocks if b.startswith("import roughness")]
+def _doc_examples() -> list[str]:
+    """The Python examples of the README and the manual: their ```python blocks that start with ``import roughness``."""
+    return [b for b in doc_python_blocks().values() if b.startswith("import roughness")]
 
 
 def _installed_layout(tmp_path: Path) -> Path:
@@ -73,11 +75,11 @@ def _installed_layout(tmp_path: Path) -> Path:
     return tree
 
 
-def test_mypy_passes_on_the_readme_python_examples_and_sees_real_types(tmp_path):
-    examples = _readme_examples()
+def test_mypy_passes_on_the_documented_python_examples_and_sees_real_types(tmp_path):
+    examples = _doc_examples()
     assert len(examples) >= 3 and any("pixel_mm=" in e and "roughness.tune(" in e for e in examples)
     # each example in a function of its own, so names do not clash between them
-    (tmp_path / "readme_examples.py").write_text("\n".join(
+    (tmp_path / "doc_examples.py").write_text("\n".join(
         f"def example_{i}() -> None:\n" + "".join(f"    {line}\n" for line in block.splitlines())
         for i, block in enumerate(examples)))
     # the control: mypy must find these wrong, so the public names are typed, not Any
@@ -86,12 +88,12 @@ def test_mypy_passes_on_the_readme_python_examples_and_sees_real_types(tmp_path)
                                          "p.roughness.upper()\n"
                                          "roughness.homogeneity(roughness.standard_texture(1.0)).verdict + 1\n")
     out = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
-                          "--cache-dir", str(tmp_path / "cache"), "--no-error-summary", "readme_examples.py",
+                          "--cache-dir", str(tmp_path / "cache"), "--no-error-summary", "doc_examples.py",
                           "control.py"], capture_output=True, text=True, cwd=tmp_path,
                          env={"MYPYPATH": str(_installed_layout(tmp_path)), "PATH": "/usr/bin:/bin"})
     assert out.returncode == 1, out.stdout + out.stderr  # mypy is in the test extra: missing, this fails
     errors = out.stdout.splitlines()
-    assert [e for e in errors if e.startswith("readme_examples.py")] == []
+    assert [e for e in errors if e.startswith("doc_examples.py")] == []
     control = "\n".join(e for e in errors if e.startswith("control.py"))
     assert 'Argument "engine" to "predict" has incompatible type "int"' in control
     assert '"float" has no attribute "upper"' in control
@@ -318,7 +320,7 @@ def test_library_code_never_selects_a_backend_or_uses_pyplot():
     assert offenders == []
 
 
-def test_wheel_ships_the_py_typed_marker(installed):
+def test_wheel_ships_the_py_typed_marker(installed):  # noqa: F811 (the fixture imported above)
     from tests.test_packaging import _purelib
 
     assert (_purelib(installed) / "roughness" / "py.typed").is_file()

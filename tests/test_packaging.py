@@ -1,4 +1,4 @@
-"""One import name: the wheel installs ``roughness`` only, and the README's Python examples run."""
+"""One import name: the wheel installs ``roughness`` only, and the Python examples of the README and the manual run."""
 from __future__ import annotations
 
 import os
@@ -21,7 +21,8 @@ PUBLIC_API = ("Heightmap", "InputError", "SimulationError", "load_heightmap", "s
 
 def _source_copy(dest: Path) -> Path:
     """The project's files as a fresh clone would have them (no build or cache folders)."""
-    ignore = shutil.ignore_patterns(".git", "build", "*.egg-info", "__pycache__", ".pytest_cache", "venv", "*.h5")
+    ignore = shutil.ignore_patterns(".git", "build", "*.egg-info", "__pycache__", ".pytest_cache", "venv", "*.h5",
+                                    "_build", "repo")  # the manual's build and its generated mirror (docs/)
     shutil.copytree(ROOT, dest, ignore=ignore)
     return dest
 
@@ -114,18 +115,23 @@ def test_checkout_imports_the_checkout():
     assert Path(roughness.__file__).resolve() == ROOT / "roughness" / "__init__.py"
 
 
-def _readme_python_blocks() -> list[str]:
-    return re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
+def doc_python_blocks() -> dict[str, str]:
+    """The ```python blocks of the README and of the manual's pages (docs/, not its generated repo/ and _build/),
+    by ``FILE:N``: each runs as it stands from the repository root. Code shown but not run (it needs a cluster)
+    is a ``{code-block} python`` instead."""
+    pages = [ROOT / "README.md"] + sorted(p for p in (ROOT / "docs").rglob("*.md")
+                                         if not {"repo", "_build"} & set(p.relative_to(ROOT / "docs").parts))
+    return {f"{page.relative_to(ROOT)}:{n}": block for page in pages
+            for n, block in enumerate(re.findall(r"```python\n(.*?)```", page.read_text(), flags=re.S), 1)}
 
 
-def test_readme_has_python_examples():
-    blocks = _readme_python_blocks()
-    assert len(blocks) >= 2
-    assert all("import roughness" in b for b in blocks)
+def test_readme_and_manual_have_python_examples():
+    blocks = doc_python_blocks()
+    assert any(name.startswith("README.md:") for name in blocks) and len(blocks) >= 3
+    assert all("import roughness" in b for b in blocks.values())
 
 
-@pytest.mark.parametrize("index", range(len(_readme_python_blocks())))
-def test_readme_python_example_runs(index):
-    code = _readme_python_blocks()[index]
-    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
+@pytest.mark.parametrize("name", list(doc_python_blocks()))
+def test_readme_and_manual_python_example_runs(name):
+    out = subprocess.run([sys.executable, "-c", doc_python_blocks()[name]], cwd=ROOT, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
