@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 
+from roughness.cluster import ClusterChoice
 from roughness.core.checks import integer
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_DATASET_SAMPLES, check_size
@@ -35,7 +36,6 @@ from roughness.core.provenance import Provenance, make_provenance
 from roughness.core.version import package_version
 from roughness.simulate.config import SimConfig
 
-from .cluster import ClusterChoice
 from .schema import DatasetConfig, sample_id
 from .worker import Failed, Job, OtherVersions, Outcome, Restored, Simulated, simulate_sample
 
@@ -181,7 +181,7 @@ def _run(writer: DatasetWriter, pending: list[Job], config: dict, workers: int, 
          counts: dict, quiet: bool) -> None:
     from distributed import KilledWorker
 
-    from .cluster import as_finished, session, versions, worker_threads
+    from roughness.cluster import as_finished, session, versions, worker_threads
 
     progress = Progress(total=len(pending), start=time.perf_counter())
     with session(where, workers, quiet) as client:

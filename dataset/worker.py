@@ -92,7 +92,7 @@ def simulator(config: dict):
 @functools.cache
 def worker_versions() -> dict:
     """``cluster.versions()`` of this process, read once."""
-    from .cluster import versions
+    from roughness.cluster import versions
 
     return versions()
 

@@ -86,7 +86,7 @@ def predict_map(heightmap: Heightmap | np.ndarray, engine: str = "surrogate", st
     MapPrediction
         The map, its engine, notes (windows, partial contact) and provenance.
     """
-    from roughness.dataset.cluster import ClusterChoice
+    from roughness.cluster import ClusterChoice
     from roughness.engines import model_provenance, spectral_provenance
 
     if engine not in MAP_ENGINES:

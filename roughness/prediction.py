@@ -312,8 +312,8 @@ class _Dispatch:
 
 def _curvature_corrected(roughness: float, curved: CurvedBase, notes: list[str]) -> tuple[float, float | None]:
     """A flat engine's V on a cylinder or sphere of signed radius (mm): times the curvature study's measured
-    correction (``roughness.objects.correction``), with its error (V); a note says which (or why none)."""
-    from roughness.objects.correction import for_base
+    correction (``roughness.curvature_correction``), with its error (V); a note says which (or why none)."""
+    from roughness.curvature_correction import for_base
 
     if curved.texture_along != "normal":
         notes.append("curved base: no correction was measured for heights along z; the flat V is given")

@@ -182,7 +182,7 @@ def test_shipped_curvature_range_comes_from_the_committed_study():
 
 def test_predict_routes_curved_bases_by_the_range(tmp_path, monkeypatch):
     from roughness import prediction
-    from roughness.objects import correction
+    from roughness import curvature_correction as correction
     from roughness.prediction import CurvedBase, PredictOptions, predict
 
     def on(radius_mm: float, shape: str = "cylinder", tile: bool = False) -> PredictOptions:
@@ -195,7 +195,7 @@ def test_predict_routes_curved_bases_by_the_range(tmp_path, monkeypatch):
     hm = standard_texture(1.0, seed=0)
     [flat_answer] = predict(hm, engine="surrogate")
     [inside] = predict(hm, engine="surrogate", options=on(40.0))
-    # inside the range the flat answer is corrected by the study's measurement (roughness.objects.correction)
+    # inside the range the flat answer is corrected by the study's measurement (roughness.curvature_correction)
     fix = correction.for_base(40.0, "cylinder")
     assert inside.engine == "surrogate" and inside.roughness == pytest.approx(flat_answer.roughness * fix.factor)
     assert inside.domain_notes == flat_answer.domain_notes + [fix.note] and inside.in_domain

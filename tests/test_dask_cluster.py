@@ -18,7 +18,7 @@ from test_build_distributed import start, wait_for
 
 from roughness.core.errors import InputError
 from roughness.dataset import build, worker
-from roughness.dataset.cluster import ClusterChoice, versions
+from roughness.cluster import ClusterChoice, versions
 from roughness.dataset.inspection import verify
 from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe, expand, realise
@@ -208,7 +208,7 @@ def test_workers_of_another_version_are_refused_before_any_work(cluster, tmp_pat
      "argument --scheduler-file: not allowed with argument --scheduler"),
 ])
 def test_a_cluster_that_cannot_be_used_is_a_clear_input_error(tmp_path, options, message, monkeypatch, capsys):
-    from roughness.dataset import cluster as cluster_module
+    from roughness import cluster as cluster_module
 
     monkeypatch.setattr(cluster_module, "CONNECT_TIMEOUT_S", 2)
     monkeypatch.chdir(tmp_path)
@@ -258,7 +258,7 @@ def test_workers_that_may_run_several_blas_threads_are_noted(tmp_path, monkeypat
     """An in-process worker sees this process's environment: OMP_NUM_THREADS=4 and no OpenBLAS variable."""
     from dask.distributed import LocalCluster
 
-    from roughness.dataset.cluster import one_blas_thread
+    from roughness.cluster import one_blas_thread
 
     assert one_blas_thread({"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": None, "MKL_NUM_THREADS": None})
     assert not one_blas_thread({"OMP_NUM_THREADS": None, "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"})

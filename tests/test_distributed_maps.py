@@ -159,7 +159,7 @@ def test_the_windows_of_a_map_on_a_two_worker_cluster_equal_the_map_solved_here(
 
 
 def test_a_worker_of_other_versions_solves_no_window(rough):
-    from roughness.dataset.cluster import versions
+    from roughness.cluster import versions
     from roughness.simulate.spectral.distributed import solve_on_worker
 
     task = maps.MapTask(np.asarray(rough.heights), rough.pixel_mm, np.array([20.0]), np.array([20.0]), False,

@@ -16,7 +16,7 @@ from roughness.core.errors import InputError  # noqa: E402
 from roughness.core.hashing import file_sha256  # noqa: E402
 from roughness.dataset.textures import standard_texture  # noqa: E402
 from roughness.prediction import PredictOptions, predict  # noqa: E402
-from roughness.objects import correction  # noqa: E402
+from roughness import curvature_correction as correction  # noqa: E402
 from roughness.objects.curvature import SurfaceSamples, principal_curvatures  # noqa: E402
 from roughness.objects.feel import CANNOT_REST, OFF_OBJECT, feel_map  # noqa: E402
 

@@ -11,7 +11,7 @@ import pytest
 
 from roughness.cli import main
 from roughness.dataset import build
-from roughness.dataset.cluster import local_cluster
+from roughness.cluster import local_cluster
 from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe
 from roughness.engines import ClassicalEngine

@@ -177,7 +177,7 @@ def readings(args: argparse.Namespace) -> list[dict]:
 
 
 def add_cluster_args(p: argparse.ArgumentParser, what: str, workers: int, default: int | None) -> None:
-    """Where the command does ``what`` (a verb phrase) on Dask (roughness.dataset.cluster): ``--workers`` local
+    """Where the command does ``what`` (a verb phrase) on Dask (roughness.cluster): ``--workers`` local
     processes (argparse ``default``; ``workers``: the number shown), or a running cluster's ``--scheduler`` or
     ``--scheduler-file``."""
     p.add_argument("--workers", type=PARALLEL, default=default,

@@ -17,8 +17,7 @@ import numpy as np
 
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_MAP_POSITIONS, check_size
-
-from .correction import FOOTPRINT_MM
+from roughness.curvature_correction import FOOTPRINT_MM
 
 FOOTPRINT_RADIUS_MM = FOOTPRINT_MM / 2  # the neighbourhood the curvature is fitted over (mm)
 SAMPLE_SPACING_MM = 0.4  # mean distance between surface samples: ~500 within a 5 mm neighbourhood

@@ -30,10 +30,10 @@ from roughness.core.checks import positive
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_MAP_POSITIONS, check_size
 from roughness.core.reprs import short_repr
+from roughness.curvature_correction import correction, measured_ranges, restable
 from roughness.perceptual_scale import jnd, load_scale
 from roughness.surface.heightmap import Heightmap
 
-from .correction import correction, measured_ranges, restable
 from .curvature import FOOTPRINT_RADIUS_MM, SurfaceSamples, principal_curvatures
 from .footprint import FOOTPRINT_MM, MAX_OFF_FRACTION, Placement, on_surface, unrolled
 

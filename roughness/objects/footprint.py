@@ -16,9 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from roughness.curvature_correction import FOOTPRINT_MM
 from roughness.surface.heightmap import Heightmap
-
-from .correction import FOOTPRINT_MM
 
 CHECK_POINTS = 11  # per side: the footprint points checked against the mesh
 OFF_SURFACE_MM = 0.3  # a footprint point this far from every surface sample is off the surface

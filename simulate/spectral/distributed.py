@@ -20,7 +20,7 @@ from roughness.core.errors import InputError, SimulationError
 from .maps import MapAnswer, MapTask, Runner, solve
 
 if TYPE_CHECKING:
-    from roughness.dataset.cluster import ClusterChoice
+    from roughness.cluster import ClusterChoice
 
 IN_FLIGHT_PER_THREAD = 2  # windows sent ahead per worker thread: none waits, and few heights are held
 LARGE_TASK_BYTES = "1GiB"  # a window's task carries its heights: distributed's warning about large graphs is not news
@@ -33,7 +33,7 @@ def dask_runner(where: ClusterChoice, workers: int, quiet: bool = False) -> Runn
         import dask
         from distributed import KilledWorker
 
-        from roughness.dataset.cluster import as_finished, session, versions, worker_threads
+        from roughness.cluster import as_finished, session, versions, worker_threads
 
         with session(where, workers, quiet) as client:
             expected = versions()
@@ -58,7 +58,7 @@ def dask_runner(where: ClusterChoice, workers: int, quiet: bool = False) -> Runn
 
 def solve_on_worker(task: MapTask, expected: dict) -> MapAnswer:
     """``maps.solve`` on a worker, which must run the ``expected`` versions (``cluster.versions()``)."""
-    from roughness.dataset.cluster import versions
+    from roughness.cluster import versions
 
     mine = versions()
     if mine != expected:

@@ -4,7 +4,7 @@
 3 realisations each, heights along the normal) on cylinders and spheres of radius 3 to 40 mm, convex and
 concave, against the same textures flat. Its tables (``studies/results/curvature_default.json`` for
 cylinders, ``curvature_sphere.json`` for spheres) are condensed into ``models/curvature_correction.json``
-(``python -m roughness.objects.correction`` rewrites it): per base and signed curvature 1/R (1/mm, convex
+(``python studies/curvature_correction.py`` rewrites it): per base and signed curvature 1/R (1/mm, convex
 positive) the relative difference of V, mean over the textures, and its error, the largest distance of any
 texture's or realisation's measured difference (min and max over realisations) from that mean.
 
@@ -165,28 +165,3 @@ def _side(k: float) -> str:
 
 def _radius(k: float) -> str:
     return "inf" if k == 0 else f"{1 / k:.3g}"
-
-
-def write_table(root: Path, path: Path = TABLE_PATH) -> dict:
-    """Condense the study's committed results under ``root`` into ``path`` (with their digests)."""
-    from roughness.core.files import atomic_write
-    from roughness.core.hashing import file_sha256
-
-    bases = {}
-    for base, relative in STUDY_RESULTS.items():
-        results = json.loads((root / relative).read_text())
-        table = table_from_study(results)
-        bases[base] = {"curvature_per_mm": list(table.curvature_per_mm), "difference": list(table.difference),
-                       "error": list(table.error), "results": relative,
-                       "results_sha256": file_sha256(root / relative), "command": results["command"]}
-    data = {"meaning": "relative difference of V on a curved base from the flat V (mean over the studied textures "
-                       "and realisations, heights along the normal) by signed curvature 1/R (1/mm, convex > 0), and "
-                       "its error: the largest distance of any texture's measured min or max from that mean",
-            "bases": bases}
-    atomic_write(path, lambda tmp: Path(tmp).write_text(json.dumps(data, indent=1) + "\n"), True)
-    return data
-
-
-if __name__ == "__main__":
-    write_table(Path(__file__).resolve().parents[2])
-    print(f"wrote {TABLE_PATH}")

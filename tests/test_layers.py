@@ -1,0 +1,82 @@
+"""The package's layers import only downward: core <- surface <- simulate <- dataset <- surrogate <- engines <-
+design / perception / objects <- cli. Every import counts, at module level or inside a function (a lazy import
+is still a dependency), except imports for type checkers only (``if TYPE_CHECKING:``)."""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+# lowest first; a module may import its own layer and those below it
+LAYERS = [
+    ("roughness.core", "roughness.models"),
+    ("roughness.surface", "roughness.perceptual_scale"),
+    ("roughness.simulate", "roughness.cluster"),
+    ("roughness.dataset",),
+    ("roughness.surrogate",),
+    ("roughness.engines", "roughness.prediction", "roughness.maps", "roughness.classical", "roughness.compare",
+     "roughness.report", "roughness.curvature_correction"),
+    ("roughness.design", "roughness.perception", "roughness.objects"),
+    ("roughness.cli",),
+]
+# the package's folders: roughness/ and the subpackages kept at the top of a checkout
+FOLDERS = {"roughness": ROOT / "roughness", "roughness.simulate": ROOT / "simulate",
+           "roughness.dataset": ROOT / "dataset", "roughness.surrogate": ROOT / "surrogate",
+           "roughness.models": ROOT / "models"}
+
+
+def layer_of(module: str) -> int | None:
+    """The layer of a roughness module (None: the package's lazy front door, or not ours)."""
+    for level, prefixes in enumerate(LAYERS):
+        if any(module == p or module.startswith(p + ".") for p in prefixes):
+            return level
+    return None
+
+
+def modules() -> dict[str, Path]:
+    """Every module of the package by its dotted name."""
+    found = {}
+    for package, folder in FOLDERS.items():
+        for path in folder.rglob("*.py"):
+            parts = path.relative_to(folder).with_suffix("").parts
+            if path.parent == ROOT / "roughness" and package == "roughness" and parts[0] in FOLDERS:
+                continue
+            name = ".".join((package, *parts)).removesuffix(".__init__")
+            found.setdefault(name, path)
+    return found
+
+
+def imports(module: str, path: Path) -> set[str]:
+    """The absolute names a module imports, type-checking-only imports left out."""
+    tree = ast.parse(path.read_text())
+    typing_only = {id(n) for node in ast.walk(tree) if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(
+        node.test) for n in ast.walk(node)}
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    names = set()
+    for node in ast.walk(tree):
+        if id(node) in typing_only:
+            continue
+        if isinstance(node, ast.Import):
+            names |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parent = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
+                base = f"{parent}.{base}" if base else parent
+            names |= {base} | {f"{base}.{a.name}" for a in node.names}
+    return {n for n in names if n.startswith("roughness")}
+
+
+def test_every_module_has_a_layer():
+    assert [m for m in modules() if m != "roughness" and layer_of(m) is None] == []
+
+
+@pytest.mark.parametrize("module, path", sorted(modules().items()), ids=lambda v: str(v).rpartition("/")[2])
+def test_a_module_imports_only_its_own_layer_and_those_below(module, path):
+    own = layer_of(module)
+    if own is None:
+        return  # roughness/__init__.py: names loaded on first use, from every layer
+    upward = sorted(name for name in imports(module, path) if (layer_of(name) or 0) > own)
+    assert upward == [], f"{module} (layer {own}) imports from above it: {upward}"
