@@ -64,8 +64,6 @@ LIBRARY_ONLY = {
     "depth_mm": "SimConfig field", "pair_distance_mm": "SimConfig field",
     "cutoff_mm": "simulate.detrend.Detrend field (--detrend lowpass:MM is checked as it is parsed); fbm parameter",
     "footprint width": "Heightmap.covers / max_in_footprint: the skin footprint width of a checked SimConfig/model",
-    "plots": "python -m surrogate.card --plots (a script, not a roughness subcommand)",
-    "checkpoints": "python -m surrogate.ensemble CHECKPOINTS (a script, not a roughness subcommand)",
     # fields of a recipe file (load_recipe names the file and drops the parameter) or of --param KEY=VALUE
     "families": "recipe field", "ranges": "recipe field", "perturb_probability": "recipe field",
     "print_probability": "recipe field", "printers": "recipe field",
