@@ -146,8 +146,10 @@ def multi_fidelity_section(meta: ModelMetadata) -> str:
     mf = meta.multi_fidelity
     if not mf:
         return ""
-    levels = sorted(mf["rows_by_h_mm"].items(), key=lambda kv: -float(kv[0]))
-    rows = ", ".join(f"h = {float(h):g} mm: {n:,}" for h, n in levels)
+    by_level = mf["rows_by_h_mm"]  # contact spacing (mm, as text) or "spectral" -> rows
+    fem = sorted(((float(h), n) for h, n in by_level.items() if h != "spectral"), reverse=True)
+    rows = ", ".join([f"h = {h:g} mm: {n:,}" for h, n in fem]
+                     + ([f"spectral engine: {by_level['spectral']:,}"] if "spectral" in by_level else []))
     extra = ", ".join(f"`{e.get('file')}` (inputs_sha256 `{e.get('inputs_sha256')}`)"
                       for e in mf.get("extra_data", [])) or "none"
     return f"""

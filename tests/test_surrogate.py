@@ -865,6 +865,10 @@ def test_spectral_and_fem_labels_train_one_network_that_answers_as_the_fem(tmp_p
     assert onnx_metadata(onnx_path).engine_input
     np.testing.assert_allclose(SurrogateModel(onnx_path).run(x.numpy()[:, 0])[0],
                                roughness_from_log(at_query.numpy(), 1e-4), rtol=1e-4, atol=1e-8)
+    from roughness.surrogate.card import write_card
+
+    write_card(tmp_path / "run", onnx_path, tmp_path / "CARD.md", tmp_path)  # the spectral rows counted last
+    assert "Label rows per spacing: h = 0.2 mm: 18, spectral engine: 40." in (tmp_path / "CARD.md").read_text()
     with pytest.raises(InputError, match="levels='all'"):
         train(TrainConfig(data=str(spectral), out=str(tmp_path / "a"), max_epochs=1, batch_size=8,
                           extra_data=(str(fem),)))
