@@ -278,7 +278,7 @@ def test_a_real_short_write_is_an_error_without_a_partial_file(tmp_path):
 def test_full_disk_while_train_saves_a_checkpoint(tmp_path, monkeypatch):
     """train's checkpoints go through atomic_write as plain bytes (torch's own writer says "unexpected pos")."""
     torch = pytest.importorskip("torch")
-    from roughness.surrogate.train import save_torch
+    from roughness.surrogate.run_files import save_torch
 
     save_torch({"w": torch.ones(3)}, tmp_path / "ok.pt")
     assert torch.load(tmp_path / "ok.pt", weights_only=True)["w"].sum() == 3
