@@ -26,7 +26,7 @@ for ((k = 0; k < MEMBERS; k++)); do
 done
 members=()
 for ((k = 0; k < MEMBERS; k++)); do members+=("$RUNS/m$k/checkpoint.pt"); done
-python -m roughness.surrogate.ensemble "${members[@]}" --out "$RUNS/roughness-cnn.onnx" \
+roughness ensemble "${members[@]}" --out "$RUNS/roughness-cnn.onnx" \
     --data "$DATA/training-v2-default.h5" "$DATA/training-v2-fine.h5" --int8 "$RUNS/roughness-cnn-int8.onnx" \
     --overwrite
-python -m roughness.surrogate.card "$RUNS/m0" "$RUNS/roughness-cnn.onnx" --card "$RUNS/MODEL_CARD.md" --plots "$RUNS"
+roughness card "$RUNS/m0" "$RUNS/roughness-cnn.onnx" --card "$RUNS/MODEL_CARD.md" --plots "$RUNS" --overwrite

@@ -32,6 +32,6 @@ for ((k = 0; k < MEMBERS; k++)); do
 done
 members=()
 for ((k = 0; k < MEMBERS; k++)); do members+=("$RUNS/m$k/checkpoint.pt"); done
-python -m roughness.surrogate.ensemble "${members[@]}" --out "$RUNS/roughness-cnn.onnx" \
+roughness ensemble "${members[@]}" --out "$RUNS/roughness-cnn.onnx" \
     --data "$DATA/training-v3.h5" "${EXTRA[@]}" --int8 "$RUNS/roughness-cnn-int8.onnx" --model-version 3 --overwrite
-python -m roughness.surrogate.card "$RUNS/m0" "$RUNS/roughness-cnn.onnx" --card "$RUNS/MODEL_CARD.md" --plots "$RUNS"
+roughness card "$RUNS/m0" "$RUNS/roughness-cnn.onnx" --card "$RUNS/MODEL_CARD.md" --plots "$RUNS" --overwrite

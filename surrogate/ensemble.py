@@ -1,7 +1,7 @@
 """A deep ensemble of trained surrogates as one ONNX graph that returns its mean and spread.
 
     for k in 0 1 2 3 4; do roughness train DATA.h5 --out runs/m$k --seed $k; done
-    python -m roughness.surrogate.ensemble runs/m*/checkpoint.pt --out MODEL.onnx --data DATA.h5 [--int8 MODEL-int8.onnx]
+    roughness ensemble runs/m*/checkpoint.pt --out MODEL.onnx --data DATA.h5 [--int8 MODEL-int8.onnx]
 
 The graph takes ``heights`` like a single model and returns ``log_roughness`` (the members' mean of
 log(V + offset)), ``log_roughness_std`` (their standard deviation times ``std_scale``: the relative
@@ -18,9 +18,6 @@ Without ``--data`` neither is measured: ``std_scale`` is 1 and there is no defau
 """
 from __future__ import annotations
 
-import argparse
-import json
-import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -31,8 +28,8 @@ import torch
 from torch import nn
 
 from roughness.core.checks import integer
-from roughness.core.errors import InputError, OutputExists
-from roughness.core.files import atomic_write, check_distinct, check_output
+from roughness.core.errors import InputError
+from roughness.core.files import atomic_write, check_output
 from roughness.core.hashing import file_sha256
 
 from .domain import Domain
@@ -227,42 +224,3 @@ def _verify(model: Ensemble, path: str, patches: np.ndarray) -> dict:
         raise ExportError(f"onnxruntime differs from PyTorch by {worst:.2e} (relative; limit {RTOL:.0e})")
     return {"max_rel_diff": worst, "checked_inputs": len(patches)}
 
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("checkpoints", nargs="+", help="member training checkpoints (checkpoint.pt), at least 2")
-    parser.add_argument("--out", required=True, help="ONNX file to write (refused if it exists unless --overwrite)")
-    parser.add_argument("--data", nargs="+", help="the members' training dataset (.h5; a multi-fidelity model's "
-                                                  "files in training order): calibrate the spread on its validation "
-                                                  "split and report it on the test split (default: not calibrated)")
-    parser.add_argument("--int8", metavar="FILE", help="also write the int8 graph of the ensemble (surrogate/quantize.py; "
-                                                       "nothing is written if it strays from fp32 beyond its limits)")
-    parser.add_argument("--model-version", type=int, default=1,
-                        help="the model's version (ONNX model_version), the next whole number (default: 1)")
-    parser.add_argument("--overwrite", action="store_true", help="replace --out (and --int8) if they exist")
-    args = parser.parse_args(argv)
-    from .quantize import QuantizationError, quantize
-
-    try:
-        check_distinct({"--out": args.out, "--int8": args.int8},
-                       {"CHECKPOINT": args.checkpoints, "--data": args.data})
-        if args.int8:  # both outputs checked before anything is computed
-            check_output(args.int8, args.overwrite, "int8")
-        report = export_ensemble(args.checkpoints, args.out, args.data, args.overwrite, args.model_version)
-        print(json.dumps({k: v for k, v in report.items() if k != "member_val"}))
-        if args.int8:
-            print(json.dumps(quantize(args.out, args.int8, overwrite=args.overwrite)))
-    except OutputExists as err:
-        print(f"roughness: error: {err.path} already exists; pass --overwrite to replace it", file=sys.stderr)
-        return 2
-    except InputError as err:
-        print(f"roughness: error: {err}", file=sys.stderr)
-        return 2
-    except QuantizationError as err:
-        print(f"roughness: int8 check failed, {args.int8} not written: {err}", file=sys.stderr)
-        return 1
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -11,8 +11,12 @@ import math
 import numbers
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from roughness.core.errors import InputError
+
+if TYPE_CHECKING:
+    import onnx
 
 METADATA_KEY = "roughness"  # ONNX metadata_props key of the model's JSON metadata
 OPTIONAL = ("int8", "ensemble", "multi_fidelity")  # keys only some models have
@@ -185,9 +189,22 @@ def read_metadata(props: dict[str, str], source: str | Path) -> ModelMetadata:
     return ModelMetadata.from_json(props[METADATA_KEY], str(source), parameter="model")
 
 
+def load_onnx(path: str | Path) -> onnx.ModelProto:
+    """An ONNX file's graph, read with onnx (no session, no external data); InputError for ``model`` if the file
+    is missing or not ONNX."""
+    import onnx
+    from google.protobuf.message import DecodeError
+
+    if not Path(path).is_file():
+        raise InputError(f"{path} is a folder, not a model file" if Path(path).is_dir() else f"model not found: {path}",
+                         parameter="model")
+    try:
+        return onnx.load(str(path), load_external_data=False)
+    except DecodeError as err:
+        raise InputError(f"{path} is not an ONNX model: {err}", parameter="model") from None
+
+
 def onnx_metadata(path: str | Path) -> ModelMetadata:
     """The metadata of an ONNX file, read with onnx (no session)."""
-    import onnx
-
-    graph = onnx.load(str(path), load_external_data=False)
+    graph = load_onnx(path)
     return read_metadata({p.key: p.value for p in graph.metadata_props}, path)

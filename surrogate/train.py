@@ -27,34 +27,30 @@ only the FEM labels converged to that fraction, and ``fem_weight`` weighs their 
 """
 from __future__ import annotations
 
-import io
-import json
 import math
 import sys
 import time
 from contextlib import ExitStack
-from dataclasses import asdict, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
 import torch
 
 from roughness.core.errors import InputError
-from roughness.core.files import atomic_write, check_output_folder
-from roughness.core.hashing import digest
-from roughness.core.provenance import make_provenance
+from roughness.core.files import check_output_folder
 from roughness.dataset.digest import inputs_sha256
 from roughness.dataset.reader import Dataset, open_dataset
 
 from .config import TrainConfig
-from .data import load_samples
-from .domain import Domain
+from .data import Samples, load_samples
+from .evaluation import Evaluation, evaluate
 from .metadata import ModelMetadata
-from .metrics import scores
 from .network import RoughnessNet, parameter_count
 from .patch import FOOTPRINT_MM, PATCH_PIXEL_MM
 from .resume import RESUME_FILE, Progress, fingerprint, restore, snapshot
-from .target import LOG_OFFSET, roughness_from_log, target
+from .run_files import save_torch, write_run
+from .target import target
 
 
 def augment(x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
@@ -62,19 +58,6 @@ def augment(x: torch.Tensor, generator: torch.Generator) -> torch.Tensor:
     k = int(torch.randint(4, (1,), generator=generator))
     x = torch.rot90(x, k, dims=(2, 3))
     return x.flip(3) if bool(torch.randint(2, (1,), generator=generator)) else x
-
-
-@torch.no_grad()
-def infer(model: RoughnessNet, patches: np.ndarray, log_offset: float = LOG_OFFSET,
-          batch: int = 256) -> tuple[np.ndarray, np.ndarray]:
-    """Predicted V and embeddings for patches (n, P, P) of a network that predicts log(V + log_offset)."""
-    model.eval()
-    logs, embeddings = [], []
-    for i in range(0, len(patches), batch):
-        log_v, emb = model(torch.from_numpy(patches[i:i + batch, None]))
-        logs.append(log_v.numpy())
-        embeddings.append(emb.numpy())
-    return roughness_from_log(np.concatenate(logs), log_offset), np.concatenate(embeddings)
 
 
 def format_scores(values: dict) -> str:
@@ -106,59 +89,33 @@ def _train(cfg: TrainConfig, out: Path, resuming: bool) -> Path:
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(cfg.threads)
     start = time.monotonic()
-    data_sha256 = [inputs_sha256(path) for path in (cfg.data, *cfg.extra_data)]
 
     # data: patches in mm (max 0) and log-V targets (one row per label level), split by base texture
-    with ExitStack() as stack:
-        data = stack.enter_context(open_dataset(cfg.data))
-        extras = [stack.enter_context(open_dataset(path)) for path in cfg.extra_data]
-        recipe = data.config.recipe
-        # the physics of the labels the model answers as: the first FEM file's (the spectral engine's records no mesh)
-        simulation = next((ds.config.simulation for ds in [data, *extras] if ds.config.simulation.get(
-            "engine", "fem") == "fem"), data.config.simulation)
-        for extra in extras:
-            _require_same_physics(data, extra)
-        data_fem_seconds = float(sum(np.nansum(ds.table()["seconds"]) for ds in [data, *extras]))  # one core each
-        holdout = recipe.get("holdout_family") if cfg.holdout_family is None else cfg.holdout_family
-        holdout = None if holdout == "none" else holdout
-        test_fraction = recipe.get("test_fraction", 0.1) if cfg.test_fraction is None else cfg.test_fraction
-        samples = load_samples([data, *extras], test_fraction, cfg.val_fraction, holdout, levels=cfg.levels,
-                               max_label_error=cfg.max_label_error)
-    multi = cfg.levels == "all"
-    engines = sorted(set(samples.engine))
-    if len(engines) > 1 and not multi:
-        raise InputError("spectral and FEM labels are learned together only with levels='all' (the engine is an "
-                         "input then)", parameter="levels")
-    if multi and np.isnan(samples.h_mm).all():
-        raise InputError("levels='all' needs FEM labels at the query spacing; these files hold spectral labels "
-                         "only", parameter="levels")
-    query = (cfg.query_h_mm or float(np.nanmin(samples.h_mm))) if multi else None
-    if multi and not np.isclose(samples.h_mm, query).any():
-        raise InputError(f"no label at the query spacing {query} mm (labels at "
-                         f"{', '.join(f'{h:g}' for h in np.unique(samples.h_mm))} mm)", parameter="query_h_mm")
+    data = load_data(cfg)
+    samples, query = data.samples, data.query_h_mm
     # rows of the training and validation splits; batches are gathered from the patches in place (no copy per split)
     tr, va = (torch.from_numpy(np.flatnonzero(samples.split == split)) for split in ("train", "val"))
     if len(tr) < cfg.batch_size or len(va) == 0:
         raise InputError(f"{cfg.data}: {len(tr)} training and {len(va)} validation samples are too few to train on: "
                          f"training needs at least {cfg.batch_size} training samples (the batch size) and one "
-                         f"validation sample, about {cfg.minimum_samples(test_fraction)} ok samples in the dataset",
-                         parameter="data")
+                         f"validation sample, about {cfg.minimum_samples(data.test_fraction)} ok samples in the "
+                         "dataset", parameter="data")
     out.mkdir(parents=True, exist_ok=True)
     x, y = torch.from_numpy(samples.patches[:, None]), torch.from_numpy(target(samples.roughness, cfg.log_offset))
-    h = torch.from_numpy(samples.h_mm.astype(np.float32)) if multi else None
+    h = torch.from_numpy(samples.h_mm.astype(np.float32)) if query is not None else None
     w = torch.from_numpy(np.where(samples.engine == "fem", cfg.fem_weight, 1.0).astype(np.float32))
     log(f"samples: {', '.join(f'{s} {int((samples.split == s).sum())}' for s in ('train', 'val', 'test', 'ood'))}")
-    if multi:
+    if query is not None:
         log(f"labels per contact spacing: {_rows_by_level(samples)}; the model answers at h = {query:g} mm")
 
     # model and optimiser: AdamW, linear warm-up then cosine decay to zero over max_epochs or the
     # time budget, whichever runs out first (a budget that ends the epochs early still anneals)
-    model = RoughnessNet(cfg.widths, cfg.hidden, query, engine_input=len(engines) > 1)
+    model = RoughnessNet(cfg.widths, cfg.hidden, query, engine_input=len(data.engines) > 1)
     log(f"model: {parameter_count(model):,} parameters")
     optimizer = torch.optim.AdamW(model.parameters(), lr=cfg.learning_rate, weight_decay=cfg.weight_decay)
     steps_per_epoch = math.ceil(len(tr) / cfg.batch_size)
     total_steps, warmup = cfg.max_epochs * steps_per_epoch, 3 * steps_per_epoch
-    progress, key = Progress(), fingerprint(cfg, data_sha256)
+    progress, key = Progress(), fingerprint(cfg, data.data_sha256)
     epochs_start = time.monotonic()
     schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, lambda s: lr_factor(
         s, total_steps, warmup, (time.monotonic() - epochs_start) / (60 * cfg.max_minutes)))
@@ -202,58 +159,87 @@ def _train(cfg: TrainConfig, out: Path, resuming: bool) -> Path:
             log(f"time budget of {cfg.max_minutes} min reached")
             break
 
-    # evaluate the best model on every split (multi-fidelity: its answers against the labels at the
-    # query spacing); fit its input domain on the training inputs (each texture once)
+    # the best epoch's network, scored on every split (multi-fidelity: against the labels at the query spacing)
     model.load_state_dict(progress.best_state)
-    ids, first = np.unique(samples.ids, return_index=True)  # rows of one texture share its patch
-    answers, codes = infer(model, samples.patches[first], cfg.log_offset)  # at the query spacing
-    trained = samples.split[first] == "train"
-    domain = Domain.fit(samples.descriptors[first][trained], codes[trained])
-    scored = samples.at_level(query) if multi else samples
-    row = np.searchsorted(ids, scored.ids)
-    predicted, embeddings = answers[row], codes[row]
-    flagged = np.array([bool(r) for r in domain.check(scored.descriptors, embeddings)])
-    metrics = {}
-    for split in ("train", "val", "test", "ood"):
-        part = scored.split == split
-        if part.any():
-            metrics[split] = scores(scored.roughness[part], predicted[part]) | {"out_of_domain": float(flagged[part].mean())}
-            log(f"{split:5s} {format_scores(metrics[split])}")
-    test = scored.split == "test"
-    by_family = {f: scores(scored.roughness[test & (scored.family == f)], predicted[test & (scored.family == f)])
-                 for f in np.unique(scored.family[test])}
-    meta = ModelMetadata(
+    evaluation = evaluate(model, samples, query, cfg.log_offset)
+    for split, values in evaluation.metrics.items():
+        log(f"{split:5s} {format_scores(values)}")
+    meta = run_metadata(cfg, data, evaluation, progress, parameter_count(model), time.monotonic() - start)
+    checkpoint = write_run(out, model, meta, progress.history, evaluation)
+    (out / RESUME_FILE).unlink(missing_ok=True)
+    log(f"wrote {checkpoint} (best epoch {progress.best_epoch}, {meta.minutes:.1f} min)")
+    return checkpoint
+
+
+@dataclass
+class TrainingData:
+    """The label rows of a run's dataset files, and what the model's metadata records of them."""
+
+    samples: Samples
+    simulation: dict  # the physics of the labels the model answers as
+    recipe: dict  # the primary file's recipe
+    holdout: str | None  # families never trained on (comma-separated), or None
+    test_fraction: float
+    data_sha256: list[str]  # inputs checksum of each file, the primary first
+    fem_seconds: float  # core-seconds the labels' simulations took
+    engines: list[str]  # engines of the labels ("fem", "spectral")
+    query_h_mm: float | None  # contact spacing (mm) the model answers for; None: single-level labels
+
+
+def load_data(cfg: TrainConfig) -> TrainingData:
+    """The label rows of ``cfg.data`` and ``cfg.extra_data``, split by base texture; InputError if the files
+    label under other physics or the labels cannot teach the model asked for."""
+    data_sha256 = [inputs_sha256(path) for path in (cfg.data, *cfg.extra_data)]
+    with ExitStack() as stack:
+        data = stack.enter_context(open_dataset(cfg.data))
+        extras = [stack.enter_context(open_dataset(path)) for path in cfg.extra_data]
+        recipe = data.config.recipe
+        # the physics of the labels the model answers as: the first FEM file's (the spectral engine's records no mesh)
+        simulation = next((ds.config.simulation for ds in [data, *extras] if ds.config.simulation.get(
+            "engine", "fem") == "fem"), data.config.simulation)
+        for extra in extras:
+            _require_same_physics(data, extra)
+        fem_seconds = float(sum(np.nansum(ds.table()["seconds"]) for ds in [data, *extras]))  # one core each
+        holdout = recipe.get("holdout_family") if cfg.holdout_family is None else cfg.holdout_family
+        holdout = None if holdout == "none" else holdout
+        test_fraction = recipe.get("test_fraction", 0.1) if cfg.test_fraction is None else cfg.test_fraction
+        samples = load_samples([data, *extras], test_fraction, cfg.val_fraction, holdout, levels=cfg.levels,
+                               max_label_error=cfg.max_label_error)
+    multi = cfg.levels == "all"
+    engines = sorted(set(samples.engine))
+    if len(engines) > 1 and not multi:
+        raise InputError("spectral and FEM labels are learned together only with levels='all' (the engine is an "
+                         "input then)", parameter="levels")
+    if multi and np.isnan(samples.h_mm).all():
+        raise InputError("levels='all' needs FEM labels at the query spacing; these files hold spectral labels "
+                         "only", parameter="levels")
+    query = (cfg.query_h_mm or float(np.nanmin(samples.h_mm))) if multi else None
+    if multi and not np.isclose(samples.h_mm, query).any():
+        raise InputError(f"no label at the query spacing {query} mm (labels at "
+                         f"{', '.join(f'{h:g}' for h in np.unique(samples.h_mm))} mm)", parameter="query_h_mm")
+    return TrainingData(samples, simulation, recipe, holdout, test_fraction, data_sha256, fem_seconds, engines, query)
+
+
+def run_metadata(cfg: TrainConfig, data: TrainingData, evaluation: Evaluation, progress: Progress, parameters: int,
+                 session_seconds: float) -> ModelMetadata:
+    """The finished run's metadata: network, labels, scores, input domain, epochs and cost (``session_seconds``:
+    this session's wall clock; earlier sessions' are in ``progress``)."""
+    query = data.query_h_mm
+    extra_data = [{"file": Path(p).name, "inputs_sha256": sha} for p, sha in zip(cfg.extra_data, data.data_sha256[1:])]
+    return ModelMetadata(
         widths=tuple(cfg.widths), hidden=cfg.hidden, patch_pixel_mm=PATCH_PIXEL_MM, footprint_mm=FOOTPRINT_MM,
-        log_offset=cfg.log_offset, simulation=simulation,
-        label_fidelity=_fidelity_name(query) if multi else simulation.get("fidelity", "default"),
-        domain=domain.to_dict(), metrics=metrics, test_by_family=by_family, holdout_family=holdout,
-        test_fraction=test_fraction,
-        data={"file": Path(cfg.data).name, "recipe": recipe.get("name"), "inputs_sha256": data_sha256[0]},
+        log_offset=cfg.log_offset, simulation=data.simulation,
+        label_fidelity=_fidelity_name(query) if query is not None else data.simulation.get("fidelity", "default"),
+        domain=evaluation.domain.to_dict(), metrics=evaluation.metrics, test_by_family=evaluation.by_family,
+        holdout_family=data.holdout, test_fraction=data.test_fraction,
+        data={"file": Path(cfg.data).name, "recipe": data.recipe.get("name"), "inputs_sha256": data.data_sha256[0]},
         train_config=asdict(cfg) | {"widths": list(cfg.widths), "extra_data": list(cfg.extra_data)},
         best_epoch=progress.best_epoch, epochs=len(progress.history),
-        minutes=(progress.seconds + time.monotonic() - start) / 60, parameters=parameter_count(model),
-        cost_core_seconds={"data_fem": data_fem_seconds,
-                           "training": progress.core_seconds + (time.monotonic() - start) * cfg.threads},
-        multi_fidelity={"query_h_mm": query, "rows_by_h_mm": _rows_by_level(samples), "engines": engines,
-                        "extra_data": [{"file": Path(p).name, "inputs_sha256": sha}
-                                       for p, sha in zip(cfg.extra_data, data_sha256[1:])]}
-        if multi else None)
-    plain = json.loads(meta.to_json())  # plain types only (no numpy scalars): export loads it with weights_only
-    save_torch({"state_dict": model.state_dict(), **plain}, out / "checkpoint.pt")
-    # the digest of the labels' simulation record (for FEM labels the result cache's); the model id comes with the
-    # exported file
-    provenance = make_provenance("surrogate", meta.label_fidelity,
-                                 f"{simulation.get('engine', 'fem')}-{digest(simulation)}")
-    write_text(out / "metrics.json", json.dumps({k: v for k, v in meta.to_dict().items() if k != "domain"}
-                                                | {"provenance": provenance.as_dict()}, indent=1))
-    write_text(out / "history.csv", "epoch,train_loss,val_loss,lr,minutes\n" + "".join(
-        ",".join(f"{v:.6g}" for v in row) + "\n" for row in progress.history))
-    write_text(out / "predictions.csv", "id,family,split,V_fem,V_predicted,out_of_domain,h_mm\n" + "".join(
-        f"{i},{f},{s},{v:.6g},{p:.6g},{int(o)},{h:g}\n" for i, f, s, v, p, o, h in zip(
-            scored.ids, scored.family, scored.split, scored.roughness, predicted, flagged, scored.h_mm)))
-    (out / RESUME_FILE).unlink(missing_ok=True)
-    log(f"wrote {out / 'checkpoint.pt'} (best epoch {progress.best_epoch}, {meta.minutes:.1f} min)")
-    return out / "checkpoint.pt"
+        minutes=(progress.seconds + session_seconds) / 60, parameters=parameters,
+        cost_core_seconds={"data_fem": data.fem_seconds,
+                           "training": progress.core_seconds + session_seconds * cfg.threads},
+        multi_fidelity={"query_h_mm": query, "rows_by_h_mm": _rows_by_level(data.samples), "engines": data.engines,
+                        "extra_data": extra_data} if query is not None else None)
 
 
 @torch.no_grad()
@@ -305,18 +291,6 @@ def _fidelity_name(h_mm: float) -> str:
     from roughness.simulate.config import FIDELITY_SPACING_MM
 
     return next((name for name, h in FIDELITY_SPACING_MM.items() if np.isclose(h, h_mm)), f"h={h_mm:g} mm")
-
-
-def write_text(path: Path, text: str) -> None:
-    atomic_write(path, lambda tmp: Path(tmp).write_text(text))
-
-
-def save_torch(obj: object, path: Path) -> None:
-    """``torch.save`` atomically, through a buffer: torch's own file writer reports a full disk as an unexplained
-    RuntimeError, a plain write as the OSError that ``atomic_write`` words ("no space left on device")."""
-    buffer = io.BytesIO()
-    torch.save(obj, buffer)
-    atomic_write(path, lambda tmp: Path(tmp).write_bytes(buffer.getvalue()))
 
 
 def log(message: str) -> None:

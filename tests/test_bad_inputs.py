@@ -47,6 +47,9 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("object", "feel"): ["mesh.stl", "--texture", "standard-1.0"],
     ("object", "tune"): ["mesh.stl", "--texture", "standard-1.0", "--target-lambda", "1.0", "--out", "new.npz"],
     ("object", "texture"): ["mesh.stl", "--texture", "standard-1.0", "--out", "new.stl"],
+    ("ensemble",): ["checkpoint.pt", "checkpoint.pt", "--out", "new.onnx"],
+    ("card",): ["run", "model.onnx", "--card", "new.md", "--plots", "."],
+    ("model-version",): ["model.onnx", "--version", "2"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -71,6 +74,9 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("object", "feel"): [(0, ".stl", []), ("--texture", ".npy", ["--pixel-mm", "0.05"])],
     ("object", "tune"): [(0, ".stl", []), ("--texture", ".npy", ["--pixel-mm", "0.05"])],
     ("object", "texture"): [(0, ".stl", []), ("--texture", ".npy", ["--pixel-mm", "0.05"])],
+    ("ensemble",): [(0, ".pt", [])],
+    ("card",): [(1, ".onnx", [])],
+    ("model-version",): [(0, ".onnx", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
@@ -88,9 +94,11 @@ FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("object", "feel"): ["--picture"],
     ("object", "tune"): ["--out", "--mesh-out"],
     ("object", "texture"): ["--out", "--preview"],
+    ("ensemble",): ["--out", "--int8"],
+    ("card",): ["--card"],
 }
 OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy", "--preview": ".png",
-                 "--picture": ".png", "--mesh-out": ".stl"}
+                 "--picture": ".png", "--mesh-out": ".stl", "--int8": ".onnx"}
 OUTPUT_SUFFIX_OF = {("homogeneity",): {"--map": ".png"}}
 
 

@@ -64,8 +64,6 @@ LIBRARY_ONLY = {
     "depth_mm": "SimConfig field", "pair_distance_mm": "SimConfig field",
     "cutoff_mm": "simulate.detrend.Detrend field (--detrend lowpass:MM is checked as it is parsed); fbm parameter",
     "footprint width": "Heightmap.covers / max_in_footprint: the skin footprint width of a checked SimConfig/model",
-    "plots": "python -m surrogate.card --plots (a script, not a roughness subcommand)",
-    "checkpoints": "python -m surrogate.ensemble CHECKPOINTS (a script, not a roughness subcommand)",
     # fields of a recipe file (load_recipe names the file and drops the parameter) or of --param KEY=VALUE
     "families": "recipe field", "ranges": "recipe field", "perturb_probability": "recipe field",
     "print_probability": "recipe field", "printers": "recipe field",
@@ -120,14 +118,17 @@ def test_every_parameter_name_is_a_flag_or_library_only():
 
 
 def test_cli_modules_name_their_own_options():
-    """A parameter raised in roughness/cli/X.py names an option or positional of X's own subcommands."""
+    """A parameter raised in roughness/cli/X.py (or in a module of one of X's actions) names an option or
+    positional of X's own subcommands."""
     for module in sorted(set(COMMANDS.values())):
         parser = argparse.ArgumentParser()
-        import_module(f"roughness.cli.{module}").add_parser(parser.add_subparsers())
+        command = import_module(f"roughness.cli.{module}")
+        command.add_parser(parser.add_subparsers())
         own = set().union(*(_names(p) for _, p in _leaves(parser)))
-        names = _parameter_names(REPO / "roughness" / "cli" / f"{module}.py")
-        wrong = [(line, name) for line, name in names if name not in own]
-        assert not wrong, f"roughness/cli/{module}.py raises parameters it has no option for: {wrong}"
+        for source in (module, *getattr(command, "ACTIONS", {}).values()):
+            names = _parameter_names(REPO / "roughness" / "cli" / f"{source}.py")
+            wrong = [(line, name) for line, name in names if name not in own]
+            assert not wrong, f"roughness/cli/{source}.py raises parameters it has no option for: {wrong}"
 
 
 # --- curved bases: the radius, not the force -----------------------------------------------------------------

@@ -53,14 +53,19 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
     ("object", "texture"): ([0, "--texture"], ["--out", "--preview"]),
     ("object", "feel"): ([0, "--texture"], ["--picture"]),
     ("object", "tune"): ([0, "--texture"], ["--out", "--mesh-out"]),
+    ("ensemble",): ([0, "--data"], ["--out", "--int8"]),
+    ("card",): ([1, "--latency"], ["--card"]),
+    ("model-version",): ([0], []),  # rewritten in place
 }
 # String options that are not files: names, lists of names, addresses; --cache is a folder of FEM
-# results that a run reads and adds to (never replaces).
+# results that a run reads and adds to (never replaces); card's RUN is a folder it reads two files from and
+# --plots one it writes two into (they may be one folder): their files are checked by test_card_outputs_*.
 NOT_PATHS = {"NAME", "--param", "--scheduler", "--holdout-family", "--engines", "--reference", "--roughest",
-             "--family", "--cache", "--axis", "--region"}
+             "--family", "--cache", "--axis", "--region", "RUN", "--plots"}
 INPUT_VALUE = {"--recipe": "recipe.json", "--labels": "labels.jsonl.gz", "--extra-data": "data.h5",
                "--model": "model.onnx", "--like": "map.npy", "--from": "maps", "--palette": "maps",
-               "--stimuli": "stimuli.csv", "--printer": "printer.json", "--scheduler-file": "scheduler.json"}
+               "--stimuli": "stimuli.csv", "--printer": "printer.json", "--scheduler-file": "scheduler.json",
+               "--data": "data.h5", "--latency": "latency.json"}
 EXCLUDES = {"--like": "--target-lambda"}  # an input flag and the BASE option it cannot go with
 
 
@@ -138,6 +143,20 @@ def test_an_output_folder_does_not_replace_an_input_inside_it(path, input_flag, 
     argv = _with(_with(BASE[path], input_flag, f"{folder}/{name}"), "--out", folder)
     _expect_refusal([*path, *argv, "--overwrite"], workdir, capsys, ("is also an input",))
 
+
+@pytest.mark.parametrize("argv, reason", [
+    (["--card", "run/history.csv"], "is also an input"),
+    (["--card", "./surrogate_training.png"], "name the same file"),
+    (["--latency", "surrogate_accuracy.png"], "is also an input"),
+], ids=str)
+def test_card_outputs_replace_no_input_and_no_other_output(argv, reason, workdir, capsys):
+    """The card's folders: RUN's predictions.csv and history.csv are inputs, the plots in --plots outputs."""
+    (workdir / "run").mkdir()
+    for name in ("run/predictions.csv", "run/history.csv", "model.onnx", "surrogate_accuracy.png"):
+        (workdir / name).write_bytes(b"precious")
+    base = ["card", "run", "model.onnx", "--plots", ".", "--overwrite"]
+    _expect_refusal([*base, *(["--card", "new.md"] if "--card" not in argv else []), *argv], workdir, capsys,
+                    (reason,))
 
 def _two_outputs_cases():
     return [(path, a, b) for path, (_, outputs) in PATHS.items() for a, b in combinations(outputs, 2)]
@@ -258,7 +277,7 @@ def test_a_real_short_write_is_an_error_without_a_partial_file(tmp_path):
 def test_full_disk_while_train_saves_a_checkpoint(tmp_path, monkeypatch):
     """train's checkpoints go through atomic_write as plain bytes (torch's own writer says "unexpected pos")."""
     torch = pytest.importorskip("torch")
-    from roughness.surrogate.train import save_torch
+    from roughness.surrogate.run_files import save_torch
 
     save_torch({"w": torch.ones(3)}, tmp_path / "ok.pt")
     assert torch.load(tmp_path / "ok.pt", weights_only=True)["w"].sum() == 3

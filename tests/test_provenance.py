@@ -70,12 +70,17 @@ def test_stamping_the_version_keeps_the_readme_answer_bit_for_bit(tmp_path, caps
     before = _json([*argv, "--json"], capsys)
     copy = tmp_path / "model.onnx"
     shutil.copyfile(DEFAULT_MODEL, copy)
-    stamp(copy, 7)
+    assert main(["model-version", str(copy), "--version", "7"]) == 0
     after = _json([*argv, "--json", "--model", str(copy)], capsys)
     assert after["roughness"] == before["roughness"] and after["roughness_std"] == before["roughness_std"]
     assert after["provenance"]["model_version"] == 7 and before["provenance"]["model_version"] == SHIPPED_MODEL_VERSION
     assert after["provenance"]["model_id"] != before["provenance"]["model_id"]
     assert after["provenance"]["model_id"] == model_id(copy.read_bytes())
+    empty = tmp_path / "empty.onnx"  # an empty file parses as an empty ONNX model: not stamped
+    empty.write_bytes(b"")
+    with pytest.raises(roughness.InputError, match="without roughness metadata"):
+        stamp(empty, 2)
+    assert empty.read_bytes() == b""
 
 
 def test_an_unversioned_model_reads_as_version_0(tmp_path):

@@ -583,6 +583,26 @@ def test_card_of_a_custom_model_describes_that_model(tiny, tmp_path):
 
 
 
+def test_card_command_refuses_existing_outputs_and_files_of_no_run(tiny, tmp_path, capsys):
+    from roughness.cli import main
+
+    argv = ["card", str(tiny.root / "run"), str(tiny.model), "--card", str(tmp_path / "CARD.md"), "--plots",
+            str(tmp_path)]
+    assert main(argv) == 0 and (tmp_path / "surrogate_accuracy.png").exists()
+    text = (tmp_path / "CARD.md").read_text()
+    assert main(argv) == 2 and "already exists; pass --overwrite" in capsys.readouterr().err
+    assert main([*argv, "--overwrite"]) == 0 and (tmp_path / "CARD.md").read_text() == text
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "predictions.csv").write_text("id,family,split,V_fem,V_predicted\na,bumps,test,0.1,x\n")
+    (tmp_path / "run" / "history.csv").write_text("epoch,loss\n")
+    before = {p: p.stat().st_mtime_ns for p in tmp_path.iterdir()}
+    for problem in ("expected a float in column 'V_predicted', got 'x'", "no column train_loss, val_loss"):
+        assert main([*argv[:1], str(tmp_path / "run"), *argv[2:], "--overwrite"]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("roughness: error: RUN: ") and problem in err and "Traceback" not in err
+        (tmp_path / "run" / "predictions.csv").write_text("id,family,split,V_fem,V_predicted\n")
+    assert {p: p.stat().st_mtime_ns for p in tmp_path.iterdir()} == before  # nothing written
+
 def test_card_of_an_ensemble_states_its_members_calibration_and_unseen_families(ensemble, tmp_path):
     from roughness.surrogate.card import write_card
     from roughness.surrogate.metadata import onnx_metadata
@@ -596,24 +616,26 @@ def test_card_of_an_ensemble_states_its_members_calibration_and_unseen_families(
     assert f"scaled by {info['std_scale']:.3g}" in section and f"exceeds {info['max_std']:.3g}" in section
     assert "Families never trained on" in section and "| knurl |" in section
     assert "--holdout-family knurl --max-epochs 2 --batch-size 8 --seed K --out runK` for K = 0..2" in text
-    assert "python -m roughness.surrogate.ensemble run*/checkpoint.pt --out ensemble.onnx --data small.h5" in text
+    assert "`roughness ensemble run*/checkpoint.pt --out ensemble.onnx --data small.h5`" in text
 
 
 def test_ensemble_int8_graph_keeps_mean_and_spread(ensemble, tmp_path, capsys):
-    from roughness.surrogate.ensemble import main as ensemble_main
+    from roughness.cli import main
     from roughness.surrogate.quantize import relative_difference, standard_patches
 
     out, int8 = tmp_path / "e.onnx", tmp_path / "e-int8.onnx"
-    assert ensemble_main([*map(str, ensemble.checkpoints), "--out", str(out), "--int8", str(out)]) == 2
+    assert main(["ensemble", *map(str, ensemble.checkpoints), "--out", str(out), "--int8", str(out)]) == 2
     assert "--out and --int8 name the same file" in capsys.readouterr().err and not out.exists()
-    assert ensemble_main([*map(str, ensemble.checkpoints), "--out", str(out), "--int8", str(int8)]) == 0
+    assert main(["ensemble", *map(str, ensemble.checkpoints), "--out", str(out), "--int8", str(int8)]) == 0
+    report, int8_report = map(json.loads, capsys.readouterr().out.splitlines()[-2:])  # after torch.onnx's progress
+    assert report["members"] == 3 and int8_report["calibration_inputs"] > 0
     fp32, q = SurrogateModel(out), SurrogateModel(int8)
     assert q.has_std and q.meta.int8["standard_max_rel_diff_vs_fp32"] < 0.02
     standard = standard_patches()[:, 0]
     a, b = fp32.evaluate(standard), q.evaluate(standard)
     assert relative_difference(b.roughness, a.roughness).max() < 0.02
-    assert ensemble_main([*map(str, ensemble.checkpoints), "--out", str(tmp_path / "new.onnx"), "--int8",
-                          str(int8)]) == 2  # an existing int8 file is refused before anything is written
+    assert main(["ensemble", *map(str, ensemble.checkpoints), "--out", str(tmp_path / "new.onnx"), "--int8",
+                 str(int8)]) == 2  # an existing int8 file is refused before anything is written
     assert not (tmp_path / "new.onnx").exists()
 
 def test_splits_are_those_the_shipped_model_was_trained_with():
@@ -770,10 +792,12 @@ def test_ensemble_export_refuses_mismatched_members_and_foreign_data(ensemble, t
     with pytest.raises(InputError, match="not the data the members were trained on"):
         export_ensemble(ensemble.checkpoints, tmp_path / "e.onnx", data=tiny.data)
     assert not (tmp_path / "e.onnx").exists()
-    from roughness.surrogate.ensemble import main
+    from roughness.cli import main
 
-    assert main([str(c) for c in ensemble.checkpoints] + ["--out", str(ensemble.model)]) == 2  # exists: kept
+    assert main(["ensemble", *map(str, ensemble.checkpoints), "--out", str(ensemble.model)]) == 2  # exists: kept
     assert "pass --overwrite" in capsys.readouterr().err
+    assert main(["ensemble", str(ensemble.checkpoints[0]), "--out", str(tmp_path / "e.onnx")]) == 2
+    assert "CHECKPOINT: an ensemble needs at least 2" in capsys.readouterr().err
 
 
 def test_ensemble_map_has_a_spread_beside_v(ensemble, tmp_path):
@@ -844,6 +868,10 @@ def test_spectral_and_fem_labels_train_one_network_that_answers_as_the_fem(tmp_p
     assert onnx_metadata(onnx_path).engine_input
     np.testing.assert_allclose(SurrogateModel(onnx_path).run(x.numpy()[:, 0])[0],
                                roughness_from_log(at_query.numpy(), 1e-4), rtol=1e-4, atol=1e-8)
+    from roughness.surrogate.card import write_card
+
+    write_card(tmp_path / "run", onnx_path, tmp_path / "CARD.md", tmp_path)  # the spectral rows counted last
+    assert "Label rows per spacing: h = 0.2 mm: 18, spectral engine: 40." in (tmp_path / "CARD.md").read_text()
     with pytest.raises(InputError, match="levels='all'"):
         train(TrainConfig(data=str(spectral), out=str(tmp_path / "a"), max_epochs=1, batch_size=8,
                           extra_data=(str(fem),)))

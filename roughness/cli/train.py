@@ -75,7 +75,7 @@ def train(args: argparse.Namespace) -> int:
 
     from roughness.core.errors import InputError
 
-    _require_torch("train")
+    require_torch("train")
     from roughness.core.files import check_distinct, check_output_folder
     from roughness.surrogate.resume import RESUME_FILE
     from roughness.surrogate.train import TrainConfig, train
@@ -101,7 +101,7 @@ def export(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
 
     check_distinct({"--out": args.out, "--int8": args.int8}, {"CHECKPOINT": args.checkpoint})
-    _require_torch("export")
+    require_torch("export")
     from roughness.surrogate.export import ExportError, export
 
     check_output(args.out, args.overwrite, "out")  # both outputs checked before anything is computed or written
@@ -113,18 +113,23 @@ def export(args: argparse.Namespace) -> int:
         print(f"roughness: export check failed, nothing written: {err}", file=sys.stderr)
         return 1
     print(json_text(report))
-    if args.int8:
-        from roughness.surrogate.quantize import QuantizationError, quantize
+    return write_int8(args.out, args.int8, args.overwrite) if args.int8 else 0
 
-        try:
-            print(json_text(quantize(args.out, args.int8, overwrite=args.overwrite)))
-        except QuantizationError as err:
-            print(f"roughness: int8 check failed, {args.int8} not written: {err}", file=sys.stderr)
-            return 1
+
+def write_int8(model: str, int8: str, overwrite: bool) -> int:
+    """Quantise ``model`` to ``int8`` and print the checks' numbers; exit code 1 (nothing written) if a check fails."""
+    from roughness.surrogate.quantize import QuantizationError, quantize
+
+    try:
+        print(json_text(quantize(model, int8, overwrite=overwrite)))
+    except QuantizationError as err:
+        print(f"roughness: int8 check failed, {int8} not written: {err}", file=sys.stderr)
+        return 1
     return 0
 
 
-def _require_torch(command: str) -> None:
+def require_torch(command: str) -> None:
+    """InputError unless PyTorch and onnx are installed (``command``: the subcommand that needs them)."""
     from importlib.util import find_spec
 
     from roughness.core.errors import InputError

@@ -1,0 +1,77 @@
+"""`roughness perception plan --stimuli TABLE --trials N,N --out DIR`: how many trials bring R within a tolerance."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from .common import COUNT, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, log
+from .perception_common import NON_NEGATIVE, PROBABILITY, add_truth_args, made, number_list, output_files, read_truth
+
+count_list = number_list(COUNT, "whole numbers >= 1")  # 500,1000,2000
+
+def add_parser(sub) -> None:
+    pla = sub.add_parser("plan", help="how many trials for R within a tolerance? simulated experiments at several "
+                                     "numbers of trials")
+    add_truth_args(pla)
+    pla.add_argument("--trials", required=True, type=count_list, metavar="N,N",
+                     help="numbers of trials to try, e.g. 500,1000,2000,4000")
+    pla.add_argument("--experiments", type=Number(int, low=2), default=20,
+                     help="simulated experiments per number of trials (default 20)")
+    pla.add_argument("--tolerance", type=POSITIVE, default=0.05,
+                     help="|R - R_inf| wanted (default 0.05; R_inf = R with unlimited trials)")
+    pla.add_argument("--share", type=PROBABILITY, default=0.9,
+                     help="share of experiments that must reach the tolerance (default 0.9)")
+    pla.add_argument("--sigma", type=NON_NEGATIVE, default=None,
+                     help="the observer's noise SD on ln(V)/2 (default 0.18, from the Weber fraction 0.19)")
+    pla.add_argument("--lapse", type=PROBABILITY, default=0.0, help="the observer's lapse rate (default 0)")
+    pla.add_argument("--seed", type=SEED, default=0, help="seed of the simulated experiments (default: %(default)s)")
+    pla.add_argument("--out", required=True, metavar="DIR", help="output folder: plan.csv, plan.json")
+    add_overwrite(pla)
+    add_quiet(pla)
+    finish(pla, run_plan)
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from roughness.core.files import write_csv
+    from roughness.core.limits import MAX_TRIALS, check_size
+    from roughness.perception.analysis import write_json
+    from roughness.perception.embed import require_cvxpy
+    from roughness.perception.observer import DEFAULT_SIGMA, Observer
+    from roughness.perception.parallel import stderr_progress
+    from roughness.perception.plan import plan_trials
+    from roughness.perception.stimuli import read_stimuli
+    from roughness.perception.values import stimulus_values
+
+    check_size("trials of one simulated experiment", max(args.trials), MAX_TRIALS, "trials")
+    require_cvxpy()
+    stimuli = read_stimuli(args.stimuli)
+    ids = [s.stimulus for s in stimuli]
+    observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
+    v = read_truth(args.truth, ids) if args.truth else None
+    files = output_files(args.out, ("plan.csv", "plan.json"), args.overwrite,
+                         {"--stimuli": args.stimuli, "--truth": args.truth})
+    if v is None:
+        cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
+        log(args, f"true V of {len(ids)} stimuli with {args.engine} ...")
+        values = stimulus_values(ids, [s.heightmap() for s in stimuli], args.engine, cache, lambda m: log(args, m))
+        v = np.array([x.roughness for x in values])
+    plan = plan_trials(ids, v, args.trials, args.experiments, observer, args.tolerance, args.share, args.seed,
+                       stderr_progress("simulated experiments", args.quiet))
+    summary = {"stimuli_table": str(args.stimuli), "truth": args.truth or args.engine, "sigma": observer.sigma,
+               "lapse": observer.lapse, "seed": args.seed, **plan.summary()}
+    made(files)
+    write_csv(files["plan.csv"], ("trials", "experiments", "pearson_mean", "pearson_5", "pearson_95",
+                                  "within_tolerance", "spearman_truth_mean"),
+              ([s["trials"], s["experiments"], *(f"{s[k]:.4f}" for k in ("pearson_mean", "pearson_5", "pearson_95",
+                                                                         "within_tolerance", "spearman_truth_mean"))]
+               for s in summary["steps"]))
+    write_json(files["plan.json"], summary)
+    needed = plan.needed
+    print(f"R with unlimited trials {plan.limit:.3f}; " + (
+        f"{needed} trials bring R within {args.tolerance:g} of it in {args.share:.0%} of simulated experiments"
+        if needed else f"none of {','.join(map(str, args.trials))} trials brings R within {args.tolerance:g} of it "
+                       f"in {args.share:.0%} of simulated experiments: try more"))
+    log(args, f"wrote {files['plan.csv']}, {files['plan.json']}")
+    return 0
