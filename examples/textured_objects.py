@@ -1,4 +1,4 @@
-"""Worked example (README, "Textured objects: how each part feels"): a knob and a handle, each textured to a target
+"""Worked example (docs/tutorials/textured-objects.md): a knob and a handle, each textured to a target
 roughness on its curved part, with pictures of how each part feels and the per-region tables.
 
     python examples/textured_objects.py [--out examples/objects] [--mesh]

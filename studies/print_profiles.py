@@ -5,7 +5,7 @@ is printed by each shipped profile and by two ablations (the 0.4 mm nozzle's dis
 negligible layers; 0.2 mm layers alone), and V of the design and of each print is computed with the
 spectral engine (roughness.simulate.spectral.engine.SpectralSimulator, the paper's parameters, tens of
 ms per texture). Differences are JNDs of equivalent wavelength on the spectral standard scale, per
-seed, then averaged. Also two tuned textures (standard-1.0, seed 0, heights x 0.5675: the README's
+seed, then averaged. Also two tuned textures (standard-1.0, seed 0, heights x 0.5675: the manual's
 `tune --target-lambda 0.8` example; x 1.4139: `tune --target-lambda 1.2 --verify spectral`), the
 kind of case the issue measured by hand (-0.24 JND for a 0.4 mm nozzle on a tuned texture). And a
 resolution check: standard-1.0 (seed 100) made at 0.05, 0.025 and 0.0125 mm pixels, where the resin

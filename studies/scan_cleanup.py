@@ -4,7 +4,7 @@ The scan is made from the standard texture lambda = 1.0 mm (seed 0, 12 mm at 0.0
 1 mm tall, and 0.1 mm tall for a fine texture) as an instrument would deliver it: heights in
 micrometres, tilted by 0.03 mm/mm along x and half that along y (1.9 degrees, 0.54 mm corner to
 corner), 3% of the points missing (NaN: dropouts and a few blobs), 0.2% spikes of 0.3 to 2 mm. V is from the spectral engine; the JND distance is ln(lambda_eq / lambda_eq_clean) / ln(1.19).
-The table goes to results/scan_cleanup.md and is copied into the README.
+The table goes to results/scan_cleanup.md and is linked from docs/how-to/real-surfaces.md.
 
     python studies/scan_cleanup.py
 """

@@ -1,4 +1,4 @@
-"""Dask the way its users run it: a scheduler and a worker started as the README says (`dask scheduler
+"""Dask the way its users run it: a scheduler and a worker started as docs/how-to/dask.md says (`dask scheduler
 --scheduler-file`, `dask worker --scheduler-file --nthreads 1`), `roughness dataset build --scheduler-file`
 against them, the worker version check, a `client=` from Python, and threaded workers."""
 from __future__ import annotations
@@ -76,8 +76,8 @@ def _pretend_another_version() -> None:
 
 @contextlib.contextmanager
 def documented_cluster(folder: Path, workers: int):
-    """The scheduler file of a ``dask scheduler`` and ``dask worker --nthreads 1 --nworkers N`` started as the README
-    says (logs in ``folder``), once all workers have joined; every process is killed on exit."""
+    """The scheduler file of a ``dask scheduler`` and ``dask worker --nthreads 1 --nworkers N`` started as
+    docs/how-to/dask.md says (logs in ``folder``), once all workers have joined; every process is killed on exit."""
     from distributed import Client
 
     scheduler_file = folder / "scheduler.json"
@@ -103,7 +103,7 @@ def documented_cluster(folder: Path, workers: int):
 
 @pytest.fixture(scope="module")
 def cluster(tmp_path_factory):
-    """The scheduler file of a scheduler and one single-threaded worker, started as the README says."""
+    """The scheduler file of a scheduler and one single-threaded worker, started as docs/how-to/dask.md says."""
     with documented_cluster(tmp_path_factory.mktemp("cluster"), 1) as scheduler_file:
         yield scheduler_file
 

@@ -118,7 +118,7 @@ def test_partial_contact_in_windows_says_the_load_is_shared_per_window(small_win
 
 def test_the_windows_of_a_map_on_a_two_worker_cluster_equal_the_map_solved_here(rough, small_windows, tmp_path,
                                                                                  capsys, monkeypatch):
-    """A scheduler and two single-threaded workers started as the README says; the map from Python (client=),
+    """A scheduler and two single-threaded workers started as docs/how-to/dask.md says; the map from Python (client=),
     again after the workers die on their next window (solved again by the restarted ones), and from the CLI
     (--scheduler-file) equals the windows solved one after the other here, bit for bit."""
     from distributed import Client

@@ -100,7 +100,7 @@ PARALLEL = Number(int, low=1, high=MAX_PARALLEL)  # threads or worker processes
 def add_heightmap_args(p: argparse.ArgumentParser) -> None:
     """The heightmap input and how to read it (one file)."""
     p.add_argument("heightmap", metavar="HEIGHTMAP", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .h5, "
-                   "or a measured scan (.x3p, .sur, .plu, .datx, .gwy, .sdf, ...: see README); "
+                   "or a measured scan (.x3p, .sur, .plu, .datx, .gwy, .sdf, ...: see docs/how-to/real-surfaces.md); "
                    "FILE:pixel-mm=MM,height-mm=MM gives its units")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="repeat a small heightmap as a periodic texture")
@@ -221,8 +221,8 @@ def add_model_tail(p: argparse.ArgumentParser, json_help: str) -> None:
     p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
     p.add_argument("--verify", choices=VERIFIERS,
                    help="what checks the surrogate's answers: the FEM at a fidelity, or the spectral engine (tens of "
-                        "milliseconds instead of seconds; see README) (default: the FEM at the fidelity of the "
-                        "model's training labels)")
+                        "milliseconds instead of seconds; see docs/how-to/spectral.md) (default: the FEM at the "
+                        "fidelity of the model's training labels)")
     p.add_argument("--json", action="store_true", help=json_help)
     add_quiet(p)
     add_overwrite(p)

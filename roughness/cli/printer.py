@@ -11,7 +11,7 @@ def add_printer_arg(p: argparse.ArgumentParser, what: str) -> None:
 
     p.add_argument("--printer", metavar="NAME|FILE",
                    help=f"answer for the plate as this printer would print it: a profile ({', '.join(PROFILES)}) or "
-                        f"a JSON profile file (see README); {what}")
+                        f"a JSON profile file (see docs/how-to/printing.md); {what}")
 
 
 def printer_of(args: argparse.Namespace):

@@ -21,7 +21,7 @@ Definition (written down, as the paper leaves the details open):
   apart. With every window below the scale there is no spread (None) and the verdict is "homogeneous":
   no roughness anywhere.
 
-Measured (coarse FEM, footprint windows; see the README): a grating varies by 1e-4, as the paper's
+Measured (coarse FEM, footprint windows; see docs/how-to/homogeneity.md): a grating varies by 1e-4, as the paper's
 textures; random bump textures by about 1.5e-3 (the bumps under a 10 mm footprint differ from place
 to place), 0.1 JND. The surrogate adds its own position-to-position error (about 5e-3 on bump textures,
 2e-2 on gratings): use ``engine="fem"`` when the relative variance itself matters.

@@ -46,8 +46,9 @@ DEFAULT_BORDER_MM = 0.5
 FLAT_CURVATURE = 1e-3
 """Curvatures (1/mm) below this (radii above 1 m) are taken as flat (rounding in the normals of a flat face)."""
 NEEDLE_ASPECT = 20.0
-"""A face longer than this many times its width is a needle: bisection leaves slivers of it (README, textured
-objects: a capsule's 80 x 1.2 mm faces refine to 489 triangles per mm^2 at a 0.3 mm edge, an icosphere's to 56)."""
+"""A face longer than this many times its width is a needle: bisection leaves slivers of it
+(docs/tutorials/textured-objects.md: a capsule's 80 x 1.2 mm faces refine to 489 triangles per mm^2 at a 0.3 mm
+edge, an icosphere's to 56)."""
 CHUNK = 500_000
 """Faces handled at once in the checks (their edges' vectors: tens of MB)."""
 

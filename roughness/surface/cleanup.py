@@ -29,7 +29,7 @@ from roughness.core.limits import MAX_FILL_PIXELS, check_size
 
 from .heightmap import Heightmap
 
-MAX_FILL_FRACTION = 0.2  # default limit of --fill (see README: the clean-up table)
+MAX_FILL_FRACTION = 0.2  # default limit of --fill (see docs/how-to/real-surfaces.md: the clean-up table)
 LEVELS = {"plane": 1, "poly2": 2, "poly3": 3}
 
 

@@ -25,7 +25,9 @@ from roughness.core.errors import InputError
 from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
 
 EXTRA = 'pip install "roughness[scans]"'
-FORMATS = {  # suffix -> SurfaceTopography format id; each states its length units and was read cleanly (see README)
+# suffix -> SurfaceTopography format id; each states its length units and was read cleanly
+# (see docs/how-to/real-surfaces.md)
+FORMATS = {
     ".x3p": "x3p", ".sur": "sur", ".plu": "plu", ".datx": "datx", ".gwy": "gwy", ".sdf": "sdf", ".nc": "nc",
     ".al3d": "al3d", ".opd": "opd", ".frt": "frt", ".mnt": "mnt", ".tmd": "tmd", ".mi": "mi",
     ".nid": "ezd", ".bcrf": "bcr",
