@@ -16,7 +16,6 @@ Textures run one at a time, every engine in turn, in one process: the times are 
 from __future__ import annotations
 
 import json
-import os
 import sys
 import time
 import weakref
@@ -25,16 +24,13 @@ from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 
-import numpy as np
-
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output_folder
-from roughness.core.hashing import array_digest
 from roughness.surface.heightmap import Heightmap
 
 from .engines import FEM_FIDELITIES, Engine, fem_identity, fem_spec
+from .result_cache import ResultCache, content_key
 
-RESULTS_FILE = "results.jsonl"
 MANIFEST_FILE = "compare.json"  # what the report in a folder compares: input, reference, engines
 SETUP_KEY = "(set-up)"  # cache key of an engine's one-time preparation (FEM block, model loading)
 STORED = "dataset"  # ``source`` of results read from a dataset file (its build's times, not measured here)
@@ -46,15 +42,6 @@ class Texture:
     name: str  # shown in the report: sample id or file name
     family: str
     load: Callable[[], Heightmap]
-
-
-def content_key(heightmap: Heightmap) -> str:
-    """What a result depends on besides the engine: the heights (mm) and the pixel size (mm).
-
-    Heights count at float32 precision (1e-7 relative, far below any engine's resolution), the
-    precision datasets store them in: a dataset sample has the key of the texture it was made from.
-    """
-    return array_digest(np.asarray(heightmap.heights, dtype=np.float32), heightmap.pixel_mm)
 
 
 def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dict]]]:
@@ -109,7 +96,7 @@ def recipe_textures(path: Path, n: int | None) -> list[Texture]:
     from roughness.dataset.schema import sample_id
 
     if n is None:
-        raise InputError("a recipe input needs n, the number of its samples to compare on", parameter="n")
+        raise InputError("a recipe input needs n=N, the number of its samples to compare on", parameter="n")
     check_size("samples of a recipe to compare on", n, MAX_DATASET_SAMPLES, "n")
     return [Texture(sample_id(r), r["family"], lambda r=r: realise(r)) for r in expand(load_recipe(path), n)]
 
@@ -150,52 +137,6 @@ def write_manifest(folder: Path, manifest: dict, provenance: dict | None = None)
     folder.mkdir(parents=True, exist_ok=True)
     text = json.dumps(manifest | ({"provenance": provenance} if provenance else {}), indent=1) + "\n"
     atomic_write(folder / MANIFEST_FILE, lambda tmp: Path(tmp).write_text(text))
-
-
-class ResultCache:
-    """The output folder's results.jsonl: {engine, identity, key, texture, value, seconds, error, source} per line.
-
-    ``key`` is the texture's ``content_key``; ``identities`` maps each engine spec to what its results
-    depend on (configuration digest, model file digest): entries made under another identity (a
-    retrained model, say) are ignored. The file is created with the first result, after the folder's
-    ``manifest`` (if given) is written. ``provenance`` (engine spec -> provenance record) goes into each new line.
-    """
-
-    def __init__(self, folder: Path, identities: dict[str, str], manifest: dict | None = None,
-                 provenance: dict[str, dict] | None = None) -> None:
-        self.identities, self.provenance = identities, provenance or {}
-        self.folder, self.manifest = folder, manifest
-        self.path = folder / RESULTS_FILE
-        self.entries: dict[tuple[str, str], dict] = {}
-        if self.path.exists():
-            text = self.path.read_text()
-            if text and not text.endswith("\n"):  # a line torn by an interruption: dropped, computed again
-                text = text[:text.rfind("\n") + 1]
-                with open(self.path, "r+") as f:
-                    f.truncate(len(text.encode()))
-            for number, line in enumerate(text.splitlines(), 1):
-                try:
-                    entry = json.loads(line)
-                except json.JSONDecodeError:
-                    raise InputError(f"{self.path} line {number} is not JSON: remove that line to recompute it") from None
-                if entry.get("identity") == identities.get(entry.get("engine")):
-                    self.entries[(entry["engine"], entry["key"])] = entry
-
-    def get(self, engine: str, key: str) -> dict | None:
-        return self.entries.get((engine, key))
-
-    def put(self, engine: str, key: str, **fields) -> None:
-        entry = {"engine": engine, "identity": self.identities[engine], "key": key, **fields,
-                 **({"provenance": self.provenance[engine]} if engine in self.provenance else {})}
-        self.entries[(engine, key)] = entry
-        if self.manifest is not None:  # what these results belong to, before the first of them
-            write_manifest(self.folder, self.manifest, self.provenance)
-            self.manifest = None
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        with open(self.path, "a") as f:
-            f.write(json.dumps(entry) + "\n")
-            f.flush()
-            os.fsync(f.fileno())
 
 
 @dataclass

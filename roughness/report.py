@@ -19,7 +19,8 @@ from roughness.core.figures import new_figure, save_figure
 from roughness.core.files import atomic_write
 from roughness.surrogate.metrics import scores
 
-from .compare import SETUP_KEY, STORED, Outcome, ResultCache, Texture
+from .compare import SETUP_KEY, STORED, Outcome, Texture
+from .result_cache import ResultCache
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

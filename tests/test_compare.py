@@ -256,7 +256,7 @@ def test_cached_results_follow_the_engine_identity(tiny_set, tmp_path, capsys):
 
 
 def test_a_dataset_sample_has_the_content_key_of_its_texture(tiny_set):
-    from roughness.compare import content_key
+    from roughness.result_cache import content_key
     from roughness.dataset.reader import open_dataset
     from roughness.dataset.schema import sample_id
 

@@ -17,7 +17,7 @@ LAYERS = [
     ("roughness.dataset",),
     ("roughness.surrogate",),
     ("roughness.engines", "roughness.prediction", "roughness.maps", "roughness.classical", "roughness.compare",
-     "roughness.report", "roughness.curvature_correction"),
+     "roughness.report", "roughness.curvature_correction", "roughness.result_cache"),
     ("roughness.design", "roughness.perception", "roughness.objects"),
     ("roughness.cli",),
 ]

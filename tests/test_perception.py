@@ -303,6 +303,7 @@ class _FakeResult:
     def __init__(self, heights: np.ndarray, force: float) -> None:
         self.roughness = float(heights.std() * force)
         self.roughness_stderr = 0.001
+        self.seconds = 0.0
         self.grid_axis_mm = np.linspace(-4, 4, 9)
         self.fluctuation = np.full((9, 9), self.roughness)
 
@@ -314,27 +315,28 @@ class _FakeResult:
 
 
 def test_fem_values_are_cached_by_content_and_configuration(tmp_path, monkeypatch):
-    import roughness
+    from roughness.engines import FemEngine
     from roughness.surface.heightmap import Heightmap
 
     calls = []
 
-    def fake(hm, fidelity="default", **overrides):
-        calls.append((fidelity, overrides))
-        return _FakeResult(hm.heights, overrides.get("force_n", 10.0))
+    def fake(engine, hm):
+        calls.append(engine.config)
+        return _FakeResult(hm.heights, engine.config.force_n)
 
-    monkeypatch.setattr(roughness, "fem_roughness", fake, raising=False)
+    monkeypatch.setattr(FemEngine, "simulate", fake)
     h = np.random.default_rng(0).uniform(0, 1, (20, 20))
     a, same, other = Heightmap(h, 0.5), Heightmap(h.copy(), 0.5), Heightmap(h + 0.1 * h ** 2, 0.5)
     first = stimulus_values(["a"], [a], "fem:coarse", tmp_path)
-    assert len(calls) == 1 and len(list(tmp_path.glob("*.npz"))) == 1
+    assert len(calls) == 1 and len(list(tmp_path.glob("arrays/*.npz"))) == 1
     renamed = stimulus_values(["renamed"], [same], "fem:coarse", tmp_path)
     assert len(calls) == 1  # same heights and configuration under another name: from the cache
     assert renamed[0].roughness == first[0].roughness and renamed[0].fluctuation.shape == (9, 9)
     stimulus_values(["a"], [a], "fem:coarse", tmp_path, force_n=5.0)
     stimulus_values(["a"], [Heightmap(h, 0.25)], "fem:coarse", tmp_path)
     stimulus_values(["b"], [other], "fem:coarse", tmp_path)
-    assert len(calls) == 4 and len(list(tmp_path.glob("*.npz"))) == 4
+    assert len(calls) == 4 and len(list(tmp_path.glob("arrays/*.npz"))) == 4
+    assert [c.fidelity for c in calls] == ["coarse"] * 4 and calls[1].force_n == 5.0
     with pytest.raises(InputError, match="engine"):
         values_module.check_engine("fem:ultra")
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from functools import partial
 
 from .common import COUNT, add_overwrite, add_quiet, add_reading_args, finish, load, log, show_notes
 
@@ -32,11 +33,12 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from roughness.compare import ResultCache, check_report_folder, run, textures_of, write_manifest
+    from roughness.compare import check_report_folder, run, textures_of, write_manifest
     from roughness.core.errors import InputError
     from roughness.core.files import check_distinct
     from roughness.engines import engine_provenance, make_engine
     from roughness.report import write_report
+    from roughness.result_cache import ResultCache
 
     specs = list(dict.fromkeys([args.reference, *args.engines]))
     engines = [make_engine(spec, "reference" if spec == args.reference else "engines") for spec in specs]
@@ -55,7 +57,8 @@ def run(args: argparse.Namespace) -> int:
 
     textures, stored = textures_of(args.input, args.n, load_file)
     provenance = {e.spec: engine_provenance(e).as_dict() for e in engines}
-    cache = ResultCache(out, {e.spec: e.identity for e in engines}, manifest, provenance)
+    cache = ResultCache(out, {e.spec: e.identity for e in engines}, partial(write_manifest, out, manifest, provenance),
+                        provenance)
     try:
         outcome = run(textures, engines, cache, stored, quiet=args.quiet)
     except KeyboardInterrupt:
