@@ -3,13 +3,17 @@
 The public Python API, loaded on first use (``import roughness`` is cheap; prediction loads
 no FEM stack and no torch)::
 
+    import numpy as np
     import roughness
-    hm = roughness.load_heightmap("texture.png", pixel_mm=0.05, height_mm=1.0)
-    [p] = roughness.predict(hm)                  # surrogate, FEM where out of domain
-    r = roughness.fem_roughness(hm)              # FEM reference: r.roughness, r.roughness_stderr
-    [q] = roughness.predict(heights, pixel_mm=0.05)  # any 2-D array of heights (mm) with its pixel size (mm)
-    ps = roughness.predict({"a": hm, "b": q_map}, options=roughness.PredictOptions(tile=True))  # named, periodic
-    m = roughness.predict_map(hm, engine="spectral", client=client)  # a large object's map, windows on Dask
+
+    hm = roughness.standard_texture(1.0)          # bumps 1 mm apart, 12 mm square (files: load_heightmap)
+    [p] = roughness.predict(hm)                   # the surrogate, climbing to physics where unsure
+    print(p)                                      # V, its spread, the engine, the place on the standard scale
+    [q] = roughness.predict(np.asarray(hm.heights), pixel_mm=hm.pixel_mm)  # any 2-D array of heights (mm)
+    named = roughness.predict({"fine": roughness.standard_texture(0.75), "coarse": hm},
+                              options=roughness.PredictOptions(tile=True))  # periodic tiles, answers by name
+    r = roughness.fem_roughness(hm, fidelity="coarse")  # the FEM reference: r.roughness, r.roughness_stderr
+    m = roughness.predict_map(hm, engine="spectral", tile=True, step_mm=4.0)  # m.map: V over it (Dask: client=)
 
 Design tools and perception analysis with plain arguments: ``tune``, ``palette``, ``tactile_image``,
 ``homogeneity``, ``embed_trials``, ``fit_embedding``. Plot functions return ``matplotlib.figure.Figure``

@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from dask.distributed import Client
 
     from roughness.simulate.footprints import RoughnessMap
+    from roughness.surrogate.predictor import SurrogateModel
 
 MAP_ENGINES = ("surrogate", "spectral", "auto")
 WORKERS = 2  # local Dask worker processes for a windowed spectral map
@@ -47,7 +48,7 @@ class MapPrediction:
 
 
 def predict_map(heightmap: Heightmap | np.ndarray, engine: str = "surrogate", step_mm: float = 1.0,
-                tile: bool = False, model: object | str | Path | None = None, batch_size: int = 256,
+                tile: bool = False, model: SurrogateModel | str | Path | None = None, batch_size: int = 256,
                 pixel_mm: float | None = None, progress: Callable[[int, int], None] | None = None,
                 workers: int | None = None, scheduler: str | None = None, scheduler_file: str | None = None,
                 client: Client | None = None, quiet: bool = True) -> MapPrediction:

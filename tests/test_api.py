@@ -340,3 +340,15 @@ def test_fem_takes_an_array_with_its_pixel_size(texture, monkeypatch):
         with pytest.raises(InputError) as err:
             roughness.fem_roughness(heights, simulator=simulator, **kwargs)
         assert err.value.parameter == parameter
+
+
+def test_the_package_docstring_example_runs():
+    """The example at the top of ``help(roughness)`` uses what exists and runs as written."""
+    doc = roughness.__doc__
+    block = doc[doc.index("::\n") + 3:].split("\n\n", 2)
+    code = "\n".join(line[4:] for line in "\n\n".join(block[:2]).splitlines())
+    namespace: dict = {}
+    exec(compile(code, "roughness.__doc__", "exec"), namespace)  # noqa: S102 (our own docstring)
+    assert namespace["p"].roughness > 0 and [n.source for n in namespace["named"]] == ["fine", "coarse"]
+    assert namespace["q"].roughness == namespace["p"].roughness or namespace["p"].engine != "surrogate"
+    assert namespace["r"].roughness > 0 and np.isfinite(namespace["m"].map.roughness).all()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .common import (
     POSITIVE,
@@ -18,6 +19,11 @@ from .common import (
     show_notes,
 )
 from .object_inputs import MAPPING_FLAGS, add_mesh_and_texture_args, check_mapping_args, mapping_for, read_texture
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from roughness.surface.heightmap import Heightmap
 
 
 def add_object_args(p: argparse.ArgumentParser) -> None:
@@ -38,8 +44,8 @@ def add_object_args(p: argparse.ArgumentParser) -> None:
 class ObjectInputs:
     """What the object commands read: the mesh, the texture, the regions (name -> face mask) and notes."""
 
-    mesh: object
-    texture: object  # Heightmap
+    mesh: trimesh.Trimesh
+    texture: Heightmap
     texture_name: str
     regions: dict
     notes: list[str] = field(default_factory=list)

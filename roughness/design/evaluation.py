@@ -10,10 +10,17 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from roughness.surface.heightmap import Heightmap
+
+if TYPE_CHECKING:
+    from roughness.core.provenance import Provenance
+    from roughness.engines import FemEngine, SpectralEngine
+    from roughness.surface.printing import PrintProfile
+    from roughness.surrogate.predictor import SurrogateModel
 
 ENGINES = ("surrogate", "fem")
 VERIFIERS = ("coarse", "default", "fine", "spectral")  # FEM fidelities, or the spectral engine
@@ -37,13 +44,13 @@ class Evaluator:
 
     model_path: str | None = None
     fidelity: str | None = None  # the verifier: a FEM fidelity or "spectral" (default: the model's training labels')
-    printer: object = None  # a PrintProfile: every texture is judged as printed (roughness.surface.printing)
-    _model: object = field(default=None, repr=False)
-    _fem: object = field(default=None, repr=False)
+    printer: PrintProfile | None = None  # every texture is judged as printed (roughness.surface.printing)
+    _model: SurrogateModel | None = field(default=None, repr=False)
+    _fem: FemEngine | SpectralEngine | None = field(default=None, repr=False)
     fem_runs: int = 0  # FEM verifications so far
 
     @property
-    def model(self):
+    def model(self) -> SurrogateModel:
         from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
         if self._model is None:
@@ -51,7 +58,7 @@ class Evaluator:
         return self._model
 
     @property
-    def fem(self):
+    def fem(self) -> FemEngine | SpectralEngine:
         """The verifying engine (``FemEngine`` or ``SpectralEngine``), prepared on first use."""
         from roughness.engines import FemEngine, SpectralEngine
 
@@ -62,7 +69,7 @@ class Evaluator:
         return self._fem
 
     @property
-    def provenance(self):
+    def provenance(self) -> Provenance:
         """The ``Provenance`` of the design's verified answers: the verifier's engine, fidelity and configuration,
         and the surrogate that searched."""
         from roughness.core.provenance import make_provenance
