@@ -6,15 +6,14 @@ Pixel (i, j) holds the height at x = (j + 0.5) * pixel_mm, y = (i + 0.5) * pixel
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
 
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
-from roughness.core.reprs import short_repr, shape_text, v_text
 from roughness.core.limits import MAX_COORDINATE_MM, MAX_HEIGHT_MM, MAX_HEIGHTMAP_PIXELS, MIN_PIXEL_MM, check_size
+from roughness.core.reprs import shape_text, short_repr
 
 TOLERANCE_MM = 1e-9
 
@@ -268,19 +267,3 @@ def as_heightmap(heights: Heightmap | np.ndarray, pixel_mm: float | None = None,
     except InputError as err:
         err.parameter = err.parameter or parameter
         raise
-
-
-def heightmaps_of(heightmaps: Heightmap | np.ndarray | Iterable[Heightmap | np.ndarray], pixel_mm: float | None = None,
-                  parameter: str = "heightmaps") -> Iterator[Heightmap]:
-    """Each of one heightmap (a ``Heightmap`` or a 2-D array) or an iterable of them as a ``Heightmap`` (lazily).
-
-    An array is always one map (a 3-D array is refused, not split); ``pixel_mm`` as in ``as_heightmap``.
-    """
-    if isinstance(heightmaps, (Heightmap, np.ndarray)):
-        yield as_heightmap(heightmaps, pixel_mm, parameter)
-        return
-    if isinstance(heightmaps, (str, bytes)) or not isinstance(heightmaps, Iterable):
-        raise InputError(f"{parameter} must be a Heightmap, a 2-D array of heights (mm) or an iterable of them, got "
-                         f"{type(heightmaps).__name__}", parameter=parameter)
-    for heightmap in heightmaps:
-        yield as_heightmap(heightmap, pixel_mm, parameter)
