@@ -24,7 +24,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from roughness.core.errors import InputError
-
 from roughness.surface.heightmap import Heightmap
 
 SHAPES = ("flat", "cylinder", "sphere")
@@ -149,8 +148,8 @@ def textured_surface(heightmap: Heightmap, centre_mm: tuple[float, float], shape
         side = 2 * shape.unrolled_half_mm(width_mm)
         raise InputError(f"wrapped on the {shape.describe()}, the {width_mm:g} mm skin footprint reads a {side:.3g} mm "
                          f"square of texture around ({cx:.2f}, {cy:.2f}) mm, beyond the heightmap's "
-                         f"{heightmap.size_mm[0]:.2f} mm x {heightmap.size_mm[1]:.2f} mm; pass --tile for a periodic "
-                         "texture, or lay heights along z (--texture-along z)", parameter="curvature_mm")
+                         f"{heightmap.size_mm[0]:.2f} mm x {heightmap.size_mm[1]:.2f} mm; pass tile=True for a "
+                         "periodic texture, or lay heights along z (texture_along=\"z\")", parameter="curvature_mm")
     p = heightmap.pixel_mm
     # Tabulation grid: the heightmap's own pixel centres, in block coordinates, over the footprint and a margin.
     half = width_mm / 2 + SLIDE_MARGIN_MM

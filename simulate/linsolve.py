@@ -16,7 +16,7 @@ force: the contact loop's force control in one solve per round instead of two (t
 with the bone held, then a unit bone displacement, combined). Its extra row is preconditioned
 by the plate's stiffness; the plate's motion is extended into the block by an earlier free
 response, so the coupling to the free DOFs is small and CG needs about the iterations of one
-held solve (studies/results/fem_speed.md has the measurements).
+held solve.
 
 CG runs in float64; the preconditioner is one V-cycle of that hierarchy in float32
 (``AMG_PRECISION``), applied directly to the levels (pyamg's own ``aspreconditioner`` also
@@ -318,7 +318,7 @@ class ConstrainedSystem:
         if info != 0 or not np.all(np.isfinite(x)):
             raise SolverError(
                 f"CG did not converge in {self.maxiter} iterations (relative residual {residual:.2e}); "
-                "the system is ill-conditioned (Poisson ratio close to 0.5 with P1 elements? try --element p2)"
+                "the system is ill-conditioned (Poisson ratio close to 0.5 with P1 elements? try element=\"p2\")"
             )
         return x, count, residual
 

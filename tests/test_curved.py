@@ -13,9 +13,9 @@ from roughness.core.hashing import file_sha256
 from roughness.dataset.textures import standard_texture
 from roughness.simulate.config import SimConfig
 from roughness.simulate.curved import BaseShape, normal_relief, textured_surface
+from roughness.simulate.model import Simulator
 from roughness.surface.detrend import detrend, parse_detrend
 from roughness.surface.heightmap import Heightmap, flat
-from roughness.simulate.model import Simulator
 
 
 @pytest.fixture(scope="module")
@@ -71,8 +71,9 @@ def test_huge_radius_is_the_flat_texture_and_concave_radius_bounds(texture):
 
 def test_normal_heights_need_the_unrolled_texture(texture):
     small = Heightmap(texture.heights[:200, :200], texture.pixel_mm)  # 10 mm: exactly the footprint
-    with pytest.raises(InputError, match="pass --tile"):
+    with pytest.raises(InputError, match="pass tile=True") as err:
         textured_surface(small, small.centre_mm, BaseShape("cylinder", 10.0, "x"), "normal", 10.0, False)
+    assert err.value.parameter == "curvature_mm" and "--" not in str(err.value)
     textured_surface(small, small.centre_mm, BaseShape("cylinder", 10.0, "x"), "z", 10.0, False)
 
 
