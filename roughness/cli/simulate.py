@@ -153,12 +153,6 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _spacing(config, hm) -> str:
-    if config.fidelity == "converged":
-        return f"refined from {config.spacing_mm(hm)} mm until the error estimate is below {config.tolerance:g}"
-    return f"{config.spacing_mm(hm)} mm"
-
-
 def contact_warning(r) -> str:
     """One line on what is left of the contact conditions of an unconverged result (shown even with --quiet)."""
     c = r.contact_check
