@@ -37,8 +37,9 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load
     from roughness.maps import MapPrediction, predict_map
     from roughness.perception.api import embed_trials, fit_embedding
     from roughness.simulate.config import SimConfig
-    from roughness.simulate.model import Result, Simulator
+    from roughness.simulate.model import Simulator
     from roughness.simulate.model import roughness as fem_roughness
+    from roughness.simulate.result import Result
     from roughness.surface.heightmap import Heightmap, as_heightmap
     from roughness.surface.io import load_heightmap, save_heightmap
     from roughness.perceptual_scale import StandardScale, load_scale
@@ -61,7 +62,7 @@ _HOMES = {
     "save_heightmap": "roughness.surface.io",
     "SimConfig": "roughness.simulate.config",
     "Simulator": "roughness.simulate.model",
-    "Result": "roughness.simulate.model",
+    "Result": "roughness.simulate.result",
     "fem_roughness": "roughness.simulate.model:roughness",
     "predict": "roughness.prediction",
     "PredictOptions": "roughness.prediction",

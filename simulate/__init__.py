@@ -6,7 +6,7 @@ from importlib import import_module
 
 _HOMES = {"SimConfig": ".config", "Heightmap": "roughness.surface.heightmap",
           "InputError": "roughness.surface.heightmap", "load_heightmap": "roughness.surface.io",
-          "save_heightmap": "roughness.surface.io", "Result": ".model", "SimulationError": ".model",
+          "save_heightmap": "roughness.surface.io", "Result": ".result", "SimulationError": ".model",
           "Simulator": ".model", "roughness": ".model"}
 
 __all__ = sorted(_HOMES)

@@ -11,18 +11,20 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from dataclasses import replace
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .discretization import LADDER_MM, V_FLOOR, coarser_spacing, richardson, within
 from roughness.surface.heightmap import Heightmap
 
+from .discretization import LADDER_MM, V_FLOOR, coarser_spacing, richardson, within
+from .result import Level, Note, Result
+
 if TYPE_CHECKING:
+    from .config import SimConfig
     from .contact import ContactRound
-    from .model import Result, Simulator
 
 # contact-face coordinates (n, 2) in mm -> starting contact set (n,) bool
 InitialSet = Callable[[np.ndarray], np.ndarray]
@@ -32,25 +34,24 @@ InitialSet = Callable[[np.ndarray], np.ndarray]
 CARRY_NEIGHBOURS = 4
 
 
-@dataclass(frozen=True)
-class Level:
-    """One solved rung: contact spacing (mm), element, V, its estimated relative error, contact
-    rounds and seconds."""
+class LevelSolver(Protocol):
+    """What the ladder asks of a simulator (``model.Simulator``): its settings, one level's ``solve`` and the
+    contact-face node coordinates (mm) of a resolved configuration's block."""
 
-    h_contact_mm: float
-    element: str
-    roughness: float
-    discretization_error: float | None
-    contact_rounds: int
-    seconds: float
+    config: SimConfig
+
+    def solve(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False,
+              callback: Callable[[ContactRound], None] | None = None, initial: InitialSet | None = None,
+              **overrides) -> Result: ...
+
+    def face_xy(self, config: SimConfig) -> np.ndarray: ...
 
 
-def contact_set_map(sim: Simulator, result: Result, neighbours: int = CARRY_NEIGHBOURS) -> InitialSet:
+def contact_set_map(sim: LevelSolver, result: Result, neighbours: int = CARRY_NEIGHBOURS) -> InitialSet:
     """The contact set of ``result`` carried to another contact face: a point starts in contact
     when any of its ``neighbours`` nearest nodes of ``result``'s face was in contact."""
-    xy = sim.block(result.config).problem.bottom_xy
     in_contact = result.state.in_contact.copy()
-    tree = cKDTree(xy)
+    tree = cKDTree(sim.face_xy(result.config))
     return lambda points: in_contact[tree.query(points, k=neighbours)[1]].any(axis=1)
 
 
@@ -59,14 +60,21 @@ def _level(result: Result) -> Level:
                  result.discretization_error, result.iterations, result.seconds)
 
 
-def _finish(result: Result, levels: list[Result], start: float) -> Result:
-    result.ladder = [_level(r) for r in levels]
-    result.stage_seconds["coarser_levels"] = sum(r.seconds for r in levels[:-1])
-    result.seconds = time.perf_counter() - start
-    return result
+def _finish(levels: list[Result], start: float, notes: tuple[Note, ...] = ()) -> Result:
+    """The last level's result with the ladder of ``levels``, their seconds since ``start`` and ``notes`` added."""
+    result = levels[-1]
+    return replace(result, ladder=[_level(r) for r in levels], notes=[*result.notes, *notes],
+                   stage_seconds={**result.stage_seconds, "coarser_levels": sum(r.seconds for r in levels[:-1])},
+                   seconds=time.perf_counter() - start)
 
 
-def estimated(sim: Simulator, heightmap: Heightmap, centre_mm: tuple[float, float] | None, tile: bool,
+def _estimate(result: Result, coarse: Result) -> Result:
+    """``result`` with the Richardson estimate of its V's relative error from the ``coarse`` level's."""
+    return replace(result, discretization_error=richardson(result.roughness, coarse.roughness,
+                                                           result.config.h_contact_mm, coarse.config.h_contact_mm))
+
+
+def estimated(sim: LevelSolver, heightmap: Heightmap, centre_mm: tuple[float, float] | None, tile: bool,
               callback: Callable[[ContactRound], None] | None = None, **overrides) -> Result:
     """The requested level with its discretization-error estimate (``converged``: ``refine``)."""
     config = replace(sim.config, **overrides)
@@ -76,32 +84,25 @@ def estimated(sim: Simulator, heightmap: Heightmap, centre_mm: tuple[float, floa
     h = config.spacing_mm(heightmap)
     coarse = sim.solve(heightmap, centre_mm, tile, **{**overrides, "h_contact_mm": coarser_spacing(h)})
     result = sim.solve(heightmap, centre_mm, tile, callback, initial=contact_set_map(sim, coarse),
-                     **{**overrides, "h_contact_mm": h})
-    result.discretization_error = richardson(result.roughness, coarse.roughness, h, coarse.config.h_contact_mm)
-    return _finish(result, [coarse, result], start)
+                       **{**overrides, "h_contact_mm": h})
+    return _finish([coarse, _estimate(result, coarse)], start)
 
 
-def refine(sim: Simulator, heightmap: Heightmap, centre_mm: tuple[float, float] | None, tile: bool,
+def refine(sim: LevelSolver, heightmap: Heightmap, centre_mm: tuple[float, float] | None, tile: bool,
            callback: Callable[[ContactRound], None] | None = None, **overrides) -> Result:
     """Climb the ladder until V's estimated relative error is below the configured tolerance."""
-    from .model import Note
-
     start = time.perf_counter()
     tolerance = replace(sim.config, **overrides).tolerance
     levels: list[Result] = []
     for h in LADDER_MM:
         initial = contact_set_map(sim, levels[-1]) if levels else None
         result = sim.solve(heightmap, centre_mm, tile, callback, initial=initial, **{**overrides, "h_contact_mm": h})
-        if levels:
-            result.discretization_error = richardson(result.roughness, levels[-1].roughness, h,
-                                                     levels[-1].config.h_contact_mm)
+        result = _estimate(result, levels[-1]) if levels else result
         levels.append(result)
         if result.discretization_error is not None and within(result.roughness, result.discretization_error,
                                                                tolerance):
-            break
-    else:
-        result.notes.append(Note(
-            "tolerance_not_met", f"estimated discretization error {100 * result.discretization_error:.1f}% of V "
-            f"exceeds the tolerance ({100 * tolerance:g}% of max(V, {V_FLOOR:g})) at the finest level (h = {h} mm)",
-            unusual=True))
-    return _finish(result, levels, start)
+            return _finish(levels, start)
+    return _finish(levels, start, (Note(
+        "tolerance_not_met", f"estimated discretization error {100 * result.discretization_error:.1f}% of V "
+        f"exceeds the tolerance ({100 * tolerance:g}% of max(V, {V_FLOOR:g})) at the finest level (h = {h} mm)",
+        unusual=True),))

@@ -1,129 +1,32 @@
 """The FEM roughness model: a prepared skin block and the texture -> V pipeline."""
 from __future__ import annotations
 
-import json
 import math
 import threading
 import time
 from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from roughness.core.errors import InputError, SimulationError
-from roughness.core.hashing import canonical_json
-from roughness.core.reprs import short_repr, v_text
+from roughness.surface.heightmap import Heightmap, as_heightmap
 
 from . import mesh as meshing
 from .config import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES, BlockSpec, SimConfig
-from .contact import ContactCheck, ContactError, ContactProblem, ContactResult, ContactRound, solve_contact
+from .contact import ContactError, ContactProblem, ContactResult, ContactRound, solve_contact
+from .converged import InitialSet, estimated
 from .curved import FLAT, BaseShape, base_surface, textured_surface
 from .elasticity import rigid_body_modes, stiffness
 from .face import ContactFace
-from roughness.surface.heightmap import Heightmap, as_heightmap
 from .linsolve import AMGCache, SolverError
+from .result import Note, Result
 from .strain import StrainSampler
 from .variation import PairSampling, variation
 
 MIN_FOOTPRINT_PIXELS = 10  # the skin footprint must span at least this many pixels across
 LOCKING_POISSON = 0.49  # P1 elements lock above this Poisson ratio
-
-
-@dataclass(frozen=True)
-class Note:
-    """A remark on how a result was obtained; ``unusual`` ones are worth a user's attention.
-
-    Codes: ``indentation`` (deeper than the tissue: outside small strain, as in the paper's
-    model; unusual beyond ``DEEP_INDENTATION_TISSUES``), ``not_converged`` (the contact
-    conditions do not hold within tolerance: what is left), ``cycled`` (a contact set recurred,
-    so the contact steps were damped; unusual if it did not converge), ``locking`` (P1 near
-    incompressibility), ``unresolved_texture`` (features finer than the contact mesh), ``tolerance_not_met``
-    (``converged`` stopped at its finest level above the tolerance), ``discretization_error_undefined`` (V is 0
-    at this mesh but not at the coarser one: no relative error; written by ``Result.summary``).
-    """
-
-    code: str
-    message: str
-    unusual: bool
-
-
-@dataclass
-class Result:
-    """Roughness of one texture and how it was obtained (mm, N, s).
-
-    ``iterations``: contact rounds; ``cg_iterations``, ``amg_setups``: linear-solver work of
-    this texture's contact solve; ``converged``: every contact condition holds within tolerance,
-    ``contact_check``: how far each is from holding (nodes, largest penetration and tension,
-    tensile force as a fraction of the load); ``notes``: see ``Note``; ``discretization_error``: estimated
-    relative error of V from the mesh (``simulate.discretization``), with ``ladder`` the levels
-    solved for it (``simulate.converged.Level``, the last one this result's).
-    """
-
-    roughness: float
-    roughness_stderr: float
-    contact_fraction: float
-    indentation_mm: float
-    converged: bool
-    iterations: int
-    unresolved_nodes: int
-    cycled: bool
-    cg_iterations: int
-    amg_setups: int
-    nodes: int
-    dofs: int
-    seconds: float
-    stage_seconds: dict[str, float]
-    fluctuation: np.ndarray
-    lambda3: np.ndarray
-    grid_axis_mm: np.ndarray
-    contact_history: list[int]
-    notes: list[Note]
-    config: SimConfig
-    state: ContactResult | None = field(default=None, repr=False)
-    discretization_error: float | None = None
-    ladder: list = field(default_factory=list)
-    contact_check: ContactCheck | None = None
-
-    def __repr__(self) -> str:
-        return short_repr(self, v_text(self.roughness, self.roughness_stderr), f"fem ({self.config.fidelity})",
-                          "converged" if self.converged else "NOT converged", f"contact {self.contact_fraction:.2f}",
-                          f"indentation {self.indentation_mm:.3g} mm", f"{self.nodes:,} nodes", f"{self.seconds:.2f} s",
-                          f"{len(self.notes)} note(s)" if self.notes else "")
-
-    def summary(self) -> dict:
-        """The scalars, contact history, notes and main settings, as plain Python types (JSON-ready)."""
-        keys = ("roughness", "roughness_stderr", "contact_fraction", "indentation_mm", "converged",
-                "iterations", "cg_iterations", "amg_setups", "unresolved_nodes", "cycled", "nodes", "dofs",
-                "seconds", "discretization_error")
-        out = {k: getattr(self, k) for k in keys}
-        notes = list(self.notes)
-        ladder = [asdict(level) for level in self.ladder]
-        if any(_undefined(x.get("discretization_error")) for x in [out, *ladder]):
-            # relative to V = 0 (simulate.discretization.richardson): undefined, null rather than Infinity
-            for x in (out, *ladder):
-                x["discretization_error"] = None if _undefined(x["discretization_error"]) else x["discretization_error"]
-            notes.append(Note("discretization_error_undefined", "V is 0 at a mesh but not at the next coarser one "
-                              "(see ladder): its relative discretization error is undefined", unusual=False))
-        out.update(stage_seconds={k: round(v, 4) for k, v in self.stage_seconds.items()},
-                   contact_history=self.contact_history, notes=[asdict(n) for n in notes],
-                   fidelity=self.config.fidelity, h_contact_mm=self.config.h_contact_mm,
-                   force_n=self.config.force_n, poisson=self.config.poisson, contact=self.config.contact,
-                   element=self.config.element, bone=self.config.bone, tolerance=self.config.tolerance,
-                   ladder=ladder,
-                   contact_check=None if self.contact_check is None else asdict(self.contact_check))
-        if self.config.curvature_mm is not None:  # the curved base under the texture
-            out.update(curvature_mm=self.config.curvature_mm, base=self.config.base,
-                       curvature_axis=self.config.curvature_axis, texture_along=self.config.texture_along)
-        return json.loads(canonical_json(out))  # numpy scalars and arrays become Python numbers and lists
-
-    @property
-    def unusual_notes(self) -> list[Note]:
-        return [n for n in self.notes if n.unusual]
-
-
-def _undefined(value: float | None) -> bool:
-    return value is not None and not math.isfinite(value)
 
 
 @dataclass(frozen=True)
@@ -234,6 +137,10 @@ class Simulator:
             self._blocks.move_to_end(key)
             return self._blocks[key]
 
+    def face_xy(self, config: SimConfig) -> np.ndarray:
+        """x, y (mm) of the contact-face nodes of a resolved configuration's block, (n, 2)."""
+        return self.block(config).problem.bottom_xy
+
     def run(self, heightmap: Heightmap | np.ndarray, centre_mm: tuple[float, float] | None = None, tile: bool = False,
             callback: Callable[[ContactRound], None] | None = None, estimate_error: bool = True,
             pixel_mm: float | None = None, **overrides) -> Result:
@@ -246,14 +153,12 @@ class Simulator:
         """
         heightmap = as_heightmap(heightmap, pixel_mm)
         if estimate_error or replace(self.config, **overrides).fidelity == "converged":
-            from .converged import estimated
-
             return estimated(self, heightmap, centre_mm, tile, callback, **overrides)
         return self.solve(heightmap, centre_mm, tile, callback, **overrides)
 
     def solve(self, heightmap: Heightmap, centre_mm: tuple[float, float] | None = None, tile: bool = False,
-              callback: Callable[[ContactRound], None] | None = None,
-              initial: Callable[[np.ndarray], np.ndarray] | None = None, **overrides) -> Result:
+              callback: Callable[[ContactRound], None] | None = None, initial: InitialSet | None = None,
+              **overrides) -> Result:
         """V at one level (no discretization-error estimate); ``initial`` maps contact-face points
         (n, 2) in mm to the starting contact set (default: what the flat block's indentation touches)."""
         t_start = time.perf_counter()

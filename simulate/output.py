@@ -10,7 +10,8 @@ from roughness.core.figures import new_figure, save_figure
 from roughness.core.files import atomic_write
 
 from .elasticity import strain_tensors, vertex_strain_operator
-from .model import Block, Result
+from .model import Block
+from .result import Result
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

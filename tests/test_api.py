@@ -206,7 +206,7 @@ def test_reprs_are_a_line_or_two(texture):
 
 def test_fem_result_repr_is_short():
     from roughness.simulate.config import SimConfig
-    from roughness.simulate.model import Result
+    from roughness.simulate.result import Result
 
     n = 400
     result = Result(0.05, 0.001, 0.9, 2.5, True, 3, 0, False, 10, 1, 1000, 3000, 1.5, {}, np.zeros((n, n)),
