@@ -42,7 +42,9 @@ tension and the tensile force as a fraction of the applied force).
 
 ``solve_contact`` returns a ``ContactResult`` (like scipy.optimize's OptimizeResult: success,
 message, iteration counts) and calls an optional ``callback`` with a ``ContactRound`` after
-every round. ``check_contact`` measures the conditions on any state.
+every round. ``check_contact`` measures the conditions on any state. Between rounds the loop is a
+``LoopState`` (active set, iterate, record); a round is ``_solve_round`` (a ``RoundSolve``), then
+``_changes``, ``_record`` (with the damping) and ``_advance``, each a new value, nothing changed in place.
 """
 from __future__ import annotations
 
@@ -53,7 +55,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .face import ContactFace
-from .linsolve import CG_RTOL, AMGCache, constrain
+from .linsolve import CG_RTOL, AMGCache, ConstrainedSystem, constrain
 
 # height(x, y) -> texture height (mm) relative to the undeformed contact face, block coordinates (mm)
 Surface = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -111,7 +113,7 @@ class ContactCheck:
         return self.violations == 0
 
 
-@dataclass
+@dataclass(frozen=True)
 class ContactResult:
     """The converged (or last) state of the contact loop and what it cost.
 
@@ -228,17 +230,58 @@ def _damped(violation: np.ndarray, candidates: np.ndarray) -> np.ndarray:
     return candidates & (violation >= DAMPING * violation[candidates].max())
 
 
-def solve_contact(
-    problem: ContactProblem,
-    surface: Surface,
-    force_n: float,
-    frictionless: bool = False,
-    initial: np.ndarray | None = None,
-    max_rounds: int = 30,
-    warm: tuple[np.ndarray, np.ndarray] | None = None,
-    callback: Callable[[ContactRound], None] | None = None,
-    amg: AMGCache | None = None,
-) -> ContactResult:
+@dataclass(frozen=True)
+class LoopState:
+    """The contact loop between rounds: the active set, the iterate the next round starts from, and the
+    loop's record; each round makes a new one (``_record``, ``_advance``).
+
+    Per contact-face node: ``contact`` (held on the texture), ``slides`` (slides when held: frictionless),
+    ``lateral`` (n, 2; mm: the x, y displacement at which it meets the texture, the last one of a sliding node,
+    where it touched for a restuck one), ``flips`` and ``releases`` (state changes, releases), ``restuck``
+    (sticks where it touches). ``u``, ``plate``: the last displacements and the bone's unit motion (mm; None
+    before the first solve); ``loose``: rounds still solve to ``settle_rtol``; ``history``: the contact-set size
+    of each round; ``seen``: the contact sets met (packed bits); ``cycled``: one recurred; ``damping``: steps are
+    damped from now on; ``damped_rounds``, ``linear_solves``, ``cg_iterations``: counts so far.
+    """
+
+    contact: np.ndarray
+    slides: np.ndarray
+    lateral: np.ndarray
+    flips: np.ndarray
+    releases: np.ndarray
+    restuck: np.ndarray
+    u: np.ndarray | None
+    plate: np.ndarray | None
+    loose: bool
+    history: tuple[int, ...] = ()
+    seen: frozenset[bytes] = frozenset()
+    cycled: bool = False
+    damping: bool = False
+    damped_rounds: int = 0
+    linear_solves: int = 0
+    cg_iterations: int = 0
+
+
+@dataclass(frozen=True)
+class RoundSolve:
+    """One round's solve for its contact set: displacements ``u`` and the bone's unit motion ``plate`` (mm),
+    the bone's displacement (mm), z reactions of the contact nodes (N), their ``pressure`` (MPa), every node's
+    ``penetration`` (mm, ``_penetration``), and the linear solves and CG iterations it took."""
+
+    u: np.ndarray
+    plate: np.ndarray
+    indentation_mm: float
+    normal_reaction: np.ndarray
+    pressure: np.ndarray
+    penetration: np.ndarray
+    linear_solves: int
+    cg_iterations: int
+
+
+def solve_contact(problem: ContactProblem, surface: Surface, force_n: float, frictionless: bool = False,
+                  initial: np.ndarray | None = None, max_rounds: int = 30,
+                  warm: tuple[np.ndarray, np.ndarray] | None = None,
+                  callback: Callable[[ContactRound], None] | None = None, amg: AMGCache | None = None) -> ContactResult:
     """Primal-dual active-set solve with force control; see the module docstring.
 
     ``initial``: starting contact set (default: every node); ``warm``: a related result's
@@ -246,116 +289,153 @@ def solve_contact(
     state the loop works on and leaves as it ended (e.g. a fork of a related solve's), default a fork
     of ``problem.amg``. Nothing shared is changed: solves of one problem may run in any order, in threads.
     """
+    amg = problem.amg.fork() if amg is None else amg
+    setups_before = amg.setups
+    tol_p = tension_tolerance(problem, force_n)
+    state = _start(problem, surface, frictionless, initial, warm)
+    system = None
+    for rounds in range(1, max_rounds + 1):
+        round_setups = amg.setups
+        system = _system(problem, problem.constraints(state.contact, state.slides), system, amg)
+        solve = _solve_round(problem, surface, force_n, state, system)
+        release, add, drift = _changes(state, solve, tol_p)
+        state, release, add = _record(state, solve, release, add, tol_p)
+        if callback is not None:
+            callback(ContactRound(rounds, int(state.contact.sum()), int(release.sum()), int(add.sum()),
+                                  solve.cg_iterations, amg.setups - round_setups))
+        settled = not (release.any() or add.any() or drift)
+        if settled and state.loose and rounds < max_rounds:
+            # settled on inexact solves: confirm with a solve to the full tolerance
+            state = replace(state, loose=False, seen=state.seen - {np.packbits(state.contact).tobytes()})
+            continue
+        if settled or rounds == max_rounds:
+            break
+        state = _advance(problem, state, release, add)
+    return _result(problem, force_n, state, solve, rounds, max_rounds, amg.setups - setups_before)
+
+
+def _start(problem: ContactProblem, surface: Surface, frictionless: bool, initial: np.ndarray | None,
+           warm: tuple[np.ndarray, np.ndarray] | None) -> LoopState:
+    """The loop before its first round: ``initial`` in contact (default every node; none: the node the texture
+    is highest under), nothing moved or flipped, the iterate from ``warm``."""
     nb = len(problem.bottom)
     contact = np.ones(nb, dtype=bool) if initial is None else initial.copy()
     if not contact.any():
         contact[np.argmax(surface(*problem.bottom_xy.T))] = True
-    lateral = np.zeros((nb, 2))
-    flips = np.zeros(nb, dtype=int)
-    slides = np.full(nb, frictionless)
-    releases = np.zeros(nb, dtype=int)
-    restuck = np.zeros(nb, dtype=bool)
-    system = None
-    tol_p = tension_tolerance(problem, force_n)
-    seen: set[bytes] = set()
-    history: list[int] = []
-    cycled = damping = False
-    damped_rounds = solves = cg_iterations = 0
-    amg = problem.amg.fork() if amg is None else amg
-    setups_before = amg.setups
+    u, plate = warm if warm is not None else (None, None)
+    return LoopState(contact=contact, slides=np.full(nb, frictionless), lateral=np.zeros((nb, 2)),
+                     flips=np.zeros(nb, dtype=int), releases=np.zeros(nb, dtype=int), restuck=np.zeros(nb, dtype=bool),
+                     u=u, plate=plate, loose=problem.settle_rtol > problem.rtol)
+
+
+def _system(problem: ContactProblem, fixed: np.ndarray, system: ConstrainedSystem | None,
+            amg: AMGCache) -> ConstrainedSystem:
+    """The constrained system for the prescribed DOFs ``fixed``: ``system`` again if they are its own
+    (sliding rounds)."""
+    if system is None or not np.array_equal(fixed, system.fixed):
+        return constrain(problem.stiffness, fixed, amg, problem.rtol)
+    return system
+
+
+def _prescribed(problem: ContactProblem, surface: Surface, state: LoopState) -> np.ndarray:
+    """Prescribed displacements (mm) of the contact nodes: z at the texture height where each meets it, and
+    x, y of sticking nodes at their held lateral displacement."""
+    contact, lateral = state.contact, state.lateral
+    moved = problem.bottom_xy + lateral
+    values = np.zeros(problem.n_dofs)
+    values[3 * problem.bottom[contact] + 2] = surface(moved[contact, 0], moved[contact, 1])
+    stick = contact & ~state.slides
+    stuck = problem.bottom[stick]
+    values[3 * stuck] = lateral[stick, 0]
+    values[3 * stuck + 1] = lateral[stick, 1]
+    return values
+
+
+def _solve_round(problem: ContactProblem, surface: Surface, force_n: float, state: LoopState,
+                 system: ConstrainedSystem) -> RoundSolve:
+    """The linear problem for the state's contact set, with the bone a rigid plate loaded by ``force_n`` (N)
+    (``ConstrainedSystem.solve_plate``), warm-started from the state's iterate."""
     unit = np.zeros(problem.n_dofs)
     unit[3 * problem.top + 2] = -1.0
-    u, plate = warm if warm is not None else (None, None)
-    loose = problem.settle_rtol > problem.rtol
-    for rounds in range(1, max_rounds + 1):
-        round_setups = amg.setups
-        fixed = problem.constraints(contact, slides)
-        if system is None or not np.array_equal(fixed, system.fixed):  # sliding rounds reuse the system
-            system = constrain(problem.stiffness, fixed, amg, problem.rtol)
-        round_cg = 0
-        if plate is None:  # the bone's unit motion, extended into the block by its free response
-            first = system.solve(unit)
-            plate, round_cg = first.u, first.iterations
-            solves += 1
-        plate = np.where(fixed, unit, plate)
-        idx = problem.bottom[contact]
-        moved = problem.bottom_xy + lateral
-        values = np.zeros(problem.n_dofs)
-        values[3 * idx + 2] = surface(moved[contact, 0], moved[contact, 1])
-        stuck = problem.bottom[contact & ~slides]
-        values[3 * stuck] = lateral[contact & ~slides, 0]
-        values[3 * stuck + 1] = lateral[contact & ~slides, 1]
-        solved = system.solve_plate(values, plate, force_n, x0=u, rtol=problem.settle_rtol if loose else None)
-        u, delta = solved.u, solved.plate_mm
-        solves += 1
-        round_cg += solved.iterations
-        cg_iterations += round_cg
-        if not delta > 0 or not np.isfinite(delta):
-            raise ContactError("the skin does not touch the texture: no force can be transmitted")
-        normal_reaction = np.where(contact, solved.reaction[3 * problem.bottom + 2], 0.0)
-        pressure = problem.face.pressure(normal_reaction)
-        penetration = _penetration(problem, surface, u)
-        release = contact & (pressure < -tol_p)
-        add = ~contact & (penetration > GAP_TOL_MM)
-        # Sliding nodes: their prescribed height follows their new position.
-        drift = bool(np.any(np.abs(penetration[contact & slides]) > GAP_TOL_MM))
-        history.append(int(contact.sum()))
-        key = np.packbits(contact).tobytes()
-        recurred = key in seen and bool(release.any() or add.any())
-        cycled |= recurred
-        seen.add(key)
-        damping |= recurred or bool(flips.max(initial=0) >= DAMP_AFTER_FLIPS)
-        if damping:
-            # Violations in units of their tolerances, so tension and penetration compare.
-            scaled = np.where(contact, -pressure / tol_p, penetration / GAP_TOL_MM)
-            keep = _damped(scaled, release | add)
-            release, add = release & keep, add & keep
-            damped_rounds += 1
-        if callback is not None:
-            callback(ContactRound(rounds, int(contact.sum()), int(release.sum()), int(add.sum()), round_cg,
-                                  amg.setups - round_setups))
-        if not (release.any() or add.any() or drift) and loose and rounds < max_rounds:
-            loose = False  # settled on inexact solves: confirm with a solve to the full tolerance
-            seen.discard(key)
-            continue
-        if not (release.any() or add.any() or drift) or rounds == max_rounds:
-            break
-        flips += release | add
-        restick = add & ~slides & (releases >= RESTICK_AFTER_RELEASES)  # see the module docstring
-        restuck |= restick
-        releases += release
-        lateral = np.where((slides | restick)[:, None], u.reshape(-1, 3)[problem.bottom, :2], lateral)
-        contact = (contact & ~release) | add
-    check = replace(_check(problem, force_n, contact, pressure, penetration),
-                    restuck_nodes=int(np.count_nonzero(contact & restuck)))
-    success = check.satisfied
-    if success:
-        message = "contact set settled"
-    else:
-        message = (f"contact conditions not satisfied after {rounds} rounds"
-                   f"{' (max_rounds)' if rounds == max_rounds else ' (nothing left to release or add)'}: "
-                   f"{check.tension_nodes} "
-                   f"nodes in contact under tension (largest {check.max_tension_mpa:.2e} MPa, tensile force "
-                   f"{100 * check.tension_fraction:.2g}% of the load), {check.penetrating_nodes} free nodes "
-                   f"penetrating (largest {check.max_penetration_mm:.2e} mm)"
-                   + (f", {check.mismatched_nodes} sliding nodes off the texture" if check.mismatched_nodes else ""))
+    plate, solves, cg = state.plate, 1, 0
+    if plate is None:  # the bone's unit motion, extended into the block by its free response
+        first = system.solve(unit)
+        plate, solves, cg = first.u, 2, first.iterations
+    plate = np.where(system.fixed, unit, plate)
+    solved = system.solve_plate(_prescribed(problem, surface, state), plate, force_n, x0=state.u,
+                                rtol=problem.settle_rtol if state.loose else None)
+    delta = solved.plate_mm
+    if not delta > 0 or not np.isfinite(delta):
+        raise ContactError("the skin does not touch the texture: no force can be transmitted")
+    normal_reaction = np.where(state.contact, solved.reaction[3 * problem.bottom + 2], 0.0)
+    return RoundSolve(solved.u, plate, float(delta), normal_reaction, problem.face.pressure(normal_reaction),
+                      _penetration(problem, surface, solved.u), solves, cg + solved.iterations)
+
+
+def _changes(state: LoopState, solve: RoundSolve, tol_p: float) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Contact nodes to release (tension beyond ``tol_p``, MPa), free nodes to add (penetrating beyond
+    GAP_TOL_MM), and whether a sliding node has moved off the texture height (its prescribed height
+    follows its new position)."""
+    release = state.contact & (solve.pressure < -tol_p)
+    add = ~state.contact & (solve.penetration > GAP_TOL_MM)
+    drift = bool(np.any(np.abs(solve.penetration[state.contact & state.slides]) > GAP_TOL_MM))
+    return release, add, drift
+
+
+def _record(state: LoopState, solve: RoundSolve, release: np.ndarray, add: np.ndarray,
+            tol_p: float) -> tuple[LoopState, np.ndarray, np.ndarray]:
+    """The round on the loop's record (iterate, set size, recurrence, counts), and its ``release`` and ``add``,
+    damped once a contact set has recurred or a node has flipped DAMP_AFTER_FLIPS times (module docstring)."""
+    key = np.packbits(state.contact).tobytes()
+    recurred = key in state.seen and bool(release.any() or add.any())
+    damping = state.damping or recurred or bool(state.flips.max(initial=0) >= DAMP_AFTER_FLIPS)
+    if damping:
+        # Violations in units of their tolerances, so tension and penetration compare.
+        scaled = np.where(state.contact, -solve.pressure / tol_p, solve.penetration / GAP_TOL_MM)
+        keep = _damped(scaled, release | add)
+        release, add = release & keep, add & keep
+    recorded = replace(state, u=solve.u, plate=solve.plate, history=(*state.history, int(state.contact.sum())),
+                       seen=state.seen | {key}, cycled=state.cycled or recurred, damping=damping,
+                       damped_rounds=state.damped_rounds + int(damping),
+                       linear_solves=state.linear_solves + solve.linear_solves,
+                       cg_iterations=state.cg_iterations + solve.cg_iterations)
+    return recorded, release, add
+
+
+def _advance(problem: ContactProblem, state: LoopState, release: np.ndarray, add: np.ndarray) -> LoopState:
+    """The next round's active set: ``release`` off the texture, ``add`` onto it. Sliding nodes, and stick nodes
+    added after RESTICK_AFTER_RELEASES releases (they restick, module docstring), are held at their lateral
+    displacement in the state's iterate."""
+    restick = add & ~state.slides & (state.releases >= RESTICK_AFTER_RELEASES)
+    lateral = np.where((state.slides | restick)[:, None], state.u.reshape(-1, 3)[problem.bottom, :2], state.lateral)
+    return replace(state, contact=(state.contact & ~release) | add, lateral=lateral,
+                   flips=state.flips + (release | add), releases=state.releases + release,
+                   restuck=state.restuck | restick)
+
+
+def _result(problem: ContactProblem, force_n: float, state: LoopState, solve: RoundSolve, rounds: int,
+            max_rounds: int, amg_setups: int) -> ContactResult:
+    """The loop's answer from its last state and round: the contact conditions measured on them."""
+    check = replace(_check(problem, force_n, state.contact, solve.pressure, solve.penetration),
+                    restuck_nodes=int(np.count_nonzero(state.contact & state.restuck)))
     return ContactResult(
-        u=u,
-        indentation_mm=float(delta),
-        in_contact=contact,
-        normal_reaction=normal_reaction,
-        success=success,
-        message=message,
-        rounds=rounds,
-        linear_solves=solves,
-        cg_iterations=cg_iterations,
-        amg_setups=amg.setups - setups_before,
-        unresolved=check.violations,
-        cycled=cycled,
-        contact_history=history,
-        max_penetration_mm=check.max_penetration_mm,
-        max_tension_mpa=check.max_tension_mpa,
-        warm=(u, plate),
-        check=check,
-        damped_rounds=damped_rounds,
+        u=solve.u, indentation_mm=solve.indentation_mm, in_contact=state.contact,
+        normal_reaction=solve.normal_reaction, success=check.satisfied, message=_message(check, rounds, max_rounds),
+        rounds=rounds, linear_solves=state.linear_solves, cg_iterations=state.cg_iterations, amg_setups=amg_setups,
+        unresolved=check.violations, cycled=state.cycled, contact_history=list(state.history),
+        max_penetration_mm=check.max_penetration_mm, max_tension_mpa=check.max_tension_mpa,
+        warm=(solve.u, solve.plate), check=check, damped_rounds=state.damped_rounds,
     )
+
+
+def _message(check: ContactCheck, rounds: int, max_rounds: int) -> str:
+    """Why the loop ended: the set settled, or what is left of the contact conditions after ``rounds``."""
+    if check.satisfied:
+        return "contact set settled"
+    return (f"contact conditions not satisfied after {rounds} rounds"
+            f"{' (max_rounds)' if rounds == max_rounds else ' (nothing left to release or add)'}: "
+            f"{check.tension_nodes} "
+            f"nodes in contact under tension (largest {check.max_tension_mpa:.2e} MPa, tensile force "
+            f"{100 * check.tension_fraction:.2g}% of the load), {check.penetrating_nodes} free nodes "
+            f"penetrating (largest {check.max_penetration_mm:.2e} mm)"
+            + (f", {check.mismatched_nodes} sliding nodes off the texture" if check.mismatched_nodes else ""))
