@@ -11,7 +11,7 @@ every set is solved exactly, both preconditioned by the layer's stiffness.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -25,7 +25,7 @@ MAX_ITERATIONS = 500  # conjugate-gradient iterations per solve
 MAX_ROUNDS = 50  # active-set rounds (stick)
 
 
-@dataclass
+@dataclass(frozen=True)
 class ContactState:
     """The solved face: Fourier face displacements (3, ny, nx//2+1), real tractions (3, ny, nx) on
     the skin (MPa), and how well the contact conditions hold (like scipy.optimize results).
@@ -115,9 +115,7 @@ def solve_contact(modes: Modes, heights: np.ndarray, pressure_mpa: float, fricti
         mask = update
     state = _checked(modes, heights, np.where(mask, traction, 0.0), mask, pressure_mpa, frictionless, iterations,
                      tolerance, tension_tolerance)
-    if message:
-        state.message = f"{message}; {state.message}"
-    return state
+    return replace(state, message=f"{message}; {state.message}") if message else state
 
 
 def _fixed_set(modes: Modes, heights: np.ndarray, mask: np.ndarray, traction: np.ndarray, load: float,

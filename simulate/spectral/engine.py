@@ -18,9 +18,9 @@ import numpy as np
 
 from roughness.core.errors import InputError
 from roughness.core.reprs import short_repr, v_text
+from roughness.surface.heightmap import Heightmap
 
 from ..config import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES, SimConfig
-from roughness.surface.heightmap import Heightmap
 from ..variation import PairSampling, variation
 from .contact import ContactState, solve_contact
 from .flat_state import FlatState, block_flat_state
@@ -34,7 +34,7 @@ MIN_FOOTPRINT_PIXELS = 10  # the footprint must span at least this many pixels a
 MAX_FOOTPRINT_PIXELS = 1024  # and at most this many
 
 
-@dataclass
+@dataclass(frozen=True)
 class SpectralResult:
     """Roughness of one texture from the spectral engine (mm, MPa, s).
 
