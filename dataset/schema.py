@@ -33,7 +33,7 @@ SCHEMA_VERSION = 2
 READABLE_VERSIONS = (1, 2)
 ROOT_ATTRS = ("schema", "schema_version", "config", "roughness_version", "created")
 STATUSES = ("ok", "failed")
-# write_result's result_fields key (a simulate.model.Result attribute) -> (Entry field, type).
+# write_result's result_fields key (a simulate.result.Result attribute) -> (Entry field, type).
 RESULT_ATTRS = {
     "roughness": ("V", float),
     "roughness_stderr": ("V_stderr", float),
@@ -62,7 +62,7 @@ def sample_id(texture_record: dict) -> str:
 
 
 def result_fields(result: object) -> dict:
-    """The ``result_fields`` of ``DatasetWriter.write_result`` from a ``simulate.model.Result``."""
+    """The ``result_fields`` of ``DatasetWriter.write_result`` from a ``simulate.result.Result``."""
     return {key: getattr(result, key) for key in (*RESULT_ATTRS, *RESULT_ARRAYS)}
 
 
@@ -195,7 +195,7 @@ def as_tuples(values: dict) -> dict:
 
 
 def ladder_columns(ladder: list) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """Spacings (mm) and V of a result's solved levels (``simulate.converged.Level`` or their dicts)."""
+    """Spacings (mm) and V of a result's solved levels (``simulate.result.Level`` or their dicts)."""
     rows = [level if isinstance(level, Mapping) else asdict(level) for level in ladder]
     return tuple(float(r["h_contact_mm"]) for r in rows), tuple(float(r["roughness"]) for r in rows)
 

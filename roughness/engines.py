@@ -27,7 +27,8 @@ from .classical import MEASURES, footprint
 
 if TYPE_CHECKING:
     from roughness.simulate.config import SimConfig
-    from roughness.simulate.model import Result, Simulator
+    from roughness.simulate.model import Simulator
+    from roughness.simulate.result import Result
     from roughness.simulate.spectral.engine import SpectralResult, SpectralSimulator
     from roughness.surrogate.predictor import SurrogateModel
 
