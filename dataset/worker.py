@@ -8,8 +8,6 @@ history-free).
 from __future__ import annotations
 
 import functools
-import json
-import threading
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -22,8 +20,6 @@ from .schema import result_fields
 if TYPE_CHECKING:
     from .labels import Label
 
-_SIMULATORS: dict = {}  # per worker process: one prepared Simulator per configuration, shared by its threads
-_SIMULATORS_LOCK = threading.Lock()
 
 
 @dataclass(frozen=True)
@@ -72,21 +68,13 @@ class OtherVersions(Outcome):
     versions: dict
 
 
-def simulator(config: dict):
-    """This process's prepared simulator for a ``build.simulation_config`` record, made once."""
-    key = json.dumps(config, sort_keys=True)
-    with _SIMULATORS_LOCK:
-        if key not in _SIMULATORS:
-            if config.get("engine") == "spectral":
-                from roughness.simulate.spectral.engine import SpectralSimulator
+def simulate(config: dict, heightmap):
+    """The shared simulator's result (``simulate.prepared``) for a ``build.simulation_config`` record."""
+    from roughness.simulate import prepared
 
-                fields = {k: v for k, v in config.items() if k not in ("engine", "engine_version")}
-                _SIMULATORS[key] = SpectralSimulator(SimConfig(**fields))
-            else:
-                from roughness.simulate.model import Simulator
-
-                _SIMULATORS[key] = Simulator(SimConfig(**config))
-        return _SIMULATORS[key]
+    engine = config.get("engine", "fem")
+    fields = {k: v for k, v in config.items() if k not in ("engine", "engine_version")}
+    return prepared.simulate(SimConfig(**fields), heightmap, engine=engine)
 
 
 @functools.cache
@@ -118,7 +106,7 @@ def simulate_sample(job: Job, config: dict, expected: dict | None = None) -> Out
     if label is not None and label.heights == heights_digest(heights, hm.pixel_mm):
         return Restored(record, heights, hm.pixel_mm, label)
     try:
-        result = simulator(config).run(hm)
+        result = simulate(config, hm)
     except Exception as err:
         return Failed(record, heights, hm.pixel_mm, f"{type(err).__name__}: {err}")
     return Simulated(record, heights, hm.pixel_mm, result_fields(result), result.fluctuation.astype(np.float32))

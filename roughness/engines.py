@@ -27,9 +27,8 @@ from .classical import MEASURES, footprint
 
 if TYPE_CHECKING:
     from roughness.simulate.config import SimConfig
-    from roughness.simulate.model import Simulator
     from roughness.simulate.result import Result
-    from roughness.simulate.spectral.engine import SpectralResult, SpectralSimulator
+    from roughness.simulate.spectral.engine import SpectralResult
     from roughness.surrogate.predictor import SurrogateModel
 
 FEM_FIDELITIES = ("coarse", "default", "fine", "converged")
@@ -52,9 +51,11 @@ def fem_identity(simulation: dict) -> str:
 
 @dataclass
 class SimulatorEngine:
-    """An engine that runs a simulator of a configuration (``SimConfig``) on one footprint per texture.
+    """An engine that runs the process's shared simulator (``simulate.prepared``) with a configuration
+    (``SimConfig``) on one footprint per texture.
 
-    The simulator is made on first use, once (its cost is ``setup_seconds``); threads share it.
+    The simulator is prepared for the configuration on first use (its cost is ``setup_seconds``: nothing when
+    another engine of the process prepared the same mesh already); threads share it.
     """
 
     spec: str
@@ -63,21 +64,19 @@ class SimulatorEngine:
     tile: bool = False
     kind: str = ""
     setup_seconds: float = 0.0
-    _simulator: Simulator | SpectralSimulator | None = field(default=None, repr=False)
+    _prepared: bool = field(default=False, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
-
-    def _make(self) -> Simulator | SpectralSimulator:
-        """The prepared simulator (``run(heightmap, centre_mm, tile)``)."""
-        raise NotImplementedError
 
     def simulate(self, heightmap: Heightmap) -> Result | SpectralResult:
         """The simulator's result for one heightmap."""
+        from roughness.simulate import prepared
+
         with self._lock:
-            if self._simulator is None:
+            if not self._prepared:
                 start = time.perf_counter()
-                self._simulator = self._make()
-                self.setup_seconds = time.perf_counter() - start
-        return self._simulator.run(heightmap, self.centre_mm, self.tile)
+                prepared.prepare(self.config, self.kind)
+                self.setup_seconds, self._prepared = time.perf_counter() - start, True
+        return prepared.simulate(self.config, heightmap, self.centre_mm, self.tile, self.kind)
 
     def measure(self, heightmap: Heightmap) -> tuple[float, float]:
         result = self.simulate(heightmap)
@@ -88,7 +87,7 @@ class SimulatorEngine:
 class FemEngine(SimulatorEngine):
     """The FEM with a configuration (``roughness.simulate.config.SimConfig``), prepared on first use.
 
-    Thread-safe: threads share its one prepared ``Simulator`` and get the sequential answers bit for bit.
+    Thread-safe: threads share the process's one prepared ``Simulator`` and get the sequential answers bit for bit.
     """
 
     kind: str = "fem"
@@ -108,13 +107,6 @@ class FemEngine(SimulatorEngine):
     @property
     def identity(self) -> str:
         return self.config.identity("fem")
-
-    def _make(self) -> Simulator:
-        from roughness.simulate.model import Simulator
-
-        simulator = Simulator(self.config)
-        simulator.block(self.config.resolved()).base(self.config.force_n, self.config.contact)
-        return simulator
 
 
 @dataclass
@@ -137,11 +129,6 @@ class SpectralEngine(SimulatorEngine):
     @property
     def identity(self) -> str:
         return self.config.identity("spectral")
-
-    def _make(self) -> SpectralSimulator:
-        from roughness.simulate.spectral.engine import SpectralSimulator
-
-        return SpectralSimulator(self.config)
 
 
 @dataclass

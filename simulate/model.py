@@ -280,11 +280,11 @@ def _notes(config: SimConfig, state: ContactResult, heightmap: Heightmap) -> lis
     return out
 
 
-_DEFAULT = Simulator()
+SHARED = Simulator()  # the process's FEM simulator: every configuration runs on it (simulate.prepared)
 
 
 def roughness(heightmap: Heightmap | np.ndarray, centre_mm: tuple[float, float] | None = None, tile: bool = False,
               simulator: Simulator | None = None, pixel_mm: float | None = None, **config) -> Result:
     """FEM roughness of a heightmap (or a 2-D array of heights in mm with its ``pixel_mm``, mm); keyword arguments
     override ``SimConfig`` fields."""
-    return (simulator or _DEFAULT).run(heightmap, centre_mm, tile, pixel_mm=pixel_mm, **config)
+    return (simulator or SHARED).run(heightmap, centre_mm, tile, pixel_mm=pixel_mm, **config)

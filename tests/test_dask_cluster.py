@@ -232,6 +232,8 @@ def test_a_spectral_build_on_a_worker_with_two_threads_equals_the_sequential_ans
     one simulator gives sample after sample, bit for bit."""
     from dask.distributed import LocalCluster
 
+    from roughness.simulate import prepared
+
     recipe = Recipe(name="threads", seed=7, families={"bumps": 1.0, "grating": 1.0, "dots": 1.0})
     config = build.BUILD_CONFIG
     records = expand(recipe, 8)
@@ -240,7 +242,7 @@ def test_a_spectral_build_on_a_worker_with_two_threads_equals_the_sequential_ans
     sim = SpectralSimulator(config)
     sequential = [sim.run(realise(r)) for r in records]
     for attempt in range(2):
-        monkeypatch.setattr(worker, "_SIMULATORS", {})
+        monkeypatch.setattr(prepared, "_SPECTRAL", {})
         out = tmp_path / f"t{attempt}.h5"
         with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=":0") as local:
             counts = build.build(str(out), len(records), recipe, config, scheduler=local.scheduler_address,

@@ -170,7 +170,7 @@ def test_compare_files_record_each_engines_provenance(tmp_path, capsys):
 
 def test_simulate_json_names_the_fem_configuration(tmp_path, capsys, monkeypatch):
     """The FEM itself is stubbed (seconds); the record is what the command builds from its configuration."""
-    import roughness.simulate.model as model
+    from roughness.simulate import prepared
 
     class Result:
         converged, unusual_notes = True, []
@@ -178,7 +178,7 @@ def test_simulate_json_names_the_fem_configuration(tmp_path, capsys, monkeypatch
         def summary(self) -> dict:
             return {"roughness": 0.1}
 
-    monkeypatch.setattr(model.Simulator, "run", lambda self, hm, centre_mm=None, tile=False: Result())
+    monkeypatch.setattr(prepared, "simulate", lambda config, hm, centre_mm=None, tile=False: Result())
     record = _json(["simulate", str(_standard(tmp_path)), "--fidelity", "coarse", "--json", "--quiet"],
                    capsys)["provenance"]
     assert record["engine"] == "fem" and record["fidelity"] == "coarse" and record["model_id"] is None

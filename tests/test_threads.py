@@ -57,13 +57,17 @@ def test_an_answer_does_not_depend_on_what_was_solved_before(records, sequential
 
 
 def test_the_build_workers_function_from_threads_equals_the_sequential_build(records, sequential, monkeypatch):
-    """``simulate_sample``, what the Dask workers run, from threads sharing the worker's simulators."""
-    monkeypatch.setattr(worker, "_SIMULATORS", {})
+    """``simulate_sample``, what the Dask workers run, from threads sharing the process's simulator."""
+    from roughness.simulate import prepared
+
+    monkeypatch.setattr(prepared, "SHARED", Simulator())
     config = CONFIG.as_dict()
     with ThreadPoolExecutor(THREADS) as pool:
         results = list(pool.map(lambda record: worker.simulate_sample(worker.Job(record), config),
                                 records * REPEATS))
-    assert len(worker._SIMULATORS) == 1  # one simulator per configuration and process, shared by the threads
+    alone = Simulator(CONFIG)
+    alone.run(realise(records[0]))
+    assert list(prepared.SHARED._blocks) == list(alone._blocks)  # the blocks of one run, shared by the threads
     for res, (v, fluctuation) in zip(results, sequential * REPEATS):
         assert isinstance(res, worker.Simulated)
         assert res.fields["roughness"] == v
@@ -76,8 +80,9 @@ def test_a_dask_worker_with_several_threads_builds_the_sequential_dataset(record
 
     from roughness.dataset.reader import open_dataset
     from roughness.dataset.schema import sample_id
+    from roughness.simulate import prepared
 
-    monkeypatch.setattr(worker, "_SIMULATORS", {})
+    monkeypatch.setattr(prepared, "SHARED", Simulator())
     out = tmp_path / "threads.h5"
     with LocalCluster(n_workers=1, threads_per_worker=THREADS, processes=False, dashboard_address=":0") as cluster:
         counts = build.build(str(out), len(records), RECIPE, CONFIG, scheduler=cluster.scheduler_address,
@@ -92,12 +97,15 @@ def test_a_dask_worker_with_several_threads_builds_the_sequential_dataset(record
         assert np.array_equal(fluctuation, expected.astype(np.float32))
 
 
-def test_threads_sharing_a_fem_engine_prepare_it_once_and_give_the_sequential_answers(records, sequential):
+def test_threads_sharing_a_fem_engine_prepare_it_once_and_give_the_sequential_answers(records, sequential,
+                                                                                      monkeypatch):
     """The FEM engine of ``predict`` and ``compare``, prepared by whichever thread comes first."""
     from roughness.engines import FemEngine
+    from roughness.simulate import prepared
 
+    monkeypatch.setattr(prepared, "SHARED", Simulator())
     engine = FemEngine.of("coarse", CONFIG.as_dict())
     with ThreadPoolExecutor(THREADS) as pool:
         values = list(pool.map(lambda record: engine.measure(realise(record))[0], records * REPEATS))
     assert values == [v for v, _ in sequential] * REPEATS
-    assert engine.setup_seconds > 0 and len(engine._simulator._blocks) == 2  # the level and its coarser one
+    assert engine.setup_seconds > 0 and len(prepared.SHARED._blocks) == 2  # the level and its coarser one

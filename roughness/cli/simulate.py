@@ -107,8 +107,8 @@ def _detrend_spec(text: str):
 def run(args: argparse.Namespace) -> int:
     from roughness.core.files import check_distinct, check_output
     from roughness.core.provenance import make_provenance
+    from roughness.simulate import prepared
     from roughness.simulate.config import SimConfig
-    from roughness.simulate.model import Simulator
 
     check_distinct({"--save-strain": args.save_strain, "--save-vtu": args.save_vtu}, {"HEIGHTMAP": args.heightmap})
     for name in ("save_strain", "save_vtu"):
@@ -128,8 +128,7 @@ def run(args: argparse.Namespace) -> int:
               f"{config.fidelity} fidelity, contact spacing {config.spacing_mm(hm)} mm, "
               f"{config.base_shape().describe()}; "
               "preparing the skin block (cached after the first run) ...")
-    sim = Simulator(config)
-    result = sim.run(hm, centre_mm=args.centre, tile=args.tile)
+    result = prepared.simulate(config, hm, args.centre, args.tile)
     if args.save_strain:
         from roughness.simulate.output import save_strain_png
 
@@ -138,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
     if args.save_vtu:
         from roughness.simulate.output import save_vtu
 
-        save_vtu(result, sim.block(result.config), args.save_vtu, args.overwrite)
+        save_vtu(result, prepared.SHARED.block(result.config), args.save_vtu, args.overwrite)
         log(args, f"deformed mesh written to {args.save_vtu}")
     if args.json:
         provenance = make_provenance("fem", config.fidelity, config.identity("fem"))
