@@ -38,9 +38,8 @@ def _median_seconds(run, repeats: int = REPEATS) -> float:
 
 
 def textures() -> dict:
-    from roughness.dataset.textures import standard_texture
-
     from roughness.dataset.recipe import expand, load_recipe, realise
+    from roughness.dataset.textures import standard_texture
 
     validation = expand(load_recipe(ROOT / "datasets" / "validation.json"), 71)
     return {"standard-1.5": standard_texture(1.5, seed=1), "standard-1.0": standard_texture(1.0, seed=1),
@@ -80,8 +79,8 @@ def fresh_predict() -> float:
 def big_map(lambda_mm: float) -> dict:
     """One spectral solve over a 100 x 100 mm map of a standard texture tiled, V at 1 mm steps."""
     from roughness.dataset.textures import standard_texture
-    from roughness.surface.heightmap import Heightmap
     from roughness.simulate.spectral.maps import spectral_map
+    from roughness.surface.heightmap import Heightmap
 
     tile = standard_texture(lambda_mm, seed=1)  # 240 x 240 at 0.05 mm
     reps = int(np.ceil(2000 / tile.shape[0]))

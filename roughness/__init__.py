@@ -33,16 +33,16 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load
     from roughness.dataset.reader import open_dataset
     from roughness.dataset.textures import named_texture, standard_texture
     from roughness.design.api import homogeneity, palette, tactile_image, tune
-    from roughness.prediction import CurvedBase, Prediction, PredictOptions, predict
     from roughness.maps import MapPrediction, predict_map
     from roughness.perception.api import embed_trials, fit_embedding
+    from roughness.perceptual_scale import StandardScale, load_scale
+    from roughness.prediction import CurvedBase, Prediction, PredictOptions, predict
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator
     from roughness.simulate.model import roughness as fem_roughness
     from roughness.simulate.result import Result
     from roughness.surface.heightmap import Heightmap, as_heightmap
     from roughness.surface.io import load_heightmap, save_heightmap
-    from roughness.perceptual_scale import StandardScale, load_scale
 
     __version__: str
 

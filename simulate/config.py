@@ -6,10 +6,10 @@ from dataclasses import asdict, dataclass, replace
 
 from roughness.core.checks import in_range, integer, positive, real
 from roughness.core.errors import InputError
+from roughness.surface.heightmap import Heightmap
 
 from .curved import AXES, TEXTURE_ALONG, BaseShape, require_restable
 from .discretization import LADDER_MM
-from roughness.surface.heightmap import Heightmap
 from .mesh import MeshSpec
 
 # Contact-face spacing (mm) per fidelity; ``auto`` picks from this ladder; ``converged`` refines

@@ -49,8 +49,8 @@ def rows(height_mm: float) -> list[tuple[str, str, str, str]]:
     import tempfile
 
     from roughness.core.errors import InputError
-    from roughness.prediction import predict
     from roughness.perceptual_scale import jnd
+    from roughness.prediction import predict
     from roughness.surface.cleanup import Cleanup
     from roughness.surface.cleanup import clean as cleanup
     from roughness.surface.heightmap import Heightmap

@@ -2,11 +2,16 @@
 from __future__ import annotations
 
 import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
+import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 from roughness.simulate.mesh import MeshSpec, build  # noqa: E402
@@ -27,3 +32,72 @@ def mesh_cache(tmp_path_factory):
     path = tmp_path_factory.mktemp("mesh-cache")
     os.environ["ROUGHNESS_CACHE"] = str(path)
     yield path
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture()
+def workdir(tmp_path, monkeypatch):
+    """A case folder with valid inputs, the cwd of the case; heavy work replaced by a tripwire."""
+    rng = np.random.default_rng(0)
+    np.save(tmp_path / "map.npy", rng.random((240, 240)) * 0.5)
+    (tmp_path / "maps").mkdir()
+    np.save(tmp_path / "maps" / "a.npy", rng.random((240, 240)) * 0.5)
+    (tmp_path / "data.h5").write_bytes(b"placeholder")
+    (tmp_path / "checkpoint.pt").write_bytes(b"placeholder")
+    (tmp_path / "trials.csv").write_text("subject,reference,left,right,answer\ns1,a,b,c,left\ns1,b,a,c,left\n")
+    (tmp_path / "stimuli.csv").write_text("stimulus,texture\na,standard-1.0\nb,standard-1.25\nc,flattop-0.3\n")
+    (tmp_path / "embedding.csv").write_text("stimulus,coordinate,low,high\na,-1,-1.2,-0.8\nb,0.1,0,0.2\nc,0.9,0.8,1\n")
+    (tmp_path / "truth.csv").write_text("stimulus,roughness\na,0.05\nb,0.08\nc,0.1\n")
+    from PIL import Image
+
+    Image.fromarray(np.repeat(np.uint8([[0, 128, 255]]), 30, axis=0).repeat(3, axis=1)[..., None].repeat(3, axis=2)
+                    ).save(tmp_path / "picture.png")  # three flat colours
+    import trimesh
+
+    trimesh.creation.box((10, 10, 10)).export(tmp_path / "mesh.stl")
+    monkeypatch.chdir(tmp_path)
+    _tripwires(monkeypatch)
+    return tmp_path
+
+
+def _tripwires(monkeypatch) -> None:
+    def tripped(*args, **kwargs):
+        raise AssertionError("bad input reached a heavy computation")
+
+    from roughness.simulate.model import Simulator
+
+    monkeypatch.setattr(Simulator, "run", tripped)
+    import roughness.dataset.build
+
+    monkeypatch.setattr(roughness.dataset.build, "build", tripped)
+    import roughness.objects.texturing
+
+    monkeypatch.setattr(roughness.objects.texturing, "texture_mesh", tripped)
+
+
+def _source_copy(dest: Path) -> Path:
+    """The project's files as a fresh clone would have them (no build or cache folders)."""
+    ignore = shutil.ignore_patterns(".git", "build", "*.egg-info", "__pycache__", ".pytest_cache", "venv", "*.h5",
+                                    "_build", "repo")  # the manual's build and its generated mirror (docs/)
+    shutil.copytree(ROOT, dest, ignore=ignore)
+    return dest
+
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory) -> Path:
+    """A fresh virtual environment with the wheel installed (dependencies from the running environment)."""
+    root = tmp_path_factory.mktemp("wheel")
+    source = _source_copy(root / "src")
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "--no-build-isolation",
+                    "--no-index", "--wheel-dir", str(root / "dist"), str(source)], check=True, cwd=root)
+    [wheel] = (root / "dist").glob("roughness-*.whl")
+    venv = root / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
+    python = venv / "bin" / "python"
+    # --ignore-installed: the running environment may already hold roughness (CI installs it there), and the
+    # venv sees it through --system-site-packages; without the flag pip would call the wheel satisfied and skip it
+    subprocess.run([str(python), "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", "--ignore-installed",
+                    str(wheel)], check=True, cwd=root)
+    return python

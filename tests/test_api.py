@@ -15,10 +15,7 @@ from matplotlib.figure import Figure
 
 import roughness
 from roughness.core.errors import InputError
-from tests.test_packaging import (
-    doc_python_blocks,
-    installed,  # noqa: F401 (the fixture: the wheel in a fresh environment)
-)
+from test_packaging import doc_python_blocks
 
 ROOT = Path(__file__).resolve().parents[1]
 LIBRARY = ("roughness", "simulate", "dataset", "surrogate", "models")  # installed as roughness.*
@@ -321,7 +318,7 @@ def test_library_code_never_selects_a_backend_or_uses_pyplot():
 
 
 def test_wheel_ships_the_py_typed_marker(installed):  # noqa: F811 (the fixture imported above)
-    from tests.test_packaging import _purelib
+    from test_packaging import _purelib
 
     assert (_purelib(installed) / "roughness" / "py.typed").is_file()
 

@@ -14,7 +14,6 @@ import hashlib
 import os
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from roughness.cli import build_parser, main
@@ -132,46 +131,6 @@ def _file_cases() -> list[tuple[tuple[str, ...], int | str, str, list[str], str]
 def _output_cases() -> list[tuple[tuple[str, ...], str, str]]:
     return [(path, flag, kind) for path, flags in FILE_OUTPUTS.items() for flag in flags
             for kind in ("exists", "no-folder")]
-
-
-@pytest.fixture()
-def workdir(tmp_path, monkeypatch):
-    """A case folder with valid inputs, the cwd of the case; heavy work replaced by a tripwire."""
-    rng = np.random.default_rng(0)
-    np.save(tmp_path / "map.npy", rng.random((240, 240)) * 0.5)
-    (tmp_path / "maps").mkdir()
-    np.save(tmp_path / "maps" / "a.npy", rng.random((240, 240)) * 0.5)
-    (tmp_path / "data.h5").write_bytes(b"placeholder")
-    (tmp_path / "checkpoint.pt").write_bytes(b"placeholder")
-    (tmp_path / "trials.csv").write_text("subject,reference,left,right,answer\ns1,a,b,c,left\ns1,b,a,c,left\n")
-    (tmp_path / "stimuli.csv").write_text("stimulus,texture\na,standard-1.0\nb,standard-1.25\nc,flattop-0.3\n")
-    (tmp_path / "embedding.csv").write_text("stimulus,coordinate,low,high\na,-1,-1.2,-0.8\nb,0.1,0,0.2\nc,0.9,0.8,1\n")
-    (tmp_path / "truth.csv").write_text("stimulus,roughness\na,0.05\nb,0.08\nc,0.1\n")
-    from PIL import Image
-
-    Image.fromarray(np.repeat(np.uint8([[0, 128, 255]]), 30, axis=0).repeat(3, axis=1)[..., None].repeat(3, axis=2)
-                    ).save(tmp_path / "picture.png")  # three flat colours
-    import trimesh
-
-    trimesh.creation.box((10, 10, 10)).export(tmp_path / "mesh.stl")
-    monkeypatch.chdir(tmp_path)
-    _tripwires(monkeypatch)
-    return tmp_path
-
-
-def _tripwires(monkeypatch) -> None:
-    def tripped(*args, **kwargs):
-        raise AssertionError("bad input reached a heavy computation")
-
-    from roughness.simulate.model import Simulator
-
-    monkeypatch.setattr(Simulator, "run", tripped)
-    import roughness.dataset.build
-
-    monkeypatch.setattr(roughness.dataset.build, "build", tripped)
-    import roughness.objects.texturing
-
-    monkeypatch.setattr(roughness.objects.texturing, "texture_mesh", tripped)
 
 
 def _snapshot(folder: Path) -> dict[str, str]:

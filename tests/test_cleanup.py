@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
@@ -16,8 +15,7 @@ from roughness.surface.heightmap import Heightmap, flat
 from roughness.surface.io import save_heightmap
 from roughness.surface.tiling import MAX_SEAM, MIN_PERIODS, check_tile, tile_fit
 from roughness.surface.units import FileUnits, check_units, plausibility, split_input
-
-from test_bad_inputs import _expect_refusal, _run, workdir  # noqa: F401  (workdir is a fixture)
+from test_bad_inputs import _expect_refusal, _run
 
 
 @pytest.fixture(scope="module")

@@ -256,9 +256,9 @@ def test_cached_results_follow_the_engine_identity(tiny_set, tmp_path, capsys):
 
 
 def test_a_dataset_sample_has_the_content_key_of_its_texture(tiny_set):
-    from roughness.result_cache import content_key
     from roughness.dataset.reader import open_dataset
     from roughness.dataset.schema import sample_id
+    from roughness.result_cache import content_key
 
     recipe = Recipe(name="tiny", seed=8, families={"bumps": 1, "fbm": 1, "woven": 1, "grating": 1})
     with open_dataset(tiny_set) as data:

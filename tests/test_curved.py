@@ -182,8 +182,8 @@ def test_shipped_curvature_range_comes_from_the_committed_study():
 
 
 def test_predict_routes_curved_bases_by_the_range(tmp_path, monkeypatch):
-    from roughness import prediction
     from roughness import curvature_correction as correction
+    from roughness import prediction
     from roughness.prediction import CurvedBase, PredictOptions, predict
 
     def on(radius_mm: float, shape: str = "cylinder", tile: bool = False) -> PredictOptions:

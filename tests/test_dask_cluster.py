@@ -14,15 +14,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_build_distributed import start, wait_for
 
+from roughness.cluster import ClusterChoice, versions
 from roughness.core.errors import InputError
 from roughness.dataset import build, worker
-from roughness.cluster import ClusterChoice, versions
 from roughness.dataset.inspection import verify
 from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe, expand, realise
 from roughness.dataset.schema import sample_id
+from test_build_distributed import start, wait_for
 
 ROOT = Path(__file__).parents[1]
 SEED = 3  # the CLI's default recipe (bump textures) with this seed

@@ -23,8 +23,7 @@ from roughness.design.tune import target_of, tune
 from roughness.perceptual_scale import jnd
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import save_heightmap
-
-from test_bad_inputs import _expect_refusal, workdir  # noqa: F401  (workdir: a fixture)
+from test_bad_inputs import _expect_refusal
 
 SHAPES = Path(__file__).resolve().parents[1] / "examples" / "design" / "shapes.png"
 LUMA = np.array([0.299, 0.587, 0.114])

@@ -10,8 +10,8 @@ from roughness.core.errors import InputError
 from roughness.simulate import converged
 from roughness.simulate.config import SimConfig
 from roughness.simulate.discretization import SAFETY, V_FLOOR, coarser_spacing, richardson, within
-from roughness.surface.heightmap import Heightmap
 from roughness.simulate.model import Simulator
+from roughness.surface.heightmap import Heightmap
 
 # A 4 mm block (force scaled with its area) sampled in a 3 mm window: a sixth of the nodes.
 SMALL = dict(width_mm=4.0, window_mm=3.0, pair_distance_mm=0.5, disk_radius_mm=0.5, pairs=2000, force_n=1.6)

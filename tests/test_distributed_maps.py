@@ -11,13 +11,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_dask_cluster import documented_cluster
 
 from roughness.core.errors import InputError
 from roughness.core.limits import Limit
 from roughness.simulate.config import SimConfig
 from roughness.simulate.spectral import maps
 from roughness.simulate.spectral.windows import plan_windows
+from test_dask_cluster import documented_cluster
 
 ROOT = Path(__file__).parents[1]
 DEADLINE_S = 120  # a bound on every wait; the cluster test takes a few seconds on an idle 2-core machine

@@ -6,8 +6,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
-from conftest import SMALL_MESH as SMALL
 
+from conftest import SMALL_MESH as SMALL
 from roughness.simulate.elasticity import (
     rigid_body_modes,
     stiffness,

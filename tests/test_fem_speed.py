@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
-from conftest import SMALL_MESH as SMALL
 
+from conftest import SMALL_MESH as SMALL
 from roughness.simulate.elasticity import (
     barycentric_gradients,
     lame,

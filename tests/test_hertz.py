@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from roughness.simulate.config import SimConfig
-from roughness.surface.heightmap import Heightmap
 from roughness.simulate.model import Simulator
+from roughness.surface.heightmap import Heightmap
 
 E, NU, R = 0.042, 0.45, 5.0
 

@@ -14,7 +14,6 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from test_bad_inputs import PARSERS
 
 from roughness.cli import main
 from roughness.dataset.grid import PIXEL_MM
@@ -22,6 +21,7 @@ from roughness.dataset.textures import MIN_PIXELS_PER_LAMBDA, standard_texture
 from roughness.design.homogeneity import homogeneity
 from roughness.perceptual_scale import FLOOR_LAMBDA_MM, StandardScale, jnd_distance, load_scale
 from roughness.surface.heightmap import Heightmap
+from test_bad_inputs import PARSERS
 
 SCALE = StandardScale((0.5, 1.0, 2.0), (0.025, 0.1, 0.4), "test")  # V = 0.1 lambda^2: floor 0.1 * 0.2^2 = 0.004
 STEP = math.log(1.19)
@@ -256,9 +256,8 @@ def near_zero(tmp_path, monkeypatch):
 
     Image.fromarray(np.repeat(np.uint8([[0, 128, 255]]), 30, axis=0).repeat(3, axis=1)[..., None].repeat(3, axis=2)
                     ).save(tmp_path / "picture.png")
-    from test_store import CONFIG, fields, texture_record
-
     from roughness.dataset.writer import DatasetWriter
+    from test_store import CONFIG, fields, texture_record
 
     with DatasetWriter(tmp_path / "zero.h5", CONFIG, "test") as writer:
         for i in range(2):

@@ -15,12 +15,12 @@ import h5py
 import numpy as np
 import pytest
 from PIL import Image
-from test_bad_inputs import BASE, PARSERS, _expect_refusal, _run, workdir  # noqa: F401 (workdir: fixture)
 
 from roughness.cli.common import float_pair
 from roughness.core.errors import InputError
 from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, MAX_MAP_POSITIONS, Limit, check_size
 from roughness.surface.heightmap import Heightmap
+from test_bad_inputs import BASE, PARSERS, _expect_refusal, _run
 
 PAIR_OPTIONS = [(path, action.option_strings[-1]) for path, parser in PARSERS.items()
                 for action in parser._actions if action.type is float_pair]

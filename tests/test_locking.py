@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_hertz import R, sphere
 
 from roughness.simulate.config import SimConfig
 from roughness.simulate.model import Simulator
+from test_hertz import R, sphere
 
 NU, FORCE = 0.499, 0.02
 

@@ -22,8 +22,8 @@ from roughness.design.tune import Target, tune
 from roughness.perception.trials import parse_trials
 from roughness.simulate.config import SimConfig
 from roughness.simulate.curved import FLAT
-from roughness.surface.heightmap import Heightmap
 from roughness.simulate.model import _require_small_strain_regime
+from roughness.surface.heightmap import Heightmap
 
 REPO = Path(__file__).resolve().parents[1]
 

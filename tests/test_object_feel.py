@@ -12,13 +12,13 @@ import pytest
 
 trimesh = pytest.importorskip("trimesh")
 
+from roughness import curvature_correction as correction  # noqa: E402
 from roughness.core.errors import InputError  # noqa: E402
 from roughness.core.hashing import file_sha256  # noqa: E402
 from roughness.dataset.textures import standard_texture  # noqa: E402
-from roughness.prediction import PredictOptions, predict  # noqa: E402
-from roughness import curvature_correction as correction  # noqa: E402
 from roughness.objects.curvature import SurfaceSamples, principal_curvatures  # noqa: E402
 from roughness.objects.feel import CANNOT_REST, OFF_OBJECT, feel_map  # noqa: E402
+from roughness.prediction import PredictOptions, predict  # noqa: E402
 
 ROOT = Path(__file__).parents[1]
 TEXTURE = standard_texture(1.0, seed=0)  # 12 mm, periodic: one tile of 1 mm bumps

@@ -23,8 +23,7 @@ from roughness.objects.remesh import refine  # noqa: E402
 from roughness.objects.sampling import sample_heightmap  # noqa: E402
 from roughness.objects.texturing import texture_mesh  # noqa: E402
 from roughness.surface.heightmap import Heightmap  # noqa: E402
-
-from tests.test_bad_inputs import _expect_refusal, workdir  # noqa: E402,F401
+from test_bad_inputs import _expect_refusal  # noqa: E402
 
 PIXEL = 0.25  # mm: the texture's pixel in these tests (the product's is 0.05)
 RELIEF = 0.3  # mm

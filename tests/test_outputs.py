@@ -21,10 +21,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_bad_inputs import BASE, PARSERS, _expect_refusal, _run, workdir  # noqa: F401 (workdir: a fixture)
 
 from roughness.core.errors import InputError, OutputExists
 from roughness.core.files import atomic_write, check_distinct
+from test_bad_inputs import BASE, PARSERS, _expect_refusal, _run
 
 # Every path option of every subcommand: (inputs it reads, outputs it writes). An input is a position
 # in BASE's argv or a flag; a flag absent from BASE gets INPUT_VALUE's file.
@@ -290,11 +290,10 @@ def test_full_disk_while_train_saves_a_checkpoint(tmp_path, monkeypatch):
 def test_full_disk_during_train_is_exit_2_and_leaves_no_run_folder(tmp_path, capsys, monkeypatch):
     """`roughness train` on a tiny store with a disk that fills at the first checkpoint: a message, exit 2."""
     pytest.importorskip("torch")
-    from test_surrogate import CONFIG, fake_fields
-
     from roughness.dataset.recipe import Recipe, realise, sample_record
     from roughness.dataset.writer import DatasetWriter
     from roughness.surrogate.patch import descriptors, footprint_patch
+    from test_surrogate import CONFIG, fake_fields
 
     data = tmp_path / "small.h5"
     recipe = Recipe(name="tiny", seed=9, families={"bumps": 1, "fbm": 1, "grating": 1, "knurl": 1})

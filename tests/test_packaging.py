@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 import subprocess
 import sys
 import sysconfig
@@ -17,32 +16,6 @@ PUBLIC_API = ("Heightmap", "InputError", "SimulationError", "load_heightmap", "s
               "Simulator", "Result", "fem_roughness", "predict", "Prediction", "StandardScale", "load_scale",
               "standard_texture", "named_texture", "open_dataset", "as_heightmap", "tune", "palette", "tactile_image",
               "homogeneity", "embed_trials", "fit_embedding", "predict_map", "MapPrediction")
-
-
-def _source_copy(dest: Path) -> Path:
-    """The project's files as a fresh clone would have them (no build or cache folders)."""
-    ignore = shutil.ignore_patterns(".git", "build", "*.egg-info", "__pycache__", ".pytest_cache", "venv", "*.h5",
-                                    "_build", "repo")  # the manual's build and its generated mirror (docs/)
-    shutil.copytree(ROOT, dest, ignore=ignore)
-    return dest
-
-
-@pytest.fixture(scope="module")
-def installed(tmp_path_factory) -> Path:
-    """A fresh virtual environment with the wheel installed (dependencies from the running environment)."""
-    root = tmp_path_factory.mktemp("wheel")
-    source = _source_copy(root / "src")
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps", "--no-build-isolation",
-                    "--no-index", "--wheel-dir", str(root / "dist"), str(source)], check=True, cwd=root)
-    [wheel] = (root / "dist").glob("roughness-*.whl")
-    venv = root / "venv"
-    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
-    python = venv / "bin" / "python"
-    # --ignore-installed: the running environment may already hold roughness (CI installs it there), and the
-    # venv sees it through --system-site-packages; without the flag pip would call the wheel satisfied and skip it
-    subprocess.run([str(python), "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", "--ignore-installed",
-                    str(wheel)], check=True, cwd=root)
-    return python
 
 
 def _purelib(python: Path) -> Path:

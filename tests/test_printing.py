@@ -11,8 +11,7 @@ from roughness.core.errors import InputError
 from roughness.dataset.textures import BumpRecipe, bump_texture, standard_texture
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.printing import PROFILES, FdmProfile, SlaProfile, load_profile, printed, printer_profile
-
-from test_bad_inputs import BASE, _expect_refusal, workdir  # noqa: F401 (workdir is a fixture)
+from test_bad_inputs import BASE, _expect_refusal
 
 FDM = PROFILES["fdm-0.4-0.2"]
 

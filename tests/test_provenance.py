@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import json
 import shutil
-import tomllib
 from pathlib import Path
 
 import h5py
 import numpy as np
 import onnx
 import pytest
+import tomllib
 import yaml
 
 import roughness
@@ -18,8 +18,8 @@ from roughness.cli import main
 from roughness.core.provenance import Provenance, combined, model_id
 from roughness.core.version import RELEASE
 from roughness.engines import FemEngine, SpectralEngine
-from roughness.prediction import predict
 from roughness.models import MODELS_DIR
+from roughness.prediction import predict
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import save_heightmap
 from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
@@ -217,6 +217,7 @@ def test_training_records_provenance_and_export_writes_the_model_version(tmp_pat
     """A 1-epoch run on synthetic labels (test_surrogate's tiny set): metrics.json names the labels'
     configuration; the export carries the version asked for, which the loaded model reports."""
     import torch
+
     from roughness.core.hashing import digest
     from roughness.surrogate.export import check_patches, export
     from roughness.surrogate.train import TrainConfig, train

@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from roughness.cli import main
-from roughness.dataset import build
 from roughness.cluster import local_cluster
+from roughness.dataset import build
 from roughness.dataset.reader import open_dataset
 from roughness.dataset.recipe import Recipe
 from roughness.engines import ClassicalEngine

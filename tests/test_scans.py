@@ -21,7 +21,7 @@ import tifffile
 from roughness.core.errors import InputError
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import load_heightmap, read_heightmap, save_heightmap
-from tests.test_bad_inputs import _expect_refusal, workdir  # noqa: F401  (workdir is a fixture)
+from test_bad_inputs import _expect_refusal
 
 MM = {"m": 1e-3, "um": 1e3, "mm": 1.0}  # file units per mm
 NY, NX = 5, 7
@@ -404,8 +404,8 @@ def test_resampling_recovers_the_roughness_that_one_size_for_both_axes_loses():
     """A texture scanned on 0.05 x 0.06 mm pixels: resampled to square it feels as the texture (measured -0.01 JND,
     Monte Carlo error about 0.02 JND); read as if its pixels were square it is 0.34 JND smoother (spectral engine)."""
     from roughness.dataset.catalogue import make_texture
-    from roughness.prediction import predict
     from roughness.perceptual_scale import jnd_distance, load_scale
+    from roughness.prediction import predict
     from roughness.surface.pixels import square
 
     hm = make_texture("standard-1.0")[0]

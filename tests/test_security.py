@@ -19,14 +19,14 @@ import onnx
 import pytest
 import torch
 from onnx import TensorProto, helper
-from test_bad_inputs import BASE, PARSERS, _expect_refusal, _run, _snapshot, workdir  # noqa: F401 (a fixture)
-from test_surrogate import tiny  # noqa: F401 (a fixture: a short real training and its export)
 
 from roughness.cli import main
 from roughness.core.errors import InputError
 from roughness.core.files import write_csv
 from roughness.surrogate.metadata import METADATA_KEY, onnx_metadata
 from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
+from test_bad_inputs import BASE, PARSERS, _expect_refusal, _run, _snapshot
+from test_surrogate import tiny  # noqa: F401 (a fixture: a short real training and its export)
 
 SHIPPED = onnx_metadata(DEFAULT_MODEL).to_dict()  # valid metadata (patch 100 px, embedding of 64)
 

@@ -9,8 +9,8 @@ import pytest
 from roughness.core.errors import InputError
 from roughness.dataset.textures import BumpRecipe, bump_texture, standard_texture
 from roughness.simulate.config import SimConfig
-from roughness.surface.heightmap import Heightmap
 from roughness.simulate.model import SimulationError, Simulator
+from roughness.surface.heightmap import Heightmap
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ from roughness.core.errors import InputError
 from roughness.surrogate import train as train_module
 from roughness.surrogate.resume import RESUME_FILE
 from roughness.surrogate.train import TrainConfig, train
-from tests.test_surrogate import write_tiny_dataset
+from test_surrogate import write_tiny_dataset
 
 # max_minutes: a budget that never binds, so the learning rate follows the steps alone (its time fraction, ~1e-9 of
 # the cosine, moves nothing at float32)

@@ -12,8 +12,8 @@ from .common import (
     defaults,
     finish,
     json_text,
-    log,
     load_input,
+    log,
     readings,
     write_stdout,
 )

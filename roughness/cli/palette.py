@@ -12,8 +12,8 @@ from .common import (
     defaults,
     finish,
     json_text,
-    log,
     load_input,
+    log,
     readings,
     write_stdout,
 )
@@ -69,7 +69,10 @@ def run(args: argparse.Namespace) -> int:
     if args.base_mm is not None and not args.stl:
         raise InputError("applies only with --stl", "base_mm")
     evaluator = Evaluator(args.model, args.verify, printer=printer_of(args))
-    progress = lambda line: log(args, "  " + line)
+
+    def progress(line: str) -> None:
+        log(args, "  " + line)
+
     if args.candidates:
         from roughness.surface.io import heightmap_files
 

@@ -11,7 +11,6 @@ worker: scattered data dies with its worker, and the window could not be solved 
 from __future__ import annotations
 
 import contextlib
-
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 

@@ -18,8 +18,7 @@ others are computed once per process (seconds).
 from __future__ import annotations
 
 import json
-from dataclasses import replace
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
@@ -52,8 +51,8 @@ class FlatState:
 
 def computed(config: SimConfig) -> FlatState:
     """The FEM's flat state at the block centre for ``config`` (seconds: one FEM solve)."""
-    from ..curved import FLAT, base_surface
     from ..contact import solve_contact
+    from ..curved import FLAT, base_surface
     from ..model import Simulator
 
     simulator = Simulator(replace(config, fidelity=FIDELITY, h_contact_mm=None))

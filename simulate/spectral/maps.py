@@ -21,12 +21,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
 from roughness.core.checks import positive
 from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, MAX_MAP_POSITIONS, Limit, check_size
+from roughness.surface.heightmap import Heightmap
 
 from ..config import SimConfig
 from ..footprints import RoughnessMap, centre_count, centres
-from roughness.surface.heightmap import Heightmap
 from ..variation import PairSampling
 from .contact import solve_contact
 from .engine import fluctuation, lambda3, tissue_of
