@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .common import Number
+from .common import SEED, Number
 
 if TYPE_CHECKING:
     import numpy as np
@@ -33,6 +33,16 @@ def add_truth_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--engine", choices=("fem:coarse", "fem:default", "fem:fine", "surrogate", "auto"),
                    default="surrogate", help="engine for the true V (default surrogate)")
     p.add_argument("--cache", metavar="DIR", help="FEM result cache (default: DIR/fem-cache)")
+
+
+def add_observer_args(p: argparse.ArgumentParser, seed_of: str, outputs: str) -> None:
+    """The simulated observer (``--sigma``, ``--lapse``), ``--seed`` (of ``seed_of``) and ``--out`` (``outputs``)."""
+    p.add_argument("--sigma", type=NON_NEGATIVE, default=None,
+                   help="the observer's noise SD on the coordinate ln(V)/2 (default 0.18, from the Weber fraction 0.19)")
+    p.add_argument("--lapse", type=PROBABILITY, default=0.0,
+                   help="the observer's lapse rate: the probability of a random answer (default 0)")
+    p.add_argument("--seed", type=SEED, default=0, help=f"seed of {seed_of} (default: %(default)s)")
+    p.add_argument("--out", required=True, metavar="DIR", help=f"output folder: {outputs}")
 
 
 def output_files(folder: str, names: tuple[str, ...], overwrite: bool, inputs: dict) -> dict[str, Path]:

@@ -4,8 +4,16 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import COUNT, POSITIVE, SEED, Number, add_overwrite, add_quiet, finish, log
-from .perception_common import NON_NEGATIVE, PROBABILITY, add_truth_args, made, number_list, output_files, read_truth
+from .common import COUNT, POSITIVE, Number, add_overwrite, add_quiet, finish, log
+from .perception_common import (
+    PROBABILITY,
+    add_observer_args,
+    add_truth_args,
+    made,
+    number_list,
+    output_files,
+    read_truth,
+)
 
 count_list = number_list(COUNT, "whole numbers >= 1")  # 500,1000,2000
 
@@ -21,11 +29,7 @@ def add_parser(sub) -> None:
                      help="|R - R_inf| wanted (default 0.05; R_inf = R with unlimited trials)")
     pla.add_argument("--share", type=PROBABILITY, default=0.9,
                      help="share of experiments that must reach the tolerance (default 0.9)")
-    pla.add_argument("--sigma", type=NON_NEGATIVE, default=None,
-                     help="the observer's noise SD on ln(V)/2 (default 0.18, from the Weber fraction 0.19)")
-    pla.add_argument("--lapse", type=PROBABILITY, default=0.0, help="the observer's lapse rate (default 0)")
-    pla.add_argument("--seed", type=SEED, default=0, help="seed of the simulated experiments (default: %(default)s)")
-    pla.add_argument("--out", required=True, metavar="DIR", help="output folder: plan.csv, plan.json")
+    add_observer_args(pla, "the simulated experiments", "plan.csv, plan.json")
     add_overwrite(pla)
     add_quiet(pla)
     finish(pla, run_plan)

@@ -5,10 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import COUNT, SEED, add_overwrite, add_quiet, finish, json_text, log
+from .common import COUNT, add_overwrite, add_quiet, finish, json_text, log
 from .perception_common import (
-    NON_NEGATIVE,
-    PROBABILITY,
+    add_observer_args,
     add_truth_args,
     check_trials,
     made,
@@ -23,11 +22,7 @@ def add_parser(sub) -> None:
     add_truth_args(sim)
     sim.add_argument("--trials", required=True, type=COUNT, help="trials per subject")
     sim.add_argument("--subjects", type=COUNT, default=1, help="number of simulated subjects (default 1)")
-    sim.add_argument("--sigma", type=NON_NEGATIVE, default=None,
-                     help="noise SD on the coordinate ln(V)/2 (default 0.18, from the Weber fraction 0.19)")
-    sim.add_argument("--lapse", type=PROBABILITY, default=0.0, help="probability of a random answer (default 0)")
-    sim.add_argument("--seed", type=SEED, default=0, help="seed of the observer's noise (default: %(default)s)")
-    sim.add_argument("--out", required=True, metavar="DIR", help="output folder: trials.csv, truth.csv")
+    add_observer_args(sim, "the observer's noise", "trials.csv, truth.csv")
     add_overwrite(sim)
     add_quiet(sim)
     finish(sim, run_simulate)
