@@ -3,6 +3,9 @@ a texture so that it feels as wanted on the object's curved parts."""
 from __future__ import annotations
 
 import argparse
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .common import (
     POSITIVE,
@@ -15,8 +18,11 @@ from .common import (
     readings,
     show_notes,
 )
-from .object_feel import add_object_args, feel_lines, mapping_of, read_object
+from .object_feel import ObjectInputs, add_object_args, feel_lines, mapping_of, read_object
 from .object_inputs import MAPPING_FLAGS
+
+if TYPE_CHECKING:
+    from roughness.objects.tuning import ObjectTuneResult
 
 
 def add_parser(sub) -> None:
@@ -49,13 +55,58 @@ def add_parser(sub) -> None:
            min_factor="--min-factor", **MAPPING_FLAGS)
 
 
+@dataclass(frozen=True)
+class _Target:
+    """The object's target: an equivalent wavelength (mm) and how it was given, in words."""
+
+    lambda_mm: float
+    text: str
+
+
+@dataclass
+class _LastMapping:
+    """Lays textures on the object (``mapping_of``), keeping the last mapping laid (the tuned texture's)."""
+
+    args: argparse.Namespace
+    inputs: ObjectInputs
+    last: object = None
+
+    def __call__(self, texture):
+        self.last = mapping_of(self.args, texture, self.inputs)
+        return self.last
+
+
 def run(args: argparse.Namespace) -> int:
-    from roughness.core.errors import InputError
-    from roughness.core.files import check_distinct, check_output
-    from roughness.objects.feel import DEFAULT_SPACING_MM, reference_of
+    """Check the options, tune the texture on the object, write it (and the textured mesh), report."""
+    from roughness.objects.feel import DEFAULT_SPACING_MM
     from roughness.objects.tuning import tune_on_object
-    from roughness.perceptual_scale import WEBER_FRACTION, load_scale
-    from roughness.surface.io import SAVE_SUFFIXES, save_heightmap
+    from roughness.surface.io import save_heightmap
+
+    _check_options(args)
+    out = _checked_out(args)
+    mesh_region = _union_region(args) if args.mesh_out else None
+    _check_factor_range(args)
+    inputs = read_object(args)
+    target = _target(args)
+    mappings = _LastMapping(args, inputs)
+    show_notes(args, inputs.notes)
+    result = tune_on_object(inputs.mesh, inputs.texture, mappings, target.lambda_mm, inputs.regions, args.by,
+                            args.spacing_mm or DEFAULT_SPACING_MM, args.tolerance_jnd,
+                            progress=lambda message: log(args, message), **_factor_options(args))
+    show_notes(args, list(getattr(mappings.last, "notes", lambda: [])()))
+    textured = _textured(args, inputs, mappings.last, mesh_region)  # before anything is written
+    save_heightmap(result.heightmap, out, overwrite=args.overwrite)
+    written = _write_mesh(args, textured)
+    if args.json:
+        print(json_text(_summary(args, inputs, target, result)))
+        return 0
+    print("\n".join(_text_lines(args, target, result, written)))
+    return 0
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """The engine (spectral) and the target's options go together (InputError naming the option at fault)."""
+    from roughness.core.errors import InputError
 
     if args.engine != "spectral":
         raise InputError("object tune judges and verifies with the spectral engine (the surrogate searches inside "
@@ -65,6 +116,14 @@ def run(args: argparse.Namespace) -> int:
     if args.reference and args.jnd is None:
         raise InputError("--reference is what --jnd counts from; with --target-lambda leave it out",
                          parameter="reference")
+
+
+def _checked_out(args: argparse.Namespace) -> Path:
+    """--out (a texture format, not .stl) and --mesh-out (a mesh format), checked before any work; --out's path."""
+    from roughness.core.errors import InputError
+    from roughness.core.files import check_distinct, check_output
+    from roughness.surface.io import SAVE_SUFFIXES
+
     check_distinct({"--out": args.out, "--mesh-out": args.mesh_out}, {"MESH": args.mesh, "--texture": args.texture})
     out = check_output(args.out, args.overwrite, "out")
     if out.suffix.lower() not in SAVE_SUFFIXES or out.suffix.lower() == ".stl":
@@ -74,54 +133,74 @@ def run(args: argparse.Namespace) -> int:
         from roughness.objects.meshes import require_mesh_format
 
         require_mesh_format(check_output(args.mesh_out, args.overwrite, "mesh_out"), "mesh_out")
-    mesh_region = _union_region(args) if args.mesh_out else None
+    return out
+
+
+def _check_factor_range(args: argparse.Namespace) -> None:
+    """--min-factor below --max-factor where both are given."""
+    from roughness.core.errors import InputError
+
     if args.min_factor and args.max_factor and not args.min_factor < args.max_factor:
         raise InputError(f"the factor range must rise, got {args.min_factor:g}..{args.max_factor:g}", "min_factor")
-    inputs = read_object(args)
+
+
+def _target(args: argparse.Namespace) -> _Target:
+    """--target-lambda, or --jnd JNDs from --reference on the spectral engine's standard scale."""
+    from roughness.objects.feel import reference_of
+    from roughness.perceptual_scale import WEBER_FRACTION, load_scale
+
     scale = load_scale("spectral")
-    if args.jnd is not None:
-        ref = reference_of(args.reference, "spectral", scale)
-        target = ref.lambda_mm * (1 + WEBER_FRACTION) ** args.jnd
-        target_text = f"{args.jnd:+g} JND from {ref.name} (lambda {ref.lambda_mm:.3f} mm)"
-    else:
-        target, target_text = args.target_lambda, "given"
-    mappings = []
+    if args.jnd is None:
+        return _Target(args.target_lambda, "given")
+    ref = reference_of(args.reference, "spectral", scale)
+    return _Target(ref.lambda_mm * (1 + WEBER_FRACTION) ** args.jnd,
+                   f"{args.jnd:+g} JND from {ref.name} (lambda {ref.lambda_mm:.3f} mm)")
 
-    def mapping_for(texture):
-        mappings.append(mapping_of(args, texture, inputs))
-        return mappings[-1]
 
-    options = {}
-    if args.min_factor or args.max_factor:
-        from roughness.design.tune import FACTOR_RANGE
+def _factor_options(args: argparse.Namespace) -> dict:
+    """tune_on_object's factor range where --min-factor or --max-factor is given (the other end the knob's
+    default)."""
+    if not (args.min_factor or args.max_factor):
+        return {}
+    from roughness.design.tune import FACTOR_RANGE
 
-        lo, hi = FACTOR_RANGE[args.by]
-        options["factor_range"] = (args.min_factor or lo, args.max_factor or hi)
-    show_notes(args, inputs.notes)
-    result = tune_on_object(inputs.mesh, inputs.texture, mapping_for, target, inputs.regions, args.by,
-                            args.spacing_mm or DEFAULT_SPACING_MM, args.tolerance_jnd,
-                            progress=lambda message: log(args, message), **options)
-    show_notes(args, list(getattr(mappings[-1], "notes", lambda: [])()))
-    textured, written = None, None
-    if args.mesh_out:  # built before anything is written: a texture too deep for the mesh writes nothing
-        from roughness.objects.texturing import texture_mesh
+    lo, hi = FACTOR_RANGE[args.by]
+    return {"factor_range": (args.min_factor or lo, args.max_factor or hi)}
 
-        log(args, "texturing the mesh with the tuned texture")
-        textured = texture_mesh(inputs.mesh, mappings[-1], mesh_region)
-    save_heightmap(result.heightmap, out, overwrite=args.overwrite)
-    if textured is not None:
-        from roughness.objects.meshes import write_mesh
 
-        written = write_mesh(textured.mesh, args.mesh_out, args.overwrite, "mesh_out")
-    summary = {"mesh": args.mesh, "texture": inputs.texture_name, "mapping": args.mapping, "target": target_text,
-               "out": args.out, "mesh_out": args.mesh_out, **result.summary(),
-               "regions": [row.as_dict() for row in result.feel.table()], "readings": readings(args)}
-    if args.json:
-        print(json_text(summary))
-        return 0
+def _textured(args: argparse.Namespace, inputs: ObjectInputs, mapping, region):
+    """With --mesh-out, the object textured with the tuned texture (None without): built before anything is
+    written, so a texture too deep for the mesh writes nothing."""
+    if not args.mesh_out:
+        return None
+    from roughness.objects.texturing import texture_mesh
+
+    log(args, "texturing the mesh with the tuned texture")
+    return texture_mesh(inputs.mesh, mapping, region)
+
+
+def _write_mesh(args: argparse.Namespace, textured):
+    """The textured mesh written to --mesh-out (its record), or None if none was built."""
+    if textured is None:
+        return None
+    from roughness.objects.meshes import write_mesh
+
+    return write_mesh(textured.mesh, args.mesh_out, args.overwrite, "mesh_out")
+
+
+def _summary(args: argparse.Namespace, inputs: ObjectInputs, target: _Target, result: ObjectTuneResult) -> dict:
+    """The JSON output."""
+    return {"mesh": args.mesh, "texture": inputs.texture_name, "mapping": args.mapping, "target": target.text,
+            "out": args.out, "mesh_out": args.mesh_out, **result.summary(),
+            "regions": [row.as_dict() for row in result.feel.table()], "readings": readings(args)}
+
+
+def _text_lines(args: argparse.Namespace, target: _Target, result: ObjectTuneResult, written) -> list[str]:
+    """The text output: the target, the flat texture, the object's curved parts, its regions and notes."""
     flat, o = result.flat, result.on_object
     where = "curved parts" if o.curved else "judged parts (none curved)"
-    lines = [f"target lambda {target:.3f} mm ({target_text}), V {result.target_roughness:.4f} (spectral scale)",
+    lines = [f"target lambda {target.lambda_mm:.3f} mm ({target.text}), V {result.target_roughness:.4f} (spectral "
+             "scale)",
              f"flat texture: {flat.by} x {flat.factor:.4g} (aimed at lambda {flat.target.lambda_mm:.3f} mm flat so that "
              f"the object meets the target): V {flat.achieved.roughness:.4f}, lambda "
              f"{flat.achieved.equivalent_lambda_mm:.3f} mm, {result.flat_jnd_error:+.2f} JND from the target as a flat "
@@ -134,8 +213,7 @@ def run(args: argparse.Namespace) -> int:
              *(f"note: {n}" for n in result.notes), f"tuned texture written to {args.out}"]
     if written is not None:
         lines.append(f"textured mesh: {written.line()}")
-    print("\n".join(lines))
-    return 0
+    return lines
 
 
 def _union_region(args: argparse.Namespace):

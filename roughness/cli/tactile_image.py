@@ -2,8 +2,18 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .common import COUNT, POSITIVE, add_model_tail, defaults, finish, json_text, log, write_stdout
+
+if TYPE_CHECKING:
+    from roughness.design.colours import PictureColours
+    from roughness.design.evaluation import Evaluator
+    from roughness.design.palette import Palette
+    from roughness.design.tactile_image import TactilePlate
+    from roughness.surface.heightmap import Heightmap
 
 
 def add_parser(sub) -> None:
@@ -46,29 +56,62 @@ def add_parser(sub) -> None:
     finish(p, run, width_mm="--size-mm")
 
 
+@dataclass(frozen=True)
+class _Textures:
+    """The plate's textures ``(name, heightmap, FEM V or None)``, smoothest first, and the palette made for them
+    (None: read from --palette)."""
+
+    members: list[tuple[str, Heightmap, float | None]]
+    made: Palette | None
+
+
+@dataclass
+class _Progress:
+    """tactile_image's progress on stderr: every FEM footprint of the strain image, the map at each tenth."""
+
+    args: argparse.Namespace
+    tenths: dict[str, int] = field(default_factory=dict)
+
+    def __call__(self, stage: str, done: int, total: int) -> None:
+        if stage == "strain image" or self.tenths.get(stage) != done * 10 // total:
+            self.tenths[stage] = done * 10 // total
+            unit = " FEM footprints" if stage == "strain image" else " positions"
+            log(self.args, f"  {stage}: {done}/{total}{unit}")
+
+
 def run(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    import numpy as np
-    from PIL import Image
-
-    from roughness.core.errors import InputError
-    from roughness.core.files import atomic_write, check_distinct, check_output_folder
-    from roughness.design.colours import cluster_colours
+    """Cluster the picture's colours, find a texture for each, compose and map the plate, write it, report."""
+    from roughness.core.files import check_distinct, check_output_folder
     from roughness.design.evaluation import Evaluator
-    from roughness.design.palette import family_palette, load_palette, save_palette
-    from roughness.design.tactile_image import (
-        describe_picture,
-        hex_colour,
-        plate_shape,
-        read_image,
-        save_figures,
-        tactile_image,
-    )
-    from roughness.surface.io import save_heightmap
+    from roughness.design.tactile_image import plate_shape, tactile_image
 
     check_distinct({"--out": args.out}, {"IMAGE": args.image, "--palette": args.palette, "--model": args.model})
     out = check_output_folder(args.out, args.overwrite, "out")
+    found = _picture_colours(args)
+    evaluator = Evaluator(args.model, args.verify)
+    # the plate's size, checked before any palette is made
+    plate_shape(found.labels.shape, args.size_mm, args.pixel_mm, args.step_mm, evaluator.footprint_mm)
+    textures = _textures(args, len(found.colours), evaluator)
+    log(args, "tactile-image: composing the plate and mapping its roughness (surrogate)"
+        + ("; FEM strain image" if args.strain else ""))
+    plate = tactile_image(found, textures.members, args.size_mm, args.pixel_mm, args.outline_mm,
+                          args.outline_height_mm, args.step_mm, args.strain, evaluator, _Progress(args))
+    summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier,
+               "provenance": evaluator.provenance.as_dict()}
+    _write(args, out, plate, textures.made, summary)
+    if args.json:
+        write_stdout(json_text(summary))
+        return 0
+    write_stdout("\n".join(_text_lines(args, out, plate, summary, evaluator.verifier)))
+    return 0
+
+
+def _picture_colours(args: argparse.Namespace) -> PictureColours:
+    """IMAGE's flat colours (within --colour-tolerance); InputError if --k textures cannot cover them."""
+    from roughness.core.errors import InputError
+    from roughness.design.colours import cluster_colours
+    from roughness.design.tactile_image import describe_picture, hex_colour, read_image
+
     rgb = read_image(args.image)
     found = cluster_colours(rgb, args.colour_tolerance, source=describe_picture(args.image))
     colours = found.colours
@@ -77,51 +120,63 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"the picture has {len(colours)} flat colours ({', '.join(hex_colour(c) for c in colours)}; "
                          f"colours within Delta E {found.tolerance:g} merged): a palette of {args.k} textures cannot "
                          f"cover them (give at least {len(colours)}, or a larger --colour-tolerance)", "k")
-    evaluator = Evaluator(args.model, args.verify)
-    plate_shape(rgb.shape, args.size_mm, args.pixel_mm, args.step_mm, evaluator.footprint_mm)  # before any palette
+    return found
+
+
+def _textures(args: argparse.Namespace, colours: int, evaluator: Evaluator) -> _Textures:
+    """The textures of --palette (InputError if fewer than the ``colours``), or a new palette of --k (default: one
+    per colour) from --family, --min-jnd apart."""
+    from roughness.core.errors import InputError
+    from roughness.design.palette import family_palette, load_palette
+
     if args.palette:
         textures = [(name, hm, m.get("fem_roughness")) for name, hm, m in load_palette(args.palette)]
-        if len(textures) < len(colours):
-            raise InputError(f"the picture has {len(colours)} flat colours but the palette only {len(textures)} "
+        if len(textures) < colours:
+            raise InputError(f"the picture has {colours} flat colours but the palette only {len(textures)} "
                              "textures", "palette")
-    else:
-        k = args.k or len(colours)
-        log(args, f"tactile-image: making a palette of {k} textures {args.min_jnd:g} JND apart")
-        palette = family_palette(k, args.min_jnd, args.family, "height", evaluator,
-                                 progress=lambda line: log(args, "  " + line))
-        textures = [(m.name, m.heightmap, m.fem.roughness) for m in palette.members]
-    log(args, "tactile-image: composing the plate and mapping its roughness (surrogate)"
-        + ("; FEM strain image" if args.strain else ""))
-    tenths: dict[str, int] = {}
+        return _Textures(textures, None)
+    k = args.k or colours
+    log(args, f"tactile-image: making a palette of {k} textures {args.min_jnd:g} JND apart")
+    palette = family_palette(k, args.min_jnd, args.family, "height", evaluator,
+                             progress=lambda line: log(args, "  " + line))
+    return _Textures([(m.name, m.heightmap, m.fem.roughness) for m in palette.members], palette)
 
-    def progress(stage: str, done: int, total: int) -> None:  # every FEM footprint; the map at each tenth
-        if stage == "strain image" or tenths.get(stage) != done * 10 // total:
-            tenths[stage] = done * 10 // total
-            log(args, f"  {stage}: {done}/{total}" + (" FEM footprints" if stage == "strain image" else " positions"))
 
-    plate = tactile_image(found, textures, args.size_mm, args.pixel_mm, args.outline_mm, args.outline_height_mm,
-                          args.step_mm, args.strain, evaluator, progress)
+def _write(args: argparse.Namespace, out: Path, plate: TactilePlate, made: Palette | None, summary: dict) -> None:
+    """Into the new folder ``out``: the palette made (if any), the plate (.npz, .stl), its roughness map, figures,
+    clustered picture and ``summary`` (plate.json)."""
+    import numpy as np
+    from PIL import Image
+
+    from roughness.core.files import atomic_write
+    from roughness.design.palette import save_palette
+    from roughness.design.tactile_image import save_figures
+    from roughness.surface.io import save_heightmap
+
     out.mkdir(parents=True, exist_ok=True)
-    if not args.palette:
-        save_palette(palette, out / "palette", overwrite=args.overwrite)
+    if made is not None:
+        save_palette(made, out / "palette", overwrite=args.overwrite)
     save_heightmap(plate.heightmap, out / "plate.npz", overwrite=args.overwrite)
     save_heightmap(plate.heightmap, out / "plate.stl", base_mm=args.base_mm, overwrite=args.overwrite)
     atomic_write(out / "roughness_map.npy", lambda tmp: np.save(tmp, plate.roughness_map), args.overwrite)
     save_figures(plate, out)
-    atomic_write(out / "clustered.png", lambda tmp: Image.fromarray(found.clustered()).save(tmp, format="PNG"),
+    atomic_write(out / "clustered.png", lambda tmp: Image.fromarray(plate.colours.clustered()).save(tmp, format="PNG"),
                  args.overwrite)
-    summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier,
-               "provenance": evaluator.provenance.as_dict()}
     atomic_write(out / "plate.json", lambda tmp: Path(tmp).write_text(json_text(summary, indent=1) + "\n"),
                  args.overwrite)
-    if args.json:
-        write_stdout(json_text(summary))
-        return 0
+
+
+def _text_lines(args: argparse.Namespace, out: Path, plate: TactilePlate, summary: dict, verifier: str) -> list[str]:
+    """The text output: the plate, its colours, each region's texture and felt roughness, the closest pair, notes."""
+    import numpy as np
+
+    from roughness.design.tactile_image import hex_colour
+
     lines = [f"plate {summary['width_mm']:.1f} x {summary['height_mm']:.1f} mm, relief {summary['relief_mm']:.2f} mm, "
              f"written to {out} (plate.npz, plate.stl, plate.json, clustered.png, relief.png, roughness_map.png"
-             + (", strain.png)" if args.strain else ")"), f"colours: {found.describe()}"]
+             + (", strain.png)" if args.strain else ")"), f"colours: {plate.colours.describe()}"]
     for r in plate.regions:
-        fem = f"texture V {r.fem_roughness:.4f} ({evaluator.verifier})" if r.fem_roughness else "texture V not verified"
+        fem = f"texture V {r.fem_roughness:.4f} ({verifier})" if r.fem_roughness else "texture V not verified"
         on_plate = (f"on the plate V {r.plate_roughness:.4f}, lambda {r.plate_lambda_mm:.3f} mm over {r.footprints} "
                     "footprints" if r.plate_roughness else "no footprint fits inside the region")
         lines.append(f"{hex_colour(r.colour)} -> {r.texture}: {fem}; {on_plate}")
@@ -129,6 +184,4 @@ def run(args: argparse.Namespace) -> int:
     pairs = [abs(d[i, j]) for i in range(len(d)) for j in range(i + 1, len(d)) if not np.isnan(d[i, j])]
     if pairs:
         lines.append(f"closest regions on the plate's map: {min(pairs):.2f} JND apart (surrogate)")
-    lines += [f"note: {n}" for n in plate.notes]
-    write_stdout("\n".join(lines))
-    return 0
+    return lines + [f"note: {n}" for n in plate.notes]

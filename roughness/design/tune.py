@@ -20,7 +20,9 @@ result is the FEM-verified factor closest to the target.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import NoReturn
 
 import numpy as np
 
@@ -173,6 +175,39 @@ def target_of(evaluator: Evaluator, lambda_mm: float | None = None, roughness: f
     return Target(fem.roughness, fem.equivalent_lambda_mm, f"like {like_name}", fem)
 
 
+@dataclass(frozen=True)
+class _Problem:
+    """What tune scales: ``heightmap`` by knob ``by`` within factors ``lo``..``hi``, judged by ``evaluator``."""
+
+    heightmap: Heightmap
+    by: str
+    evaluator: Evaluator
+    tile: bool
+    lo: float
+    hi: float
+
+    def scaled(self, factor: float) -> Heightmap:
+        """The texture scaled by ``factor``."""
+        return scaled(self.heightmap, self.by, factor)
+
+    def surrogate(self, factors) -> tuple[np.ndarray, np.ndarray]:
+        """The surrogate's V and in-domain flags of the texture scaled by each of ``factors``."""
+        return self.evaluator.surrogate([self.scaled(f) for f in factors], tile=self.tile)
+
+
+@dataclass
+class _Search:
+    """The engine that searches for the factor: its V (``values``) on a rising ``grid`` of factors over the range,
+    ``evaluate(factors)`` for more, and the surrogate's V over the range (``reachable``)."""
+
+    engine: str  # "surrogate" or "spectral"
+    grid: np.ndarray
+    values: np.ndarray
+    evaluate: Callable[[Sequence[float]], np.ndarray]
+    reachable: tuple[float, float]
+    notes: list[str] = field(default_factory=list)
+
+
 def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Evaluator | None = None,
          factor_range: tuple[float, float] | None = None, tolerance_jnd: float = TOLERANCE_JND,
          max_fem: int = MAX_FEM, tile: bool = False, progress=None) -> TuneResult:
@@ -180,115 +215,166 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
 
     ``progress(message)`` receives a line per FEM verification.
     """
+    lo, hi = _factor_range(by, factor_range)
+    tolerance_jnd = positive("tolerance_jnd", tolerance_jnd)
+    max_fem = integer("max_fem", max_fem, minimum=1)
+    evaluator = evaluator or Evaluator()
+    if not tile:
+        heightmap.require_footprint(evaluator.footprint_mm)
+    problem = _Problem(heightmap, by, evaluator, tile, lo, hi)
+    search = _search(problem, target)
+    steps, stuck = _verify(problem, search, target, tolerance_jnd, max_fem, progress)
+    return _result(problem, search, target, steps, tolerance_jnd, search.notes + stuck)
+
+
+def _factor_range(by: str, factor_range: tuple[float, float] | None) -> tuple[float, float]:
+    """The rising factor range for knob ``by`` (default ``FACTOR_RANGE[by]``), checked."""
     if by not in KNOBS:
         raise InputError(f"unknown knob {by!r}; choose one of {', '.join(KNOBS)}", parameter="by")
     lo, hi = factor_range or FACTOR_RANGE[by]
     lo, hi = positive("min_factor", lo), positive("max_factor", hi)
     if not lo < hi:
         raise InputError(f"the factor range must rise, got {lo:g}..{hi:g}", parameter="min_factor")
-    tolerance_jnd = positive("tolerance_jnd", tolerance_jnd)
-    max_fem = integer("max_fem", max_fem, minimum=1)
-    evaluator = evaluator or Evaluator()
-    if not tile:
-        heightmap.require_footprint(evaluator.footprint_mm)
+    return lo, hi
 
-    def surrogate(factors) -> tuple[np.ndarray, np.ndarray]:
-        return evaluator.surrogate([scaled(heightmap, by, f) for f in factors], tile=tile)
 
-    grid = np.geomspace(lo, hi, GRID)
-    v_grid, _ = surrogate(grid)
-    reachable = (float(v_grid.min()), float(v_grid.max()))
-    search, engine, notes = (lambda factors: surrogate(factors)[0]), "surrogate", []
-    if not reachable[0] <= target.roughness <= reachable[1]:  # the spectral engine, over a wider bracket
-        spectral = _spectral_search(heightmap, by, evaluator, tile)
-        wide = np.geomspace(lo / WIDEN, hi * WIDEN, SPECTRAL_GRID)
-        wide = np.concatenate([wide[wide < lo], [lo], wide[(wide > lo) & (wide < hi)], [hi], wide[wide > hi]])
-        inside = (wide >= lo) & (wide <= hi)
-        v_wide = np.full(len(wide), np.nan)
-        v_wide[inside] = spectral(wide[inside])
-        if not v_wide[inside].min() <= target.roughness <= v_wide[inside].max():  # which factor would reach it?
-            above = target.roughness > v_wide[inside].max()
-            outward = np.nonzero(wide > hi)[0] if above else np.nonzero(wide < lo)[0][::-1]
-            for i in outward:  # one factor at a time, outwards from the range, until one reaches the target
-                v_wide[i] = spectral(wide[i:i + 1])[0]
-                if (v_wide[i] >= target.roughness) == above:
-                    break
-            seen = ~np.isnan(v_wide)
-            raise InputError(_out_of_reach(target, by, evaluator, (lo, hi), reachable, wide[seen], v_wide[seen]),
-                             parameter=target.parameter)
-        search, engine, grid, v_grid = spectral, "spectral", wide[inside], v_wide[inside]
-        lam_lo, lam_hi = evaluator.lambda_of(reachable[0]), evaluator.lambda_of(reachable[1])
-        notes.append(f"the surrogate reaches only lambda {lam_lo:.3f}..{lam_hi:.3f} mm by {by} factors {lo:g}..{hi:g} "
-                     "(outside its training domain it is not to be trusted): the spectral engine searched instead")
-    if np.any(np.diff(v_grid) <= 0):
-        searcher = "surrogate" if engine == "surrogate" else "spectral engine"
-        notes.append(f"the {searcher}'s V does not rise monotonically with the {by} factor; the first crossing is used")
+def _search(problem: _Problem, target: Target) -> _Search:
+    """The surrogate over the factor range, or the spectral engine where the surrogate cannot reach the target."""
+    grid = np.geomspace(problem.lo, problem.hi, GRID)
+    values, _ = problem.surrogate(grid)
+    reachable = (float(values.min()), float(values.max()))
+    if reachable[0] <= target.roughness <= reachable[1]:
+        search = _Search("surrogate", grid, values, lambda factors: problem.surrogate(factors)[0], reachable)
+    else:
+        search = _spectral_fallback(problem, target, reachable)
+    if np.any(np.diff(search.values) <= 0):
+        searcher = "surrogate" if search.engine == "surrogate" else "spectral engine"
+        search.notes.append(f"the {searcher}'s V does not rise monotonically with the {problem.by} factor; the first "
+                            "crossing is used")
+    return search
 
-    def factor_for(v_wanted: float, bias: float) -> float:
-        """The factor where bias * search V = v_wanted: grid crossing, then bisection on the surrogate (the spectral
-        engine: interpolation between the grid's points, 1.4x apart; the verifier's answers correct the rest)."""
-        values = v_grid * bias
-        above = np.nonzero(values >= v_wanted)[0]
-        if len(above) == 0:
-            return hi
-        k = int(above[0])
-        if k == 0:
-            return lo
-        a, b = math.log(grid[k - 1]), math.log(grid[k])
-        if engine == "spectral":  # each evaluation up to a second: log V interpolated over log factor instead
-            va, vb = math.log(values[k - 1]), math.log(values[k])
-            return math.exp(a + (b - a) * (math.log(v_wanted) - va) / (vb - va)) if vb > va else math.exp(b)
-        for _ in range(12):  # bisection in log factor: 2^-12 of one grid step
-            mid = (a + b) / 2
-            if search([math.exp(mid)])[0] * bias >= v_wanted:
-                b = mid
-            else:
-                a = mid
-        return math.exp((a + b) / 2)
 
+def _spectral_fallback(problem: _Problem, target: Target, reachable: tuple[float, float]) -> _Search:
+    """The spectral engine's search over the factor range; InputError if it cannot reach the target there either."""
+    lo, hi = problem.lo, problem.hi
+    spectral = _spectral_search(problem.heightmap, problem.by, problem.evaluator, problem.tile)
+    wide = np.geomspace(lo / WIDEN, hi * WIDEN, SPECTRAL_GRID)
+    wide = np.concatenate([wide[wide < lo], [lo], wide[(wide > lo) & (wide < hi)], [hi], wide[wide > hi]])
+    inside = (wide >= lo) & (wide <= hi)
+    v_wide = np.full(len(wide), np.nan)
+    v_wide[inside] = spectral(wide[inside])
+    if not v_wide[inside].min() <= target.roughness <= v_wide[inside].max():
+        _refuse(problem, target, reachable, spectral, wide, v_wide)
+    lam_lo, lam_hi = problem.evaluator.lambda_of(reachable[0]), problem.evaluator.lambda_of(reachable[1])
+    note = (f"the surrogate reaches only lambda {lam_lo:.3f}..{lam_hi:.3f} mm by {problem.by} factors {lo:g}..{hi:g} "
+            "(outside its training domain it is not to be trusted): the spectral engine searched instead")
+    return _Search("spectral", wide[inside], v_wide[inside], spectral, reachable, [note])
+
+
+def _refuse(problem: _Problem, target: Target, reachable: tuple[float, float], spectral, wide: np.ndarray,
+            v_wide: np.ndarray) -> NoReturn:
+    """InputError for a target out of reach in the factor range (``v_wide``: the spectral V on ``wide``, NaN
+    outside the range): looks outwards, one factor at a time, for one that reaches it, to name in the message."""
+    inside = (wide >= problem.lo) & (wide <= problem.hi)
+    above = target.roughness > v_wide[inside].max()
+    outward = np.nonzero(wide > problem.hi)[0] if above else np.nonzero(wide < problem.lo)[0][::-1]
+    for i in outward:  # one factor at a time, outwards from the range, until one reaches the target
+        v_wide[i] = spectral(wide[i:i + 1])[0]
+        if (v_wide[i] >= target.roughness) == above:
+            break
+    seen = ~np.isnan(v_wide)
+    raise InputError(_out_of_reach(problem, target, reachable, wide[seen], v_wide[seen]), parameter=target.parameter)
+
+
+def _factor_for(problem: _Problem, search: _Search, v_wanted: float, bias: float) -> float:
+    """The factor where bias * search V = v_wanted: grid crossing, then bisection on the surrogate (the spectral
+    engine: interpolation between the grid's points, 1.4x apart; the verifier's answers correct the rest)."""
+    values = search.values * bias
+    above = np.nonzero(values >= v_wanted)[0]
+    if len(above) == 0:
+        return problem.hi
+    k = int(above[0])
+    if k == 0:
+        return problem.lo
+    a, b = math.log(search.grid[k - 1]), math.log(search.grid[k])
+    if search.engine == "spectral":  # each evaluation up to a second: log V interpolated over log factor instead
+        va, vb = math.log(values[k - 1]), math.log(values[k])
+        return math.exp(a + (b - a) * (math.log(v_wanted) - va) / (vb - va)) if vb > va else math.exp(b)
+    for _ in range(12):  # bisection in log factor: 2^-12 of one grid step
+        mid = (a + b) / 2
+        if search.evaluate([math.exp(mid)])[0] * bias >= v_wanted:
+            b = mid
+        else:
+            a = mid
+    return math.exp((a + b) / 2)
+
+
+def _verify(problem: _Problem, search: _Search, target: Target, tolerance_jnd: float, max_fem: int,
+            progress) -> tuple[list[Step], list[str]]:
+    """FEM verifications from the search's factor, corrected (``_next_factor``) until within ``tolerance_jnd`` or
+    ``max_fem`` runs; and a note if the factor can move no closer."""
     steps: list[Step] = []
-    factor = factor_for(target.roughness, 1.0)
+    factor = _factor_for(problem, search, target.roughness, 1.0)
     for _ in range(max_fem):
-        v_sur = float(surrogate([factor])[0][0])
-        v_search = v_sur if engine == "surrogate" else float(search([factor])[0])
-        fem = evaluator.verify(scaled(heightmap, by, factor), tile=tile)
-        error = jnd(fem.equivalent_lambda_mm, target.lambda_mm)
-        steps.append(Step(factor, v_sur, v_search, fem, error))
+        steps.append(_step(problem, search, target, factor))
         if progress:
-            progress(f"{evaluator.verifier} at {by} factor {factor:.4f}: V {fem.roughness:.4f} (surrogate {v_sur:.4f}"
-                     + (f", spectral {v_search:.4f}" if engine == "spectral" else "")
-                     + f"), {error:+.2f} JND from the target")
-        if abs(error) <= tolerance_jnd:
+            progress(_step_line(problem, search, steps[-1]))
+        if abs(steps[-1].jnd_error) <= tolerance_jnd:
             break
-        factor = _next_factor(steps, target, lo, hi, factor_for)
+        factor = _next_factor(problem, search, steps, target)
         if any(math.isclose(factor, s.factor, rel_tol=1e-6) for s in steps):
-            notes.append(f"the {by} factor cannot move closer to the target within {lo:g}..{hi:g}")
-            break
+            return steps, [f"the {problem.by} factor cannot move closer to the target within "
+                           f"{problem.lo:g}..{problem.hi:g}"]
+    return steps, []
+
+
+def _step(problem: _Problem, search: _Search, target: Target, factor: float) -> Step:
+    """One FEM verification at ``factor``, with the surrogate's and the search engine's V there."""
+    v_sur = float(problem.surrogate([factor])[0][0])
+    v_search = v_sur if search.engine == "surrogate" else float(search.evaluate([factor])[0])
+    fem = problem.evaluator.verify(problem.scaled(factor), tile=problem.tile)
+    return Step(factor, v_sur, v_search, fem, jnd(fem.equivalent_lambda_mm, target.lambda_mm))
+
+
+def _step_line(problem: _Problem, search: _Search, step: Step) -> str:
+    """The progress line of one FEM verification."""
+    return (f"{problem.evaluator.verifier} at {problem.by} factor {step.factor:.4f}: V {step.fem.roughness:.4f} "
+            f"(surrogate {step.surrogate_roughness:.4f}"
+            + (f", spectral {step.search_roughness:.4f}" if search.engine == "spectral" else "")
+            + f"), {step.jnd_error:+.2f} JND from the target")
+
+
+def _result(problem: _Problem, search: _Search, target: Target, steps: list[Step], tolerance_jnd: float,
+            notes: list[str]) -> TuneResult:
+    """The result at the FEM-verified factor closest to the target, with notes on how far to trust it."""
     best = min(steps, key=lambda s: abs(s.jnd_error))
-    se = best.fem.roughness_stderr / best.fem.roughness / evaluator.scale.power_law[1] / LOG_JND
+    se = best.fem.roughness_stderr / best.fem.roughness / problem.evaluator.scale.power_law[1] / LOG_JND
     if not best.fem.on_scale:
         notes.append("the achieved V lies off the standard scale: its equivalent lambda is extrapolated")
-    in_domain = bool(surrogate([best.factor])[1][0])
+    in_domain = bool(problem.surrogate([best.factor])[1][0])
     if not in_domain:
         notes.append("the scaled texture lies outside the surrogate's training domain (the FEM verified it)")
-    return TuneResult(scaled(heightmap, by, best.factor), by, best.factor, target, best.fem, best.surrogate_roughness,
-                      in_domain, best.jnd_error, se, tuple(steps), reachable, (lo, hi), tolerance_jnd, engine,
-                      tuple(notes))
+    return TuneResult(problem.scaled(best.factor), problem.by, best.factor, target, best.fem,
+                      best.surrogate_roughness, in_domain, best.jnd_error, se, tuple(steps), search.reachable,
+                      (problem.lo, problem.hi), tolerance_jnd, search.engine, tuple(notes))
 
 
-def _next_factor(steps: list[Step], target: Target, lo: float, hi: float, factor_for) -> float:
-    """A corrected factor: the surrogate's bias at the last step, or the secant through the two closest FEM answers."""
+def _next_factor(problem: _Problem, search: _Search, steps: list[Step], target: Target) -> float:
+    """A corrected factor: the search engine's bias at the last step, or the secant through the two closest FEM
+    answers."""
+    def biased(step: Step) -> float:
+        return _factor_for(problem, search, target.roughness, step.fem.roughness / step.search_roughness)
+
     if len(steps) == 1:
-        last = steps[0]
-        return factor_for(target.roughness, last.fem.roughness / last.search_roughness)
+        return biased(steps[0])
     a, b = sorted(steps, key=lambda s: abs(s.jnd_error))[:2]
     if math.isclose(a.factor, b.factor) or math.isclose(a.fem.roughness, b.fem.roughness):
-        return factor_for(target.roughness, a.fem.roughness / a.search_roughness)
+        return biased(a)
     slope = (math.log(a.fem.roughness) - math.log(b.fem.roughness)) / (math.log(a.factor) - math.log(b.factor))
-    if slope <= 0:  # not rising here: fall back on the surrogate's bias at the best step
-        return factor_for(target.roughness, a.fem.roughness / a.search_roughness)
+    if slope <= 0:  # not rising here: fall back on the search engine's bias at the best step
+        return biased(a)
     step = (math.log(target.roughness) - math.log(a.fem.roughness)) / slope
-    return float(np.clip(a.factor * math.exp(np.clip(step, -0.5, 0.5)), lo, hi))
+    return float(np.clip(a.factor * math.exp(np.clip(step, -0.5, 0.5)), problem.lo, problem.hi))
 
 
 def _spectral_search(heightmap: Heightmap, by: str, evaluator: Evaluator, tile: bool):
@@ -302,10 +388,11 @@ def _spectral_search(heightmap: Heightmap, by: str, evaluator: Evaluator, tile: 
     return search
 
 
-def _out_of_reach(target: Target, by: str, evaluator: Evaluator, factors: tuple[float, float],
-                  reachable: tuple[float, float], wide: np.ndarray, v_wide: np.ndarray) -> str:
+def _out_of_reach(problem: _Problem, target: Target, reachable: tuple[float, float], wide: np.ndarray,
+                  v_wide: np.ndarray) -> str:
     """Why the target is refused, and the factor that would reach it on the spectral engine, if any."""
-    (lo, hi), lams = factors, [evaluator.lambda_of(v) for v in reachable]
+    by, evaluator, lo, hi = problem.by, problem.evaluator, problem.lo, problem.hi
+    lams = [evaluator.lambda_of(v) for v in reachable]
     text = (f"target V {target.roughness:.4f} (equivalent lambda {target.lambda_mm:.3f} mm) is out of reach by {by} "
             f"factors {lo:g}..{hi:g}: this texture reaches V {reachable[0]:.4f}..{reachable[1]:.4f} (lambda "
             f"{lams[0]:.3f}..{lams[1]:.3f} mm) on the surrogate")

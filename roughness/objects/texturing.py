@@ -37,7 +37,7 @@ from .mapping import TextureMapping
 from .meshes import require_closed
 from .normals import face_normals, smoothed, vertex_normals
 from .regions import Region
-from .remesh import refine
+from .remesh import Refined, refine
 
 DEFAULT_NORMAL_RADIUS_MM = 0.0
 DEFAULT_BORDER_MM = 0.5
@@ -86,6 +86,29 @@ class TexturedMesh:
         return out
 
 
+@dataclass(frozen=True)
+class _Input:
+    """The checked input of texture_mesh: the mesh as arrays (mm), the faces to texture and the settings (mm)."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    selected: np.ndarray  # bool per face: the region's
+    edge_mm: float
+    normal_radius_mm: float
+    border_mm: float
+
+
+@dataclass(frozen=True)
+class _Relief:
+    """The displacement of the refined mesh: ``where`` (indices of the vertices of textured faces) move by
+    ``heights`` (mm, ramped at the border) along their normals; ``moving`` flags those vertices."""
+
+    moving: np.ndarray  # bool per vertex
+    where: np.ndarray
+    heights: np.ndarray
+    depth_mm: float  # the largest height
+
+
 def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_mm: float | None = None,
                  normal_radius_mm: float = DEFAULT_NORMAL_RADIUS_MM, check_intersections: bool = True,
                  progress: Callable[[str], object] | None = None,
@@ -100,6 +123,36 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     heights ramp from 0 on the region's border to full height over this distance (0: no ramp, the border moves).
     """
     clock = _Clock(progress)
+    given = _checked_input(mesh, mapping, region, edge_mm, normal_radius_mm, border_mm)
+    notes = _input_notes(given, mapping, region)
+    volume_in = signed_volume(given.vertices, given.faces)
+    refined = _refined(given, clock, notes)
+    normals, rounds = _normals(refined, given, clock, notes)
+    relief = _relief(refined, mapping, normals, given.border_mm, clock, notes)
+    concave = min_concave_radius(refined.vertices, refined.faces[refined.textured], normals)
+    clock.step("concave radius")
+    _require_shallower(concave, relief.depth_mm, notes)
+    displaced = refined.vertices.copy()
+    displaced[relief.where] += relief.heights[:, None] * normals[relief.where]
+    del normals
+    _check_displaced(refined, displaced, clock, notes)
+    tested = None
+    if check_intersections:
+        tested = _check_crossings(refined, displaced, relief, clock, notes)
+    else:
+        notes.append("self-intersection NOT checked (asked not to)")
+    import trimesh
+
+    area, volume = _area_and_volume(refined, relief)
+    return TexturedMesh(trimesh.Trimesh(displaced, refined.faces, process=False, validate=False), len(given.faces),
+                        len(refined.faces), int(given.selected.sum()), area, given.edge_mm, refined.rounds, rounds,
+                        relief.depth_mm, volume / area, volume, concave.radius_mm, volume_in,
+                        signed_volume(displaced, refined.faces), tested, notes, clock.seconds)
+
+
+def _checked_input(mesh, mapping: TextureMapping, region: Region, edge_mm: float | None, normal_radius_mm: float,
+                   border_mm: float) -> _Input:
+    """texture_mesh's input as arrays, checked (InputError naming the parameter at fault)."""
     require_closed(mesh, "the mesh")
     edge = positive("edge_mm", math.sqrt(2) * mapping.pixel_mm if edge_mm is None else edge_mm)
     radius = non_negative("normal_radius_mm", normal_radius_mm)
@@ -107,59 +160,81 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     selected = np.asarray(region.faces(mesh), dtype=bool)
     if not selected.any():
         raise InputError(f"the region ({region.describe()}) selects no face of the mesh", parameter="region")
-    notes = [f"textured region: {region.describe()}: {int(selected.sum()):,} of {len(mesh.faces):,} faces"]
+    return _Input(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64), selected, edge,
+                  radius, border)
+
+
+def _input_notes(given: _Input, mapping: TextureMapping, region: Region) -> list[str]:
+    """Notes on the input: the region, the mapping's own notes, and needle-shaped textured faces."""
+    notes = [f"textured region: {region.describe()}: {int(given.selected.sum()):,} of {len(given.faces):,} faces"]
     notes += list(getattr(mapping, "notes", lambda: [])())
-    base_vertices = np.asarray(mesh.vertices, dtype=float)
-    base_faces = np.asarray(mesh.faces, dtype=np.int64)
-    needles = needle_faces(base_vertices, base_faces[selected], edge)
+    needles = needle_faces(given.vertices, given.faces[given.selected], given.edge_mm)
     if needles:
         notes.append(f"{needles:,} textured faces of the input are needle-shaped (longer than {NEEDLE_ASPECT:g} times "
                      "their width): refining them leaves slivers, several times the triangles (and memory) a "
                      "well-shaped mesh needs; remeshing the input isotropically first (e.g. Blender's Remesh, "
                      "MeshLab's isotropic remeshing) avoids it")
-    volume_in = signed_volume(base_vertices, base_faces)
+    return notes
 
-    refined = refine(base_vertices, base_faces, selected, edge)
-    v, f, textured = refined.vertices, refined.faces, refined.textured
-    clock.step("check input, refine", f"{len(f):,} triangles")
-    notes.append(f"remeshed the textured faces to edges of at most {edge:.4g} mm ({refined.rounds} rounds of "
-                 f"edge splitting): {len(base_faces):,} -> {len(f):,} triangles; untextured faces kept except where "
-                 "they border textured ones")
 
-    normals = vertex_normals(v, f[textured])
-    normals, rounds = smoothed(normals, f[textured], radius, edge)
+def _refined(given: _Input, clock: _Clock, notes: list[str]) -> Refined:
+    """The textured faces refined to edges of at most ``edge_mm`` (step 1; noted in ``notes``)."""
+    refined = refine(given.vertices, given.faces, given.selected, given.edge_mm)
+    clock.step("check input, refine", f"{len(refined.faces):,} triangles")
+    notes.append(f"remeshed the textured faces to edges of at most {given.edge_mm:.4g} mm ({refined.rounds} rounds of "
+                 f"edge splitting): {len(given.faces):,} -> {len(refined.faces):,} triangles; untextured faces kept "
+                 "except where they border textured ones")
+    return refined
+
+
+def _normals(refined: Refined, given: _Input, clock: _Clock, notes: list[str]) -> tuple[np.ndarray, int]:
+    """Unit vertex normals of the textured faces, area-weighted and smoothed over ``normal_radius_mm`` (step 2), and
+    the smoothing rounds (noted in ``notes``)."""
+    textured = refined.faces[refined.textured]
+    normals = vertex_normals(refined.vertices, textured)
+    normals, rounds = smoothed(normals, textured, given.normal_radius_mm, given.edge_mm)
     notes.append("displaced along area-weighted vertex normals of the textured faces" +
-                 (f", smoothed over about {radius:g} mm ({rounds} rounds)" if rounds else ""))
+                 (f", smoothed over about {given.normal_radius_mm:g} mm ({rounds} rounds)" if rounds else ""))
+    clock.step("normals", f"{len(refined.vertices):,} vertices")
+    return normals, rounds
 
-    moving = np.zeros(len(v), dtype=bool)
-    moving[f[textured].ravel()] = True
+
+def _relief(refined: Refined, mapping: TextureMapping, normals: np.ndarray, border_mm: float, clock: _Clock,
+            notes: list[str]) -> _Relief:
+    """The mapping's heights (mm) at the vertices of textured faces, ramped over ``border_mm`` (step 3); InputError
+    if the mapping gives other than one finite height per vertex."""
+    moving = np.zeros(len(refined.vertices), dtype=bool)
+    moving[refined.faces[refined.textured].ravel()] = True
     where = np.flatnonzero(moving)
-    clock.step("normals", f"{len(v):,} vertices")
-    heights = np.asarray(mapping.heights(v[where], normals[where]), dtype=float)
+    heights = np.asarray(mapping.heights(refined.vertices[where], normals[where]), dtype=float)
     if heights.shape != (len(where),) or not np.all(np.isfinite(heights)):
         raise InputError("the mapping gave heights that are not finite numbers (one per point)", parameter="mapping")
-    ramped = border_ramp(v, f, textured, where, border)
+    ramped = border_ramp(refined.vertices, refined.faces, refined.textured, where, border_mm)
     if ramped is not None:
         heights *= ramped
-        notes.append(f"heights ramp from 0 on the region's border to full over {border:g} mm "
+        notes.append(f"heights ramp from 0 on the region's border to full over {border_mm:g} mm "
                      f"({int(np.count_nonzero(ramped < 1)):,} vertices within it)")
-    depth = float(heights.max())
     clock.step("heights", f"{len(where):,} vertices")
-    concave = min_concave_radius(v, f[textured], normals)
-    clock.step("concave radius")
-    if concave.radius_mm < depth:
+    return _Relief(moving, where, heights, float(heights.max()))
+
+
+def _require_shallower(concave: Concave, depth_mm: float, notes: list[str]) -> None:
+    """InputError if the texture is deeper than the surface's smallest concave radius (step 4; noted in ``notes``)."""
+    if concave.radius_mm < depth_mm:
         x, y, z = concave.where
-        raise InputError(f"the texture is {depth:.3g} mm deep but the surface is concave with a radius of "
+        raise InputError(f"the texture is {depth_mm:.3g} mm deep but the surface is concave with a radius of "
                          f"{concave.radius_mm:.3g} mm near ({x:.2f}, {y:.2f}, {z:.2f}) mm: displaced along its normals "
                          "it would fold into itself; use a shallower texture (--height-mm), smooth the normals over a "
                          "larger radius (--normal-radius-mm), or leave that part out of the region", parameter="mapping")
     if math.isfinite(concave.radius_mm):
         notes.append(f"smallest concave radius of the textured surface {concave.radius_mm:.3g} mm, above the "
-                     f"texture's depth {depth:.3g} mm")
+                     f"texture's depth {depth_mm:.3g} mm")
 
-    displaced = v.copy()
-    displaced[where] += heights[:, None] * normals[where]
-    del normals
+
+def _check_displaced(refined: Refined, displaced: np.ndarray, clock: _Clock, notes: list[str]) -> None:
+    """InputError if displacing turned a face over; RuntimeError unless the result is closed and consistently wound
+    (step 5; noted in ``notes``)."""
+    v, f = refined.vertices, refined.faces
     folded = np.concatenate([folded_faces(face_normals(v, f[s:s + CHUNK]), displaced, f[s:s + CHUNK])
                              for s in range(0, len(f), CHUNK)])
     if folded.any():
@@ -171,31 +246,23 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     check_closed(f)
     clock.step("displace, turned-face and closed checks")
     notes.append("checked: closed, consistently wound, no face turned over")
-    tested = None
-    if check_intersections:
-        moved_faces = moving[f].any(axis=1)
-        crossing = self_intersections(displaced, f, moved_faces)
-        if crossing.count:
-            x, y, z = displaced[f[crossing.pairs[0, 0]]].mean(axis=0)
-            raise InputError(f"the textured mesh crosses itself: {crossing.count:,} pairs of faces intersect (first "
-                             f"near ({x:.2f}, {y:.2f}, {z:.2f}) mm): the texture is too deep where parts of the object "
-                             "are close; use a shallower texture or leave that part out of the region",
-                             parameter="mapping")
-        tested = crossing.tested
-        clock.step("self-intersection check", f"{tested:,} pairs")
-        notes.append(f"checked: no two faces cross ({tested:,} pairs of faces with overlapping boxes tested exactly)")
-    else:
-        notes.append("self-intersection NOT checked (asked not to)")
 
-    import trimesh
 
-    out = trimesh.Trimesh(displaced, f, process=False, validate=False)
-    at_vertex = np.zeros(len(v))
-    at_vertex[where] = heights
-    area, volume = _area_and_volume(v, f[textured], at_vertex)
-    return TexturedMesh(out, len(base_faces), len(f), int(selected.sum()), area, edge, refined.rounds, rounds, depth,
-                        volume / area, volume, concave.radius_mm, volume_in, signed_volume(displaced, f), tested, notes,
-                        clock.seconds)
+def _check_crossings(refined: Refined, displaced: np.ndarray, relief: _Relief, clock: _Clock,
+                     notes: list[str]) -> int:
+    """InputError if two faces of the result cross (step 5); the pairs of faces tested (noted in ``notes``)."""
+    f = refined.faces
+    crossing = self_intersections(displaced, f, relief.moving[f].any(axis=1))
+    if crossing.count:
+        x, y, z = displaced[f[crossing.pairs[0, 0]]].mean(axis=0)
+        raise InputError(f"the textured mesh crosses itself: {crossing.count:,} pairs of faces intersect (first "
+                         f"near ({x:.2f}, {y:.2f}, {z:.2f}) mm): the texture is too deep where parts of the object "
+                         "are close; use a shallower texture or leave that part out of the region",
+                         parameter="mapping")
+    clock.step("self-intersection check", f"{crossing.tested:,} pairs")
+    notes.append(f"checked: no two faces cross ({crossing.tested:,} pairs of faces with overlapping boxes tested "
+                 "exactly)")
+    return crossing.tested
 
 
 def needle_faces(vertices: np.ndarray, faces: np.ndarray, edge_mm: float) -> int:
@@ -294,12 +361,15 @@ def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
     return total
 
 
-def _area_and_volume(vertices: np.ndarray, faces: np.ndarray, heights: np.ndarray) -> tuple[float, float]:
-    """Area (mm^2) of the base faces and the integral (mm^3) over them of the heights, linear on each face."""
+def _area_and_volume(refined: Refined, relief: _Relief) -> tuple[float, float]:
+    """Area (mm^2) of the textured base faces and the integral (mm^3) over them of the heights, linear on each face."""
+    heights = np.zeros(len(refined.vertices))
+    heights[relief.where] = relief.heights
+    faces = refined.faces[refined.textured]
     area = volume = 0.0
     for s in range(0, len(faces), CHUNK):
         f = faces[s:s + CHUNK]
-        a = 0.5 * np.linalg.norm(face_normals(vertices, f, unit=False), axis=1)
+        a = 0.5 * np.linalg.norm(face_normals(refined.vertices, f, unit=False), axis=1)
         area += float(a.sum())
         volume += float((a * heights[f].mean(axis=1)).sum())
     return area, volume
