@@ -245,20 +245,23 @@ def error_message(err: InputError, flags: dict[str, str]) -> str:
     if isinstance(err, OutputExists):
         return f"{err.path} already exists; pass --overwrite to replace it"
     flag = flags.get(err.parameter or "")
-    message = in_flags(str(err), flags)
+    message = in_flags(str(err), flags, [err.parameter] if err.parameter else [])
     return f"{flag}: {message}" if flag and flag not in message else message
 
 
-def in_flags(text: str, flags: dict[str, str]) -> str:
-    """``text`` with the library's Python names of parameters as the command's flags: ``fill=True`` as ``--fill``,
-    ``max_factor=2.5`` or ``engine='fem'`` as ``--max-factor 2.5``, ``--engine fem``, and a name with an underscore
-    (``pixel_mm``) as ``--pixel-mm``."""
+def in_flags(text: str, flags: dict[str, str], names: list[str] | None = None) -> str:
+    """``text`` with the library's Python names of parameters as the command's flags: a call's keywords anywhere
+    (``fill=True`` as ``--fill``, ``max_factor=2.5`` or ``engine='fem'`` as ``--max-factor 2.5``, ``--engine fem``),
+    and bare ``names`` with an underscore (``pixel_mm`` as ``--pixel-mm``; default: every flag's name). An error
+    converts only its own parameter's: other words may name other things, as ``height_mm`` in ``--param
+    height_mm=2``."""
+    before, after = r"(?<![\w.-])", r"(?![\w-])"
     for name, flag in flags.items():
-        before, after = r"(?<![\w.-])", r"(?![\w-])"
         text = re.sub(rf"{before}{re.escape(name)}=True{after}", flag, text)
         text = re.sub(rf"{before}{re.escape(name)}=(['\"]?)([\w.+-]+)\1", lambda m: f"{flag} {m.group(2)}", text)
-        if "_" in name:
-            text = re.sub(rf"{before}{re.escape(name)}{after}", flag, text)
+    for name in flags if names is None else names:
+        if "_" in name and name in flags:
+            text = re.sub(rf"{before}{re.escape(name)}{after}", flags[name], text)
     return text
 
 

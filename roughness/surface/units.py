@@ -87,7 +87,7 @@ def check_units(hm: Heightmap, source: str, units_ok: bool = False) -> Plausibil
             f"{source}: {'; '.join(what for what, _ in problems)}: implausible for a touchable texture in mm "
             f"(the bounds lie 10 times beyond the product's textures; see roughness.surface.units). It looks like "
             f"{likely}: convert the file to mm (metres x 1000, micrometres / 1000; a pixel size can be given as "
-            f"pixel_mm or FILE:pixel-mm=MM), or pass {CONFIRM} if the numbers really are mm", parameter=CONFIRM)
+            f"pixel_mm=MM or FILE:pixel-mm=MM), or pass {CONFIRM} if the numbers really are mm", parameter=CONFIRM)
     return found
 
 
