@@ -7,6 +7,7 @@ The table ``roughness.curvature_correction`` reads (the flat V's measured correc
 """
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 
@@ -33,6 +34,12 @@ def write_table(root: Path, path: Path = TABLE_PATH) -> dict:
     return data
 
 
-if __name__ == "__main__":
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.parse_args(argv)
     write_table(Path(__file__).resolve().parents[1])
     print(f"wrote {TABLE_PATH}")
+
+
+if __name__ == "__main__":
+    main()
