@@ -1,13 +1,13 @@
 """How the shipped surrogate does on new textures of the engineered and composite families.
 
-Draws ``--per-family`` textures of each family of dataset/engineered.py from the training-v2 recipe
+Draws ``--per-family`` textures of each family of roughness/dataset/engineered.py from the training-v2 recipe
 (datasets/training-v2.json, with its perturbations), from sample ``--start`` on (default 6000: past the
 6,000 samples the v2 model was trained on, so none of them was seen; ``waffle`` was held out
 entirely), runs the FEM at the model's label fidelity and
 the surrogate on each, and reports per family the median and worst relative error, the Spearman
 correlation and how many inputs the surrogate flags as out of domain.
 
-    python benchmarks/surrogate_new_families.py [--per-family 8] [--model models/roughness-cnn.onnx]
+    python benchmarks/surrogate_new_families.py [--per-family 8] [--model roughness/models/roughness-cnn.onnx]
     # writes benchmarks/results/surrogate_new_families.{md,json}
 """
 from __future__ import annotations
@@ -30,8 +30,8 @@ def parse_args() -> argparse.Namespace:
     parser.add_argument("--per-family", type=int, default=8, help="textures per family (default: 8)")
     parser.add_argument("--start", type=int, default=6000,
                         help="first recipe sample to draw from (default: 6000, past the v2 training set)")
-    parser.add_argument("--model", default=str(ROOT / "models" / "roughness-cnn.onnx"),
-                        help="ONNX model (default: models/roughness-cnn.onnx)")
+    parser.add_argument("--model", default=str(ROOT / "roughness" / "models" / "roughness-cnn.onnx"),
+                        help="ONNX model (default: roughness/models/roughness-cnn.onnx)")
     return parser.parse_args()
 
 
@@ -75,7 +75,7 @@ def main() -> None:
     (OUT / "surrogate_new_families.json").write_text(json.dumps({"model": Path(args.model).name,
                                                                  "fidelity": model.fidelity, "samples": rows},
                                                                 indent=1))
-    lines = ["| family | n | Spearman | median surrogate/FEM | median rel. error | worst rel. error | flagged |",
+    lines = ["| family | n | Spearman | median roughness/surrogate/FEM | median rel. error | worst rel. error | flagged |",
              "|---|---|---|---|---|---|---|"]
     lines += [f"| {f} | {n} | {rho:.2f} | {ratio:.2f} | {100 * med:.0f}% | {100 * worst:.0f}% | {flag} |"
               for f, n, rho, ratio, med, worst, flag in table]

@@ -25,7 +25,6 @@ Subpackages: ``roughness.simulate`` (FEM), ``roughness.dataset`` (textures, HDF5
 from __future__ import annotations
 
 from importlib import import_module
-from pathlib import Path
 
 TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (type checkers take this name as True)
 if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load on first use (``__getattr__``)
@@ -45,13 +44,6 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load
     from roughness.surface.io import load_heightmap, save_heightmap
 
     __version__: str
-
-_SOURCE_ROOT = Path(__file__).resolve().parents[1]
-if (_SOURCE_ROOT / "pyproject.toml").is_file() and (_SOURCE_ROOT / "simulate" / "__init__.py").is_file():
-    # Running from a checkout: the top-level folders simulate/, dataset/, surrogate/ and models/
-    # are this package's subpackages (pyproject.toml maps them the same way when installing),
-    # so code and tests run in a checkout always import the checkout, never an installed copy.
-    __path__.append(str(_SOURCE_ROOT))  # noqa: F821 (package __path__)
 
 _HOMES = {
     "Heightmap": "roughness.surface.heightmap",

@@ -3,7 +3,7 @@
 ``studies/curvature.py`` measured, with the FEM, V of the standard textures (lambda 0.75, 1.0, 1.25 mm,
 3 realisations each, heights along the normal) on cylinders and spheres of radius 3 to 40 mm, convex and
 concave, against the same textures flat. Its tables (``studies/results/curvature_default.json`` for
-cylinders, ``curvature_sphere.json`` for spheres) are condensed into ``models/curvature_correction.json``
+cylinders, ``curvature_sphere.json`` for spheres) are condensed into ``roughness/models/curvature_correction.json``
 (``python studies/curvature_correction.py`` rewrites it): per base and signed curvature 1/R (1/mm, convex
 positive) the relative difference of V, mean over the textures, and its error, the largest distance of any
 texture's or realisation's measured difference (min and max over realisations) from that mean.

@@ -4,7 +4,7 @@ Engines: ``surrogate`` (milliseconds), ``spectral`` (the skin as an infinite lay
 milliseconds, ``roughness.simulate.spectral``), ``fem`` (the reference; seconds) and ``auto`` (the
 surrogate; for inputs outside the model's domain and, with an ensemble model, for inputs whose
 relative spread roughness_std / (V + 0.001) exceeds ``max_std`` (by default the threshold measured
-when the ensemble was exported, see surrogate/ensemble.py), the spectral engine on a flat base where
+when the ensemble was exported, see roughness/surrogate/ensemble.py), the spectral engine on a flat base where
 its contact fraction is at least ``SPECTRAL_MIN_CONTACT``, else the FEM). The FEM runs with the
 model's simulation parameters at the fidelity of its training labels unless told otherwise (a given
 ``fidelity`` also makes ``auto`` skip the spectral rung); each answer is placed on the standard scale
@@ -95,7 +95,7 @@ class CurvatureRange:
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> CurvatureRange:
-        """The range in ``path`` (default: the shipped ``models/curvature_range.json``)."""
+        """The range in ``path`` (default: the shipped ``roughness/models/curvature_range.json``)."""
         import json
 
         path = Path(path or CURVATURE_RANGE_PATH)
@@ -383,5 +383,5 @@ def uncertainty_limit(model: SurrogateModel, max_std: float | None) -> float | N
     positive("max_std", max_std)
     if not model.has_std:
         raise InputError(f"{model.path.name} is a single network without an uncertainty; max_std needs an "
-                         "ensemble model (surrogate/ensemble.py)", parameter="max_std")
+                         "ensemble model (roughness/surrogate/ensemble.py)", parameter="max_std")
     return float(max_std)

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -174,7 +175,7 @@ def test_shipped_curvature_range_comes_from_the_committed_study():
     data = json.loads(CURVATURE_RANGE_PATH.read_text())
     assert "cylinder" in data["bases"]
     for base, entry in data["bases"].items():
-        results = CURVATURE_RANGE_PATH.parents[1] / entry["provenance"]["results"]
+        results = Path(__file__).resolve().parents[1] / entry["provenance"]["results"]
         assert file_sha256(results) == entry["provenance"]["results_sha256"], base
         study = json.loads(results.read_text())
         assert study["base"] == base and study["tolerance"] == data["tolerance"]

@@ -21,12 +21,6 @@ LAYERS = [
     ("roughness.design", "roughness.perception", "roughness.objects"),
     ("roughness.cli",),
 ]
-# the package's folders: roughness/ and the subpackages kept at the top of a checkout
-FOLDERS = {"roughness": ROOT / "roughness", "roughness.simulate": ROOT / "simulate",
-           "roughness.dataset": ROOT / "dataset", "roughness.surrogate": ROOT / "surrogate",
-           "roughness.models": ROOT / "models"}
-
-
 def layer_of(module: str) -> int | None:
     """The layer of a roughness module (None: the package's lazy front door, or not ours)."""
     for level, prefixes in enumerate(LAYERS):
@@ -37,15 +31,8 @@ def layer_of(module: str) -> int | None:
 
 def modules() -> dict[str, Path]:
     """Every module of the package by its dotted name."""
-    found = {}
-    for package, folder in FOLDERS.items():
-        for path in folder.rglob("*.py"):
-            parts = path.relative_to(folder).with_suffix("").parts
-            if path.parent == ROOT / "roughness" and package == "roughness" and parts[0] in FOLDERS:
-                continue
-            name = ".".join((package, *parts)).removesuffix(".__init__")
-            found.setdefault(name, path)
-    return found
+    return {".".join(path.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__"): path
+            for path in (ROOT / "roughness").rglob("*.py")}
 
 
 def imports(module: str, path: Path) -> set[str]:

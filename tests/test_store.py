@@ -296,17 +296,6 @@ def test_version_1_files_are_read_and_converted_by_the_next_writer(tmp_path):
     assert inputs_sha256(new) == checksum  # ids, texture records and heightmaps read alike from both layouts
 
 
-def test_the_dataset_layer_imports_no_upper_layer():
-    import ast
-
-    upper = ("roughness.cli", "roughness.surrogate", "roughness.compare", "roughness.engines", "roughness.report")
-    for source in (ROOT / "dataset").glob("*.py"):
-        for node in ast.walk(ast.parse(source.read_text())):
-            names = [a.name for a in node.names] if isinstance(node, ast.Import) else \
-                [node.module or ""] if isinstance(node, ast.ImportFrom) else []
-            assert not [n for n in names if n.startswith(upper)], f"{source.name} imports {names}"
-
-
 def values_of(sid: str) -> float:
     return next(fields(i)["roughness"] for i in range(N) if sample_id(texture_record(i)) == sid)
 

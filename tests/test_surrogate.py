@@ -373,7 +373,7 @@ def test_shipped_model_matches_its_card_and_data():
     subset, whose checksums are committed, and its card names both."""
     assert DEFAULT_MODEL.stat().st_size < 5e6
     meta = SurrogateModel().meta
-    card = (ROOT / "models" / "MODEL_CARD.md").read_text()
+    card = (ROOT / "roughness" / "models" / "MODEL_CARD.md").read_text()
     default, fine = (json.loads((ROOT / "datasets" / f"training-v2-{f}.sha256.json").read_text())
                      for f in ("default", "fine"))
     assert meta.data["inputs_sha256"] == default["inputs_sha256"] and default["inputs_sha256"] in card

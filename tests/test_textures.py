@@ -144,7 +144,7 @@ def test_bad_names_and_lambdas_raise_input_error():
         nearest_neighbour_spacing(np.zeros((1, 2)))
 
 
-# Engineered and composite families (dataset/engineered.py), registered in dataset/families.py.
+# Engineered and composite families (roughness/dataset/engineered.py), registered in roughness/dataset/families.py.
 
 ENGINEERED = sorted(engineered.FAMILIES)
 SMALL = {"size_mm": 8.0, "pixel_mm": 0.05}

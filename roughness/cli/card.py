@@ -1,5 +1,5 @@
 """`roughness card RUN MODEL --card CARD.md --plots FOLDER`: the model card and accuracy plots of an exported
-surrogate, from its training run (surrogate/card.py)."""
+surrogate, from its training run (roughness/surrogate/card.py)."""
 from __future__ import annotations
 
 import argparse

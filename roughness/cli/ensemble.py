@@ -1,5 +1,5 @@
 """`roughness ensemble CHECKPOINT... --out MODEL.onnx`: trained members as one ONNX graph that returns their mean
-and spread (surrogate/ensemble.py; needs torch)."""
+and spread (roughness/surrogate/ensemble.py; needs torch)."""
 from __future__ import annotations
 
 import argparse
@@ -19,7 +19,7 @@ def add_parser(sub) -> None:
                    help="the members' training dataset (.h5; a multi-fidelity model's files in training order): "
                         "calibrate the spread on its validation split and report it on the test split (default: not "
                         "calibrated)")
-    p.add_argument("--int8", metavar="FILE", help="also write the int8 graph of the ensemble (surrogate/quantize.py; "
+    p.add_argument("--int8", metavar="FILE", help="also write the int8 graph of the ensemble (roughness/surrogate/quantize.py; "
                                                   "nothing is written if it strays from fp32 beyond its limits) "
                                                   "(default: none); refused if it exists unless --overwrite")
     p.add_argument("--model-version", type=COUNT, default=1,

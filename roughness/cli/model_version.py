@@ -1,5 +1,5 @@
 """`roughness model-version MODEL... --version N`: stamp exported surrogates with a model version in place
-(surrogate/versioning.py)."""
+(roughness/surrogate/versioning.py)."""
 from __future__ import annotations
 
 import argparse

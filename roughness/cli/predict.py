@@ -45,7 +45,7 @@ def add_parser(sub) -> None:
     pr.add_argument("inputs", nargs="+", metavar="HEIGHTMAP",
                     help="heightmap files, folders of them, or roughness dataset files (.h5); "
                          "FILE:pixel-mm=MM,height-mm=MM gives a file (or every file of a folder) its own units")
-    pr.add_argument("--model", help="ONNX surrogate (default: the shipped models/roughness-cnn.onnx)")
+    pr.add_argument("--model", help="ONNX surrogate (default: the shipped roughness/models/roughness-cnn.onnx)")
     pr.add_argument("--engine", choices=PREDICT_ENGINES, default=given["engine"],
                     help=f"surrogate (ms), spectral (the skin as an infinite layer: tens of ms, no mesh), fem "
                          f"(seconds), or auto: the surrogate, FEM for inputs outside its domain "

@@ -134,7 +134,7 @@ def export_ensemble(checkpoints: list[str | Path], out: str | Path,
                     model_version: int = 1) -> dict:
     """Write the ensemble graph (checked against PyTorch) and return what was measured; see the module docstring.
 
-    ``model_version``: the ONNX ``model_version`` field (surrogate/versioning.py)."""
+    ``model_version``: the ONNX ``model_version`` field (roughness/surrogate/versioning.py)."""
     out = check_output(out, overwrite, "out")
     integer("model_version", model_version, minimum=1)
     members, metas = load_members(checkpoints)

@@ -2,7 +2,7 @@
 # Trains the Surrogate v2 ensemble (issue 12) on the datasets of datasets/build-v2.sh and exports it
 # with its int8 graph and model card into RUNS (the shipped files are copied from there by hand):
 #
-#   bash models/train-v2.sh DATA RUNS
+#   bash training/train-v2.sh DATA RUNS
 #
 # DATA holds training-v2-default.h5 and training-v2-fine.h5. Members are trained one after another
 # (2 torch threads each; MEMBERS, MINUTES, WIDTHS and HIDDEN override the defaults below); a member

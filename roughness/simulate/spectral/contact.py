@@ -20,7 +20,7 @@ from .modes import EVEN, Modes
 GAP_TOLERANCE = 1e-6  # relative to the texture's height range: largest penetration, mismatch and stick slip
 TENSION_TOLERANCE = 1e-3  # relative to the mean pressure: largest tension of a touching pixel
 SETTLE_TOLERANCE = 1e-4  # relative to the height range: the rounds' solves until the contact set holds
-LOOSE_TENSION_TOLERANCE = 1e-2  # the FEM's (simulate/contact.py TENSION_TOL): taken if the contact set cycles
+LOOSE_TENSION_TOLERANCE = 1e-2  # the FEM's (roughness/simulate/contact.py TENSION_TOL): taken if the contact set cycles
 MAX_ITERATIONS = 500  # conjugate-gradient iterations per solve
 MAX_ROUNDS = 50  # active-set rounds (stick)
 

@@ -2,7 +2,7 @@
 
 The contact conditions on every contact-face node, with gap g = u_z - H (mm) and nodal contact
 pressure p (MPa, compressive positive) from the nodal z reactions r (``ContactFace.pressure``:
-r / area with P1; with P2 the pressure in a modified quadratic basis, simulate/face.py):
+r / area with P1; with P2 the pressure in a modified quadratic basis, roughness/simulate/face.py):
 
     no penetration  g >= -GAP_TOL_MM
     no tension      p >= -tension_tol, tension_tol = TENSION_TOL x (force / face area)

@@ -5,7 +5,7 @@
 Reads the model's metadata, the run's ``predictions.csv`` and ``history.csv`` and, if given, the
 latency benchmark's JSON (used only if it timed this model); writes the card and
 ``surrogate_accuracy.png`` / ``surrogate_training.png`` into the plots folder. The shipped card:
-``roughness card runs/cnn models/roughness-cnn.onnx --card models/MODEL_CARD.md --plots benchmarks/results
+``roughness card runs/cnn roughness/models/roughness-cnn.onnx --card roughness/models/MODEL_CARD.md --plots benchmarks/results
 --latency benchmarks/results/surrogate_latency.json --overwrite``.
 """
 from __future__ import annotations
@@ -109,7 +109,7 @@ def int8_section(model_path: Path, meta: ModelMetadata, latency: dict | None) ->
 ### int8 variant
 `{path.name}` ({path.stat().st_size / 1e6:.2f} MB): static QDQ quantisation, per-channel 7-bit weights, the first
 convolution and the dense head kept in fp32, activation ranges from the 0.001..99.999th percentiles over
-{report['calibration_inputs']} recipe textures (`roughness export ... --int8 FILE`; why: surrogate/quantize.py).
+{report['calibration_inputs']} recipe textures (`roughness export ... --int8 FILE`; why: roughness/surrogate/quantize.py).
 Its V differs from this model's by {100 * report['standard_median_rel_diff_vs_fp32']:.1f}% (median),
 {100 * report['standard_max_rel_diff_vs_fp32']:.1f}% at most on the 13 standard textures, and by
 {100 * report['check_median_rel_diff_vs_fp32']:.1f}% (median), {100 * report['check_p95_rel_diff_vs_fp32']:.1f}% (p95),

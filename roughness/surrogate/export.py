@@ -93,7 +93,7 @@ def export(checkpoint_path: str | Path, out: str | Path, patches: np.ndarray | N
            overwrite: bool = False, model_version: int = 1) -> dict:
     """Write the ONNX model to ``out`` after checking it; returns the check's numbers.
 
-    ``model_version`` (a whole number >= 1) goes into the ONNX ``model_version`` field (surrogate/versioning.py).
+    ``model_version`` (a whole number >= 1) goes into the ONNX ``model_version`` field (roughness/surrogate/versioning.py).
 
     ``out`` must not exist unless ``overwrite``; it is written whole or not at all.
     """

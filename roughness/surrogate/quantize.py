@@ -2,7 +2,7 @@
 
 Static QDQ keeps standard Conv nodes between QuantizeLinear/DequantizeLinear pairs, which the CPU
 runtime fuses into int8 kernels (dynamic quantisation would make ConvInteger, which it may refuse).
-Three choices, each measured (models/MODEL_CARD.md, int8 variant):
+Three choices, each measured (roughness/models/MODEL_CARD.md, int8 variant):
 
 - 7-bit weights (``reduce_range``). On x86-64 CPUs with AVX2 but without VNNI the runtime's u8 x s8
   kernels add pairs of products in int16 (VPMADDUBSW), which saturates for full-range weights: the

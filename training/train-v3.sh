@@ -2,7 +2,7 @@
 # Trains the Surrogate v3 ensemble (issue 29) on the datasets of datasets/build-v3.sh and exports it
 # with its int8 graph and model card into RUNS (the shipped files are copied from there by hand):
 #
-#   bash models/train-v3.sh DATA RUNS
+#   bash training/train-v3.sh DATA RUNS
 #
 # DATA holds training-v3.h5 and training-v3-printed.h5 (110,000 spectral labels) and training-v2-default.h5,
 # training-v2-fine.h5 (FEM labels): datasets/build-v3.sh. Members are trained one after another (2 torch

@@ -2,7 +2,7 @@
 lattices, sparse isolated features on flat ground, multi-scale and low-relief surfaces, and mixtures.
 
 They widen what the surrogate is trained on beyond the paper's bumps and the natural-like families
-(dataset/natural.py), whose conventions they share: ``family(size_mm=12.0, pixel_mm=0.05, seed=0,
+(roughness/dataset/natural.py), whose conventions they share: ``family(size_mm=12.0, pixel_mm=0.05, seed=0,
 **params) -> Heightmap``, heights from 0 up to at most ``height_mm`` (``multiscale``: the waviness'
 peak-to-valley plus the fine roughness; ``shallow``: ``relief_mm``), parameters checked against
 PARAMETER_RANGES (inclusive numeric (low, high), or the choices), which is also the range a dataset

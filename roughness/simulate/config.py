@@ -13,7 +13,7 @@ from .discretization import LADDER_MM
 from .mesh import MeshSpec
 
 # Contact-face spacing (mm) per fidelity; ``auto`` picks from this ladder; ``converged`` refines
-# (simulate/converged.py) until V's estimated discretization error is below ``tolerance``.
+# (roughness/simulate/converged.py) until V's estimated discretization error is below ``tolerance``.
 FIDELITY_SPACING_MM = {"coarse": 0.3, "default": 0.2, "fine": 0.14}
 FIDELITIES = ("coarse", "default", "fine", "auto", "converged")
 CONTACT_MODES = ("stick", "frictionless")

@@ -12,7 +12,7 @@ to the FEM's (contact fraction median -0.5 points instead of -3.0 on the validat
 
 The tensor is the FEM's strain at the receptor depth, and the pressure its contact pressure, averaged
 over the central 1 mm x 1 mm, at `fine`; standard configurations ship in
-``models/spectral_flat_state.json`` (regenerate: ``python -m roughness.simulate.spectral.flat_state``),
+``roughness/models/spectral_flat_state.json`` (regenerate: ``python -m roughness.simulate.spectral.flat_state``),
 others are computed once per process (seconds).
 """
 from __future__ import annotations

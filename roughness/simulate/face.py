@@ -1,6 +1,6 @@
 """The contact face: its triangles, nodal areas, and the nodal contact pressure.
 
-The contact conditions are imposed node by node (simulate/contact.py), so the nodal z
+The contact conditions are imposed node by node (roughness/simulate/contact.py), so the nodal z
 reactions r are their multipliers. With P1 the pressure is r / area (lumped nodal areas).
 With P2 a uniform pressure p puts no consistent force on triangle corners (r = 0 there, and
 r < 0 at the edge of a contact where p falls), so the pressure is judged in a modified quadratic
