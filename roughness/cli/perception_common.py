@@ -3,6 +3,7 @@ folder and the limit on trials."""
 from __future__ import annotations
 
 import argparse
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -10,6 +11,8 @@ from .common import SEED, Number
 
 if TYPE_CHECKING:
     import numpy as np
+
+    from roughness.perception.observer import Observer
 
 NON_NEGATIVE = Number(float, low=0)
 PROBABILITY = Number(float, low=0, high=1)
@@ -43,6 +46,30 @@ def add_observer_args(p: argparse.ArgumentParser, seed_of: str, outputs: str) ->
                    help="the observer's lapse rate: the probability of a random answer (default 0)")
     p.add_argument("--seed", type=SEED, default=0, help=f"seed of {seed_of} (default: %(default)s)")
     p.add_argument("--out", required=True, metavar="DIR", help=f"output folder: {outputs}")
+
+
+@dataclass(frozen=True)
+class ObserverRun:
+    """What a simulated observer's command reads first: the stimuli, the observer, the truth if given, the outputs."""
+
+    stimuli: list
+    ids: list[str]
+    observer: Observer
+    truth: np.ndarray | None  # V per stimulus from --truth (None: from the engine)
+    files: dict[str, Path]
+
+
+def observer_run(args: argparse.Namespace, outputs: tuple[str, ...]) -> ObserverRun:
+    """The stimuli, the simulated observer (``add_observer_args``), the truth and the output files, checked."""
+    from roughness.perception.observer import DEFAULT_SIGMA, Observer
+    from roughness.perception.stimuli import read_stimuli
+
+    stimuli = read_stimuli(args.stimuli)
+    ids = [s.stimulus for s in stimuli]
+    observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
+    truth = read_truth(args.truth, ids) if args.truth else None
+    files = output_files(args.out, outputs, args.overwrite, {"--stimuli": args.stimuli, "--truth": args.truth})
+    return ObserverRun(stimuli, ids, observer, truth, files)
 
 
 def output_files(folder: str, names: tuple[str, ...], overwrite: bool, inputs: dict) -> dict[str, Path]:

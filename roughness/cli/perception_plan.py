@@ -11,8 +11,7 @@ from .perception_common import (
     add_truth_args,
     made,
     number_list,
-    output_files,
-    read_truth,
+    observer_run,
 )
 
 count_list = number_list(COUNT, "whole numbers >= 1")  # 500,1000,2000
@@ -42,20 +41,14 @@ def run_plan(args: argparse.Namespace) -> int:
     from roughness.core.limits import MAX_TRIALS, check_size
     from roughness.perception.analysis import write_json
     from roughness.perception.embed import require_cvxpy
-    from roughness.perception.observer import DEFAULT_SIGMA, Observer
     from roughness.perception.parallel import stderr_progress
     from roughness.perception.plan import plan_trials
-    from roughness.perception.stimuli import read_stimuli
     from roughness.perception.values import stimulus_values
 
     check_size("trials of one simulated experiment", max(args.trials), MAX_TRIALS, "trials")
     require_cvxpy()
-    stimuli = read_stimuli(args.stimuli)
-    ids = [s.stimulus for s in stimuli]
-    observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
-    v = read_truth(args.truth, ids) if args.truth else None
-    files = output_files(args.out, ("plan.csv", "plan.json"), args.overwrite,
-                         {"--stimuli": args.stimuli, "--truth": args.truth})
+    run = observer_run(args, ("plan.csv", "plan.json"))
+    stimuli, ids, observer, v, files = run.stimuli, run.ids, run.observer, run.truth, run.files
     if v is None:
         cache = Path(args.cache) if args.cache else Path(args.out) / "fem-cache"
         log(args, f"true V of {len(ids)} stimuli with {args.engine} ...")

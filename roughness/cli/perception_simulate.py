@@ -11,8 +11,7 @@ from .perception_common import (
     add_truth_args,
     check_trials,
     made,
-    output_files,
-    read_truth,
+    observer_run,
 )
 
 
@@ -32,18 +31,13 @@ def run_simulate(args: argparse.Namespace) -> int:
     import numpy as np
 
     from roughness.perception.design import FIELDNAMES, balanced_design
-    from roughness.perception.observer import DEFAULT_SIGMA, Observer, noiseless_answer, perceptual_coordinate
-    from roughness.perception.stimuli import read_stimuli
+    from roughness.perception.observer import noiseless_answer, perceptual_coordinate
     from roughness.perception.trials import write_trials
     from roughness.perception.values import stimulus_values
 
     check_trials(args)
-    stimuli = read_stimuli(args.stimuli)
-    ids = [s.stimulus for s in stimuli]
-    observer = Observer(DEFAULT_SIGMA if args.sigma is None else args.sigma, args.lapse)
-    v = read_truth(args.truth, ids) if args.truth else None
-    files = output_files(args.out, ("trials.csv", "truth.csv"), args.overwrite,
-                         {"--stimuli": args.stimuli, "--truth": args.truth})
+    run = observer_run(args, ("trials.csv", "truth.csv"))
+    stimuli, ids, observer, v, files = run.stimuli, run.ids, run.observer, run.truth, run.files
     if v is not None:
         source = f"--truth {args.truth}"
     else:

@@ -22,7 +22,6 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-import onnx
 import onnxruntime as ort
 import torch
 from torch import nn
@@ -33,14 +32,13 @@ from roughness.core.files import atomic_write, check_output
 from roughness.core.hashing import file_sha256
 
 from .domain import Domain
-from .export import RTOL, ExportError, check_patches, load_checkpoint
-from .metadata import METADATA_KEY, ModelMetadata
+from .export import RTOL, ExportError, check_patches, load_checkpoint, write_graph
+from .metadata import ModelMetadata
 from .metrics import scores
 from .network import RoughnessNet
 from .patch import batch_descriptors
 from .predictor import EMBEDDING_OUTPUT, INPUT, LOG_OUTPUT, STD_OUTPUT
 from .target import roughness_from_log
-from .versioning import set_version
 
 MIN_MEMBERS = 2
 COVERAGE = 0.95  # share of validation samples within 2 sigma after scaling
@@ -162,14 +160,7 @@ def export_ensemble(checkpoints: list[str | Path], out: str | Path,
     report: dict = {}
 
     def write(tmp: str) -> None:
-        batch = torch.export.Dim("batch", min=1)
-        torch.onnx.export(model, (torch.from_numpy(patches[:2]),), tmp, input_names=[INPUT],
-                          output_names=[LOG_OUTPUT, STD_OUTPUT, EMBEDDING_OUTPUT], dynamic_shapes=({0: batch},),
-                          external_data=False, dynamo=True)
-        graph = onnx.load(tmp)
-        graph.metadata_props.add(key=METADATA_KEY, value=meta.to_json())
-        set_version(graph, model_version)
-        onnx.save(graph, tmp)
+        write_graph(model, patches, [LOG_OUTPUT, STD_OUTPUT, EMBEDDING_OUTPUT], meta, model_version, tmp)
         report.update(_verify(model, tmp, patches))
 
     atomic_write(out, write, overwrite)

@@ -40,6 +40,19 @@ class ExportError(RuntimeError):
     """The exported graph disagrees with PyTorch or lacks a dynamic batch axis."""
 
 
+def write_graph(model: torch.nn.Module, patches: np.ndarray, outputs: list[str], meta: ModelMetadata,
+                model_version: int, path: str) -> None:
+    """``model`` as an ONNX graph at ``path``: a dynamic batch axis, ``outputs`` named, the model's metadata and
+    version in the file (traced on two of ``patches``)."""
+    batch = torch.export.Dim("batch", min=1)
+    torch.onnx.export(model, (torch.from_numpy(patches[:2]),), path, input_names=[INPUT], output_names=outputs,
+                      dynamic_shapes=({0: batch},), external_data=False, dynamo=True)
+    graph = onnx.load(path)
+    graph.metadata_props.add(key=METADATA_KEY, value=meta.to_json())
+    set_version(graph, model_version)
+    onnx.save(graph, path)
+
+
 def load_checkpoint(path: str | Path) -> tuple[RoughnessNet, ModelMetadata]:
     """The network (eval mode) and the checkpoint's metadata; InputError if it is not a training checkpoint.
 
@@ -104,13 +117,7 @@ def export(checkpoint_path: str | Path, out: str | Path, patches: np.ndarray | N
     report: dict = {}
 
     def write(tmp: str) -> None:
-        batch = torch.export.Dim("batch", min=1)
-        torch.onnx.export(model, (torch.from_numpy(patches[:2]),), tmp, input_names=[INPUT], output_names=list(OUTPUTS),
-                          dynamic_shapes=({0: batch},), external_data=False, dynamo=True)
-        graph = onnx.load(tmp)
-        graph.metadata_props.add(key=METADATA_KEY, value=meta.to_json())
-        set_version(graph, model_version)
-        onnx.save(graph, tmp)
+        write_graph(model, patches, list(OUTPUTS), meta, model_version, tmp)
         report.update(verify(model, tmp, patches))
 
     atomic_write(out, write, overwrite)
