@@ -15,7 +15,8 @@ GENERIC_NAMES = ("simulate", "dataset", "surrogate", "models")
 PUBLIC_API = ("Heightmap", "InputError", "SimulationError", "load_heightmap", "save_heightmap", "SimConfig",
               "Simulator", "Result", "fem_roughness", "predict", "Prediction", "StandardScale", "load_scale",
               "standard_texture", "named_texture", "open_dataset", "as_heightmap", "tune", "palette", "tactile_image",
-              "homogeneity", "embed_trials", "fit_embedding", "predict_map", "MapPrediction")
+              "homogeneity", "embed_trials", "fit_embedding", "predict_map", "MapPrediction", "PredictOptions",
+              "CurvedBase")
 
 
 def _purelib(python: Path) -> Path:
