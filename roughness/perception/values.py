@@ -46,9 +46,10 @@ def fem_value(stimulus: str, heightmap: Heightmap, cache: ResultCache, engine: F
               ) -> tuple[StimulusValue, bool]:
     """(FEM V of ``heightmap``, whether it came from the cache); runs and stores it on a miss."""
     key = content_key(heightmap)
-    entry, arrays = cache.get(engine.spec, key), cache.arrays(engine.spec, key)
+    entry = cache.get(engine.spec, key)
+    arrays = cache.arrays(engine.spec, key) if entry is not None else {}
     config = engine.config.as_dict()
-    if entry is not None and arrays:
+    if arrays:
         return StimulusValue(stimulus, entry["value"], entry["stderr"], engine.spec, arrays["fluctuation"],
                              arrays["grid_axis_mm"], config), True
     result = engine.simulate(heightmap)

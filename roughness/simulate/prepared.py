@@ -22,7 +22,6 @@ from .result import Result
 if TYPE_CHECKING:
     from .spectral.engine import SpectralResult, SpectralSimulator
 
-ENGINES = ("fem", "spectral")
 _SPECTRAL: dict[SimConfig, SpectralSimulator] = {}
 _SPECTRAL_LOCK = threading.Lock()
 
