@@ -28,8 +28,10 @@ ROOT = Path(__file__).resolve().parents[1]
 RECIPE = ROOT / "datasets" / "validation.json"
 OUT = Path(__file__).parent / "results" / "trade"
 N = 160
-ENGINES = ("fem:coarse", "fem:default", "fem:fine", "spectral", "surrogate", "surrogate:roughness/models/roughness-cnn-int8.onnx", "ra",
-           "p90", "glcm_sum_of_squares", "glcm_sum_variance")
+ENGINES = ("fem:coarse", "fem:default", "fem:fine", "spectral", "surrogate",
+           "surrogate:roughness/models/roughness-cnn-int8.onnx",
+           "surrogate:roughness/models/roughness-cnn-v2.onnx",  # the previous model, kept for comparison
+           "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance")
 
 
 def reference_of(labels: Path) -> str:

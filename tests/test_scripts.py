@@ -30,17 +30,23 @@ def test_help_does_not_run(script, tmp_path):
     assert _results(script.parent) == before  # nothing written
 
 
-def test_surrogate_report_counts_coverage_and_what_auto_catches(monkeypatch):
-    """The report's arithmetic on a hand-made case: 2-sigma coverage in log(V + offset), auto's routing
-    (out of domain, or spread above max_std) and the share of >15% errors it catches."""
+def _surrogate_report(monkeypatch):
+    """benchmarks/surrogate_report.py as a module."""
     import importlib.util
-
-    import numpy as np
 
     spec = importlib.util.spec_from_file_location("surrogate_report", ROOT / "benchmarks" / "surrogate_report.py")
     report = importlib.util.module_from_spec(spec)
     monkeypatch.setitem(sys.modules, spec.name, report)  # its dataclass looks its module up
     spec.loader.exec_module(report)
+    return report
+
+
+def test_surrogate_report_counts_coverage_and_what_auto_catches(monkeypatch):
+    """The report's arithmetic on a hand-made case: 2-sigma coverage in log(V + offset), auto's routing
+    (out of domain, or spread above max_std) and the share of >15% errors it catches."""
+    import numpy as np
+
+    report = _surrogate_report(monkeypatch)
     offset = 0.001
     reference = np.array([0.10, 0.10, 0.10, 0.10])
     predicted = np.array([0.101, 0.13, 0.08, 0.10])  # errors 1%, 30%, 20%, 0%
@@ -51,6 +57,18 @@ def test_surrogate_report_counts_coverage_and_what_auto_catches(monkeypatch):
     out = report.uncertainty(p)
     z = np.abs(np.log(reference + offset) - np.log(predicted + offset)) / spread
     assert out["coverage_2sigma"] == np.mean(z <= 2) == 0.75  # c: 20% off with a 2% spread
-    assert out["sent_to_fem"] == 0.5 and out["sent_out_of_domain"] == 0.25  # b (uncertain) and d (outside)
+    assert out["sent"] == 0.5 and out["sent_out_of_domain"] == 0.25  # b (uncertain) and d (outside)
     assert out["large_errors"] == 2 and out["large_errors_caught"] == 0.5  # b caught, c missed
     assert [w["id"] for w in report.worst(p, 2)] == ["b", "c"]
+    caught = [r["large_errors_caught"] for r in report.routing(p, np.ones(4, bool), (0.01, 0.1, 1.0))]
+    assert caught == [1.0, 0.5, 0.0]  # every spread above 0.01; b above 0.1; none above 1 (c is in domain)
+
+
+def test_surrogate_report_break_even_pays_the_training_back_per_engine(monkeypatch):
+    """Break-even textures = cost (core-hours) / (engine's seconds - surrogate's seconds); none if not faster."""
+    report = _surrogate_report(monkeypatch)
+    rows = {"surrogate": {"kind": "surrogate", "median_s": "0.001"}, "fem:fine": {"kind": "fem", "median_s": "10.001"},
+            "spectral": {"kind": "spectral", "median_s": "0.0005"}, "ra": {"kind": "classical", "median_s": "0.001"}}
+    out = {b["engine"]: b["textures"] for b in report.break_even(2.0, rows, "surrogate")}
+    assert out.keys() == {"fem:fine", "spectral"}
+    assert abs(out["fem:fine"] - 2.0 * 3600 / 10.0) < 1e-6 and out["spectral"] is None
