@@ -463,6 +463,9 @@ def test_int8_export_is_static_qdq_and_close_to_fp32(tiny, tmp_path):
     dequantized = {n.output[0] for n in graph.graph.node if n.op_type == "DequantizeLinear"}
     fp32 = [n for n in graph.graph.node if n.op_type in ("Gemm", "MatMul") or (n.op_type == "Conv" and "heights" in n.input)]
     assert len(fp32) == 3 and not any(n.input[1] in dequantized for n in fp32)  # first conv and dense head in fp32
+    readers = {n.op_type for n in graph.graph.node if set(n.input) & dequantized}
+    assert readers == {"Conv", "Relu"}  # only convolutions (and their ReLU) are quantised: the pooling, the
+    # embedding and the head read fp32 tensors
 
 
 def test_shipped_int8_model_stays_within_2_percent_of_fp32():
