@@ -277,9 +277,12 @@ def trade_rows() -> dict[str, dict]:
 
 
 def spec_of(model: str) -> str:
-    """The trade report's engine spec of a model file."""
-    return "surrogate" if Path(model) == (MODELS / "roughness-cnn.onnx").resolve() else \
-        f"surrogate:{Path(model).relative_to(ROOT)}"
+    """The trade report's engine spec of a model file (the shipped one, or one of the repository by its path)."""
+    if Path(model) == (MODELS / "roughness-cnn.onnx").resolve():
+        return "surrogate"
+    if not Path(model).is_relative_to(ROOT):
+        raise SystemExit(f"{model} is outside the repository: the trade report names its models by their path in it")
+    return f"surrogate:{Path(model).relative_to(ROOT)}"
 
 
 def break_even(cost_core_hours: float, rows: dict[str, dict], surrogate: str) -> list[dict]:
@@ -355,6 +358,7 @@ def main() -> None:
     labels = Path(args.labels).resolve()
     model_path, baseline_path = str(Path(args.model).resolve()), str(Path(args.baseline).resolve())
     int8_path = str(Path(args.int8).resolve()) if args.int8 else model_path.replace(".onnx", "-int8.onnx")
+    spec = spec_of(model_path)
     run("trade_report.py", "--labels", str(labels))
     if not args.no_timing:
         run("surrogate_latency.py", "--model", model_path)
@@ -368,6 +372,8 @@ def main() -> None:
     int8 = int8_agreement(textures, model_path, int8_path)
     auto = auto_answers(textures, model_path)
     rows = trade_rows()
+    if spec not in rows:
+        raise SystemExit(f"the trade report has no row for {spec}: add it to trade_report.ENGINES")
     curves = {"all validation textures": routing(p, np.ones(len(p["id"]), bool)),
               "trained families only": routing(p, trained_on(p))}
     plot_routing(curves, p["max_std"], RESULTS / "surrogate_routing.png")
@@ -382,7 +388,7 @@ def main() -> None:
               "routing": curves, "auto": auto, "int8": int8, "worst": worst(p),
               "ensemble": {k: v for k, v in (meta.ensemble or {}).items() if k != "member_val"},
               "training_core_hours": training_h, "data_core_hours": data_h, "label_fidelity": meta.label_fidelity,
-              "break_even": break_even(training_h + data_h, rows, spec_of(model_path))}
+              "break_even": break_even(training_h + data_h, rows, spec)}
     (RESULTS / "surrogate_report.json").write_text(json.dumps(result, indent=1) + "\n")
     text = markdown(result, table, curves, labels, model, auto, Path(baseline_path).name)
     (RESULTS / "surrogate_report.md").write_text(text)
