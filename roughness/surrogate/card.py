@@ -107,8 +107,9 @@ def int8_section(model_path: Path, meta: ModelMetadata, latency: dict | None) ->
              if latency and latency.get("int8") else "")
     return f"""
 ### int8 variant
-`{path.name}` ({path.stat().st_size / 1e6:.2f} MB): static QDQ quantisation, per-channel 7-bit weights, the first
-convolution and the dense head kept in fp32, activation ranges from the 0.001..99.999th percentiles over
+`{path.name}` ({path.stat().st_size / 1e6:.2f} MB): static QDQ quantisation of the convolutions only, per-channel
+7-bit weights; the first convolution, the pooling and the dense head stay fp32; activation ranges from the
+0.001..99.999th percentiles over
 {report['calibration_inputs']} recipe textures (`roughness export ... --int8 FILE`; why: roughness/surrogate/quantize.py).
 Its V differs from this model's by {100 * report['standard_median_rel_diff_vs_fp32']:.1f}% (median),
 {100 * report['standard_max_rel_diff_vs_fp32']:.1f}% at most on the 13 standard textures, and by
