@@ -71,12 +71,11 @@ def group_of(hm) -> tuple[str, float, float]:
 def draw(per_group: int, start: int, models: list) -> list[Row]:
     """Recipe textures from ``start`` on until each group has ``per_group``, with every model's answer."""
     from roughness.dataset.recipe import load_recipe, realise, sample_record
-    from roughness.simulate.config import SimConfig
-    from roughness.simulate.prepared import simulate
+    from roughness.engines import SpectralEngine
 
     recipe = load_recipe(ROOT / "datasets" / "training-v3.json")
     wanted = {"fine, low relief": per_group, "other": per_group}
-    config = SimConfig(**{k: v for k, v in models[0].meta.simulation.items() if k in SimConfig.__dataclass_fields__})
+    spectral = SpectralEngine.of(models[0].meta.simulation)  # the physics the first model was trained for
     rows = []
     for index in range(start, start + 1_000_000):
         record = sample_record(recipe, index)
@@ -85,7 +84,7 @@ def draw(per_group: int, start: int, models: list) -> list[Row]:
         if wanted[group] == 0:
             continue
         wanted[group] -= 1
-        result = simulate(config, hm, engine="spectral")
+        result = spectral.simulate(hm)
         predicted = {m.path.name: float(m.run(m.patch(hm)[None])[0][0]) for m in models}
         rows.append(Row(index, record["family"], group, feature, relief, result.roughness, result.contact_fraction,
                         predicted))
@@ -100,11 +99,11 @@ def scores(rows: list[Row], name: str) -> dict:
     """Median, p95 and worst relative error and Spearman of model ``name`` against the spectral engine."""
     from scipy.stats import spearmanr
 
+    if len(rows) < 3:
+        return {"n": len(rows)}
     ref = np.array([r.reference for r in rows])
     pred = np.array([r.predicted[name] for r in rows])
     rel = np.abs(pred - ref) / np.maximum(ref, V_FLOOR)
-    if len(rows) < 3:
-        return {"n": len(rows)}
     return {"n": len(rows), "median_rel_err": float(np.median(rel)), "p95_rel_err": float(np.percentile(rel, 95)),
             "worst_rel_err": float(rel.max()), "spearman": float(spearmanr(ref, pred).statistic),
             "median_ratio": float(np.median(pred / np.maximum(ref, 1e-12)))}
