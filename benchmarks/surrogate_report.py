@@ -31,7 +31,7 @@ import json
 import os
 import subprocess
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
@@ -55,7 +55,7 @@ class Target:
     baseline: str = "-"  # the same measure of the baseline model ("-": not measured for it)
 
 
-@dataclass
+@dataclass(frozen=True)
 class Measures:
     """What the report measures of one model on the validation set."""
 
@@ -63,7 +63,6 @@ class Measures:
     overall: dict  # accuracy of every texture
     split: dict[str, dict]  # accuracy of the trained families, then of each held-out family
     uncertainty: dict
-    targets: dict[str, tuple[str, str, bool | None]] = field(default_factory=dict)  # what -> (goal, reached, met)
 
 
 def parse_args() -> argparse.Namespace:
@@ -197,9 +196,7 @@ def by_training(p: dict) -> dict[str, dict]:
 def measure(textures: list, model_path: str) -> Measures:
     """The accuracy, the per-family split and the uncertainty of one model on the validation textures."""
     p = validation_predictions(textures, model_path)
-    m = Measures(p, accuracy(p["predicted"], p["reference"]), by_training(p), uncertainty(p))
-    m.targets = accuracy_targets(m)
-    return m
+    return Measures(p, accuracy(p["predicted"], p["reference"]), by_training(p), uncertainty(p))
 
 
 def percent(x: float | None) -> str:
@@ -375,8 +372,9 @@ def main() -> None:
     curves = {"all validation textures": routing(p, np.ones(len(p["id"]), bool)),
               "trained families only": routing(p, trained_on(p))}
     plot_routing(curves, p["max_std"], RESULTS / "surrogate_routing.png")
-    table = [Target(what, goal, reached, met, baseline.targets.get(what, ("", "-", None))[1])
-             for what, (goal, reached, met) in model.targets.items()] + timing_targets(latency, maps, int8)
+    baseline_targets = accuracy_targets(baseline)
+    table = [Target(what, goal, reached, met, baseline_targets.get(what, ("", "-", None))[1])
+             for what, (goal, reached, met) in accuracy_targets(model).items()] + timing_targets(latency, maps, int8)
     cost = meta.cost_core_seconds or {}
     training_h, data_h = cost.get("training", 0.0) / 3600, cost.get("data_fem", 0.0) / 3600
     result = {"model": Path(model_path).name, "baseline": Path(baseline_path).name, "labels": labels.name,
