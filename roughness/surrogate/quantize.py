@@ -11,7 +11,7 @@ Four choices, each measured (roughness/models/MODEL_CARD.md, int8 variant):
   session 6) then strayed 2.2% from fp32 on a standard texture and 1.7% (median) on the check textures,
   as far with a single convolution quantised as with all of them; with the convolutions only, 0.9% and
   0.8%, at 70% of the fp32 graph's time (every op type: 65%; both on a loaded machine). The 5-member v3
-  ensemble still strayed 2.2% (standard) and 1.2% (median) with the convolutions only, and was refused.
+  ensemble: 0.8% (standard, max) and 0.3% (check, median) with the convolutions only.
 - 7-bit weights (``reduce_range``). On x86-64 CPUs with AVX2 but without VNNI the runtime's u8 x s8
   kernels add pairs of products in int16 (VPMADDUBSW), which saturates for full-range weights: the
   first int8 model was 10% below fp32 on the standard textures there although the same graph without
