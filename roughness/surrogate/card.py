@@ -14,7 +14,7 @@ import csv
 import json
 import os
 from collections import Counter
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -119,21 +119,27 @@ Its V differs from this model's by {100 * report['standard_median_rel_diff_vs_fp
 """
 
 
+CARD_OPTIONS = ("levels", "max_label_error", "query_h_mm", "fem_weight", "log_offset", "holdout_family", "widths",
+                "hidden", "max_epochs", "max_minutes", "batch_size")  # `roughness train` options the card repeats
+
+
+def _option_text(value) -> str:
+    """A training option's value as typed on the command line (widths: comma-separated)."""
+    return ",".join(map(str, value)) if isinstance(value, (list, tuple)) else f"{value:g}" if isinstance(
+        value, float) else str(value)
+
+
 def training_commands(meta: ModelMetadata, model_name: str) -> str:
     """The commands that made the model, from its training configuration (defaults left out)."""
     from .config import TrainConfig
 
-    config, default = meta.train_config, TrainConfig("", "")
-    options = [("--levels", config.get("levels", "last"), default.levels),
-               ("--query-h-mm", config.get("query_h_mm"), default.query_h_mm),
-               ("--holdout-family", config.get("holdout_family"), default.holdout_family),
-               ("--widths", ",".join(map(str, config.get("widths", default.widths))), ",".join(map(str, default.widths))),
-               ("--hidden", config.get("hidden", default.hidden), default.hidden),
-               ("--max-epochs", config.get("max_epochs"), default.max_epochs),
-               ("--batch-size", config.get("batch_size"), default.batch_size)]
+    config, default = meta.train_config, asdict(TrainConfig("", ""))
+    given = [(name, config.get(name, default[name])) for name in CARD_OPTIONS]
+    options = [f"--{name.replace('_', '-')} {_option_text(value)}" for name, value in given
+               if _option_text(value) != _option_text(default[name])]
     extra = [Path(p).name for p in config.get("extra_data", [])]
     train = " ".join([f"roughness train {meta.data.get('file')}", *(["--extra-data", *extra] if extra else []),
-                      *(f"{flag} {value}" for flag, value, given in options if value != given)])
+                      *options])
     if not meta.ensemble:
         return f"`{train} --out RUN`, then\n`roughness export RUN/checkpoint.pt --out {model_name}`"
     k = meta.ensemble["members"]
@@ -170,7 +176,7 @@ def ensemble_section(meta: ModelMetadata) -> str:
     calibrated = e.get("max_std") is not None
     test = (f"On the test split ({e['test_inputs']} inputs) the 2-sigma interval holds the label for "
             f"{100 * e['coverage_2sigma_test']:.1f}%; the default threshold sends {100 * e['sent_to_fem_test']:.1f}% "
-            f"to the FEM ({100 * e.get('out_of_domain_test', 0):.1f}% as out of domain) and catches "
+            f"on ({100 * e.get('out_of_domain_test', 0):.1f}% as out of domain) and catches "
             + (f"{100 * e['large_errors_caught_test']:.0f}% of the {e['large_errors_test']} predictions off by more "
                "than 15%." if e.get("large_errors_caught_test") is not None else "no prediction off by more than 15% "
                                                                                  "(there were none).")
@@ -185,8 +191,8 @@ trained alike with seeds 0..{e['members'] - 1}, exported as one graph that retur
 and its spread (`roughness ensemble RUN*/checkpoint.pt --out MODEL.onnx --data DATA...`).
 """ + (f"""The spread is scaled by {e['std_scale']:.3g} so that 95% of validation labels lie within 2 sigma
 (raw coverage {100 * e['raw_coverage_2sigma_val']:.1f}%), and `--engine auto` sends inputs whose relative spread
-exceeds {e['max_std']:.3g} to the FEM: the threshold at which 10% of the validation inputs go to the FEM,
-counting the {100 * e.get('out_of_domain_val', 0):.1f}% sent as out of domain. {test}
+exceeds {e['max_std']:.3g} to a physics engine (the spectral one where it holds, the FEM otherwise): the
+threshold at which 10% of the validation inputs are sent on, counting the {100 * e.get('out_of_domain_val', 0):.1f}% sent as out of domain. {test}
 """ if calibrated else "The spread is not calibrated (exported without `--data`): no default threshold.\n") + ood_table
 
 
@@ -337,9 +343,12 @@ def _training_data(c: CardInputs) -> str:
     extra_files = "".join(f" with `{e['file']}`" for e in (meta.multi_fidelity or {}).get("extra_data", []))
     held = (f"Held out entirely (out-of-family score): {', '.join(f'`{f}`' for f in meta.holdout_family.split(','))}."
             if meta.holdout_family else "No family is held out.")
+    spectral_rows = (meta.multi_fidelity or {}).get("rows_by_h_mm", {}).get("spectral")
+    spectral = (f" (scored on; besides them, {spectral_rows:,} labelled by the spectral engine)" if spectral_rows
+                else "")
     return f"""
 ## Training data
-- Dataset `{meta.data.get('file')}`{extra_files} (recipe `{meta.data.get('recipe')}`): {len(c.predictions)} FEM samples labelled at `{meta.label_fidelity}`; by family:
+- Dataset `{meta.data.get('file')}`{extra_files} (recipe `{meta.data.get('recipe')}`): {len(c.predictions)} FEM samples labelled at `{meta.label_fidelity}`{spectral}; by family:
   {', '.join(f'{f} {n}' for f, n in sorted(families.items()))}.
 - Data checksum (inputs_sha256): `{meta.data.get('inputs_sha256')}`
 - Splits by base texture (family, parameters, seed; perturbations ignored), so no perturbed sibling of a
