@@ -75,7 +75,7 @@ def main() -> None:
     (OUT / "surrogate_new_families.json").write_text(json.dumps({"model": Path(args.model).name,
                                                                  "fidelity": model.fidelity, "samples": rows},
                                                                 indent=1))
-    lines = ["| family | n | Spearman | median roughness/surrogate/FEM | median rel. error | worst rel. error | flagged |",
+    lines = ["| family | n | Spearman | median surrogate/FEM | median rel. error | worst rel. error | flagged |",
              "|---|---|---|---|---|---|---|"]
     lines += [f"| {f} | {n} | {rho:.2f} | {ratio:.2f} | {100 * med:.0f}% | {100 * worst:.0f}% | {flag} |"
               for f, n, rho, ratio, med, worst, flag in table]

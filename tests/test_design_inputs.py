@@ -148,6 +148,9 @@ def test_noise_is_refused_naming_the_tolerance(workdir, capsys):  # noqa: F811
 # --- tune: relative targets, and the factor that would reach a refused target ------------------------------------
 
 SPECTRAL = Evaluator(fidelity="spectral")  # tens of ms a texture (about 1 s for reliefs 3x the standard's)
+# a surrogate whose V peaks inside the height range: model version 2, kept beside the shipped model
+V2_MODEL = Path(__file__).resolve().parents[1] / "roughness" / "models" / "roughness-cnn-v2.onnx"
+PEAKED = Evaluator(model_path=str(V2_MODEL), fidelity="spectral")
 
 
 @pytest.fixture(scope="module")
@@ -197,25 +200,26 @@ def test_tune_cli_one_jnd_rougher_says_the_input_and_the_target(tmp_path, capsys
 
 
 def test_a_target_beyond_the_surrogates_reach_within_the_range_is_searched_with_the_spectral_engine(standard):
-    """The shipped surrogate's V peaks near height x1.8 (lambda 1.35 mm, far out of its domain) and falls beyond;
+    """Model version 2's V peaks near height x1.8 (lambda 1.35 mm, far out of its domain) and falls beyond;
     the physics does not: lambda 1.7 mm, past the coarsest standard (1.625 mm), is reached beyond that peak, at
     about x2.25 on the spectral scale extrapolated from its end."""
-    result = tune(standard, target_of(SPECTRAL, lambda_mm=1.7), "height", SPECTRAL)
+    result = tune(standard, target_of(PEAKED, lambda_mm=1.7), "height", PEAKED)
     assert result.search_engine == "spectral" and result.reached
     assert 1.9 < result.factor < 3.0 and any("spectral engine searched instead" in n for n in result.notes)
     assert result.summary()["steps"][0]["search_roughness"] != result.summary()["steps"][0]["surrogate_roughness"]
 
 
 def test_a_refused_target_names_the_factor_that_reaches_it(standard):
-    """lambda 2 mm lies beyond the default factors (about x3.4 on the spectral scale)."""
+    """lambda 2 mm lies beyond the default factors (about x3.4 on the spectral scale), and beyond model version 2's
+    reach, so the spectral engine searches and names the factor."""
     with pytest.raises(InputError, match=r"about (\d+\.\d+): widen the range \(max_factor=(\d+\.?\d*)\)") as err:
-        tune(standard, target_of(SPECTRAL, lambda_mm=2.0), "height", SPECTRAL)
+        tune(standard, target_of(PEAKED, lambda_mm=2.0), "height", PEAKED)
     about, flag = (float(x) for x in re.search(r"about (\d+\.\d+).*max_factor=(\d+\.?\d*)", str(err.value)).groups())
     assert 3.0 < about < flag
-    result = tune(standard, target_of(SPECTRAL, lambda_mm=2.0), "height", SPECTRAL, factor_range=(3.0, flag))
+    result = tune(standard, target_of(PEAKED, lambda_mm=2.0), "height", PEAKED, factor_range=(3.0, flag))
     assert result.reached and result.factor == pytest.approx(about, rel=0.05)
     with pytest.raises(InputError, match=r"no height factor in 0\.0333\.\.0\.5 reaches it on the spectral engine"):
-        tune(standard, target_of(SPECTRAL, lambda_mm=0.1), "height", SPECTRAL, factor_range=(0.1, 0.5))
+        tune(standard, target_of(PEAKED, lambda_mm=0.1), "height", PEAKED, factor_range=(0.1, 0.5))
 
 
 def test_tune_refuses_two_targets_and_bad_jnds(workdir, capsys):  # noqa: F811
