@@ -147,6 +147,12 @@ def test_split_follows_the_base_texture():
     assert split_of({**record, "family": "waffle"}, 0.3, 0.3, "knit") != "ood"
     seen = {split_of({**record, "seed": s}, 0.3, 0.3, None) for s in range(50)}
     assert seen == {"train", "val", "test"}
+    # a composite is held out with a held-out family it is made of, so that family is never trained on
+    mixture = {"family": "mixture", "params": {"base": "grating", "overlay": "knurl", "combine": "add"}, "seed": 3,
+               "perturbation": None}
+    assert split_of(mixture, 0.3, 0.3, "waffle,knurl") == "ood"
+    assert split_of({**mixture, "params": {"base": "knurl"}}, 0.3, 0.3, "knurl") == "ood"
+    assert split_of(mixture, 0.3, 0.3, "knit,waffle") != "ood"
 
 
 def test_training_writes_checkpoint_metrics_and_history(tiny):

@@ -21,7 +21,8 @@ def add_parser(sub) -> None:
     tr.add_argument("--seed", type=SEED, default=d["seed"], help=f"seed of weights and batches (default: {d['seed']})")
     tr.add_argument("--holdout-family", default=d["holdout_family"],
                     help="family (or comma-separated families, e.g. knit,waffle) never trained on, scored as "
-                         "out-of-family (default: the dataset recipe's; 'none' to train on all)")
+                         "out-of-family, with every mixture or shallow texture made of it (default: the dataset "
+                         "recipe's; 'none' to train on all)")
     tr.add_argument("--batch-size", type=COUNT, default=d["batch_size"],
                     help=f"training batch size (default: {d['batch_size']})")
     tr.add_argument("--max-epochs", type=COUNT, default=d["max_epochs"],

@@ -36,12 +36,19 @@ def base_key(record: dict) -> str:
     return hashlib.sha1(json.dumps(base, sort_keys=True).encode()).hexdigest()
 
 
+def families_in(record: dict) -> set[str]:
+    """The families a texture is made of: its own and, for a composite (mixture, shallow), its base and overlay."""
+    params = record.get("params") or {}
+    return {record["family"]} | {params[k] for k in ("base", "overlay") if isinstance(params.get(k), str)}
+
+
 def split_of(record: dict, test_fraction: float, val_fraction: float, holdout_family: str | None) -> str:
     """Which split a sample belongs to: a fixed function of its base texture.
 
-    ``holdout_family``: the family never trained on ("ood"), or several, comma-separated ("knit,waffle").
+    ``holdout_family``: the family never trained on ("ood"), or several, comma-separated ("knit,waffle"); a
+    composite texture with a held-out family as its base or overlay is held out with it.
     """
-    if holdout_family and record["family"] in holdout_family.split(","):
+    if holdout_family and families_in(record) & set(holdout_family.split(",")):
         return "ood"
     u = int(base_key(record)[:8], 16) / 2**32
     return "test" if u < test_fraction else "val" if u < test_fraction + val_fraction else "train"
