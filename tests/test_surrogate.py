@@ -25,7 +25,7 @@ from roughness.prediction import PredictOptions, predict
 from roughness.simulate.linsolve import CG_RTOL
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import save_heightmap
-from roughness.surrogate.data import split_of
+from roughness.surrogate.data import held_out_name, split_of
 from roughness.surrogate.export import (
     ExportError,
     check_patches,
@@ -153,6 +153,8 @@ def test_split_follows_the_base_texture():
     assert split_of(mixture, 0.3, 0.3, "waffle,knurl") == "ood"
     assert split_of({**mixture, "params": {"base": "knurl"}}, 0.3, 0.3, "knurl") == "ood"
     assert split_of(mixture, 0.3, 0.3, "knit,waffle") != "ood"
+    assert held_out_name("mixture", "waffle,knurl") == "mixture made with waffle or knurl"  # in scores and cards
+    assert held_out_name("knurl", "waffle,knurl") == "knurl"
 
 
 def test_training_writes_checkpoint_metrics_and_history(tiny):

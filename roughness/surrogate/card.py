@@ -26,6 +26,7 @@ from roughness.core.files import atomic_write, check_output
 from roughness.core.hashing import file_sha256
 from roughness.core.provenance import model_id
 
+from .data import held_out_name
 from .metadata import ModelMetadata, load_onnx, onnx_metadata, read_metadata
 from .patch import DESCRIPTOR_NAMES, FOOTPRINT_MM
 from .predictor import DEFAULT_MODEL
@@ -182,7 +183,8 @@ def ensemble_section(meta: ModelMetadata) -> str:
                                                                                  "(there were none).")
             if calibrated and "test_inputs" in e else "")
     ood = e.get("ood_by_family") or {}
-    by_family = metric_table(ood, {f: f for f in sorted(ood)}).replace("| split |", "| family |")
+    by_family = metric_table(ood, {f: held_out_name(f, meta.holdout_family) for f in sorted(ood)}).replace(
+        "| split |", "| family |")
     ood_table = f"\nFamilies never trained on, one by one:\n\n{by_family}\n" if ood else ""
     return f"""
 ## Ensemble and uncertainty

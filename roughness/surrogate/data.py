@@ -42,6 +42,12 @@ def families_in(record: dict) -> set[str]:
     return {record["family"]} | {params[k] for k in ("base", "overlay") if isinstance(params.get(k), str)}
 
 
+def held_out_name(family: str, holdout_family: str | None) -> str:
+    """How a family of held-out samples is named in scores: a composite is held out for a family it is made of."""
+    held = (holdout_family or "").split(",")
+    return family if family in held else f"{family} made with {' or '.join(held)}"
+
+
 def split_of(record: dict, test_fraction: float, val_fraction: float, holdout_family: str | None) -> str:
     """Which split a sample belongs to: a fixed function of its base texture.
 
