@@ -390,6 +390,24 @@ def test_shipped_model_matches_its_card_and_data():
     assert meta.parameters < 1_000_000 and meta.label_fidelity == "fine" and meta.ensemble["members"] >= 5
 
 
+def test_the_cards_training_command_remakes_the_shipped_models_configuration():
+    """The command the card prints, parsed by `roughness train`'s own parser, gives the training options the
+    shipped model's members were trained with."""
+    import shlex
+
+    from roughness.cli import build_parser
+    from roughness.surrogate.card import CARD_OPTIONS
+
+    meta = SurrogateModel().meta
+    card = (ROOT / "roughness" / "models" / "MODEL_CARD.md").read_text()
+    command = card[card.index("`roughness train ") + 1:]
+    argv = shlex.split(command[:command.index("`")].replace("runK", "run0").replace(" K ", " 0 "))[1:]
+    args = vars(build_parser("train").parse_args(argv))
+    for name in CARD_OPTIONS:
+        given = meta.train_config[name]
+        assert args[name] == (tuple(given) if isinstance(given, list) else given), name
+
+
 def test_extreme_inputs_give_finite_answers_or_are_flagged():
     model = SurrogateModel()
     rng = np.random.default_rng(3)
