@@ -26,6 +26,7 @@ from pathlib import Path
 
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write, check_output_folder
+from roughness.core.status_line import StatusLine
 from roughness.surface.heightmap import Heightmap
 
 from .engines import FEM_FIDELITIES, Engine, fem_identity, fem_spec
@@ -34,7 +35,6 @@ from .result_cache import ResultCache, content_key
 MANIFEST_FILE = "compare.json"  # what the report in a folder compares: input, reference, engines
 SETUP_KEY = "(set-up)"  # cache key of an engine's one-time preparation (FEM block, model loading)
 STORED = "dataset"  # ``source`` of results read from a dataset file (its build's times, not measured here)
-PLAIN_PROGRESS_SECONDS = 30.0  # interval of progress lines when stderr is not a terminal
 
 
 @dataclass(frozen=True)
@@ -150,7 +150,7 @@ class Outcome:
 
 
 class Progress:
-    """Progress on stderr: one updated line on a terminal, plain lines every PLAIN_PROGRESS_SECONDS otherwise.
+    """Progress on stderr (a ``StatusLine``: one updated line on a terminal, plain lines now and then otherwise).
 
     The ETA is the remaining results of each engine times that engine's mean time so far (set-up excluded).
     """
@@ -159,8 +159,7 @@ class Progress:
         self.remaining, self.quiet = dict(remaining), quiet
         self.total, self.done = sum(remaining.values()), 0
         self.spent: dict[str, list[float]] = {e: [0.0, 0] for e in remaining}
-        self.terminal = sys.stderr.isatty()
-        self.last = time.monotonic()
+        self.line = StatusLine()
 
     def eta_minutes(self) -> float | None:
         if any(n and not self.spent[e][1] for e, n in self.remaining.items()):
@@ -177,15 +176,10 @@ class Progress:
         eta = self.eta_minutes()
         text = f"  {self.done}/{self.total} results, {texture} {engine:<20s} ETA " + (
             f"{eta:5.1f} min" if eta is not None else "  ? min")
-        if self.terminal:
-            print("\r" + text, end="", file=sys.stderr, flush=True)
-        elif self.done == self.total or time.monotonic() - self.last >= PLAIN_PROGRESS_SECONDS:
-            print(text.strip(), file=sys.stderr, flush=True)
-            self.last = time.monotonic()
+        self.line.show(text, last=self.done == self.total)
 
     def close(self) -> None:
-        if self.terminal and self.done and not self.quiet:
-            print(file=sys.stderr)
+        self.line.close()
 
 
 def _input_error(outcome: Outcome, name: str, err: InputError) -> None:

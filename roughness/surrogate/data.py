@@ -16,13 +16,13 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import sys
 import time
 from dataclasses import dataclass, fields
 
 import numpy as np
 
 from roughness.core.errors import InputError
+from roughness.core.status_line import StatusLine
 from roughness.dataset.reader import Dataset, Sample
 
 from .patch import descriptors, footprint_patch
@@ -112,7 +112,7 @@ def load_samples(data: Dataset | list[Dataset], test_fraction: float = 0.1, val_
     rows: dict[str, list] = {f.name: [] for f in fields(Samples)}
     seen: set[tuple[str, str, float | None]] = set()
     made: dict[str, tuple[np.ndarray, np.ndarray]] = {}  # sample id -> (patch, descriptors), made once
-    start = time.monotonic()
+    start, line = time.monotonic(), StatusLine()
     for ds in datasets:
         spacing, engine = _spacing_mm(ds.config.simulation), ds.config.simulation.get("engine", "fem")
         for i, sample in enumerate(ds.iter_samples("ok")):
@@ -136,11 +136,10 @@ def load_samples(data: Dataset | list[Dataset], test_fraction: float = 0.1, val_
                                    ("family", sample.texture_record["family"]), ("descriptors", descr), ("h_mm", h_mm),
                                    ("engine", engine)):
                     rows[key].append(value)
-            if progress and (i + 1) % 250 == 0:
-                print(f"\rreading {ds.path}: {i + 1}/{len(ds)} samples ({time.monotonic() - start:.0f} s)",
-                      end="", file=sys.stderr, flush=True)
-        if progress:
-            print(file=sys.stderr)
+            if progress and ((i + 1) % 250 == 0 or i + 1 == len(ds)):
+                line.show(f"reading {ds.path}: {i + 1}/{len(ds)} samples ({time.monotonic() - start:.0f} s)",
+                          last=i + 1 == len(ds))
+        line.close()
     if not rows["ids"]:
         raise InputError(f"{', '.join(str(ds.path) for ds in datasets)} holds no ok samples to train on")
     return Samples(*(np.asarray(rows[f.name], dtype=float if f.name == "h_mm" else None) for f in fields(Samples)))
