@@ -115,7 +115,10 @@ def load_samples(data: Dataset | list[Dataset], test_fraction: float = 0.1, val_
     start, line = time.monotonic(), StatusLine()
     for ds in datasets:
         spacing, engine = _spacing_mm(ds.config.simulation), ds.config.simulation.get("engine", "fem")
-        for i, sample in enumerate(ds.iter_samples("ok")):
+        read = 0
+        for read, sample in enumerate(ds.iter_samples("ok"), 1):
+            if progress and read % 250 == 0:
+                line.show(_reading(ds, read, start))
             rows_of = labels(sample, spacing, levels)
             if engine == "fem" and max_label_error is not None:
                 error = sample.values.get("discretization_error")
@@ -136,13 +139,17 @@ def load_samples(data: Dataset | list[Dataset], test_fraction: float = 0.1, val_
                                    ("family", sample.texture_record["family"]), ("descriptors", descr), ("h_mm", h_mm),
                                    ("engine", engine)):
                     rows[key].append(value)
-            if progress and ((i + 1) % 250 == 0 or i + 1 == len(ds)):
-                line.show(f"reading {ds.path}: {i + 1}/{len(ds)} samples ({time.monotonic() - start:.0f} s)",
-                          last=i + 1 == len(ds))
-        line.close()
+        if progress:
+            line.show(_reading(ds, read, start), last=True)
+            line.close()
     if not rows["ids"]:
         raise InputError(f"{', '.join(str(ds.path) for ds in datasets)} holds no ok samples to train on")
     return Samples(*(np.asarray(rows[f.name], dtype=float if f.name == "h_mm" else None) for f in fields(Samples)))
+
+
+def _reading(ds: Dataset, read: int, start: float) -> str:
+    """The progress line of ``load_samples``: ok samples read of the file's samples, seconds since ``start``."""
+    return f"reading {ds.path}: {read}/{len(ds)} samples ({time.monotonic() - start:.0f} s)"
 
 
 LEVELS = ("last", "all")
