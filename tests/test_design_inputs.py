@@ -20,6 +20,7 @@ from roughness.design.colours import TOLERANCE, cluster_colours, lab
 from roughness.design.evaluation import Evaluator
 from roughness.design.tactile_image import read_image
 from roughness.design.tune import target_of, tune
+from roughness.models import MODELS_DIR
 from roughness.perceptual_scale import jnd
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.io import save_heightmap
@@ -149,8 +150,7 @@ def test_noise_is_refused_naming_the_tolerance(workdir, capsys):  # noqa: F811
 
 SPECTRAL = Evaluator(fidelity="spectral")  # tens of ms a texture (about 1 s for reliefs 3x the standard's)
 # a surrogate whose V peaks inside the height range: model version 2, kept beside the shipped model
-V2_MODEL = Path(__file__).resolve().parents[1] / "roughness" / "models" / "roughness-cnn-v2.onnx"
-PEAKED = Evaluator(model_path=str(V2_MODEL), fidelity="spectral")
+PEAKED = Evaluator(model_path=str(MODELS_DIR / "roughness-cnn-v2.onnx"), fidelity="spectral")
 
 
 @pytest.fixture(scope="module")

@@ -677,9 +677,9 @@ def test_ensemble_int8_graph_keeps_mean_and_spread(ensemble, tmp_path, capsys):
 def test_splits_are_those_the_shipped_model_was_trained_with():
     """The shipped model is scored on the FEM rows at its query spacing: the fine textures of training-v2.json
     whose committed labels (datasets/labels) estimate a discretization error within the training's limit."""
-    import gzip
     from collections import Counter
 
+    from roughness.dataset.labels import load_labels
     from roughness.dataset.recipe import expand, load_recipe
     from roughness.dataset.schema import sample_id
     from roughness.surrogate.metadata import onnx_metadata
@@ -687,10 +687,9 @@ def test_splits_are_those_the_shipped_model_was_trained_with():
     meta = onnx_metadata(DEFAULT_MODEL)
     config = meta.train_config
     scored = {split: m["n"] + m["n_zero"] for split, m in meta.metrics.items()}  # textures labelled at its query
-    with gzip.open(ROOT / "datasets" / "labels" / "training-v2-fine.labels.jsonl.gz", "rt") as lines:
-        header, *labels = (json.loads(line) for line in lines)
-    error = {row["id"]: row["entry"]["discretization_error"] for row in labels if row["entry"]["status"] == "ok"}
-    records = [r for r in expand(load_recipe(ROOT / "datasets" / "training-v2.json"), header["samples"])
+    fine = load_labels(ROOT / "datasets" / "labels" / "training-v2-fine.labels.jsonl.gz").labels
+    error = {sid: label.values["discretization_error"] for sid, label in fine.items() if label.values["status"] == "ok"}
+    records = [r for r in expand(load_recipe(ROOT / "datasets" / "training-v2.json"), len(fine))
                if error.get(sample_id(r), math.inf) <= config["max_label_error"]]
     counts = Counter(split_of(r, meta.test_fraction, config["val_fraction"], meta.holdout_family) for r in records)
     assert counts == scored and meta.holdout_family == "knit,waffle"

@@ -126,8 +126,9 @@ CARD_OPTIONS = ("levels", "max_label_error", "query_h_mm", "fem_weight", "log_of
 
 def _option_text(value) -> str:
     """A training option's value as typed on the command line (widths: comma-separated)."""
-    return ",".join(map(str, value)) if isinstance(value, (list, tuple)) else f"{value:g}" if isinstance(
-        value, float) else str(value)
+    if isinstance(value, (list, tuple)):
+        return ",".join(map(str, value))
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def training_commands(meta: ModelMetadata, model_name: str) -> str:
