@@ -4,7 +4,8 @@
 
 stamps an existing file with version N, rewriting only that field (the weights, graph and metadata stay
 byte for byte, so its answers stay bit-identical; its content hash, the model id, changes). The shipped
-models are surrogate v2 (``roughness/models/roughness-cnn.onnx`` and its int8 graph): ``SHIPPED_MODEL_VERSION``.
+model (``roughness/models/roughness-cnn.onnx`` and its int8 graph) has ``SHIPPED_MODEL_VERSION``; the v2 model
+kept beside it for comparison (``roughness-cnn-v2.onnx``) has version 2.
 A new model gets the next whole number; 0 is ONNX's "unversioned".
 """
 from __future__ import annotations
