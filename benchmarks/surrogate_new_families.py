@@ -8,6 +8,7 @@ the surrogate on each, and reports per family the median and worst relative erro
 correlation and how many inputs the surrogate flags as out of domain.
 
     python benchmarks/surrogate_new_families.py [--per-family 8] [--model roughness/models/roughness-cnn.onnx]
+        [--cache FOLDER]
     # writes benchmarks/results/surrogate_new_families.{md,json}
 """
 from __future__ import annotations
@@ -16,6 +17,7 @@ import argparse
 import json
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
@@ -23,6 +25,11 @@ import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = Path(__file__).parent / "results"
+
+if TYPE_CHECKING:
+    from roughness.engines import FemEngine
+    from roughness.result_cache import ResultCache
+    from roughness.surface.heightmap import Heightmap
 
 
 def parse_args() -> argparse.Namespace:
@@ -32,7 +39,23 @@ def parse_args() -> argparse.Namespace:
                         help="first recipe sample to draw from (default: 6000, past the v2 training set)")
     parser.add_argument("--model", default=str(ROOT / "roughness" / "models" / "roughness-cnn.onnx"),
                         help="ONNX model (default: roughness/models/roughness-cnn.onnx)")
+    parser.add_argument("--cache", type=Path,
+                        help="keep the FEM results in this folder, keyed by texture content and FEM configuration, "
+                             "so that scoring another model reruns only the surrogate")
     return parser.parse_args()
+
+
+def fem_roughness(fem: FemEngine, heightmap: Heightmap, cache: ResultCache | None) -> float:
+    """The FEM's V of ``heightmap``, from ``cache`` when it holds it (and stored there when it did not)."""
+    from roughness.result_cache import content_key
+
+    key = content_key(heightmap)
+    if cache is not None and (hit := cache.get("fem", key)) is not None:
+        return hit["V"]
+    v = fem.simulate(heightmap).roughness
+    if cache is not None:
+        cache.put("fem", key, V=v)
+    return v
 
 
 def main() -> None:
@@ -41,11 +64,13 @@ def main() -> None:
     from roughness.dataset.engineered import FAMILIES
     from roughness.dataset.recipe import load_recipe, realise, sample_record
     from roughness.engines import FemEngine
+    from roughness.result_cache import ResultCache
     from roughness.surrogate.predictor import SurrogateModel
 
     args = parse_args()
     model = SurrogateModel(args.model)
     fem = FemEngine.of(model.fidelity, model.meta.simulation)
+    cache = ResultCache(args.cache, {"fem": fem.identity}) if args.cache else None
     recipe = load_recipe(ROOT / "datasets" / "training-v2.json")
     wanted = dict.fromkeys(FAMILIES, args.per_family)
     rows = []
@@ -55,11 +80,11 @@ def main() -> None:
             continue
         wanted[record["family"]] -= 1
         hm = realise(record)
-        result = fem.simulate(hm)
+        v_fem = fem_roughness(fem, hm, cache)
         [v], [why] = model.run(model.patch(hm)[None])
-        rows.append({"index": index, "family": record["family"], "V_fem": result.roughness, "V_surrogate": float(v),
+        rows.append({"index": index, "family": record["family"], "V_fem": v_fem, "V_surrogate": float(v),
                      "out_of_domain": bool(why), "params": record["params"]})
-        print(f"{index:6d} {record['family']:10s} FEM {result.roughness:.4f} surrogate {v:.4f}"
+        print(f"{index:6d} {record['family']:10s} FEM {v_fem:.4f} surrogate {v:.4f}"
               f"{' (out of domain)' if why else ''}", flush=True)
         if not any(wanted.values()):
             break
