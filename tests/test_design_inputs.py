@@ -206,6 +206,7 @@ def test_a_target_beyond_the_surrogates_reach_within_the_range_is_searched_with_
     result = tune(standard, target_of(PEAKED, lambda_mm=1.7), "height", PEAKED)
     assert result.search_engine == "spectral" and result.reached
     assert 1.9 < result.factor < 3.0 and any("spectral engine searched instead" in n for n in result.notes)
+    assert "the scaled texture lies outside the surrogate's training domain (verified by spectral)" in result.notes
     assert result.summary()["steps"][0]["search_roughness"] != result.summary()["steps"][0]["surrogate_roughness"]
 
 

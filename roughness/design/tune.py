@@ -353,7 +353,8 @@ def _result(problem: _Problem, search: _Search, target: Target, steps: list[Step
         notes.append("the achieved V lies off the standard scale: its equivalent lambda is extrapolated")
     in_domain = bool(problem.surrogate([best.factor])[1][0])
     if not in_domain:
-        notes.append("the scaled texture lies outside the surrogate's training domain (the FEM verified it)")
+        notes.append("the scaled texture lies outside the surrogate's training domain "
+                     f"(verified by {problem.evaluator.verifier})")
     return TuneResult(problem.scaled(best.factor), problem.by, best.factor, target, best.fem,
                       best.surrogate_roughness, in_domain, best.jnd_error, se, tuple(steps), search.reachable,
                       (problem.lo, problem.hi), tolerance_jnd, search.engine, tuple(notes))
