@@ -17,7 +17,7 @@ from roughness.core.files import atomic_write
 
 from .metadata import load_onnx, read_metadata
 
-SHIPPED_MODEL_VERSION = 3
+SHIPPED_MODEL_VERSION = 4
 
 
 def set_version(graph, version: int) -> None:
