@@ -6,7 +6,8 @@ curvature study's correction applies to; all judged points where none is curved)
 ``design.tune`` verifies it (at the tile's centre).
 ``design.tune`` then scales the texture (height or lateral size, spectral engine verifying) to that flat target,
 the object is mapped again with the tuned texture, and while the curved parts' median misses the target by more
-than ``tolerance_jnd`` the object's correction is measured again and the flat target moved (``MAX_ROUNDS``).
+than ``tolerance_jnd`` the flat target is moved by the ratio of the target to the curved parts' median
+(``MAX_ROUNDS``).
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from roughness.surface.heightmap import Heightmap
 from .feel import FeelMap, feel_map
 
 MAX_ROUNDS = 3
+FLAT_SHARE = 3  # the flat tune aims within tolerance / FLAT_SHARE, so its own error leaves room for the object's
 TOLERANCE_JND = 0.1
 
 
@@ -125,13 +127,17 @@ def tune_on_object(mesh, texture: Heightmap, mapping_for: Callable[[Heightmap], 
     for rounds in range(1, MAX_ROUNDS + 1):
         flat_v = target_v / correction
         flat_target = Target(flat_v, scale.equivalent_lambda(flat_v)[0], "lambda")
-        flat = tune(texture, flat_target, by, evaluator, tolerance_jnd=tolerance_jnd, tile=True, **tune_options)
+        flat = tune(texture, flat_target, by, evaluator, tolerance_jnd=tolerance_jnd / FLAT_SHARE, tile=True,
+                    **tune_options)
         feel = feel_map(mesh, mapping_for(flat.heightmap), regions, spacing_mm, "spectral")
         result = object_result(feel, target_lambda_mm)
         say(f"round {rounds}: flat target lambda {flat_target.lambda_mm:.3f} mm, {by} x {flat.factor:.4g}: on the "
             f"object lambda {result.lambda_mm:.3f} mm, {result.jnd_error:+.2f} JND from the target")
         if abs(result.jnd_error) <= tolerance_jnd or rounds == MAX_ROUNDS:
             break
-        correction = result.roughness / flat.achieved.roughness  # the object's correction at the tuned scale
+        # the next flat target is this one moved by the object's miss: that takes out the object's correction at
+        # the tuned scale and the flat tune's own error within its tolerance (which a correction over the flat
+        # tile's achieved V leaves in, so the same flat target and the same miss would come back)
+        correction = result.roughness / flat_target.roughness
     return ObjectTuneResult(flat.heightmap, flat, result, feel, target_lambda_mm, target_v, rounds, tolerance_jnd,
                             tuple(notes + list(flat.notes)))
