@@ -481,6 +481,26 @@ def test_roughness_map_matches_single_predictions(tmp_path, capsys):
         assert message in capsys.readouterr().err
 
 
+def test_a_map_runs_batches_side_by_side_on_one_thread_sessions_with_the_same_answers():
+    from roughness.surrogate.roughness_map import roughness_map
+
+    model, two = SurrogateModel(), SurrogateModel(threads=2)
+    assert model.single_threaded() is model
+    single = two.single_threaded()
+    assert single is two.single_threaded() and single.threads == 1 and two.threads == 2
+    assert single.session is not two.session and single.model_id == two.model_id
+    hm = standard_texture(1.0, seed=5, size_mm=16.0)
+    ones, twos = roughness_map(model, hm, 0.5, batch_size=16), roughness_map(two, hm, 0.5, batch_size=16)
+    assert ones.roughness.size == 169  # 11 batches on 3 Python threads, kept in order
+    np.testing.assert_allclose(twos.roughness, ones.roughness, rtol=1e-6)  # one-thread sessions alike
+    np.testing.assert_allclose(twos.roughness_std, ones.roughness_std, rtol=1e-5, atol=1e-9)
+    assert (twos.in_domain == ones.in_domain).all()
+    for i, j in ((0, 0), (5, 9), (12, 12)):  # the batches' answers land at their own positions
+        [p] = predict(hm, engine="surrogate", model=model,
+                      options=PredictOptions(centre_mm=(twos.x_mm[j], twos.y_mm[i])))
+        assert twos.roughness[i, j] == pytest.approx(p.roughness, rel=1e-5)
+
+
 def test_int8_export_is_static_qdq_and_close_to_fp32(tiny, tmp_path):
     from roughness.surrogate.quantize import quantize
 

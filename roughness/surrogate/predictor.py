@@ -8,6 +8,7 @@ Prediction with engine choice and FEM fallback is ``roughness.predict`` (roughne
 """
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,20 +45,21 @@ class SurrogateModel:
 
     def __init__(self, path: str | Path = DEFAULT_MODEL, threads: int = 1) -> None:
         """Load and check the model at ``path``: its metadata (``read_metadata``), its graph's inputs and
-        outputs, and one finite answer for a flat patch; InputError for ``model`` if any is wrong."""
+        outputs, and one finite answer for a flat patch; InputError for ``model`` if any is wrong.
+        ``threads``: onnxruntime's threads per call (a roughness map runs threads + 1 batches at once instead, each
+        on one thread: ``single_threaded``)."""
         path = Path(path)
         if not path.is_file():
             raise InputError(f"surrogate model not found: {path}", parameter="model")
-        options = ort.SessionOptions()
-        options.intra_op_num_threads = threads  # explicit: the default counts the host's cores
-        options.inter_op_num_threads = 1
+        self.threads = threads
         try:
             data = path.read_bytes()  # hashed and loaded from the same bytes: the id is of what answers
         except OSError as err:
             raise InputError(f"cannot read the surrogate model {path}: {err.strerror}", parameter="model") from None
         self.model_id = model_id(data)
+        self._data, self._single_threaded = data, None
         try:
-            self.session = ort.InferenceSession(data, options, providers=["CPUExecutionProvider"])
+            self.session = _session(data, threads)
         except Exception as err:
             raise InputError(f"{path} is not a loadable ONNX model: {err}", parameter="model") from None
         self.path = path
@@ -72,6 +74,17 @@ class SurrogateModel:
         self.has_std = STD_OUTPUT in self.outputs  # an ensemble graph (ensemble.py)
         self._check_signature()
         self._check_answers()  # also pays the one-time set-up costs
+
+    def single_threaded(self) -> SurrogateModel:
+        """This model on a one-thread onnxruntime session (itself if it has one), to run batches side by side on
+        several Python threads, each on its own core (roughness maps)."""
+        if self.threads == 1:
+            return self
+        if self._single_threaded is None:
+            single = copy.copy(self)
+            single.session, single.threads, single._single_threaded = _session(self._data, 1), 1, single
+            self._single_threaded = single
+        return self._single_threaded
 
     def _refuse(self, problem: str) -> InputError:
         return InputError(f"{self.path} is not a usable roughness model: {problem}", parameter="model")
@@ -153,3 +166,11 @@ class SurrogateModel:
             descriptors = batch_descriptors(patches, self.pixel_mm)
         reasons = self.domain.check(descriptors, out[EMBEDDING_OUTPUT])
         return Estimate(v, spread, relative, reasons)
+
+
+def _session(data: bytes, threads: int) -> ort.InferenceSession:
+    """An onnxruntime CPU session of the ONNX bytes ``data`` on ``threads`` intra-op threads."""
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = threads  # explicit: the default counts the host's cores
+    options.inter_op_num_threads = 1
+    return ort.InferenceSession(data, options, providers=["CPUExecutionProvider"])

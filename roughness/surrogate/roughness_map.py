@@ -3,9 +3,10 @@
 The 10 mm footprint slides over the heightmap in steps of ``step_mm``; each position gets V, its
 domain flag and, for an ensemble model, the spread of V. Positions are footprint centres from half a
 footprint inside one edge to half a footprint inside the other (the whole map, wrapping, if ``tile``).
-Footprints are cut out in batches sharing their row and column averaging (patch.footprint_patches),
-the next batch while the network runs on the current one; the network is the cost that remains
-(benchmarks/surrogate_map.py).
+Footprints are cut out in batches sharing their row and column averaging (patch.footprint_patches);
+batches run side by side, one more than the model's threads, each cut out, described and passed through
+a one-thread onnxruntime session by one Python thread, so that the cores stay busy while one thread is in
+Python (benchmarks/surrogate_map.py). The network is the cost that remains.
 """
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ from .patch import batch_descriptors, footprint_patches
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from .predictor import SurrogateModel
+    from .predictor import Estimate, SurrogateModel
 
 
 MAP_SUFFIXES = (".npy", ".png")
@@ -57,20 +58,17 @@ def roughness_map(model: SurrogateModel, heightmap: Heightmap, step_mm: float = 
     grid = [(x, y) for y in ys for x in xs]
     values, spreads, flags = [], [], []
 
-    def prepare(start: int) -> tuple[np.ndarray, np.ndarray]:
+    def batch(start: int) -> Estimate:
+        """The estimate of the footprints from ``start`` on: cut out, described, then the network."""
         patches = footprint_patches(heightmap, np.array(grid[start:start + batch_size]), tile, model.pixel_mm,
                                     model.footprint_mm)
-        return patches, batch_descriptors(patches, model.pixel_mm)
+        return runner.evaluate(patches, batch_descriptors(patches, model.pixel_mm))
 
     from concurrent.futures import ThreadPoolExecutor  # here: its import costs ~10 ms of every predict's start-up
 
-    with ThreadPoolExecutor(max_workers=1) as worker:  # the next batch is cut out while the network runs
-        upcoming = worker.submit(prepare, 0)
-        for i in range(0, len(grid), batch_size):
-            patches, descriptors = upcoming.result()
-            if i + batch_size < len(grid):
-                upcoming = worker.submit(prepare, i + batch_size)
-            estimate = model.evaluate(patches, descriptors)
+    runner = model.single_threaded()
+    with ThreadPoolExecutor(max_workers=model.threads + 1) as workers:  # batches side by side, in order
+        for estimate in workers.map(batch, range(0, len(grid), batch_size)):
             values.append(estimate.roughness)
             spreads.append(estimate.roughness_std)
             flags += [not r for r in estimate.reasons]
