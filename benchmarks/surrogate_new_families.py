@@ -17,7 +17,6 @@ import argparse
 import json
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
@@ -25,11 +24,6 @@ import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = Path(__file__).parent / "results"
-
-if TYPE_CHECKING:
-    from roughness.engines import FemEngine
-    from roughness.result_cache import ResultCache
-    from roughness.surface.heightmap import Heightmap
 
 
 def parse_args() -> argparse.Namespace:
@@ -45,32 +39,20 @@ def parse_args() -> argparse.Namespace:
     return parser.parse_args()
 
 
-def fem_roughness(fem: FemEngine, heightmap: Heightmap, cache: ResultCache | None) -> float:
-    """The FEM's V of ``heightmap``, from ``cache`` when it holds it (and stored there when it did not)."""
-    from roughness.result_cache import content_key
-
-    key = content_key(heightmap)
-    if cache is not None and (hit := cache.get("fem", key)) is not None:
-        return hit["V"]
-    v = fem.simulate(heightmap).roughness
-    if cache is not None:
-        cache.put("fem", key, V=v)
-    return v
-
-
 def main() -> None:
     from scipy.stats import spearmanr
 
     from roughness.dataset.engineered import FAMILIES
     from roughness.dataset.recipe import load_recipe, realise, sample_record
     from roughness.engines import FemEngine
+    from roughness.perception.values import fem_value
     from roughness.result_cache import ResultCache
     from roughness.surrogate.predictor import SurrogateModel
 
     args = parse_args()
     model = SurrogateModel(args.model)
     fem = FemEngine.of(model.fidelity, model.meta.simulation)
-    cache = ResultCache(args.cache, {"fem": fem.identity}) if args.cache else None
+    cache = ResultCache(args.cache, {fem.spec: fem.identity}) if args.cache else None
     recipe = load_recipe(ROOT / "datasets" / "training-v2.json")
     wanted = dict.fromkeys(FAMILIES, args.per_family)
     rows = []
@@ -80,7 +62,7 @@ def main() -> None:
             continue
         wanted[record["family"]] -= 1
         hm = realise(record)
-        v_fem = fem_roughness(fem, hm, cache)
+        v_fem = fem_value(str(index), hm, cache, fem)[0].roughness if cache else fem.simulate(hm).roughness
         [v], [why] = model.run(model.patch(hm)[None])
         rows.append({"index": index, "family": record["family"], "V_fem": v_fem, "V_surrogate": float(v),
                      "out_of_domain": bool(why), "params": record["params"]})
