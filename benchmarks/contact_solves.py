@@ -1,6 +1,6 @@
 """Where a warm texture's contact time goes: force-controlled solves, system set-up, the rest.
 
-The contact loop (roughness/simulate/contact.py) solves once per round: the texture gaps prescribed and
+The contact loop (simulate/contact.py) solves once per round: the texture gaps prescribed and
 the bone a force-controlled rigid plate (``ConstrainedSystem.solve_plate``; until 2026-11 it
 solved twice, texture and unit bone, and combined them). This script wraps
 ``ConstrainedSystem`` (timing only, nothing changes) and splits each warm texture's contact

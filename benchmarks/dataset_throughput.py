@@ -5,8 +5,8 @@ in one run (so the ratio is measured under the same conditions). Wall time inclu
 the cluster and preparing the skin block(s) on every worker (meshes come from the on-disk cache
 when present).
 
-    python benchmarks/dataset_throughput.py [--n 30]   # coarse, datasets/training.json: dataset_throughput.md
-    python benchmarks/dataset_throughput.py --recipe datasets/training-v2.json --fidelity converged \
+    python benchmarks/dataset_throughput.py [--n 30]   # coarse, recipes/training.json: dataset_throughput.md
+    python benchmarks/dataset_throughput.py --recipe recipes/training-v2.json --fidelity converged \
         --workers 2 --n 40                             # writes dataset_throughput_converged.md
 """
 from __future__ import annotations
@@ -30,8 +30,8 @@ def main() -> None:
     ap.add_argument("--n", type=int, default=30, help="samples per run (default 30)")
     ap.add_argument("--fidelity", choices=FIDELITIES, default=BUILD_CONFIG.fidelity,
                     help=f"FEM fidelity (default {BUILD_CONFIG.fidelity}, as training sets are built)")
-    ap.add_argument("--recipe", type=Path, default=ROOT / "datasets" / "training.json",
-                    help="recipe (default datasets/training.json)")
+    ap.add_argument("--recipe", type=Path, default=ROOT / "recipes" / "training.json",
+                    help="recipe (default recipes/training.json)")
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="worker counts (default 1 2)")
     args = ap.parse_args()
     recipe = load_recipe(args.recipe)
@@ -50,7 +50,7 @@ def main() -> None:
     stem = "dataset_throughput" + ("" if args.fidelity == "coarse" else f"_{args.fidelity}")
     (out / f"{stem}.json").write_text(json.dumps({"recipe": args.recipe.name, "fidelity": args.fidelity,
                                                   "rows": rows, "speedup": speedup}, indent=1))
-    lines = [f"Dataset generation, first {args.n} samples of datasets/{args.recipe.name}, {args.fidelity} fidelity, "
+    lines = [f"Dataset generation, first {args.n} samples of recipes/{args.recipe.name}, {args.fidelity} fidelity, "
              "2-core machine (wall time includes cluster start and block preparation per worker):", "",
              "| workers | samples | failed | wall (s) | samples / hour |", "|---|---|---|---|---|"]
     lines += [f"| {r['workers']} | {r['samples']} | {r['failed']} | {r['wall_s']:.1f} | {r['samples_per_hour']:.0f} |"

@@ -21,7 +21,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "benchmarks" / "results"
-PREPARE = "0d8f15a921f63835"  # validation textures (datasets/validation.json) of the fem_tail table
+PREPARE = "0d8f15a921f63835"  # validation textures (recipes/validation.json) of the fem_tail table
 TEXTURES = ("1e04876c42a53a11", "0d8f15a921f63835", "caf9f9db88bb4dab")
 
 
@@ -31,7 +31,7 @@ def one_process(fidelity: str) -> list[dict]:
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator
 
-    records = {sample_id(r): r for r in expand(load_recipe(ROOT / "datasets" / "validation.json"), 160)}
+    records = {sample_id(r): r for r in expand(load_recipe(ROOT / "recipes" / "validation.json"), 160)}
     sim = Simulator(SimConfig(fidelity=fidelity))
     sim.run(realise(records[PREPARE]), estimate_error=False)
     rows = []

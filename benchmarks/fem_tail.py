@@ -50,7 +50,7 @@ def main() -> None:
     ranked = sorted(seconds, key=seconds.get, reverse=True)
     middle = len(ranked) // 2
     chosen = ranked[:args.slowest] + ranked[middle - args.typical // 2:middle + (args.typical + 1) // 2]
-    records = {sample_id(r): r for r in expand(load_recipe(ROOT / "datasets" / "validation.json"), len(seconds))}
+    records = {sample_id(r): r for r in expand(load_recipe(ROOT / "recipes" / "validation.json"), len(seconds))}
     sim = Simulator(SimConfig(fidelity=args.fidelity))
     sim.run(realise(records[chosen[0]]), estimate_error=False)  # the block is prepared once (not timed)
     rows = []

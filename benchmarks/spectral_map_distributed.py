@@ -2,8 +2,8 @@
 
 A printed texture (standard 1.5 mm bumps) of ``--size-mm`` square at ``--pixel-mm`` is more pixels than one
 solve's MAX_MAP_PIXELS, so ``roughness.predict_map`` cuts it into overlapping windows
-(roughness/simulate/spectral/windows.py) and solves them on ``--workers`` local worker processes of one thread each
-(roughness/cluster.py ``local_cluster``, as ``roughness predict --map --engine spectral`` does by default).
+(simulate/spectral/windows.py) and solves them on ``--workers`` local worker processes of one thread each
+(src/roughness/cluster.py ``local_cluster``, as ``roughness predict --map --engine spectral`` does by default).
 Peak memory is each process's resident high-water mark (VmHWM; getrusage's maximum would be the calling
 process's, inherited across the workers' exec): the calling process's from after the texture is made (the map,
 the scheduler, the stitched result) and every worker's (one window's fields at a time). Run it once: it takes

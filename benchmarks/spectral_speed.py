@@ -41,7 +41,7 @@ def textures() -> dict:
     from roughness.dataset.recipe import expand, load_recipe, realise
     from roughness.dataset.textures import standard_texture
 
-    validation = expand(load_recipe(ROOT / "datasets" / "validation.json"), 71)
+    validation = expand(load_recipe(ROOT / "recipes" / "validation.json"), 71)
     return {"standard-1.5": standard_texture(1.5, seed=1), "standard-1.0": standard_texture(1.0, seed=1),
             "validation knit #46": realise(validation[46]), "validation cellular #70": realise(validation[70])}
 

@@ -5,13 +5,13 @@ Surrogate v3's issue (29) found v2's tail on fine, low-relief textures (features
 pixel (against FEM converged to 1%: median 1.9%, p95 7.0%, studies/results/spectral_validation.md), so it is the
 reference here, where it holds (contact fraction >= ``SPECTRAL_MIN_CONTACT``; the others are counted, not scored).
 
-Textures are drawn from the v3 recipe (datasets/training-v3.json) from sample ``--start`` on (default 100,000: past
+Textures are drawn from the v3 recipe (recipes/training-v3.json) from sample ``--start`` on (default 100,000: past
 the 100,000 samples v3 was trained on; none was seen by v2 either) until ``--per-group`` of each group are found:
 "fine, low relief" (feature size 2 pi std / rms slope <= 0.5 mm and relief p99.5 - p0.5 <= 0.15 mm over the
 footprint, at the map's own pixels) and "other". The families held out of either model's training are reported apart as well.
 
-    python benchmarks/surrogate_fine_textures.py [--per-group 60] [--model roughness/models/roughness-cnn.onnx]
-        [--baseline roughness/models/roughness-cnn-v2.onnx]
+    python benchmarks/surrogate_fine_textures.py [--per-group 60] [--model models/roughness-cnn.onnx]
+        [--baseline models/roughness-cnn-v2.onnx]
     # writes benchmarks/results/surrogate_fine_textures.{md,json}
 """
 from __future__ import annotations
@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = Path(__file__).parent / "results"
-MODELS = ROOT / "roughness" / "models"
+MODELS = ROOT / "models"
 FINE_FEATURE_MM = 0.5  # at most this feature size ...
 LOW_RELIEF_MM = 0.15  # ... and at most this relief: the "fine, low relief" group
 V_FLOOR = 0.001  # relative errors against max(V_ref, V_FLOOR), as the trade report takes them
@@ -71,7 +71,7 @@ def draw(per_group: int, start: int, models: list) -> list[Row]:
     from roughness.dataset.recipe import load_recipe, realise, sample_record
     from roughness.engines import SpectralEngine
 
-    recipe = load_recipe(ROOT / "datasets" / "training-v3.json")
+    recipe = load_recipe(ROOT / "recipes" / "training-v3.json")
     wanted = {"fine, low relief": per_group, "other": per_group}
     spectral = SpectralEngine.of(models[0].meta.simulation)  # the physics the first model was trained for
     rows = []
@@ -135,7 +135,7 @@ def main() -> None:
                 f"/ {s['spearman']:.3f}")
 
     lines = [f"# {names[0]} and {names[1]} on new fine, low-relief textures (reference: the spectral engine)", "",
-             f"Textures of datasets/training-v3.json from sample {args.start:,} on (seen by neither model), "
+             f"Textures of recipes/training-v3.json from sample {args.start:,} on (seen by neither model), "
              f"{args.per_group} per group; \"fine, low relief\": feature size <= {FINE_FEATURE_MM} mm and relief <= "
              f"{LOW_RELIEF_MM} mm over the footprint. Scored where the spectral engine holds (contact fraction >= "
              f"{SPECTRAL_MIN_CONTACT}); {len(rows) - len(holds)} of {len(rows)} were in partial contact and are not "

@@ -9,7 +9,7 @@ of the whole process, and of the first predict call in it), and the README's mai
 fresh process: ``roughness predict`` on that example, wall time of the whole command. Fresh processes
 find compiled bytecode, as an installed package does (the first, compiling run is not timed).
 
-    python benchmarks/surrogate_latency.py [--model roughness/models/roughness-cnn.onnx]
+    python benchmarks/surrogate_latency.py [--model models/roughness-cnn.onnx]
     # writes benchmarks/results/surrogate_latency.{md,json}
 """
 from __future__ import annotations
@@ -87,8 +87,8 @@ def timed(fn, repeats: int) -> list[float]:
 
 def parse_args() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--model", default=str(Path(__file__).resolve().parents[1] / "roughness" / "models" / "roughness-cnn.onnx"),
-                        help="ONNX model to time (default: roughness/models/roughness-cnn.onnx; roughness/models/*-int8.onnx beside it "
+    parser.add_argument("--model", default=str(Path(__file__).resolve().parents[1] / "models" / "roughness-cnn.onnx"),
+                        help="ONNX model to time (default: models/roughness-cnn.onnx; models/*-int8.onnx beside it "
                              "is timed too)")
     return parser.parse_args()
 

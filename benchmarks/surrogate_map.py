@@ -10,7 +10,7 @@ The map's CPU time (all threads of this process) is recorded too: it is much les
 processes than the wall time, and bounds the rate on an idle machine with T threads between
 1/cpu (nothing runs in parallel) and T/cpu (everything does).
 
-    python benchmarks/surrogate_map.py [--model roughness/models/roughness-cnn.onnx] [--threads 2]
+    python benchmarks/surrogate_map.py [--model models/roughness-cnn.onnx] [--threads 2]
     # writes benchmarks/results/surrogate_map.{md,json}
 """
 from __future__ import annotations
@@ -32,8 +32,8 @@ OUT = Path(__file__).parent / "results"
 def parse_args() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     root = Path(__file__).resolve().parents[1]
-    parser.add_argument("--model", default=str(root / "roughness" / "models" / "roughness-cnn.onnx"), help="ONNX model to time "
-                        "(default: roughness/models/roughness-cnn.onnx)")
+    parser.add_argument("--model", default=str(root / "models" / "roughness-cnn.onnx"), help="ONNX model to time "
+                        "(default: models/roughness-cnn.onnx)")
     parser.add_argument("--threads", type=int, default=2, help="onnxruntime threads (default: 2)")
     parser.add_argument("--size-mm", type=float, default=30.0, help="side of the square test map in mm (default: 30)")
     parser.add_argument("--step-mm", type=float, default=0.5, help="map step in mm (default: 0.5)")

@@ -1,13 +1,13 @@
 """How the shipped surrogate does on new textures of the engineered and composite families.
 
-Draws ``--per-family`` textures of each family of roughness/dataset/engineered.py from the training-v2 recipe
-(datasets/training-v2.json, with its perturbations), from sample ``--start`` on (default 6000: past the
+Draws ``--per-family`` textures of each family of dataset/engineered.py from the training-v2 recipe
+(recipes/training-v2.json, with its perturbations), from sample ``--start`` on (default 6000: past the
 6,000 samples the v2 model was trained on, so none of them was seen; ``waffle`` was held out
 entirely), runs the FEM at the model's label fidelity and
 the surrogate on each, and reports per family the median and worst relative error, the Spearman
 correlation and how many inputs the surrogate flags as out of domain.
 
-    python benchmarks/surrogate_new_families.py [--per-family 8] [--model roughness/models/roughness-cnn.onnx]
+    python benchmarks/surrogate_new_families.py [--per-family 8] [--model models/roughness-cnn.onnx]
         [--cache FOLDER]
     # writes benchmarks/results/surrogate_new_families.{md,json}
 """
@@ -31,8 +31,8 @@ def parse_args() -> argparse.Namespace:
     parser.add_argument("--per-family", type=int, default=8, help="textures per family (default: 8)")
     parser.add_argument("--start", type=int, default=6000,
                         help="first recipe sample to draw from (default: 6000, past the v2 training set)")
-    parser.add_argument("--model", default=str(ROOT / "roughness" / "models" / "roughness-cnn.onnx"),
-                        help="ONNX model (default: roughness/models/roughness-cnn.onnx)")
+    parser.add_argument("--model", default=str(ROOT / "models" / "roughness-cnn.onnx"),
+                        help="ONNX model (default: models/roughness-cnn.onnx)")
     parser.add_argument("--cache", type=Path,
                         help="keep the FEM results in this folder, keyed by texture content and FEM configuration, "
                              "so that scoring another model reruns only the surrogate")
@@ -53,7 +53,7 @@ def main() -> None:
     model = SurrogateModel(args.model)
     fem = FemEngine.of(model.fidelity, model.meta.simulation)
     cache = ResultCache(args.cache, {fem.spec: fem.identity}) if args.cache else None
-    recipe = load_recipe(ROOT / "datasets" / "training-v2.json")
+    recipe = load_recipe(ROOT / "recipes" / "training-v2.json")
     wanted = dict.fromkeys(FAMILIES, args.per_family)
     rows = []
     for index in range(args.start, args.start + 100_000):
@@ -88,7 +88,7 @@ def main() -> None:
               for f, n, rho, ratio, med, worst, flag in table]
     (OUT / "surrogate_new_families.md").write_text(
         f"# {Path(args.model).name} on the engineered and composite families (FEM {model.fidelity})\n\n"
-        f"{args.per_family} textures per family from datasets/training-v2.json, samples {args.start} on; "
+        f"{args.per_family} textures per family from recipes/training-v2.json, samples {args.start} on; "
         "relative errors against "
         "max(V_fem, 0.001). Regenerate: `python benchmarks/surrogate_new_families.py`.\n\n" + "\n".join(lines) + "\n")
     print("\n".join(lines))

@@ -1,13 +1,13 @@
 """Surrogate v3 (issue 29): every target in one report, the previous model's numbers beside it, by one command.
 
-    python benchmarks/surrogate_report.py --labels validation-converged.h5 [--model roughness/models/roughness-cnn.onnx]
-        [--baseline roughness/models/roughness-cnn-v2.onnx]
+    python benchmarks/surrogate_report.py --labels validation-converged.h5 [--model models/roughness-cnn.onnx]
+        [--baseline models/roughness-cnn-v2.onnx]
     # writes benchmarks/results/surrogate_report.{md,json} and surrogate_routing.png; also regenerates trade/,
     # surrogate_latency.* and surrogate_map.* (skip those two timing runs with --no-timing: their committed results
     # are read)
 
 ``--labels``: the validation recipe built at the reference fidelity (FEM converged to 1%):
-`roughness dataset build --recipe datasets/validation.json --n 160 --fidelity converged --tolerance 0.01
+`roughness dataset build --recipe recipes/validation.json --n 160 --fidelity converged --tolerance 0.01
 --out validation-converged.h5`. Sections:
 
 - accuracy against that reference (median and p95 relative error, Spearman), with the other engines
@@ -42,7 +42,7 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = Path(__file__).parent / "results"
 LARGE_ERROR = 0.15  # issues 12 and 29: auto must catch predictions off by more than this
 V_FLOOR = 0.001  # relative errors are taken against max(V_ref, V_FLOOR), as the trade report does
-MODELS = ROOT / "roughness" / "models"
+MODELS = ROOT / "models"
 ROUTING_THRESHOLDS = (0.05, 0.08, 0.10, 0.12, 0.15, 0.20, 0.25, 0.30, 0.40)  # relative spreads tried as --max-std
 
 

@@ -1,12 +1,12 @@
 """The speed/accuracy report of the shipped model on the committed validation set.
 
-The validation set is `datasets/validation.json` (160 textures, all eight families, none in the
+The validation set is `recipes/validation.json` (160 textures, all eight families, none in the
 training set). Its reference labels come from a build of that recipe: FEM converged to 1%
 (`fem:converged@0.01`, the reference of Surrogate v2, issue 12), or earlier `fine`. Results are
 cached in benchmarks/results/trade/results.jsonl (the cache of `roughness compare`, keyed by texture
 content and engine configuration), so regenerating the report recomputes nothing that is cached:
 
-    roughness dataset build --recipe datasets/validation.json --n 160 --fidelity converged --tolerance 0.01 \
+    roughness dataset build --recipe recipes/validation.json --n 160 --fidelity converged --tolerance 0.01 \
         --workers 2 --out validation-converged.h5
     python benchmarks/trade_report.py --labels validation-converged.h5
 
@@ -25,12 +25,12 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 ROOT = Path(__file__).resolve().parents[1]
-RECIPE = ROOT / "datasets" / "validation.json"
+RECIPE = ROOT / "recipes" / "validation.json"
 OUT = Path(__file__).parent / "results" / "trade"
 N = 160
 ENGINES = ("fem:coarse", "fem:default", "fem:fine", "spectral", "surrogate",
-           "surrogate:roughness/models/roughness-cnn-int8.onnx",
-           "surrogate:roughness/models/roughness-cnn-v2.onnx",  # the previous model, kept for comparison
+           "surrogate:models/roughness-cnn-int8.onnx",
+           "surrogate:models/roughness-cnn-v2.onnx",  # the previous model, kept for comparison
            "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance")
 
 

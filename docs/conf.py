@@ -20,7 +20,7 @@ DOCS = Path(__file__).resolve().parent
 MIRROR = DOCS / "repo"
 sys.path.insert(0, str(DOCS / "_ext"))  # cli_parser: the parser for sphinx-argparse
 # committed results shown in the manual: (folder, glob) relative to the repository root
-RESULTS = [("benchmarks/results", "**/*"), ("studies/results", "*"), ("roughness/models", "MODEL_CARD.md"),
+RESULTS = [("benchmarks/results", "**/*"), ("studies/results", "*"), ("models", "MODEL_CARD.md"),
            ("examples", "**/*")]
 PAGE = """# {path}
 

@@ -1,20 +1,20 @@
 """Contact solve before and after issue 16: partial contact (0.1-2 N) and the standard scale at 10 N.
 
-BEFORE is the active-set loop of commit cfb2493 (``--before``; its roughness/simulate/contact.py is that of
+BEFORE is the active-set loop of commit cfb2493 (``--before``; its simulate/contact.py is that of
 a653923: a node may change state at most twice, then it is held in contact), loaded from git
 under another module name; AFTER is the current
-roughness/simulate/contact.py (primal-dual active set with a damped step against cycling). Both run in
+simulate/contact.py (primal-dual active set with a damped step against cycling). Both run in
 the same process, each on its own Simulator (own block, AMG hierarchy and base field), on
 the same textures, interleaved (before, then after, per case); every state is measured by the same
-``check_contact`` (tolerances GAP_TOL_MM and TENSION_TOL of roughness/simulate/contact.py). Seconds are
+``check_contact`` (tolerances GAP_TOL_MM and TENSION_TOL of simulate/contact.py). Seconds are
 the contact stage only (``stage_seconds["contact"]``), measured on a shared, contended machine:
 compare them as ratios within one run.
 
 Part 1, partial contact: a periodic egg-crate texture and random rough fBm surfaces at
 0.1, 0.5 and 2 N, stick and frictionless. Part 2: the 13 standard textures at 10 N, stick.
 Part 3 (``--p2-criteria``): the P2 contact pressure that decides tension, on small P2 blocks
-(4 mm, h 0.6 mm, fBm at 0.02 and 0.1 N): today's modified quadratic basis (roughness/simulate/face.py)
-against the face-mass recovery M^-1 r of BEFORE's roughness/simulate/face.py and the lumped r / area,
+(4 mm, h 0.6 mm, fBm at 0.02 and 0.1 N): today's modified quadratic basis (simulate/face.py)
+against the face-mass recovery M^-1 r of BEFORE's simulate/face.py and the lumped r / area,
 all with today's active-set loop.
 
     python studies/contact_partial.py                        # coarse; writes studies/results/contact_partial.{md,json}
@@ -124,7 +124,7 @@ def row(label: str, r) -> dict:
 
 def compare(cases, fidelity: str, solvers: dict, rows: list, part: str, old_face=None) -> None:
     """Run every (name, heightmap, overrides) case with every solver on its own Simulator. With
-    ``old_face`` (P2 only) BEFORE also recovers the contact pressure as it did (its roughness/simulate/face.py),
+    ``old_face`` (P2 only) BEFORE also recovers the contact pressure as it did (its simulate/face.py),
     and each case solves one mesh level (no discretization-error estimate)."""
     from roughness.simulate.config import SimConfig
     from roughness.simulate.model import Simulator

@@ -290,7 +290,7 @@ def write_table(rows: list[dict], names: list[str], path: Path) -> None:
         "Regenerate: `python studies/convergence_panel.py --levels p1:0.3 p1:0.2 p1:0.14 p1:0.1`, then "
         "`--converged`, then `--table` (resumable; results in convergence_panel.jsonl).",
         "Errors are signed, relative to the reference. Estimated errors are the two-level Richardson estimates "
-        "of roughness/simulate/discretization.py (default: from h = 0.3 and 0.2 mm; converged: from its last two levels); "
+        "of simulate/discretization.py (default: from h = 0.3 and 0.2 mm; converged: from its last two levels); "
         "the interval V (1 ± estimate) contains the reference when estimated >= actual. "
         f"'ref's own estimate' is the same estimate for the reference (from h = 0.14 and 0.1 mm): above 3% "
         "the reference itself is not converged, and only the absolute criterion |V - ref| <= tolerance x "

@@ -9,7 +9,7 @@ that choice, along z. Concave bases narrower than the 10 mm skin footprint are r
 model and reported as such. Results are appended to a JSON-lines file keyed by the texture's
 content and the configuration, so an interrupted run resumes where it stopped. From the
 results it writes the range of curvatures where curved and flat V agree within the tolerance
-for every texture (``roughness/models/curvature_range.json``, read by ``roughness predict``).
+for every texture (``models/curvature_range.json``, read by ``roughness predict``).
 
     nice -n 10 python studies/curvature.py --fidelity coarse   # about 20 min on a busy 2-core machine
     nice -n 10 python studies/curvature.py --fidelity coarse --base sphere --normal-only
@@ -32,7 +32,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "studies" / "results"
-RANGE_PATH = ROOT / "roughness" / "models" / "curvature_range.json"
+RANGE_PATH = ROOT / "models" / "curvature_range.json"
 LAMBDAS_MM = (0.75, 1.0, 1.25)
 RADII_MM = (3.0, 5.0, 10.0, 20.0, 40.0)
 # Concave radii between the 10 mm footprint's limit (5 mm) and 10 mm probe the paper's concave claim.
@@ -221,7 +221,7 @@ def _plot(diffs: list[dict], path: Path, fidelity: str, base: str) -> None:
 
 
 def _write_range(limits: dict, command: str, fidelity: str, seeds: int, base: str, results: Path) -> None:
-    """Record this base's range in roughness/models/curvature_range.json, keeping the other bases' entries."""
+    """Record this base's range in models/curvature_range.json, keeping the other bases' entries."""
     from roughness.core.hashing import file_sha256
 
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True,
@@ -252,7 +252,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--normal-only", action="store_true",
                         help="lay heights along the normal only, skipping the z comparison (default: both)")
     parser.add_argument("--no-range", action="store_true",
-                        help="do not record the range in roughness/models/curvature_range.json (default: record it)")
+                        help="do not record the range in models/curvature_range.json (default: record it)")
     args = parser.parse_args(argv)
     if args.seeds < 1:
         parser.error("--seeds must be >= 1")

@@ -1,4 +1,4 @@
-"""Condense the curvature study's committed results into ``roughness/models/curvature_correction.json``.
+"""Condense the curvature study's committed results into ``models/curvature_correction.json``.
 
 The table ``roughness.curvature_correction`` reads (the flat V's measured correction for a curved base), from
 ``studies/results/curvature_default.json`` (cylinders) and ``curvature_sphere.json`` (spheres), with their digests::

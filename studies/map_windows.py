@@ -1,4 +1,4 @@
-"""How far inside a window's edge a spectral map's V stops feeling the edge (roughness/simulate/spectral/windows.py).
+"""How far inside a window's edge a spectral map's V stops feeling the edge (simulate/spectral/windows.py).
 
 For each texture (40 mm maps at 0.05 mm: printed bumps, and fBm surfaces whose long wavelengths reach the
 map's size, the hardest case), the whole map is solved once (mirrored across its edges, as
@@ -72,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
         lines.append(f"| {d:g} | " + " | ".join(f"{r[0][i]:.1e}" for r in results.values()) + " |")
     lines += ["", "Contact: " + "; ".join(f"{name}: {r[1]}" for name, r in results.items()), "",
               f"Guard band chosen: {GUARD_TISSUES:g} tissue thicknesses ({GUARD_TISSUES * tissue:g} mm) beyond the "
-              "sampled strain (roughness/simulate/spectral/windows.py GUARD_TISSUES)."]
+              "sampled strain (simulate/spectral/windows.py GUARD_TISSUES)."]
     out = ROOT / "studies" / "results"
     (out / "map_windows.md").write_text("\n".join(lines) + "\n")
     (out / "map_windows.json").write_text(json.dumps({"distances_mm": DISTANCES_MM, "results": results}, indent=1))

@@ -1,6 +1,6 @@
 """The standard scale as designed and as printed by each printer profile (roughness.surface.printing).
 
-Every standard texture (13 wavelengths, seeds 100-104 as in roughness/models/standard_scale.json, 0.05 mm pixels)
+Every standard texture (13 wavelengths, seeds 100-104 as in models/standard_scale.json, 0.05 mm pixels)
 is printed by each shipped profile and by two ablations (the 0.4 mm nozzle's disk alone, with
 negligible layers; 0.2 mm layers alone), and V of the design and of each print is computed with the
 spectral engine (roughness.simulate.spectral.engine.SpectralSimulator, the paper's parameters, tens of

@@ -1,14 +1,14 @@
 """The spectral engine against the FEM reference: the validation set and the convergence panel.
 
 References: the 160 validation textures with their FEM labels converged to 1% (a build of
-``datasets/validation.json``, see ``datasets/build-v2.sh``), and the 24-texture convergence panel's
+``recipes/validation.json``, see ``recipes/build-v2.sh``), and the 24-texture convergence panel's
 P1 h = 0.1 mm results (``studies/results/convergence_panel.jsonl``). For every texture the spectral
 engine runs once per variant of what the infinite layer stands for (``VARIANTS``), so the choice is
 measured, not assumed. Writes
 results/spectral_validation.{jsonl,md} and results/spectral_validation.png.
 
-    roughness dataset build --recipe datasets/validation.json --n 160 --fidelity converged --tolerance 0.01 \\
-        --labels datasets/labels/validation-converged.labels.jsonl.gz --workers 2 --out validation-converged.h5
+    roughness dataset build --recipe recipes/validation.json --n 160 --fidelity converged --tolerance 0.01 \\
+        --labels recipes/labels/validation-converged.labels.jsonl.gz --workers 2 --out validation-converged.h5
     python studies/spectral_validation.py --labels validation-converged.h5
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Measure the standard reference scale (``roughness/models/standard_scale.json``, read by ``roughness.perceptual_scale``).
+"""Measure the standard reference scale (``models/standard_scale.json``, read by ``roughness.perceptual_scale``).
 
 Per fidelity, the mean V of each standard texture (cap-topped bumps at the paper's lambdas, 10 N,
 stick) over several seeds, with its spread; for the FEM also the mean estimated discretization error

@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import tomllib
+
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
@@ -35,6 +37,21 @@ def mesh_cache(tmp_path_factory):
 
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def source_packages() -> dict[str, Path]:
+    """Every package of the source tree by its import name (``roughness.simulate.spectral``), with its folder: the
+    folders pyproject.toml maps to import names ([tool.setuptools.package-dir]) and the packages inside them."""
+    with open(ROOT / "pyproject.toml", "rb") as f:
+        mapping = tomllib.load(f)["tool"]["setuptools"]["package-dir"]
+    return {".".join((name, *init.parent.relative_to(ROOT / folder).parts)): init.parent
+            for name, folder in mapping.items() for init in (ROOT / folder).rglob("__init__.py")}
+
+
+def source_modules() -> dict[str, Path]:
+    """Every module of the package by its import name (a package's ``__init__.py`` by the package's name)."""
+    return {(package if path.stem == "__init__" else f"{package}.{path.stem}"): path
+            for package, folder in source_packages().items() for path in folder.glob("*.py")}
 
 
 @pytest.fixture()

@@ -14,6 +14,7 @@ import pytest
 from matplotlib.figure import Figure
 
 import roughness
+from conftest import source_modules
 from roughness.core.errors import InputError
 from test_packaging import doc_python_blocks
 
@@ -297,7 +298,7 @@ def test_plot_functions_return_figures_and_leave_the_backend(tmp_path):
 
 
 def test_library_code_never_selects_a_backend_or_uses_pyplot():
-    offenders = [f"{path.relative_to(ROOT)}:{i}" for path in (ROOT / "roughness").rglob("*.py")
+    offenders = [f"{path.relative_to(ROOT)}:{i}" for path in source_modules().values()
                  for i, line in enumerate(path.read_text().splitlines(), 1)
                  if re.search(r"matplotlib\.use\(|import matplotlib\.pyplot|from matplotlib import pyplot", line)]
     assert offenders == []

@@ -198,8 +198,8 @@ def test_eta_comes_from_each_engines_time_per_texture():
 
 def test_bad_compare_arguments_exit_2(tmp_path, capsys):
     assert main(["compare", str(tmp_path / "nothing.h5"), "--out", str(tmp_path / "o")]) == 2
-    assert main(["compare", "datasets/validation.json", "--out", str(tmp_path / "o")]) == 2
-    assert main(["compare", "datasets/validation.json", "--n", "2", "--engines", "fem:huge",
+    assert main(["compare", "recipes/validation.json", "--out", str(tmp_path / "o")]) == 2
+    assert main(["compare", "recipes/validation.json", "--n", "2", "--engines", "fem:huge",
                  "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert "not found" in err and "needs --n" in err and "unknown engine 'fem:huge'" in err

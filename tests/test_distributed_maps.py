@@ -1,5 +1,5 @@
-"""Spectral maps larger than one solve: overlapping windows stitched (roughness/simulate/spectral/windows.py), run here or
-on Dask as the dataset build runs (roughness/simulate/spectral/distributed.py), from Python (``roughness.predict_map``)
+"""Spectral maps larger than one solve: overlapping windows stitched (simulate/spectral/windows.py), run here or
+on Dask as the dataset build runs (simulate/spectral/distributed.py), from Python (``roughness.predict_map``)
 and ``roughness predict --map``. MAX_MAP_PIXELS is lowered so that small maps take several windows."""
 from __future__ import annotations
 

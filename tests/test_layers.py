@@ -8,7 +8,8 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+from conftest import source_modules as modules
+
 # lowest first; a module may import its own layer and those below it
 LAYERS = [
     ("roughness.core", "roughness.models"),
@@ -27,12 +28,6 @@ def layer_of(module: str) -> int | None:
         if any(module == p or module.startswith(p + ".") for p in prefixes):
             return level
     return None
-
-
-def modules() -> dict[str, Path]:
-    """Every module of the package by its dotted name."""
-    return {".".join(path.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__"): path
-            for path in (ROOT / "roughness").rglob("*.py")}
 
 
 def imports(module: str, path: Path) -> set[str]:
@@ -64,6 +59,40 @@ def test_every_module_has_a_layer():
 def test_a_module_imports_only_its_own_layer_and_those_below(module, path):
     own = layer_of(module)
     if own is None:
-        return  # roughness/__init__.py: names loaded on first use, from every layer
+        return  # src/roughness/__init__.py: names loaded on first use, from every layer
     upward = sorted(name for name in imports(module, path) if (layer_of(name) or 0) > own)
     assert upward == [], f"{module} (layer {own}) imports from above it: {upward}"
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Each module and the modules it imports (a name imported from a module counts as that module)."""
+    names = modules()
+    graph = {}
+    for module, path in names.items():
+        targets = set()
+        for name in imports(module, path):
+            while name and name not in names:
+                name = name.rpartition(".")[0]
+            if name and name != module:
+                targets.add(name)
+        graph[module] = targets
+    return graph
+
+
+def test_no_module_imports_itself_through_others():
+    """No import circle, lazy imports included: within a layer too, each module sits above what it imports."""
+    graph, done, path = import_graph(), set(), []
+
+    def visit(module: str) -> None:
+        if module in path:
+            raise AssertionError("import circle: " + " -> ".join(path[path.index(module):] + [module]))
+        if module in done:
+            return
+        path.append(module)
+        for target in sorted(graph[module]):
+            visit(target)
+        path.pop()
+        done.add(module)
+
+    for module in sorted(graph):
+        visit(module)

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from conftest import source_modules
 from roughness.cli import COMMANDS, build_parser, main
 from roughness.cli.common import error_message
 from roughness.core.errors import InputError
@@ -86,7 +87,7 @@ CHECK_HELPERS = {"real": 0, "positive": 0, "non_negative": 0, "in_range": 0, "in
 
 def _parameter_names(path: Path) -> list[tuple[int, str]]:
     """(line, name) of every literal parameter name in a file: InputError(..., parameter=...) or its second
-    positional argument, and the name argument of the checks in roughness/core (checks.py, files.py)."""
+    positional argument, and the name argument of the checks in src/roughness/core (checks.py, files.py)."""
     out = []
     for node in ast.walk(ast.parse(path.read_text())):
         if not isinstance(node, ast.Call):
@@ -103,7 +104,7 @@ def _parameter_names(path: Path) -> list[tuple[int, str]]:
 
 
 def _sources() -> list[Path]:
-    return sorted((REPO / "roughness").rglob("*.py"))
+    return sorted(source_modules().values())
 
 
 def test_every_parameter_name_is_a_flag_or_library_only():
@@ -118,7 +119,7 @@ def test_every_parameter_name_is_a_flag_or_library_only():
 
 
 def test_cli_modules_name_their_own_options():
-    """A parameter raised in roughness/cli/X.py (or in a module of one of X's actions) names an option or
+    """A parameter raised in src/roughness/cli/X.py (or in a module of one of X's actions) names an option or
     positional of X's own subcommands."""
     for module in sorted(set(COMMANDS.values())):
         parser = argparse.ArgumentParser()
@@ -126,9 +127,9 @@ def test_cli_modules_name_their_own_options():
         command.add_parser(parser.add_subparsers())
         own = set().union(*(_names(p) for _, p in _leaves(parser)))
         for source in (module, *getattr(command, "ACTIONS", {}).values()):
-            names = _parameter_names(REPO / "roughness" / "cli" / f"{source}.py")
+            names = _parameter_names(source_modules()[f"roughness.cli.{source}"])
             wrong = [(line, name) for line, name in names if name not in own]
-            assert not wrong, f"roughness/cli/{source}.py raises parameters it has no option for: {wrong}"
+            assert not wrong, f"src/roughness/cli/{source}.py raises parameters it has no option for: {wrong}"
 
 
 # --- curved bases: the radius, not the force -----------------------------------------------------------------

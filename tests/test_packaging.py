@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from conftest import _source_copy, source_modules, source_packages
+
 ROOT = Path(__file__).resolve().parents[1]
 GENERIC_NAMES = ("simulate", "dataset", "surrogate", "models")
 PUBLIC_API = ("Heightmap", "InputError", "SimulationError", "load_heightmap", "save_heightmap", "SimConfig",
@@ -41,14 +43,9 @@ def test_wheel_installs_one_top_level_name(installed):
     assert all(line.startswith(("roughness/", "roughness-", "../../../bin/")) for line in record), record[:5]
 
 
-def _source_packages() -> set[str]:
-    """Every package of the source tree, by its installed name (roughness/x/y -> roughness.x.y)."""
-    return {".".join(init.parent.relative_to(ROOT).parts) for init in (ROOT / "roughness").glob("**/__init__.py")}
-
-
 def test_wheel_holds_every_package_of_the_source_tree(installed):
     site = _purelib(installed)
-    missing = [name for name in _source_packages() if not (site / name.replace(".", "/") / "__init__.py").is_file()]
+    missing = [name for name in source_packages() if not (site / name.replace(".", "/") / "__init__.py").is_file()]
     assert not missing, f"packages not in the wheel (pyproject.toml [tool.setuptools] packages): {missing}"
 
 
@@ -76,12 +73,87 @@ print("ok", p.roughness)
     assert out.stdout.startswith("ok")
 
 
-def test_checkout_imports_the_checkout():
-    import roughness
-    import roughness.simulate
+def test_the_suite_runs_the_checkouts_code():
+    """Installed regularly or editable, the package the tests import is this checkout's code, module for module
+    (a stale install fails here, not somewhere deep in the suite)."""
+    import importlib.util
 
-    assert Path(roughness.simulate.__file__).resolve() == ROOT / "roughness" / "simulate" / "__init__.py"
-    assert Path(roughness.__file__).resolve() == ROOT / "roughness" / "__init__.py"
+    stale = [name for name, path in source_modules().items()
+             if Path(importlib.util.find_spec(name).origin).read_bytes() != path.read_bytes()]
+    assert not stale, f"installed modules differ from the checkout (reinstall: pip install .): {stale}"
+
+
+IMPORT_EVERY_MODULE = """
+import importlib, importlib.util, sys
+import roughness
+for name in sys.argv[1:]:
+    importlib.import_module(name)
+assert (roughness.models.MODELS_DIR / "roughness-cnn.onnx").is_file()
+assert importlib.util.find_spec("roughness.roughness") is None
+print(roughness.simulate.__file__)
+"""
+FIND_EVERY_MODULE = """
+import importlib.resources, importlib.util, sys
+for name in sys.argv[1:]:
+    print(importlib.util.find_spec(name).origin)
+assert (importlib.resources.files("roughness.models") / "roughness-cnn.onnx").is_file()
+assert importlib.util.find_spec("roughness.roughness") is None
+"""
+NOT_IMPORTABLE_OUTSIDE = """
+import importlib.util, sys
+for name in ("simulate", "dataset", "surrogate", "models", "src"):
+    spec = importlib.util.find_spec(name)
+    assert spec is None or not str(spec.origin).startswith(sys.argv[1]), (name, spec.origin)
+"""
+
+
+def _imports_every_module(python: Path | str, cwd: Path) -> str:
+    """Import every module of the source tree (``__main__`` modules left out: they run) with ``python`` run in
+    ``cwd``; the file roughness.simulate came from."""
+    names = sorted(name for name in source_modules() if not name.endswith(".__main__"))
+    out = subprocess.run([str(python), "-c", IMPORT_EVERY_MODULE, *names], cwd=cwd, capture_output=True, text=True)
+    assert out.returncode == 0, (cwd, out.stderr[-2000:])
+    return out.stdout.strip()
+
+
+def _nothing_of_the_checkout_importable_outside(python: Path | str, checkout: Path) -> None:
+    out = subprocess.run([str(python), "-c", NOT_IMPORTABLE_OUTSIDE, str(checkout)], cwd="/", capture_output=True,
+                         text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+
+
+def test_every_module_imports_from_the_root_and_from_elsewhere(tmp_path):
+    """The running install (regular or editable) imports every module from the checkout's root and from another
+    folder, finds the shipped models, and has no ``roughness.roughness``; outside the checkout, none of its folders
+    is a package of its own."""
+    assert _imports_every_module(sys.executable, ROOT) == _imports_every_module(sys.executable, tmp_path)
+    _nothing_of_the_checkout_importable_outside(sys.executable, ROOT)
+
+
+def test_an_editable_install_finds_every_module_in_the_checkout(tmp_path):
+    """``pip install -e`` of a copy of the checkout maps the top-level folders to their import names too: every
+    module is found at its file in the copy, from the copy's root and from elsewhere (the packages' ``__init__``
+    files import nothing heavy, so this needs none of the dependencies, which the venv does not see)."""
+    source = _source_copy(tmp_path / "checkout")
+    venv = tmp_path / "venv"
+    # the editable wheel is built by the running environment's setuptools (PEP 660: build_editable), as pip would with
+    # build isolation; the venv's own pip only installs it (its bundled setuptools may predate editable wheels)
+    build = ("import sys; from setuptools import build_meta; "
+             "print(build_meta.build_editable(sys.argv[1]))")
+    out = subprocess.run([sys.executable, "-c", build, str(tmp_path / "dist")], cwd=source, check=True,
+                         capture_output=True, text=True)
+    wheel = tmp_path / "dist" / out.stdout.strip().splitlines()[-1]
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
+    python = venv / "bin" / "python"
+    subprocess.run([str(python), "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", "--ignore-installed",
+                    str(wheel)], check=True, cwd=tmp_path)
+    expected = {name: str(source / path.relative_to(ROOT)) for name, path in source_modules().items()}
+    for cwd in (source, tmp_path):
+        out = subprocess.run([str(python), "-c", FIND_EVERY_MODULE, *expected], cwd=cwd, capture_output=True,
+                             text=True)
+        assert out.returncode == 0, (cwd, out.stderr[-2000:])
+        assert dict(zip(expected, out.stdout.split())) == expected
+    _nothing_of_the_checkout_importable_outside(python, source)
 
 
 def doc_python_blocks() -> dict[str, str]:

@@ -326,7 +326,7 @@ def test_a_cycling_stick_contact_takes_the_fems_tension_tolerance_and_holds():
     from roughness.dataset.recipe import expand, load_recipe, realise
     from roughness.simulate.spectral.contact import LOOSE_TENSION_TOLERANCE
 
-    record = expand(load_recipe(Path(__file__).parents[1] / "datasets" / "validation.json"), 71)[70]  # cellular
+    record = expand(load_recipe(Path(__file__).parents[1] / "recipes" / "validation.json"), 71)[70]  # cellular
     result = SpectralSimulator().run(realise(record))
     assert "cycled" in result.message and result.converged, result.message
     state = result.contact

@@ -381,8 +381,8 @@ def test_shipped_model_matches_its_card_and_data():
     versions and the v2 FEM builds, whose checksums are committed, and its card names them all."""
     assert DEFAULT_MODEL.stat().st_size < 5e6
     meta = SurrogateModel().meta
-    card = (ROOT / "roughness" / "models" / "MODEL_CARD.md").read_text()
-    main, *extra = (json.loads((ROOT / "datasets" / f"{name}.sha256.json").read_text())["inputs_sha256"]
+    card = (ROOT / "models" / "MODEL_CARD.md").read_text()
+    main, *extra = (json.loads((ROOT / "recipes" / f"{name}.sha256.json").read_text())["inputs_sha256"]
                     for name in ("training-v3", "training-v3-printed", "training-v2-default", "training-v2-fine"))
     assert meta.data["inputs_sha256"] == main
     assert [e["inputs_sha256"] for e in meta.multi_fidelity["extra_data"]] == extra
@@ -399,7 +399,7 @@ def test_the_cards_training_command_remakes_the_shipped_models_configuration():
     from roughness.surrogate.card import CARD_OPTIONS
 
     meta = SurrogateModel().meta
-    card = (ROOT / "roughness" / "models" / "MODEL_CARD.md").read_text()
+    card = (ROOT / "models" / "MODEL_CARD.md").read_text()
     command = card[card.index("`roughness train ") + 1:]
     argv = shlex.split(command[:command.index("`")].replace("runK", "run0").replace(" K ", " 0 "))[1:]
     args = vars(build_parser("train").parse_args(argv))
@@ -530,7 +530,7 @@ def test_shipped_int8_model_stays_within_2_percent_of_fp32():
     fp32, int8 = SurrogateModel(DEFAULT_MODEL), SurrogateModel(DEFAULT_MODEL.with_name("roughness-cnn-int8.onnx"))
     standard = standard_patches()[:, 0]
     assert relative_difference(int8.run(standard)[0], fp32.run(standard)[0]).max() < 0.02
-    recipe = load_recipe(ROOT / "datasets" / "validation.json")
+    recipe = load_recipe(ROOT / "recipes" / "validation.json")
     others = np.stack([footprint_patch(realise(sample_record(recipe, i))) for i in range(40)])
     rel = relative_difference(int8.run(others)[0], fp32.run(others)[0])
     assert np.median(rel) < 0.01 and np.percentile(rel, 90) < 0.02
@@ -696,7 +696,7 @@ def test_ensemble_int8_graph_keeps_mean_and_spread(ensemble, tmp_path, capsys):
 
 def test_splits_are_those_the_shipped_model_was_trained_with():
     """The shipped model is scored on the FEM rows at its query spacing: the fine textures of training-v2.json
-    whose committed labels (datasets/labels) estimate a discretization error within the training's limit."""
+    whose committed labels (recipes/labels) estimate a discretization error within the training's limit."""
     from collections import Counter
 
     from roughness.dataset.labels import load_labels
@@ -707,9 +707,9 @@ def test_splits_are_those_the_shipped_model_was_trained_with():
     meta = onnx_metadata(DEFAULT_MODEL)
     config = meta.train_config
     scored = {split: m["n"] + m["n_zero"] for split, m in meta.metrics.items()}  # textures labelled at its query
-    fine = load_labels(ROOT / "datasets" / "labels" / "training-v2-fine.labels.jsonl.gz").labels
+    fine = load_labels(ROOT / "recipes" / "labels" / "training-v2-fine.labels.jsonl.gz").labels
     error = {sid: label.values["discretization_error"] for sid, label in fine.items() if label.values["status"] == "ok"}
-    records = [r for r in expand(load_recipe(ROOT / "datasets" / "training-v2.json"), len(fine))
+    records = [r for r in expand(load_recipe(ROOT / "recipes" / "training-v2.json"), len(fine))
                if error.get(sample_id(r), math.inf) <= config["max_label_error"]]
     counts = Counter(split_of(r, meta.test_fraction, config["val_fraction"], meta.holdout_family) for r in records)
     assert counts == scored and meta.holdout_family == "waffle,knurl"

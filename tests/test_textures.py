@@ -144,7 +144,7 @@ def test_bad_names_and_lambdas_raise_input_error():
         nearest_neighbour_spacing(np.zeros((1, 2)))
 
 
-# Engineered and composite families (roughness/dataset/engineered.py), registered in roughness/dataset/families.py.
+# Engineered and composite families (dataset/engineered.py), registered in dataset/families.py.
 
 ENGINEERED = sorted(engineered.FAMILIES)
 SMALL = {"size_mm": 8.0, "pixel_mm": 0.05}
@@ -252,7 +252,7 @@ def test_shallow_and_mixture_scale_to_their_peak():
 
 
 def test_training_v2_recipe_draws_every_family_and_never_the_held_out_one_inside_composites():
-    recipe = load_recipe(Path(__file__).parents[1] / "datasets" / "training-v2.json")
+    recipe = load_recipe(Path(__file__).parents[1] / "recipes" / "training-v2.json")
     assert recipe.name == "training-v2" and recipe.holdout_family == "knit"
     records = [sample_record(recipe, i) for i in range(400)]
     assert {r["family"] for r in records} == set(recipe.families) == {"bumps", *FAMILIES}

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Trains the Surrogate v2 ensemble (issue 12) on the datasets of datasets/build-v2.sh and exports it
+# Trains the Surrogate v2 ensemble (issue 12) on the datasets of recipes/build-v2.sh and exports it
 # with its int8 graph and model card into RUNS (the shipped files are copied from there by hand):
 #
 #   bash training/train-v2.sh DATA RUNS

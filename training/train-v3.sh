@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# Trains the Surrogate v3 ensemble (issue 29) on the datasets of datasets/build-v3.sh and exports it
+# Trains the Surrogate v3 ensemble (issue 29) on the datasets of recipes/build-v3.sh and exports it
 # with its int8 graph and model card into RUNS (the shipped files are copied from there by hand):
 #
 #   bash training/train-v3.sh DATA RUNS
 #
 # DATA holds training-v3.h5 and training-v3-printed.h5 (110,000 spectral labels) and training-v2-default.h5,
-# training-v2-fine.h5 (FEM labels): datasets/build-v3.sh. Members are trained one after another (2 torch
+# training-v2-fine.h5 (FEM labels): recipes/build-v3.sh. Members are trained one after another (2 torch
 # threads each; MEMBERS, EPOCHS, MINUTES, WIDTHS, HIDDEN, FEM_WEIGHT, HOLDOUT, MODEL_VERSION override the defaults below; the epochs bind,
 # not the minutes, so the learning-rate schedule does not depend on how loaded the machine is); a member whose
 # checkpoint exists is kept and an interrupted member resumes from its last finished epoch (--resume), so the
