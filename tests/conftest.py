@@ -48,6 +48,23 @@ def source_packages() -> dict[str, Path]:
             for name, folder in mapping.items() for init in (ROOT / folder).rglob("__init__.py")}
 
 
+def package_view(dest: Path) -> Path:
+    """``dest`` holding the package as an install lays it out (roughness/, roughness/simulate/, ...), made of symlinks
+    to the checkout's folders: for tools that read source trees rather than import (mypy cannot follow an editable
+    install's import hook)."""
+    with open(ROOT / "pyproject.toml", "rb") as f:
+        mapping = tomllib.load(f)["tool"]["setuptools"]["package-dir"]
+    for name, folder in sorted(mapping.items()):  # "roughness" first: the others go inside it
+        target = dest.joinpath(*name.split("."))
+        if name == "roughness":
+            target.mkdir(parents=True)
+            for child in (ROOT / folder).iterdir():
+                (target / child.name).symlink_to(child)
+        else:
+            target.symlink_to(ROOT / folder)
+    return dest
+
+
 def source_modules() -> dict[str, Path]:
     """Every module of the package by its import name (a package's ``__init__.py`` by the package's name)."""
     return {(package if path.stem == "__init__" else f"{package}.{path.stem}"): path

@@ -14,7 +14,7 @@ import pytest
 from matplotlib.figure import Figure
 
 import roughness
-from conftest import source_modules
+from conftest import package_view, source_modules
 from roughness.core.errors import InputError
 from test_packaging import doc_python_blocks
 
@@ -74,7 +74,7 @@ def test_mypy_passes_on_the_documented_python_examples_and_sees_real_types(tmp_p
     out = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
                           "--cache-dir", str(tmp_path / "cache"), "--no-error-summary", "doc_examples.py",
                           "control.py"], capture_output=True, text=True, cwd=tmp_path,
-                         env={"MYPYPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+                         env={"MYPYPATH": str(package_view(tmp_path / "view")), "PATH": "/usr/bin:/bin"})
     assert out.returncode == 1, out.stdout + out.stderr  # mypy is in the test extra: missing, this fails
     errors = out.stdout.splitlines()
     assert [e for e in errors if e.startswith("doc_examples.py")] == []
