@@ -79,7 +79,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         write_stdout(json_text({"mesh": args.mesh, "texture": args.texture, "mapping": args.mapping,
                                 "region": region.describe(), "out": written.path, "triangles": written.triangles,
-                                "bytes": written.bytes, "preview": None if preview is None else str(preview),
+                                "bytes": written.bytes, "check": written.check.as_dict(), "preview": None if preview is None else str(preview),
                                 "result": result.as_dict(), "notes": notes, "readings": readings(args)}))
     else:
         lines = [written.line(),

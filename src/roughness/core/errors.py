@@ -23,4 +23,5 @@ class OutputExists(InputError):
 
 
 class SimulationError(RuntimeError):
-    """The FEM model could not produce an answer; the message says why (the CLI exits with code 3)."""
+    """An engine could not produce an answer, or a result failed its own check (e.g. a mesh about to be written
+    that is not a closed solid); the message says why (the CLI exits with code 3)."""

@@ -18,11 +18,11 @@ import numpy as np
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write
 from roughness.core.limits import MAX_MESH_FILE_BYTES, MAX_MESH_TRIANGLES, check_size
+from roughness.surface.solid import SolidCheck
+from roughness.surface.stl import require_solid, write_stl
 
 READ_SUFFIXES = (".stl", ".obj", ".ply", ".3mf")
 WRITE_SUFFIXES = (".stl", ".3mf")
-STL_CHUNK_FACES = 1_000_000
-"""Faces packed at once when writing a binary STL (50 MB)."""
 UNIT_MM = {"mm": 1.0, "millimeter": 1.0, "millimeters": 1.0, "millimetre": 1.0, "cm": 10.0, "centimeter": 10.0,
            "m": 1000.0, "meter": 1000.0, "meters": 1000.0, "in": 25.4, "inch": 25.4, "inches": 25.4,
            "um": 1e-3, "micron": 1e-3, "micrometer": 1e-3, "ft": 304.8, "foot": 304.8, "feet": 304.8}
@@ -159,14 +159,15 @@ def _open_edges(mesh) -> int:
 
 @dataclass(frozen=True)
 class Written:
-    """A mesh file written: its path, triangles and bytes."""
+    """A mesh file written: its path, triangles, bytes, and the independent check it passed before it was written."""
 
     path: str
     triangles: int
     bytes: int
+    check: SolidCheck
 
     def line(self) -> str:
-        return f"wrote {self.path}: {self.triangles:,} triangles, {self.bytes / 1e6:.1f} MB"
+        return f"wrote {self.path}: {self.triangles:,} triangles, {self.bytes / 1e6:.1f} MB; {self.check.line()}"
 
 
 def require_mesh_format(path: str | Path, parameter: str = "out") -> Path:
@@ -180,37 +181,29 @@ def require_mesh_format(path: str | Path, parameter: str = "out") -> Path:
 
 
 def write_mesh(mesh, path: str | Path, overwrite: bool = False, parameter: str = "out") -> Written:
-    """Write ``mesh`` as binary STL (streamed in chunks of STL_CHUNK_FACES) or 3MF (mm), atomically; refused if the
-    file exists and not ``overwrite``."""
+    """Write ``mesh`` as binary STL (streamed) or 3MF (mm), atomically, after the independent check of the mesh as
+    the file will hold it (``roughness.surface.solid``: float32 corners in an STL, float64 in a 3MF): SimulationError,
+    and nothing written, unless it is a closed solid; refused if the file exists and not ``overwrite``."""
     path = require_mesh_format(path, parameter)
-    write = _write_stl if path.suffix.lower() == ".stl" else _write_3mf
-    atomic_write(path, lambda tmp: write(mesh, tmp), overwrite)
-    return Written(str(path), len(mesh.faces), os.path.getsize(path))
+    stl = path.suffix.lower() == ".stl"
+    vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    check = require_solid(vertices, faces, str(path), np.float32 if stl else np.float64)
+    if stl:
+        atomic_write(path, lambda tmp: _write_stl(vertices, faces, tmp), overwrite)
+    else:
+        atomic_write(path, lambda tmp: _write_3mf(vertices, faces, tmp), overwrite)
+    return Written(str(path), len(faces), os.path.getsize(path), check)
 
 
-STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
-
-
-def _write_stl(mesh, tmp: str) -> None:
-    vertices = np.asarray(mesh.vertices)
-    faces = np.asarray(mesh.faces)
+def _write_stl(vertices: np.ndarray, faces: np.ndarray, tmp: str) -> None:
     with open(tmp, "wb") as f:
-        f.write(b"roughness textured object, mm".ljust(80, b" "))
-        f.write(struct.pack("<I", len(faces)))
-        for start in range(0, len(faces), STL_CHUNK_FACES):
-            tri = vertices[faces[start:start + STL_CHUNK_FACES]]
-            normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-            length = np.linalg.norm(normal, axis=1, keepdims=True)
-            record = np.zeros(len(tri), dtype=STL_RECORD)
-            record["normal"] = normal / np.where(length > 0, length, 1.0)
-            record["vertices"] = tri
-            f.write(record.tobytes())
+        write_stl(f, vertices, faces, b"roughness textured object, mm")
 
 
-def _write_3mf(mesh, tmp: str) -> None:
+def _write_3mf(vertices: np.ndarray, faces: np.ndarray, tmp: str) -> None:
     import trimesh
 
-    plain = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
+    plain = trimesh.Trimesh(vertices, faces, process=False)
     plain.units = "millimeters"
     with open(tmp, "wb") as f:
         f.write(trimesh.exchange.threemf.export_3MF(plain))

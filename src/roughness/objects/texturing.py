@@ -16,8 +16,9 @@ Steps, each reported in ``TexturedMesh.notes``:
 4. refused (InputError) if the texture is deeper than the surface's radius where it is concave: the offset
    surface folds where the depth exceeds the radius at which the normals converge (estimated on every textured
    edge from the normals at its ends: curvature = -(n_b - n_a).(b - a) / |b - a|^2);
-5. displaced, then checked: every directed edge once and its reverse once (closed and consistently wound), no
-   face turned over, no two faces crossing (``intersections``).
+5. displaced, then checked: no face turned over, a closed solid by an independent check (``roughness.surface.solid``:
+   every edge shared by exactly two triangles, consistently wound, no zero-area triangle), no two faces crossing
+   (``intersections``). Writing the mesh checks it again as the file holds it (``meshes.write_mesh``).
 """
 from __future__ import annotations
 
@@ -31,6 +32,7 @@ import numpy as np
 
 from roughness.core.checks import non_negative, positive
 from roughness.core.errors import InputError
+from roughness.surface.stl import require_solid
 
 from .intersections import folded_faces, self_intersections
 from .mapping import TextureMapping
@@ -232,8 +234,9 @@ def _require_shallower(concave: Concave, depth_mm: float, notes: list[str]) -> N
 
 
 def _check_displaced(refined: Refined, displaced: np.ndarray, clock: _Clock, notes: list[str]) -> None:
-    """InputError if displacing turned a face over; RuntimeError unless the result is closed and consistently wound
-    (step 5; noted in ``notes``)."""
+    """InputError if displacing turned a face over; SimulationError unless the result passes the independent check
+    of a closed solid (``roughness.surface.solid``: watertight, manifold, consistently wound, no zero-area triangle;
+    step 5; noted in ``notes``)."""
     v, f = refined.vertices, refined.faces
     folded = np.concatenate([folded_faces(face_normals(v, f[s:s + CHUNK]), displaced, f[s:s + CHUNK])
                              for s in range(0, len(f), CHUNK)])
@@ -243,9 +246,9 @@ def _check_displaced(refined: Refined, displaced: np.ndarray, clock: _Clock, not
                          f"{y:.2f}, {z:.2f}) mm): the texture is too deep for the mesh there; use a shallower texture, "
                          "smooth the normals (--normal-radius-mm) or a finer mesh", parameter="mapping")
     del folded
-    check_closed(f)
+    notes.append("checked: no face turned over")
+    notes.append(require_solid(displaced, f, "the textured mesh", np.float64).line())
     clock.step("displace, turned-face and closed checks")
-    notes.append("checked: closed, consistently wound, no face turned over")
 
 
 def _check_crossings(refined: Refined, displaced: np.ndarray, relief: _Relief, clock: _Clock,
@@ -336,20 +339,6 @@ def min_concave_radius(vertices: np.ndarray, faces: np.ndarray, normals: np.ndar
             x, y, z = (float(c) for c in (vertices[a[k]] + vertices[b[k]]) / 2)
             where = (x, y, z)
     return Concave(best, where)
-
-
-def check_closed(faces: np.ndarray) -> None:
-    """RuntimeError unless every directed edge occurs once and its reverse once (closed, consistently wound): the
-    refinement guarantees it, so a failure is a bug, not bad input."""
-    n = int(faces.max()) + 1
-    a, b = faces.ravel(), np.roll(faces, -1, axis=1).ravel()
-    # each undirected edge as 2 * key + direction: sorted, a closed consistently wound mesh holds every key exactly
-    # twice, once in each direction
-    code = (np.minimum(a, b) * n + np.maximum(a, b)) * 2 + (a < b)
-    del a, b
-    code.sort()
-    if len(code) % 2 or np.any(code[0::2] % 2 != 0) or np.any(code[1::2] != code[0::2] + 1):
-        raise RuntimeError("the textured mesh is not closed and consistently wound (a bug in the refinement)")
 
 
 def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:

@@ -3,20 +3,27 @@
 The plate's top is the heightmap's surface through the pixel centres (two triangles per cell),
 raised so that its lowest point stands ``base_mm`` above the flat bottom at z = 0; vertical walls
 close the four sides, and the bottom is a fan from its centre to the boundary vertices, so every
-edge is shared by exactly two triangles. Triangles wind counter-clockwise seen from outside.
+edge is shared by exactly two triangles. Triangles wind counter-clockwise seen from outside. Every mesh written
+is first checked as a reader will see it (``roughness.surface.solid``).
 """
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass
+from typing import BinaryIO
 
 import numpy as np
 
 from roughness.core.checks import positive
+from roughness.core.errors import SimulationError
 
 from .heightmap import Heightmap
+from .solid import SolidCheck, check_solid
 
 DEFAULT_BASE_MM = 2.0  # plate thickness below the texture's lowest point (mm)
 STL_RECORD = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attribute", "<u2")])
+STL_CHUNK_FACES = 1_000_000
+"""Faces packed at once when writing a binary STL (50 MB)."""
 
 
 @dataclass(frozen=True)
@@ -53,11 +60,32 @@ def plate(hm: Heightmap, base_mm: float = DEFAULT_BASE_MM) -> Plate:
 
 
 def stl_bytes(mesh: Plate) -> bytes:
-    """Binary STL: an 80-byte header, the triangle count, one 50-byte record per triangle."""
-    corners = mesh.vertices[mesh.triangles]
-    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
-    records = np.zeros(len(corners), dtype=STL_RECORD)
-    records["normal"], records["vertices"] = normals, corners
-    header = b"roughness plate, units: mm".ljust(80, b" ")
-    return header + np.uint32(len(records)).tobytes() + records.tobytes()
+    """Binary STL of a plate, checked as written (``solid.check_solid``; SimulationError if it is not a closed solid,
+    e.g. pixels so small beside the plate's coordinates that float32 corners weld together)."""
+    require_solid(mesh.vertices, mesh.triangles, "the plate")
+    out = io.BytesIO()
+    write_stl(out, mesh.vertices, mesh.triangles, b"roughness plate, units: mm")
+    return out.getvalue()
+
+
+def require_solid(vertices: np.ndarray, faces: np.ndarray, what: str, precision: type = np.float32) -> SolidCheck:
+    """The independent check of a mesh about to be written (``check_solid``); SimulationError naming its defects
+    unless it is a closed solid: the product made it, so a defect is the product's failure, not bad input."""
+    check = check_solid(vertices, faces, precision)
+    if not check.closed:
+        raise SimulationError(f"{what} was not written: it is {check.line()}")
+    return check
+
+
+def write_stl(f: BinaryIO, vertices: np.ndarray, faces: np.ndarray, header: bytes) -> None:
+    """Binary STL (mm) of ``faces`` over ``vertices`` to ``f``: an 80-byte header, the triangle count, one 50-byte
+    record per triangle, packed STL_CHUNK_FACES at a time."""
+    f.write(header.ljust(80, b" ")[:80])
+    f.write(np.uint32(len(faces)).tobytes())
+    for start in range(0, len(faces), STL_CHUNK_FACES):
+        corners = vertices[faces[start:start + STL_CHUNK_FACES]]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
+        records = np.zeros(len(corners), dtype=STL_RECORD)
+        records["normal"], records["vertices"] = normals, corners
+        f.write(records.tobytes())
