@@ -147,3 +147,16 @@ def test_a_mesh_broken_inside_the_pipeline_is_never_called_closed(cad_part, caps
     err = capsys.readouterr().err
     assert code == 3 and "NOT a closed solid" in err and "3 open edges" in err and "Traceback" not in err
     assert not (cad_part / "broken.stl").exists()
+
+
+def test_an_input_that_crosses_itself_is_named_as_such_not_as_a_texture_too_deep(cad_part, capsys, monkeypatch):
+    a = trimesh.creation.box((10, 10, 10))
+    b = trimesh.creation.box((10, 10, 10))
+    b.apply_translation((5.37, 5.29, 5.31))  # general position: no vertex of one on a face plane of the other
+    trimesh.util.concatenate([a, b]).export(cad_part / "two_boxes.stl")
+    monkeypatch.chdir(cad_part)
+    code = main(["object", "texture", "two_boxes.stl", "--texture", "shallow.npy", "--pixel-mm", "0.05",
+                 "--edge-mm", "1", "--out", "crossing.stl"])
+    err = capsys.readouterr().err
+    assert code == 2 and "MESH: the mesh crosses itself before any texture is applied" in err, err
+    assert "too deep" not in err and not (cad_part / "crossing.stl").exists()

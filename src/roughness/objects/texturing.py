@@ -34,7 +34,7 @@ from roughness.core.checks import non_negative, positive
 from roughness.core.errors import InputError
 from roughness.surface.stl import require_solid
 
-from .intersections import folded_faces, self_intersections
+from .intersections import folded_faces, self_intersections, triangles_cross
 from .mapping import TextureMapping
 from .meshes import require_closed
 from .normals import face_normals, smoothed, vertex_normals
@@ -257,6 +257,13 @@ def _check_crossings(refined: Refined, displaced: np.ndarray, relief: _Relief, c
     f = refined.faces
     crossing = self_intersections(displaced, f, relief.moving[f].any(axis=1))
     if crossing.count:
+        i, j = crossing.pairs.T
+        before = triangles_cross(refined.vertices[f[i]], refined.vertices[f[j]])
+        if before.any():  # the input crossed itself there already: no texture depth would help
+            x, y, z = refined.vertices[f[i[before][0]]].mean(axis=0)
+            raise InputError(f"the mesh crosses itself before any texture is applied: {int(before.sum()):,} pairs of "
+                             f"faces intersect (first near ({x:.2f}, {y:.2f}, {z:.2f}) mm); repair it first (e.g. "
+                             "in a slicer or MeshLab)", parameter="mesh")
         x, y, z = displaced[f[crossing.pairs[0, 0]]].mean(axis=0)
         raise InputError(f"the textured mesh crosses itself: {crossing.count:,} pairs of faces intersect (first "
                          f"near ({x:.2f}, {y:.2f}, {z:.2f}) mm): the texture is too deep where parts of the object "
