@@ -66,6 +66,20 @@ def test_report_tables_plots_and_numbers(tiny_set, tmp_path, capsys):
     assert "| fem:coarse | fem | 12 | 0 |" in (out / "table.md").read_text().replace("†", "")
     assert [line for line in (out / "table.md").read_text().splitlines() if "†" in line] == [
         line for line in (out / "table.md").read_text().splitlines() if line.startswith("| fem:coarse")]
+    # each result keeps its error bars, absolute (V units) and relative named apart; none for classical measures
+    assert {r["stderr_abs"] for r in stored.values()} == {1e-4}
+    assert {r["discretization_rel"] for r in stored.values()} == {None}
+    from roughness.dataset.reader import open_dataset
+    from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
+
+    model = SurrogateModel(DEFAULT_MODEL)
+    with open_dataset(tiny_set) as data:
+        for r in (r for r in results if r["engine"] == "surrogate"):
+            spread = model.evaluate(model.patch(data.heightmap(r["texture"]), None, False)[None]).roughness_std[0]
+            assert r["ensemble_std_abs"] == pytest.approx(float(spread), rel=1e-6) and r["ensemble_std_abs"] > 0
+            assert r["stderr_abs"] is None and r["discretization_rel"] is None
+    assert all(r["stderr_abs"] is r["ensemble_std_abs"] is r["discretization_rel"] is None
+               for r in results if r["engine"] == "ra")
     # the surrogate's numbers follow from the cached results
     mine = {r["key"]: r["value"] for r in results if r["engine"] == "surrogate"}
     rel = [abs(mine[k] - stored[k]["value"]) / stored[k]["value"] for k in mine]
@@ -218,7 +232,7 @@ def test_classical_measures():
     assert classical.glcm_sum_of_squares(noise) == pytest.approx((32**2 - 1) / 12, rel=0.03)
     assert classical.glcm_sum_variance(noise) == pytest.approx(2 * (32**2 - 1) / 12, rel=0.03)
     hm = Heightmap(np.zeros((240, 240)), 0.05)
-    assert make_engine("ra").measure(hm)[0] == 0
+    assert make_engine("ra").measure(hm).value == 0
     with pytest.raises(InputError, match="valid"):
         make_engine("glcm")
 

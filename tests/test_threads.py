@@ -106,6 +106,6 @@ def test_threads_sharing_a_fem_engine_prepare_it_once_and_give_the_sequential_an
     monkeypatch.setattr(prepared, "SHARED", Simulator())
     engine = FemEngine.of("coarse", CONFIG.as_dict())
     with ThreadPoolExecutor(THREADS) as pool:
-        values = list(pool.map(lambda record: engine.measure(realise(record))[0], records * REPEATS))
+        values = list(pool.map(lambda record: engine.measure(realise(record)).value, records * REPEATS))
     assert values == [v for v, _ in sequential] * REPEATS
     assert engine.setup_seconds > 0 and len(prepared.SHARED._blocks) == 2  # the level and its coarser one

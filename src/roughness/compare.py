@@ -4,7 +4,8 @@ Inputs: a dataset file (its stored FEM labels serve as results of ``fem:<its fid
 ``fem:converged@TOL`` for a build converged to another tolerance than the default, when its
 simulation parameters are the defaults), a folder of heightmaps, or a recipe JSON (its first
 ``n`` samples). Results go to ``results.jsonl`` in the output folder as they arrive, one line per
-(engine, texture), keyed by the texture's content (its heights and pixel size) and the engine's
+(engine, texture), with its uncertainties (``engines.Measurement``: ``stderr_abs`` and ``ensemble_std_abs`` in V
+units, ``discretization_rel`` a fraction of V; null where the engine has none), keyed by the texture's content (its heights and pixel size) and the engine's
 identity (configuration, model file); a rerun reads it and computes only what is missing, so an
 interrupted comparison resumes, FEM results are never recomputed, and a replaced file or another
 ``--pixel-mm`` is computed afresh. The folder's manifest (``compare.json``: input, number of
@@ -16,6 +17,7 @@ Textures run one at a time, every engine in turn, in one process: the times are 
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 import weakref
@@ -29,7 +31,7 @@ from roughness.core.files import atomic_write, check_output_folder
 from roughness.core.status_line import StatusLine
 from roughness.surface.heightmap import Heightmap
 
-from .engines import FEM_FIDELITIES, Engine, fem_identity, fem_spec
+from .engines import FEM_FIDELITIES, Engine, Measurement, fem_identity, fem_spec
 from .result_cache import ResultCache, content_key
 
 MANIFEST_FILE = "compare.json"  # what the report in a folder compares: input, reference, engines
@@ -60,10 +62,19 @@ def dataset_textures(path: Path) -> tuple[list[Texture], dict[str, dict[str, dic
     stored: dict[str, dict[str, dict]] = {}
     if fidelity in FEM_FIDELITIES and fem_identity(simulation) == fem_identity(SimConfig(
             fidelity=fidelity, tolerance=simulation.get("tolerance", SimConfig.tolerance)).as_dict()):
-        stored[fem_spec(simulation)] = {str(table["id"][i]): {"value": float(table["V"][i]),
-                                                          "seconds": float(table["seconds"][i]), "source": STORED}
-                                     for i in ok}
+        stored[fem_spec(simulation)] = {str(table["id"][i]): {**_stored_measurement(table, i).fields(),
+                                                          "source": STORED} for i in ok}
     return textures, stored
+
+
+def _stored_measurement(table: dict, i: int) -> Measurement:
+    """A dataset's FEM result for sample ``i`` with its uncertainties (missing ones, nan in the file: None)."""
+    def known(name: str) -> float | None:
+        value = float(table[name][i]) if name in table else math.nan
+        return value if math.isfinite(value) else None
+
+    return Measurement(float(table["V"][i]), float(table["seconds"][i]), known("V_stderr"),
+                       known("discretization_error"))
 
 
 class _DatasetSamples:
@@ -222,7 +233,7 @@ def run(textures: list[Texture], engines: list[Engine], cache: ResultCache,
             for engine in pending[texture.name]:
                 setup, start = engine.setup_seconds, time.perf_counter()
                 try:
-                    value, seconds = engine.measure(heightmap)
+                    measured = engine.measure(heightmap)
                 except InputError as err:  # the texture does not suit the engine (e.g. smaller than the footprint)
                     _input_error(outcome, texture.name, err)
                     del outcome.keys[texture.name]  # not compared: listed with its reason instead
@@ -231,7 +242,7 @@ def run(textures: list[Texture], engines: list[Engine], cache: ResultCache,
                     cache.put(engine.spec, key, texture=texture.name, value=None, seconds=None,
                               error=f"{type(err).__name__}: {err}")
                 else:
-                    cache.put(engine.spec, key, texture=texture.name, value=value, seconds=seconds, error=None,
+                    cache.put(engine.spec, key, texture=texture.name, **measured.fields(), error=None,
                               source="computed")
                     if engine.setup_seconds and cache.get(engine.spec, SETUP_KEY) is None:
                         cache.put(engine.spec, SETUP_KEY, seconds=engine.setup_seconds)

@@ -5,13 +5,16 @@ Used by ``roughness compare``, the design tools and ``roughness.predict`` (``rou
 Spec strings (compare): ``fem:coarse``, ``fem:default``, ``fem:fine``, ``fem:converged`` (or ``fem:converged@TOL``,
 refined to the relative tolerance TOL instead of the default 0.03), ``surrogate`` (or
 ``surrogate:PATH.onnx``), ``spectral``, and the classical measures ``ra``, ``p90``, ``glcm_sum_of_squares``,
-``glcm_sum_variance``. Each engine returns a value and the seconds it took for one texture: FEM
+``glcm_sum_variance``. Each engine returns a ``Measurement`` for one texture: the value, the seconds it took and
+its uncertainties (FEM: Monte Carlo standard error and discretization error; spectral: Monte Carlo standard error;
+surrogate ensemble: the members' spread; named ``_abs`` in V units or ``_rel`` as a fraction of V). FEM
 reports the solve with its block prepared (mesh, assembly and base field are paid once per process
 and reported as ``setup_seconds``); the surrogate and the measures are timed end to end from the
 heightmap.
 """
 from __future__ import annotations
 
+import math
 import threading
 import time
 from dataclasses import dataclass, field, replace
@@ -34,14 +37,32 @@ if TYPE_CHECKING:
 FEM_FIDELITIES = ("coarse", "default", "fine", "converged")
 
 
+@dataclass(frozen=True)
+class Measurement:
+    """One engine's value for one texture, the seconds it took, and how sure the value is. Absolute uncertainties
+    are in the value's units (``_abs``), relative ones a fraction of the value (``_rel``); None: the engine has no
+    such estimate (classical measures have none)."""
+
+    value: float
+    seconds: float
+    stderr_abs: float | None = None  # FEM, spectral: Monte Carlo standard error of V (V units)
+    discretization_rel: float | None = None  # FEM: estimated relative error of V from the mesh
+    ensemble_std_abs: float | None = None  # surrogate ensemble: spread of V over its members (V units)
+
+    def fields(self) -> dict:
+        """The fields a result line stores (``results.jsonl``)."""
+        return {"value": self.value, "seconds": self.seconds, "stderr_abs": self.stderr_abs,
+                "discretization_rel": self.discretization_rel, "ensemble_std_abs": self.ensemble_std_abs}
+
+
 class Engine(Protocol):
     spec: str
     kind: str  # "fem", "surrogate" or "classical" (a measure, not an estimate of V)
     setup_seconds: float
     identity: str  # what the results depend on (configuration, model file): cached results must match it
 
-    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
-        """(value, seconds) for one texture."""
+    def measure(self, heightmap: Heightmap) -> Measurement:
+        """The value for one texture, its seconds and its uncertainties."""
 
 
 def fem_identity(simulation: dict) -> str:
@@ -78,9 +99,11 @@ class SimulatorEngine:
                 self.setup_seconds, self._prepared = time.perf_counter() - start, True
         return prepared.simulate(self.config, heightmap, self.centre_mm, self.tile, self.kind)
 
-    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
+    def measure(self, heightmap: Heightmap) -> Measurement:
         result = self.simulate(heightmap)
-        return result.roughness, result.seconds
+        error = getattr(result, "discretization_error", None)  # the spectral engine has no mesh
+        return Measurement(result.roughness, result.seconds, result.roughness_stderr,
+                           error if error is not None and math.isfinite(error) else None)
 
 
 @dataclass
@@ -168,11 +191,12 @@ class SurrogateEngine:
                 self.setup_seconds = time.perf_counter() - start
         return self._model
 
-    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
+    def measure(self, heightmap: Heightmap) -> Measurement:
         model = self.model
         start = time.perf_counter()
         estimate = model.evaluate(model.patch(heightmap, None, False)[None])
-        return float(estimate.roughness[0]), time.perf_counter() - start
+        spread = None if estimate.roughness_std is None else float(estimate.roughness_std[0])
+        return Measurement(float(estimate.roughness[0]), time.perf_counter() - start, ensemble_std_abs=spread)
 
 
 @dataclass
@@ -182,10 +206,10 @@ class ClassicalEngine:
     setup_seconds: float = 0.0
     identity: str = "classical-1"  # bump when a measure's definition changes
 
-    def measure(self, heightmap: Heightmap) -> tuple[float, float]:
+    def measure(self, heightmap: Heightmap) -> Measurement:
         start = time.perf_counter()
         value = MEASURES[self.spec](footprint(heightmap))
-        return value, time.perf_counter() - start
+        return Measurement(value, time.perf_counter() - start)
 
 
 def fem_spec(simulation: dict) -> str:
