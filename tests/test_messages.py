@@ -6,6 +6,7 @@ import argparse
 import ast
 import itertools
 import json
+import re
 from importlib import import_module
 from pathlib import Path
 from types import SimpleNamespace
@@ -68,7 +69,6 @@ LIBRARY_ONLY = {
     # fields of a recipe file (load_recipe names the file and drops the parameter) or of --param KEY=VALUE
     "families": "recipe field", "ranges": "recipe field", "perturb_probability": "recipe field",
     "print_probability": "recipe field", "printers": "recipe field",
-    "half_angle_deg": "objects.regions.Region field (the CLI's --region cone:AX,AY,AZ,DEG is parsed into it)",
     "reach_mm": "objects.sampling.sample_heightmap(reach_mm): a library function the CLI does not call",
     "max_perturb_steps": "recipe field", "test_fraction": "recipe field", "max_steps": "perturbation (recipe)",
     "hurst": "texture parameter (--param)", "rms_mm": "texture parameter (--param)",
@@ -302,3 +302,19 @@ def test_a_stimulus_without_roughness_is_named(tmp_path, capsys):
     code, err = _cli(["perception", "simulate", "--stimuli", table, "--truth", truth, "--trials", "20",
                       "--out", tmp_path / "sim"], capsys)
     assert code == 2 and "not so for: standard-1.0 (V = 0)" in err
+
+
+# --- a flag parsed into several fields names the flag, never a field ---------------------------------------------
+
+@pytest.mark.parametrize("text", ["cone:0,0,1,1e300", "cone:0,0,1,-1", "cone:0,0,0,10", "cone:nan,0,1,10",
+                                  "box:0,0,0,nan,1,1", "box:1,1,1,0,0,0", "colour:300,0,0", "colour:1,2,3,300",
+                                  "colour:1,2,3,-1", "cone:1,2", "foo:1"])
+def test_region_errors_name_the_region_in_words(text):
+    """--region is parsed into Region fields (axis, half_angle_deg, low, high, tolerance): an error in any of them is
+    the --region flag's, worded as parts of the region, so the CLI never shows a Python field name."""
+    from roughness.objects.regions import parse_region
+
+    with pytest.raises(InputError) as caught:
+        parse_region(text)
+    assert caught.value.parameter == "region"
+    assert not re.search(r"(^|[^' \w])(axis|low|high|tolerance)\b|half_angle_deg", str(caught.value)), str(caught.value)

@@ -7,7 +7,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughness.core.checks import in_range, non_negative
 from roughness.core.errors import InputError
 
 KINDS = ("all", "cone", "box", "colour")
@@ -40,10 +39,10 @@ class Region:
             if getattr(self, name) is None:
                 raise InputError(f"a {self.kind} region needs {name}", parameter="region")
         if self.kind == "cone":
-            _vector("axis", self.axis, nonzero=True)
-            in_range("half_angle_deg", self.half_angle_deg, 0.0, 180.0)
+            _vector("the cone's axis", self.axis, nonzero=True)
+            _number_between("the cone's half angle (degrees)", self.half_angle_deg, 0.0, 180.0)
         if self.kind == "box":
-            low, high = _vector("low", self.low), _vector("high", self.high)
+            low, high = _vector("the box's low corner", self.low), _vector("the box's high corner", self.high)
             if not np.all(low < high):
                 raise InputError(f"the box's low corner {self.low} must lie below its high corner {self.high} on "
                                  "every axis", parameter="region")
@@ -51,9 +50,7 @@ class Region:
             rgb = np.asarray(self.colour, dtype=float).reshape(-1)
             if rgb.shape != (3,) or not np.all((rgb >= 0) & (rgb <= 255)):
                 raise InputError(f"a colour is three numbers 0-255 (R, G, B), got {self.colour!r}", parameter="region")
-            in_range("tolerance", self.tolerance, 0.0, 255.0)
-        else:
-            non_negative("tolerance", self.tolerance)
+            _number_between("the colour's tolerance (per channel, 0-255)", self.tolerance, 0.0, 255.0)
 
     def faces(self, mesh) -> np.ndarray:
         """Boolean mask (faces,) of the faces selected in ``mesh`` (a trimesh)."""
@@ -61,7 +58,7 @@ class Region:
         if self.kind == "all":
             return np.ones(n, dtype=bool)
         if self.kind == "cone":
-            axis = _vector("axis", self.axis, nonzero=True)
+            axis = _vector("the cone's axis", self.axis, nonzero=True)
             cosine = np.asarray(mesh.face_normals) @ (axis / np.linalg.norm(axis))
             return cosine >= math.cos(math.radians(float(self.half_angle_deg or 0.0))) - 1e-12
         if self.kind == "box":
@@ -95,12 +92,25 @@ def face_colours(mesh) -> np.ndarray | None:
     return vertex[np.asarray(mesh.faces)].mean(axis=1)
 
 
-def _vector(name: str, value: object, nonzero: bool = False) -> np.ndarray:
-    v = np.asarray(value, dtype=float).reshape(-1) if value is not None else np.empty(0)
+def _vector(what: str, value: object, nonzero: bool = False) -> np.ndarray:
+    """``value`` as three finite numbers (not all 0 if ``nonzero``); InputError naming ``what`` (a part of the
+    region, in words: the CLI's --region has no flag per part)."""
+    try:
+        v = np.asarray(value, dtype=float).reshape(-1) if value is not None else np.empty(0)
+    except (TypeError, ValueError):
+        v = np.empty(0)
     if v.shape != (3,) or not np.all(np.isfinite(v)) or (nonzero and not np.any(v)):
-        raise InputError(f"{name} must be three finite numbers{' not all 0' if nonzero else ''}, got {value!r}",
+        raise InputError(f"{what} must be three finite numbers{' not all 0' if nonzero else ''}, got {value!r}",
                          parameter="region")
     return v
+
+
+def _number_between(what: str, value: object, low: float, high: float) -> float:
+    """``value`` as a number in [low, high]; InputError naming ``what`` in words, as ``_vector``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) or not (
+            low <= float(value) <= high):
+        raise InputError(f"{what} must be a number from {low:g} to {high:g}, got {value!r}", parameter="region")
+    return float(value)
 
 
 def parse_region(text: str) -> Region:
