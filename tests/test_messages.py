@@ -318,3 +318,35 @@ def test_region_errors_name_the_region_in_words(text):
         parse_region(text)
     assert caught.value.parameter == "region"
     assert not re.search(r"(^|[^' \w])(axis|low|high|tolerance)\b|half_angle_deg", str(caught.value)), str(caught.value)
+
+
+# --- an optional dependency missing: the extra that installs it, never a traceback --------------------------------
+
+BLOCK_AND_RUN = """
+import importlib.abc, sys
+class Missing(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path, target=None):
+        if name.partition(".")[0] == sys.argv[1]:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+sys.meta_path.insert(0, Missing())
+from roughness.cli import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
+@pytest.mark.parametrize("module, extra, argv", [
+    ("trimesh", "objects", ["object", "texture", "mesh.stl", "--texture", "standard-1.0", "--out", "new.stl"]),
+    ("trimesh", "objects", ["object", "feel", "mesh.stl", "--texture", "standard-1.0"]),
+    ("trimesh", "objects", ["object", "tune", "mesh.stl", "--texture", "standard-1.0", "--target-lambda", "1",
+                            "--out", "new.npz"]),
+    ("cvxpy", "perception", ["perception", "embed", "trials.csv", "--out", "emb", "--folds", "2", "--resamples", "2",
+                             "--workers", "1"]),
+])
+def test_a_missing_optional_dependency_names_its_extra(module, extra, argv, workdir):
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", BLOCK_AND_RUN, module, *argv], cwd=workdir, capture_output=True,
+                         text=True)
+    assert out.returncode == 2, out.stderr
+    assert module in out.stderr and f"roughness[{extra}]" in out.stderr and "Traceback" not in out.stderr

@@ -49,6 +49,11 @@ def _command(argv: list[str]) -> str | None:
     return word if word in COMMANDS else None
 
 
+# the optional dependencies (pyproject.toml's extras) by the name they import as
+EXTRA_OF = {"trimesh": "objects", "rtree": "objects", "lxml": "objects", "torch": "train", "onnx": "train",
+            "onnxscript": "train", "sklearn": "train", "cvxpy": "perception", "SurfaceTopography": "scans"}
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     parser = build_parser(_command(argv))
@@ -66,8 +71,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"roughness: error: {error_message(err, getattr(args, 'flags', {}))}", file=sys.stderr)
         return 2
     except SimulationError as err:
-        print(f"roughness: simulation failed: {err}", file=sys.stderr)
+        print(f"roughness: failed: {err}", file=sys.stderr)
         return 3
+    except ModuleNotFoundError as err:  # an optional dependency of this command: name the extra that installs it
+        extra = EXTRA_OF.get((err.name or "").partition(".")[0])
+        if extra is None:
+            raise
+        print(f"roughness: error: this command needs {err.name}, which the '{extra}' extra installs: pip install "
+              f"\"roughness[{extra}]\" (from a checkout: pip install \".[{extra}]\")", file=sys.stderr)
+        return 2
     except OSError as err:
         print(f"roughness: error: {err}", file=sys.stderr)
         return 2
