@@ -93,3 +93,14 @@ def test_cli_tactile_image_from_a_palette(palette_dir, tmp_path, capsys):
     for name in ("plate.npz", "plate.json", "relief.png", "roughness_map.png"):
         assert (out / name).stat().st_size > 0
     assert main(["tactile-image", str(tmp_path / "picture.png"), "--palette", str(pal), "--out", str(out)]) == 2
+
+
+def test_progress_names_the_verifier_that_answered():
+    """Under a spectral verifier the progress lines say so (they said "FEM lambda" whatever the verifier)."""
+    lines: list[str] = []
+    names = [0.625, 1.625]
+    candidates = [(f"standard-{lam}", standard_texture(lam, seed=2)) for lam in names]
+    spectral = Evaluator(fidelity="spectral")
+    folder_palette(candidates, 2, 3.0, spectral, progress=lines.append)
+    family_palette(2, 2.0, evaluator=spectral, progress=lines.append)
+    assert len(lines) == 4 and all(line.count("spectral") == 1 and "FEM" not in line for line in lines), lines

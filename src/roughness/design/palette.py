@@ -130,7 +130,7 @@ def family_palette(k: int, min_jnd: float = 2.0, family: str = DEFAULT_FAMILY, b
         members.append(Member(f"texture-{i + 1}", result.heightmap, result.achieved, result.surrogate_roughness,
                               {**recipe, "by": by, "factor": result.factor, "target_lambda_mm": lam}))
         if progress:
-            progress(f"texture {i + 1}/{k}: {by} x {result.factor:.3f}, FEM lambda "
+            progress(f"texture {i + 1}/{k}: {by} x {result.factor:.3f}, {evaluator.verifier} lambda "
                      f"{result.achieved.equivalent_lambda_mm:.3f} mm ({result.jnd_error:+.2f} JND from {lam:.3f})")
     return Palette(tuple(members), min_jnd, _distances(members), f"family {family} by {by}")
 
@@ -208,7 +208,8 @@ def folder_palette(candidates: list[tuple[str, Heightmap]], k: int, min_jnd: flo
             fem[i] = evaluator.verify(candidates[i][1], tile=tile)
             log_lam[i] = math.log(fem[i].equivalent_lambda_mm) / LOG_JND
             if progress:
-                progress(f"FEM {candidates[i][0]}: V {fem[i].roughness:.4f}, lambda {fem[i].equivalent_lambda_mm:.3f} mm")
+                progress(f"{evaluator.verifier} {candidates[i][0]}: V {fem[i].roughness:.4f}, "
+                         f"lambda {fem[i].equivalent_lambda_mm:.3f} mm")
     chosen, gap = widest_selection(log_lam, k)
     if gap < min_jnd or any(i not in fem for i in chosen):
         raise InputError(f"no {k} of the {len(candidates)} textures are {min_jnd:g} JND apart: the best choice "
