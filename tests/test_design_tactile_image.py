@@ -99,3 +99,15 @@ def test_strain_image_tiles_fem_windows_over_the_plate():
     assert abs(left.mean()) < 1e-9 and abs(right.mean()) < 1e-9  # each window shown minus its mean
     x0, x1, y1, y0 = plate.strain_extent_mm
     assert (x0, x1, y0, y1) == pytest.approx((1.0, 17.0, 1.0, 9.0))  # centres x 5, 13 mm; y 5 mm
+
+
+@pytest.mark.parametrize("pixels", [[[0, 255]], [[0], [255]], [[0, 255], [255, 0]], [[0, 255, 0]]])
+def test_a_picture_of_a_few_pixels_has_its_flat_colours(pixels):
+    """In a picture so small that every pixel is on an edge, no pixel has four like neighbours: every pixel counts
+    (a valid two-pixel, two-colour picture was refused as having no flat colour)."""
+    grey = np.array(pixels, dtype=np.uint8)
+    colours, labels = flat_colours(np.repeat(grey[..., None], 3, axis=2))
+    assert colours.tolist() == [[255, 255, 255], [0, 0, 0]]
+    assert (labels == (grey == 0)).all()
+    with pytest.raises(InputError, match="fewer than 2 flat colours"):
+        flat_colours(np.zeros((1, 2, 3), dtype=np.uint8))

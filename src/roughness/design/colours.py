@@ -3,7 +3,8 @@
 Colours are compared in CIELAB (D65), where a distance (Delta E 1976) of about 2.3 is just noticeable to the
 eye and flat colours a designer tells apart are tens of units apart. A pixel is *flat* when its four
 neighbours are all within the tolerance of it: inside a region, not on an edge whose blend steps exceed the
-tolerance. Flat pixels' colours are grouped greedily: the most frequent ungrouped colour leads a group of
+tolerance (in a picture so small that every pixel is on an edge, every pixel counts as flat). Flat pixels'
+colours are grouped greedily: the most frequent ungrouped colour leads a group of
 every ungrouped colour within the tolerance of it, until all are grouped. Groups covering at least
 ``min_fraction`` of the picture's pixels are its flat colours; their centres are refined (a few k-means steps
 on the flat pixels), and every pixel, edges included, joins the nearest centre. Pixels farther than the
@@ -84,8 +85,10 @@ def cluster_colours(rgb: np.ndarray, tolerance: float = TOLERANCE, min_fraction:
     index = lookup[codes].reshape(rgb.shape[:2])
     del lookup, codes
     colour_lab = lab(colours)
-    weight = np.bincount(index[_flat_pixels(index, colour_lab, tolerance * FLAT_STEP)],
-                         minlength=len(present)).astype(float)
+    flat_pixels = _flat_pixels(index, colour_lab, tolerance * FLAT_STEP)
+    if not flat_pixels.any():  # every pixel on an edge (a picture of a few pixels): every pixel counts
+        flat_pixels[:] = True
+    weight = np.bincount(index[flat_pixels], minlength=len(present)).astype(float)
     centres = _groups(colours, colour_lab, weight, tolerance, min_fraction * index.size, source)
     if len(centres) < 2:
         _too_few(colours, counts[present], centres, weight.sum() / index.size, tolerance, min_fraction, source)
