@@ -103,8 +103,9 @@ def test_strain_image_tiles_fem_windows_over_the_plate():
 
 @pytest.mark.parametrize("pixels", [[[0, 255]], [[0], [255]], [[0, 255], [255, 0]], [[0, 255, 0]]])
 def test_a_picture_of_a_few_pixels_has_its_flat_colours(pixels):
-    """In a picture so small that every pixel is on an edge, no pixel has four like neighbours: every pixel counts
-    (a valid two-pixel, two-colour picture was refused as having no flat colour)."""
+    """In a picture of one or two rows or columns every pixel is on its border, and none may have like neighbours:
+    then every pixel counts (a valid two-pixel, two-colour picture was refused as having no flat colour); noise
+    in a larger picture is still refused (tests/test_design_inputs.py)."""
     grey = np.array(pixels, dtype=np.uint8)
     colours, labels = flat_colours(np.repeat(grey[..., None], 3, axis=2))
     assert colours.tolist() == [[255, 255, 255], [0, 0, 0]]

@@ -3,7 +3,7 @@
 Colours are compared in CIELAB (D65), where a distance (Delta E 1976) of about 2.3 is just noticeable to the
 eye and flat colours a designer tells apart are tens of units apart. A pixel is *flat* when its four
 neighbours are all within the tolerance of it: inside a region, not on an edge whose blend steps exceed the
-tolerance (in a picture so small that every pixel is on an edge, every pixel counts as flat). Flat pixels'
+tolerance (in a picture of one or two rows or columns where none is, every pixel counts as flat). Flat pixels'
 colours are grouped greedily: the most frequent ungrouped colour leads a group of
 every ungrouped colour within the tolerance of it, until all are grouped. Groups covering at least
 ``min_fraction`` of the picture's pixels are its flat colours; their centres are refined (a few k-means steps
@@ -86,8 +86,8 @@ def cluster_colours(rgb: np.ndarray, tolerance: float = TOLERANCE, min_fraction:
     del lookup, codes
     colour_lab = lab(colours)
     flat_pixels = _flat_pixels(index, colour_lab, tolerance * FLAT_STEP)
-    if not flat_pixels.any():  # every pixel on an edge (a picture of a few pixels): every pixel counts
-        flat_pixels[:] = True
+    if min(index.shape) < 3 and not flat_pixels.any():  # one or two rows or columns: no pixel inside the picture
+        flat_pixels[:] = True  # for the four-neighbour test to tell a region's inside from its edge, so all count
     weight = np.bincount(index[flat_pixels], minlength=len(present)).astype(float)
     centres = _groups(colours, colour_lab, weight, tolerance, min_fraction * index.size, source)
     if len(centres) < 2:
