@@ -11,7 +11,7 @@ import numpy as np
 
 from roughness.core.errors import InputError
 
-from .layout import MAPS, group_maps, open_h5, part_ids, parts_folder, read_index, read_part
+from .layout import MAPS, open_h5, part_ids, parts_folder, read_index, read_part, sample_maps
 from .reader import open_dataset
 from .schema import OPTIONAL_FLOATS, RESULT_ATTRS, STATUSES, Entry, header_problems, sample_id
 
@@ -47,7 +47,8 @@ def _span(values: np.ndarray) -> list[float] | None:
 
 
 def verify(path: str | os.PathLike) -> list[str]:
-    """Problems found in a dataset (empty: all good); InputError if the file is missing or not HDF5."""
+    """Problems found in a dataset (empty: all good), damage included (an index, sample or part file HDF5 or NumPy
+    cannot read); InputError if the file is missing or not HDF5 (no dataset to verify)."""
     path = Path(path)
     with open_h5(path) as h5:
         problems = header_problems(h5.attrs)
@@ -60,13 +61,17 @@ def verify(path: str | os.PathLike) -> list[str]:
         samples = h5.get("samples", {})
         problems += [f"samples/{n}: not in the index (an unfinished sample)" for n in samples if n not in entries]
         for sid, entry in entries.items():
-            maps = group_maps(samples[sid]) if sid in samples else {}
+            try:
+                maps = sample_maps(h5, sid) if sid in samples else {}
+            except InputError as err:
+                problems.append(f"samples/{sid}: {err}")
+                continue
             problems += [f"samples/{sid}: {p}" for p in _entry_problems(entry, maps)]
     folder = parts_folder(path)
     for sid in part_ids(folder):
         try:
             entry, maps = read_part(folder / f"{sid}.npz")
-        except (OSError, ValueError, KeyError, TypeError) as err:
+        except (OSError, InputError) as err:
             problems.append(f"{folder.name}/{sid}.npz: unreadable ({err})")
             continue
         problems += [f"{folder.name}/{sid}.npz: {p}" for p in _entry_problems(entry, maps)]

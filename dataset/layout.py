@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import zipfile
 from pathlib import Path
 
 import h5py
@@ -67,17 +68,26 @@ def read_index(h5: h5py.File, path: Path, context: str = "is") -> tuple[Header, 
         columns = [index[n].asstr()[()] if n in TEXT_FIELDS else index[n][()] for n in names]
     except KeyError as err:
         raise InputError(f"{path} {context} is not a roughness dataset: {err}") from None
+    except OSError as err:  # HDF5's "can't read data" of a damaged chunk or header
+        raise InputError(f"{path}: its index cannot be read ({err}): the file is damaged") from None
     columns = [[tuple(h.tolist()) for h in c] if n in TUPLE_FIELDS else c.tolist()
                for n, c in zip(names, columns)]
     return header, {row[0]: Entry(**dict(zip(names, row))) for row in zip(*columns)}
 
 
 def read_part(file: Path) -> tuple[Entry, dict[str, np.ndarray]]:
-    """Index entry and maps of one part file."""
-    with np.load(file) as npz:
-        data = {name: npz[name] for name in npz.files}
-    values = json.loads(str(data.pop("entry")))
-    return Entry(**as_tuples(values)), data
+    """Index entry and maps of one part file; FileNotFoundError if it is gone (packed meanwhile), InputError naming
+    it if it is damaged."""
+    try:
+        with np.load(file, allow_pickle=False) as npz:
+            data = {name: npz[name] for name in npz.files}
+        values = json.loads(str(data.pop("entry")))
+        return Entry(**as_tuples(values)), data
+    except FileNotFoundError:
+        raise
+    except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as err:
+        raise InputError(f"{file}: a finished sample's part file that cannot be read ({type(err).__name__}: {err}): "
+                         "it is damaged; delete it to simulate the sample again") from None
 
 
 def part_ids(folder: Path) -> list[str]:
@@ -87,6 +97,16 @@ def part_ids(folder: Path) -> list[str]:
     except FileNotFoundError:
         return []
     return sorted(n[:-4] for n in names if n.endswith(".npz") and not n.startswith("."))
+
+
+def sample_maps(h5: h5py.File, sid: str) -> dict[str, np.ndarray]:
+    """The maps of packed sample ``sid`` (``group_maps``); InputError naming the file and the sample if HDF5 cannot
+    read them (a damaged chunk or header)."""
+    try:
+        return group_maps(h5["samples"][sid])
+    except OSError as err:
+        raise InputError(f"{h5.filename}: sample {sid} cannot be read ({err}): the file is damaged; `roughness "
+                         "dataset verify` lists every damaged sample") from None
 
 
 def group_maps(group: h5py.Group) -> dict[str, np.ndarray]:

@@ -13,9 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
+from roughness.core.checks import file_path
+from roughness.core.errors import InputError
 from roughness.surface.heightmap import Heightmap
 
-from .layout import group_maps, open_h5, part_ids, parts_folder, read_index, read_part
+from .layout import open_h5, part_ids, parts_folder, read_index, read_part, sample_maps
 from .schema import RESULT_ATTRS, DatasetConfig, Entry
 
 __all__ = ["Dataset", "Sample", "open_dataset"]
@@ -140,7 +142,7 @@ class Dataset:
                 self._h5 = open_h5(self.path)
                 self._packed.add(sid)
         if maps is None:
-            maps = group_maps(self._h5["samples"][sid])
+            maps = sample_maps(self._h5, sid)
         if needed is not None and needed not in maps:
             restored = " restored from a labels file" if entry.restored else ""
             raise KeyError(f"sample {sid} ({entry.status}{restored}) has no {needed}")
@@ -148,5 +150,9 @@ class Dataset:
 
 
 def open_dataset(path: str | os.PathLike) -> Dataset:
-    """Open a dataset file for reading; InputError if it is missing, not HDF5 or not a dataset."""
-    return Dataset(path)
+    """Open a dataset file for reading; InputError (parameter ``path``) if it is missing, not HDF5 or not a dataset."""
+    try:
+        return Dataset(file_path("path", path))
+    except InputError as err:
+        err.parameter = err.parameter or "path"
+        raise

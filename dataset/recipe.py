@@ -158,8 +158,9 @@ def load_recipe(path: str | Path) -> Recipe:
                          f"{', '.join(f.name for f in fields(Recipe))}")
     try:
         return Recipe(**data)
-    except InputError as err:
-        raise InputError(f"recipe {path}: {err}") from None  # a field of the file, not a flag
+    except InputError as err:  # a field of the file, not a flag: named in the words (a check may name only its value)
+        field = f"{err.parameter}: " if err.parameter and err.parameter not in str(err) else ""
+        raise InputError(f"recipe {path}: {field}{err}") from None
 
 
 def _draw(rng: np.random.Generator, spec: tuple | list) -> float | str:

@@ -9,13 +9,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from dataclasses import fields as dataclass_fields
 
 import numpy as np
 from scipy import ndimage, optimize
 from scipy.spatial import cKDTree
 
-from roughness.core.checks import positive
+from roughness.core.checks import positive, real
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_HEIGHT_MM
 from roughness.surface.heightmap import Heightmap, flat
 
 from .grid import PIXEL_MM, SIZE_MM, check_seed, map_side
@@ -79,6 +81,9 @@ def _check_recipe(recipe: BumpRecipe) -> int:
     check_seed(recipe.seed)
     for name in ("lambda_mm", "top_diameter_mm", "height_mm"):
         positive(name, getattr(recipe, name))
+    if recipe.height_mm > MAX_HEIGHT_MM:
+        raise InputError(f"height_mm={recipe.height_mm:g} is above {MAX_HEIGHT_MM:g} mm (MAX_HEIGHT_MM): no texture",
+                         parameter="height_mm")
     if recipe.base_diameter_mm is not None:
         positive("base_diameter_mm", recipe.base_diameter_mm)
     n = _check_grid(recipe.lambda_mm, recipe.size_mm, recipe.pixel_mm)
@@ -169,15 +174,30 @@ def bump_texture(recipe: BumpRecipe) -> Heightmap:
 
 def standard_texture(lambda_mm: float, seed: int = 0, **overrides) -> Heightmap:
     """Cap-topped texture at a lambda (mm) of STANDARD_LAMBDAS_MM; overrides go to BumpRecipe."""
-    if not any(math.isclose(lambda_mm, lam) for lam in STANDARD_LAMBDAS_MM):
-        raise InputError(f"lambda_mm={lambda_mm} is not on the standard scale {STANDARD_LAMBDAS_MM}")
-    return bump_texture(BumpRecipe(lambda_mm=lambda_mm, top="cap", seed=seed, **overrides))
+    if not any(math.isclose(real("lambda_mm", lambda_mm), lam) for lam in STANDARD_LAMBDAS_MM):
+        raise InputError(f"lambda_mm={lambda_mm} is not on the standard scale {STANDARD_LAMBDAS_MM}",
+                         parameter="lambda_mm")
+    return bump_texture(bump_recipe({"lambda_mm": lambda_mm, "top": "cap", "seed": seed}, overrides))
+
+
+def bump_recipe(fixed: dict, overrides: dict) -> BumpRecipe:
+    """The BumpRecipe of a named kind of texture (its ``fixed`` fields) with a caller's ``overrides``; InputError
+    naming an override that is not a field, or that the kind fixes."""
+    known = {f.name for f in dataclass_fields(BumpRecipe)}
+    for name in overrides:
+        if name not in known:
+            raise InputError(f"{name!r} is not a bump texture parameter; BumpRecipe's fields are "
+                             f"{', '.join(sorted(known))}", parameter=name)
+        if name in fixed:
+            raise InputError(f"this texture sets {name}={fixed[name]!r}; bump_texture(BumpRecipe(...)) takes any",
+                             parameter=name)
+    return BumpRecipe(**fixed, **overrides)
 
 
 def flat_top_texture(top_diameter_mm: float, seed: int = 0, lambda_mm: float = 1.0, **overrides) -> Heightmap:
     """Flat-topped texture with plateau diameter ``top_diameter_mm`` (0.1..0.5 mm)."""
-    recipe = BumpRecipe(lambda_mm=lambda_mm, top="flat", top_diameter_mm=top_diameter_mm, seed=seed, **overrides)
-    return bump_texture(recipe)
+    return bump_texture(bump_recipe({"lambda_mm": lambda_mm, "top": "flat", "top_diameter_mm": top_diameter_mm,
+                                     "seed": seed}, overrides))
 
 
 def texture_names() -> list[str]:
@@ -188,8 +208,9 @@ def texture_names() -> list[str]:
 
 def named_texture(name: str, seed: int = 0) -> Heightmap:
     """Texture by name: ``standard-<lambda>``, ``flattop-<diameter>`` (lambda 1 mm) or ``flat`` (zeros)."""
+    check_seed(seed)
     if name not in texture_names():
-        raise InputError(f"unknown texture {name!r}; valid names: {', '.join(texture_names())}")
+        raise InputError(f"unknown texture {name!r}; valid names: {', '.join(texture_names())}", parameter="name")
     if name == "flat":
         recipe = BumpRecipe(lambda_mm=1.0)
         return flat(recipe.size_mm, recipe.pixel_mm)

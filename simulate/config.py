@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, replace
+from dataclasses import fields as dataclass_fields
 
 from roughness.core.checks import in_range, integer, positive, real
 from roughness.core.errors import InputError
@@ -98,9 +99,8 @@ class SimConfig:
                      "depth_mm", "window_mm", "grid_mm", "pair_distance_mm", "disk_radius_mm"):
             positive(name, getattr(self, name))
         for name in ("poisson", "bone_poisson"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and -1.0 < value < 0.5):
-                raise InputError(f"{name} must lie in (-1, 0.5), got {value}", parameter=name)
+            if not -1.0 < real(name, getattr(self, name)) < 0.5:
+                raise InputError(f"{name} must lie in (-1, 0.5), got {getattr(self, name)}", parameter=name)
         if self.h_contact_mm is not None:
             positive("h_contact_mm", self.h_contact_mm)
         positive("tolerance", self.tolerance)
@@ -127,6 +127,15 @@ class SimConfig:
                     f"is an edge, not a curved surface; |curvature_mm| must be at least {self.depth_mm:g} mm "
                     "(the receptor depth)", parameter="curvature_mm")
             require_restable(self.base_shape(), self.width_mm)
+
+    def updated(self, **fields: object) -> SimConfig:
+        """This configuration with ``fields`` replaced, checked; InputError naming an unknown field."""
+        known = {f.name for f in dataclass_fields(self)}
+        unknown = [name for name in fields if name not in known]
+        if unknown:
+            raise InputError(f"{unknown[0]!r} is not a simulation parameter; SimConfig's fields are "
+                             f"{', '.join(sorted(known))}", parameter=unknown[0])
+        return replace(self, **fields)
 
     def base_shape(self) -> BaseShape:
         """The untextured base under the texture (flat unless ``curvature_mm`` is set)."""

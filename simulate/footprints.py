@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from roughness.core.limits import MAX_MAP_POSITIONS, check_size
 from roughness.core.reprs import shape_text, short_repr
 
 
@@ -49,3 +50,12 @@ def centre_count(size_mm: float, footprint_mm: float, step_mm: float, tile: bool
     computed without making them, to check the count first."""
     steps = (size_mm if tile else size_mm - footprint_mm + 1e-9) / step_mm
     return math.ceil(steps) if math.isfinite(steps) else math.inf
+
+
+def map_positions(size_mm: tuple[float, float], footprint_mm: float, step_mm: float, tile: bool) -> int:
+    """How many footprint positions a map of (width, height) ``size_mm`` has (``centres`` along x times along y),
+    counted without making them; InputError (parameter ``step_mm``) above MAX_MAP_POSITIONS."""
+    width, height = size_mm
+    count = centre_count(width, footprint_mm, step_mm, tile) * centre_count(height, footprint_mm, step_mm, tile)
+    return check_size(f"footprint positions on a {width:g} mm x {height:g} mm map in steps of {step_mm:g} mm", count,
+                      MAX_MAP_POSITIONS, "step_mm")

@@ -6,12 +6,14 @@ import threading
 import time
 from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
+from roughness.core.checks import flag, function, integer
 from roughness.core.errors import InputError, SimulationError
-from roughness.surface.heightmap import Heightmap, as_heightmap
+from roughness.surface.arguments import as_heightmap, heightmap_argument
+from roughness.surface.heightmap import Heightmap
 
 from . import mesh as meshing
 from .config import DEEP_INDENTATION_TISSUES, MAX_INDENTATION_TISSUES, BlockSpec, SimConfig
@@ -120,9 +122,12 @@ class Simulator:
     """
 
     def __init__(self, config: SimConfig | None = None, cache: bool = True, max_blocks: int = 4) -> None:
+        if config is not None and not isinstance(config, SimConfig):
+            raise InputError(f"config must be a SimConfig (or None for the defaults), got {type(config).__name__}",
+                             parameter="config")
         self.config = config or SimConfig()
-        self.cache = cache
-        self.max_blocks = max_blocks
+        self.cache = flag("cache", cache)
+        self.max_blocks = integer("max_blocks", max_blocks, minimum=1)
         self._blocks: OrderedDict[BlockSpec, Block] = OrderedDict()
         self._lock = threading.Lock()
 
@@ -151,8 +156,12 @@ class Simulator:
         With ``estimate_error`` (and always for fidelity ``converged``) a coarser level is solved too, for
         the discretization-error estimate (``simulate.converged``); without it, ``solve``: one level.
         """
-        heightmap = as_heightmap(heightmap, pixel_mm)
-        if estimate_error or replace(self.config, **overrides).fidelity == "converged":
+        config = self.config.updated(**overrides)
+        flag("estimate_error", estimate_error)
+        function("callback", callback)
+        heightmap = as_heightmap(heightmap, pixel_mm, "heightmap")
+        heightmap.require_footprint(config.width_mm, centre_mm, flag("tile", tile))  # before any mesh is made
+        if estimate_error or config.fidelity == "converged":
             return estimated(self, heightmap, centre_mm, tile, callback, **overrides)
         return self.solve(heightmap, centre_mm, tile, callback, **overrides)
 
@@ -162,7 +171,7 @@ class Simulator:
         """V at one level (no discretization-error estimate); ``initial`` maps contact-face points
         (n, 2) in mm to the starting contact set (default: what the flat block's indentation touches)."""
         t_start = time.perf_counter()
-        config = replace(self.config, **overrides).resolved(heightmap)
+        config = self.config.updated(**overrides).resolved(heightmap)
         centre = centre_mm or heightmap.centre_mm
         heightmap.require_footprint(config.width_mm, centre, tile)
         _require_resolved_footprint(heightmap, config)
@@ -284,7 +293,13 @@ SHARED = Simulator()  # the process's FEM simulator: every configuration runs on
 
 
 def roughness(heightmap: Heightmap | np.ndarray, centre_mm: tuple[float, float] | None = None, tile: bool = False,
-              simulator: Simulator | None = None, pixel_mm: float | None = None, **config) -> Result:
+              simulator: Simulator | None = None, pixel_mm: float | None = None, units_ok: bool = False,
+              **config) -> Result:
     """FEM roughness of a heightmap (or a 2-D array of heights in mm with its ``pixel_mm``, mm); keyword arguments
-    override ``SimConfig`` fields."""
-    return (simulator or SHARED).run(heightmap, centre_mm, tile, pixel_mm=pixel_mm, **config)
+    override ``SimConfig`` fields. Numbers that look like metres or micrometres are refused (``units_ok=True``:
+    they are mm), and every argument is checked before a mesh is made."""
+    if simulator is not None and not isinstance(simulator, Simulator):
+        raise InputError(f"simulator must be a roughness.Simulator (or None for the shared one), got "
+                         f"{type(simulator).__name__}", parameter="simulator")
+    heightmap = heightmap_argument(heightmap, pixel_mm, "heightmap", units_ok)
+    return (simulator or SHARED).run(heightmap, centre_mm, tile, **config)

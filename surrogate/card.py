@@ -2,8 +2,9 @@
 
     roughness card RUN_DIR MODEL.onnx --card CARD.md --plots FOLDER [--latency LATENCY.json]
 
-Reads the model's metadata, the run's ``predictions.csv`` and ``history.csv`` and, if given, the
-latency benchmark's JSON (used only if it timed this model); writes the card and
+Reads the model's metadata, the run's ``predictions.csv`` and ``history.csv`` (the run refused unless its
+``metrics.json`` records the model's training: ``check_provenance``) and, if given, the latency benchmark's
+JSON (used only if it timed this model); writes the card and
 ``surrogate_accuracy.png`` / ``surrogate_training.png`` into the plots folder. The shipped card:
 ``roughness card runs/cnn models/roughness-cnn.onnx --card models/MODEL_CARD.md --plots benchmarks/results
 --latency benchmarks/results/surrogate_latency.json --overwrite``.
@@ -252,17 +253,71 @@ def check_outputs(card: Path, plots: Path, overwrite: bool) -> None:
 
 
 def read_inputs(run_dir: Path, model_path: Path, card: Path, plots: Path, latency_path: Path | None) -> CardInputs:
-    """The model's metadata and version, the run's predictions and history, and the latency if it timed this model."""
+    """The model's metadata and version, the run's predictions and history (the run checked to be the model's, by
+    ``check_provenance``), and the latency if it timed this model."""
     graph = load_onnx(model_path)
+    meta = read_metadata({p.key: p.value for p in graph.metadata_props}, model_path)
     shipped = model_path.resolve() == DEFAULT_MODEL.resolve() or (
         DEFAULT_MODEL.exists() and file_sha256(model_path) == file_sha256(DEFAULT_MODEL))
-    return CardInputs(model_path=model_path, meta=read_metadata({p.key: p.value for p in graph.metadata_props},
-                                                                model_path),
-                      model_version=graph.model_version, shipped=shipped,
-                      predictions=read_table(run_dir / "predictions.csv", PREDICTION_COLUMNS),
-                      history=read_table(run_dir / "history.csv", HISTORY_COLUMNS),
-                      latency=read_latency(latency_path, model_path),
+    predictions = read_table(run_dir / "predictions.csv", PREDICTION_COLUMNS)
+    history = read_table(run_dir / "history.csv", HISTORY_COLUMNS)
+    check_provenance(run_dir, model_path, meta, history)
+    return CardInputs(model_path=model_path, meta=meta, model_version=graph.model_version, shipped=shipped,
+                      predictions=predictions, history=history, latency=read_latency(latency_path, model_path),
                       plots_link=Path(os.path.relpath(plots.resolve(), card.resolve().parent)))
+
+
+# what a run's metrics.json and the model's metadata both record of the training (an ensemble keeps member 0's)
+RUN_RECORD = ("data", "train_config", "holdout_family", "test_fraction", "label_fidelity", "simulation", "widths",
+              "hidden", "best_epoch", "epochs")
+
+
+def check_provenance(run_dir: Path, model_path: Path, meta: ModelMetadata, history: list[dict]) -> None:
+    """InputError for ``run_dir`` unless the run made the model: its metrics.json records the model's data
+    checksum, training options, held-out family, network and epochs (a single network's scores too), its history
+    has the model's epochs, and (an ensemble) its checkpoint is the model's member 0."""
+    run = read_run_record(run_dir / "metrics.json")
+    ours = json.loads(meta.to_json())
+    keys = RUN_RECORD + (() if meta.ensemble else ("metrics", "test_by_family"))
+    differ = [_difference(key, ours.get(key), run.get(key)) for key in keys if run.get(key) != ours.get(key)]
+    if not differ and len(history) != meta.epochs:
+        differ.append(f"epochs {meta.epochs} vs {len(history)} rows of history.csv")
+    checkpoint = run_dir / "checkpoint.pt"
+    if meta.ensemble and checkpoint.is_file() and file_sha256(checkpoint)[:16] != meta.ensemble["member_sha256"][0]:
+        differ.append(f"member 0's checkpoint {meta.ensemble['member_sha256'][0]} vs {file_sha256(checkpoint)[:16]}")
+    if differ:
+        raise InputError(f"{model_path} was not made by the training run {run_dir} (the model's record vs the run's: "
+                         f"{'; '.join(differ)}): its card would describe the model with another run's scores and "
+                         "plots; give the model's own run folder (an ensemble: its member 0's)", parameter="run_dir")
+
+
+def read_run_record(path: Path) -> dict:
+    """A training run's metrics.json (a JSON object); InputError for ``run_dir`` otherwise."""
+    try:
+        record = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"{path} not found: not the folder of a training run (`roughness train` writes it)",
+                         parameter="run_dir") from None
+    except (OSError, ValueError) as err:  # UnicodeDecodeError and JSONDecodeError are ValueErrors
+        raise InputError(f"cannot read {path} as a training run's JSON: {err}", parameter="run_dir") from None
+    if not isinstance(record, dict):
+        raise InputError(f"{path}: expected a training run's JSON object", parameter="run_dir")
+    return record
+
+
+def _difference(key: str, ours: object, theirs: object) -> str:
+    """How a recorded value differs: the values, or a record's entries that differ (their values if plain)."""
+    if not (isinstance(ours, dict) and isinstance(theirs, dict)):
+        return f"{key} {_brief(ours)} vs {_brief(theirs)}"
+    entries = [k for k in sorted(ours.keys() | theirs.keys()) if ours.get(k) != theirs.get(k)]
+    return f"{key} " + ", ".join(k if isinstance(ours.get(k), dict) else f"{k} {_brief(ours.get(k))} vs "
+                                 f"{_brief(theirs.get(k))}" for k in entries)
+
+
+def _brief(value: object, width: int = 40) -> str:
+    """A recorded value for a message, cut to ``width`` characters."""
+    text = json.dumps(value, sort_keys=True)
+    return text if len(text) <= width else text[:width - 3] + "..."
 
 
 def read_table(path: Path, columns: dict[str, type]) -> list[dict]:

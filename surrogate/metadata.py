@@ -195,13 +195,25 @@ def load_onnx(path: str | Path) -> onnx.ModelProto:
     import onnx
     from google.protobuf.message import DecodeError
 
-    if not Path(path).is_file():
-        raise InputError(f"{path} is a folder, not a model file" if Path(path).is_dir() else f"model not found: {path}",
-                         parameter="model")
+    require_model_file(path)
     try:
         return onnx.load(str(path), load_external_data=False)
     except DecodeError as err:
         raise InputError(f"{path} is not an ONNX model: {err}", parameter="model") from None
+
+
+def require_model_file(path: str | Path) -> Path:
+    """``path`` as a Path if it is a regular file (or a link to one); InputError for ``model`` saying what it is
+    otherwise (missing, a folder, or a FIFO, socket or device, which are never opened: reading one could block)."""
+    path = Path(path)
+    if path.is_file():
+        return path
+    if path.is_dir():
+        raise InputError(f"{path} is a folder, not a model file", parameter="model")
+    if path.exists():
+        raise InputError(f"{path} is not a regular file (a FIFO, socket or device): give the model's .onnx file",
+                         parameter="model")
+    raise InputError(f"model not found: {path}", parameter="model")
 
 
 def onnx_metadata(path: str | Path) -> ModelMetadata:

@@ -11,14 +11,14 @@ import math
 
 import numpy as np
 
-from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
+from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, PIXEL_RTOL, check_size
 from roughness.simulate.config import SimConfig
 from roughness.surface.heightmap import Heightmap, bracket
 
 FOOTPRINT_MM = SimConfig.width_mm  # the skin block's width (mm) that the surrogate was trained for
 PATCH_PIXEL_MM = 0.1  # model pixel size
 PATCH_SIZE = round(FOOTPRINT_MM / PATCH_PIXEL_MM)
-ON_CENTRE = 1e-9  # a sample this close to a pixel centre (in pixels) reads that pixel
+ROUNDINGS = 16  # float64 roundings a sample position or a centre's offset carries (a few operations, with margin)
 DESCRIPTOR_NAMES = ("relief_mm", "feature_mm", "rms_slope", "p99_slope")
 
 
@@ -26,12 +26,28 @@ def footprint_patch(heightmap: Heightmap, centre_mm: tuple[float, float] | None 
                     pixel_mm: float = PATCH_PIXEL_MM, width_mm: float = FOOTPRINT_MM) -> np.ndarray:
     """Heights (mm, max 0) of the footprint square centred at ``centre_mm`` on ``pixel_mm`` pixels.
 
-    Each patch pixel is the mean of sub x sub bilinear samples of the map (sub = ceil(pixel_mm /
-    map pixel)); bilinear sampling is separable, so rows are averaged first, then columns
+    Each patch pixel is the mean of sub x sub bilinear samples of the map (sub: ``samples_per_pixel``,
+    about pixel_mm / map pixel); bilinear sampling is separable, so rows are averaged first, then columns
     (``_average``: gathers and weighted sums, no matrix product, so no BLAS threads start for a
-    small patch). Raises InputError (from the heightmap) if the footprint leaves a non-tiled map.
+    small patch). Raises InputError (from the heightmap) if the footprint leaves a non-tiled map; the map's own
+    centre (no ``centre_mm``) is not checked as a given centre would be.
     """
-    return footprint_patches(heightmap, np.array([centre_mm or heightmap.centre_mm]), tile, pixel_mm, width_mm)[0]
+    if centre_mm is not None:
+        return footprint_patches(heightmap, np.array([centre_mm]), tile, pixel_mm, width_mm)[0]
+    heightmap.require_footprint(width_mm, None, tile)
+    return _patches(heightmap, np.array([heightmap.centre_mm]), tile, pixel_mm, width_mm)[0]
+
+
+def samples_per_pixel(pixel_mm: float, map_pixel_mm: float) -> int:
+    """Bilinear samples per patch pixel of ``pixel_mm`` along each axis, so that none lies further than a map pixel
+    of ``map_pixel_mm`` from the next: a ratio within the pixel size's precision (PIXEL_RTOL) above a whole number
+    is that number, so a 0.05 mm pixel stored as float32 metres (0.0499999987 mm) is sampled as 0.05 mm is."""
+    return max(1, math.ceil(pixel_mm / map_pixel_mm * (1 - PIXEL_RTOL)))
+
+
+def _round_off(magnitude: float) -> float:
+    """The float64 round-off of a few operations (ROUNDINGS) on numbers up to ``magnitude``."""
+    return ROUNDINGS * np.finfo(float).eps * (1.0 + magnitude)
 
 
 def _average(values: np.ndarray, axis: int, start_mm: float, n: int, pixel_mm: float, sub: int,
@@ -51,7 +67,8 @@ def _average(values: np.ndarray, axis: int, start_mm: float, n: int, pixel_mm: f
     u = ((start_mm + np.arange(n)[:, None] * pixel_mm + offsets) / map_pixel_mm - 0.5).ravel()
     lower, upper, frac = bracket(u, values.shape[axis], periodic)
     rows = values if axis == 0 else values.T
-    if np.all((frac < ON_CENTRE) | (frac > 1 - ON_CENTRE)):
+    on_centre = _round_off(float(np.abs(u).max()))  # a sample this close to a pixel centre (in pixels) reads it
+    if np.all((frac < on_centre) | (frac > 1 - on_centre)):
         samples = rows[np.where(frac > 0.5, upper, lower)]
     else:
         low = rows[lower]
@@ -75,12 +92,18 @@ def footprint_patches(heightmap: Heightmap, centres_mm: np.ndarray, tile: bool =
     centres_mm = np.asarray(centres_mm, dtype=float).reshape(-1, 2)
     for centre in dict.fromkeys(map(tuple, centres_mm.tolist())):  # distinct centres (np.unique of floats
         heightmap.require_footprint(width_mm, centre, tile)            # imports numpy.ma: 20 ms at start-up)
+    return _patches(heightmap, centres_mm, tile, pixel_mm, width_mm)
+
+
+def _patches(heightmap: Heightmap, centres_mm: np.ndarray, tile: bool, pixel_mm: float,
+             width_mm: float) -> np.ndarray:
+    """``footprint_patches`` at centres already checked."""
     n = round(width_mm / pixel_mm)
-    sub = max(1, math.ceil(pixel_mm / heightmap.pixel_mm - 1e-9))  # finite: heightmap pixels >= MIN_PIXEL_MM
+    sub = samples_per_pixel(pixel_mm, heightmap.pixel_mm)  # finite: heightmap pixels >= MIN_PIXEL_MM
     origin = centres_mm.min(axis=0)
     steps = (centres_mm - origin) / pixel_mm
     out = np.empty((len(centres_mm), n, n), dtype=np.float32)
-    if np.allclose(steps, np.rint(steps), rtol=0, atol=1e-9):
+    if np.allclose(steps, np.rint(steps), rtol=0, atol=_round_off(float(np.abs(centres_mm).max()) / pixel_mm)):
         ix, iy = np.rint(steps).astype(int).T
         band = _average(heightmap.heights, 0, origin[1] - width_mm / 2, n + iy.max(), pixel_mm, sub,
                         heightmap.pixel_mm, tile)

@@ -15,13 +15,15 @@ from pathlib import Path
 import numpy as np
 import onnxruntime as ort
 
+from roughness.core.checks import file_path
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_MODEL_FILE_BYTES, check_size
 from roughness.core.provenance import model_id
 from roughness.models import MODELS_DIR
 from roughness.surface.heightmap import Heightmap, flat
 
 from .domain import Domain
-from .metadata import ModelMetadata, read_metadata
+from .metadata import ModelMetadata, read_metadata, require_model_file
 from .patch import batch_descriptors, footprint_patch
 from .target import roughness_from_log
 
@@ -48,9 +50,10 @@ class SurrogateModel:
         outputs, and one finite answer for a flat patch; InputError for ``model`` if any is wrong.
         ``threads``: onnxruntime's threads per call (a roughness map runs threads + 1 batches at once instead, each
         on one thread: ``single_threaded``)."""
-        path = Path(path)
-        if not path.is_file():
-            raise InputError(f"surrogate model not found: {path}", parameter="model")
+        path = file_path("model", path)
+        require_model_file(path)
+        check_size(f"bytes of the surrogate model {path} (read whole)", path.stat().st_size, MAX_MODEL_FILE_BYTES,
+                   "model")
         self.threads = threads
         try:
             data = path.read_bytes()  # hashed and loaded from the same bytes: the id is of what answers

@@ -48,7 +48,7 @@ from .evaluation import Evaluation, evaluate
 from .metadata import ModelMetadata
 from .network import RoughnessNet, parameter_count
 from .patch import FOOTPRINT_MM, PATCH_PIXEL_MM
-from .resume import RESUME_FILE, Progress, fingerprint, restore, snapshot
+from .resume import RESUME_FILE, Progress, fingerprint, improves, restore, snapshot
 from .run_files import save_torch, write_run
 from .target import target
 
@@ -121,7 +121,7 @@ def _train(cfg: TrainConfig, out: Path, resuming: bool) -> Path:
         s, total_steps, warmup, (time.monotonic() - epochs_start) / (60 * cfg.max_minutes)))
     generator = torch.Generator().manual_seed(cfg.seed)
     if resuming:
-        progress = restore(out / RESUME_FILE, key, model, optimizer, schedule, generator)
+        progress = restore(out / RESUME_FILE, key, model, optimizer, schedule, generator, steps_per_epoch)
         epochs_start = time.monotonic() - progress.epochs_seconds  # the budget's clock goes on where it stopped
         log(f"resuming at epoch {progress.epoch} ({progress.epochs_seconds / 60:.1f} min of the budget used)")
 
@@ -142,7 +142,7 @@ def _train(cfg: TrainConfig, out: Path, resuming: bool) -> Path:
         progress.epoch, progress.epochs_seconds = epoch + 1, time.monotonic() - epochs_start
         minutes = (progress.seconds + time.monotonic() - start) / 60
         progress.history.append((epoch, train_loss, val_loss, schedule.get_last_lr()[0], minutes))
-        improved = val_loss < progress.best_val
+        improved = improves(val_loss, progress.best_val)
         if improved:
             progress.best_val, progress.best_epoch = val_loss, epoch
             progress.best_state = {k: v.clone() for k, v in model.state_dict().items()}

@@ -119,8 +119,9 @@ def test_predict_names_its_answers_after_named_inputs_and_takes_options(texture)
 @pytest.mark.parametrize("heights, kwargs, parameter, message", [
     ("array", {}, "pixel_mm", "without a pixel size: pass pixel_mm="),
     ("3d", {"pixel_mm": 0.05}, "inputs", "must be 2-D"),
-    ("nan", {"pixel_mm": 0.05}, "inputs", "NaN/Inf"),
-    ("inf", {"pixel_mm": 0.05}, "inputs", "NaN/Inf"),
+    ("nan", {"pixel_mm": 0.05}, "inputs", "NaN/Inf pixel(s); first at row 0, column 0: NaN and masked points are "
+                                          "missing data"),
+    ("inf", {"pixel_mm": 0.05}, "inputs", "infinite height"),
     ("text", {"pixel_mm": 0.05}, "inputs", "must be a Heightmap, a 2-D array"),
     ("number", {"pixel_mm": 0.05}, "inputs", "must be a Heightmap, a 2-D array"),
     ("map", {"pixel_mm": 0.1}, "pixel_mm", "contradicts the heightmap's own pixel"),

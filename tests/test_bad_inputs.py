@@ -1,7 +1,8 @@
 """Bad input never gives a traceback, a silent result or a changed file: a generated sweep over the CLI.
 
 For every subcommand the matrix is generated from the parser itself: each numeric option's
-declared domain (``common.Number.invalid``), each input file broken in the usual ways (missing,
+declared domain (``common.Number.invalid``: every option has an upper bound, so the matrix holds a
+value just above it), each input file broken in the usual ways (missing,
 empty, truncated, a folder, the wrong kind of content), and each output that exists already or
 cannot be written. Every case must exit with 2, name the problem on stderr, print no traceback,
 and leave the working folder exactly as it was. Heavy computations are replaced by a tripwire,
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import math
 import os
 from pathlib import Path
 
@@ -113,12 +115,23 @@ def _subcommands(parser: argparse.ArgumentParser, path: tuple[str, ...] = ()):
 PARSERS = dict(_subcommands(build_parser()))
 
 
+def _domain(action: argparse.Action) -> Number | None:
+    """The Number an option's values are parsed with: its type, or the ``kind`` of a list of numbers."""
+    return action.type if isinstance(action.type, Number) else getattr(action.type, "kind", None)
+
+
+# Option types that parse numbers without a Number, each bounded where its value is used: --centre by
+# MAX_COORDINATE_MM (test_limits.py), --widths by MAX_CHANNELS, --detrend's cut-off by MAX_LENGTH_MM; --exclude
+# holds names.
+OTHER_TYPES = {"float_pair", "count_list", "_detrend_spec", "id_list"}
+
+
 def _numeric_cases() -> list[tuple[tuple[str, ...], str, str]]:
     cases = []
     for path, parser in PARSERS.items():
         for action in parser._actions:
-            if isinstance(action.type, Number):
-                cases += [(path, action.option_strings[-1], value) for value in action.type.invalid]
+            if _domain(action) is not None:
+                cases += [(path, action.option_strings[-1], value) for value in _domain(action).invalid]
     return cases
 
 
@@ -165,6 +178,35 @@ def test_every_numeric_option_declares_its_domain():
     loose = [(" ".join(path), a.option_strings[-1]) for path, parser in PARSERS.items() for a in parser._actions
              if a.type in (int, float)]
     assert not loose, f"options typed plain int/float (use common.Number with a domain): {loose}"
+
+
+def test_every_numeric_option_declares_an_upper_bound():
+    """Nothing touchable needs 1e300 of anything: each number has a stated largest value, and the sweep tries one
+    just above it (an option without one once read --radius-mm 1e300 into garbage heights)."""
+    unbounded, untested, others = [], [], set()
+    for path, parser in PARSERS.items():
+        for action in parser._actions:
+            domain, where = _domain(action), (" ".join(path), action.option_strings[-1] if action.option_strings else "")
+            if domain is None:
+                if action.type is not None:
+                    others.add(getattr(action.type, "__name__", repr(action.type)))
+                continue
+            if domain.high is None:
+                unbounded.append(where)
+            elif not any(_beyond(domain, v) for v in domain.invalid):
+                untested.append(where)
+    assert not unbounded, f"numeric options without an upper bound: {unbounded}"
+    assert not untested, f"numeric options whose sweep has no value above the bound: {untested}"
+    assert others == OTHER_TYPES, f"options parsed by a type that is not a common.Number: {others - OTHER_TYPES}"
+
+
+def _beyond(domain: Number, text: str) -> bool:
+    """True if ``text`` is a finite number of the domain's kind on or past its upper bound (past it if closed)."""
+    try:
+        value = domain.kind(text)
+    except ValueError:
+        return False
+    return math.isfinite(value) and (value >= domain.high if domain.high_open else value > domain.high)
 
 
 def test_every_option_has_help():

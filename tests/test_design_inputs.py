@@ -183,6 +183,17 @@ def test_a_relative_target_is_refused_when_ill_posed(standard):
         target_of(SPECTRAL, jnd=1.0, heightmap=flat)
 
 
+@pytest.mark.parametrize("relief_mm", [0.0, 1e-4])
+def test_every_target_measured_on_a_texture_refuses_a_flat_one(standard, relief_mm):
+    """A target taken from a texture (like REF, or JNDs from the input) has no V to aim at when the texture is
+    flat or nearly (it raised "math domain error" for like): each is refused, naming its own parameter."""
+    near_flat = Heightmap(relief_mm * standard.heights / np.ptp(standard.heights), standard.pixel_mm)
+    for kwargs, parameter in (({"like": near_flat}, "like"), ({"jnd": 1.0, "heightmap": near_flat}, "jnd")):
+        with pytest.raises(InputError, match="below the standard scale's floor") as err:
+            target_of(SPECTRAL, **kwargs)
+        assert err.value.parameter == parameter
+
+
 def test_tune_cli_one_jnd_rougher_says_the_input_and_the_target(tmp_path, capsys):
     path = tmp_path / "standard.npz"
     save_heightmap(standard_texture(1.0, seed=0), path)

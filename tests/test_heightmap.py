@@ -142,7 +142,7 @@ def test_require_footprint_on_a_small_map_suggests_tiling() -> None:
     with pytest.raises(InputError) as err:
         hm.require_footprint(10.0)
     assert str(err.value) == ("heightmap is 6.40 mm x 6.40 mm, smaller than the 10.0 mm x 10.0 mm skin "
-                              "footprint; pass --tile to repeat it as a periodic texture")
+                              "footprint; pass tile=True to repeat it as a periodic texture")
     hm.require_footprint(10.0, tile=True)
 
 

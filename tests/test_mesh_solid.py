@@ -7,7 +7,7 @@ import pytest
 import trimesh
 
 from roughness.cli import main
-from roughness.core.errors import SimulationError
+from roughness.core.errors import InputError, SimulationError
 from roughness.dataset.textures import standard_texture
 from roughness.objects.meshes import write_mesh
 from roughness.surface.heightmap import Heightmap
@@ -160,3 +160,20 @@ def test_an_input_that_crosses_itself_is_named_as_such_not_as_a_texture_too_deep
     err = capsys.readouterr().err
     assert code == 2 and "MESH: the mesh crosses itself before any texture is applied" in err, err
     assert "too deep" not in err and not (cad_part / "crossing.stl").exists()
+
+
+@pytest.mark.parametrize("name, kwargs", [("edge_mm", {"edge_mm": 1e300}), ("normal_radius_mm", {"normal_radius_mm": 1e300}),
+                                          ("border_mm", {"border_mm": 2e3})])
+def test_texturing_lengths_are_bounded_in_the_library_too(name, kwargs):
+    """The command line's bound on lengths holds for library callers: 1e300 overflowed (garbage heights on the mesh
+    from a wrap radius of 1e300, with only a numpy warning)."""
+    from roughness.objects.mapping import Triplanar, axis_of, wrap
+    from roughness.objects.texturing import texture_mesh
+
+    box = trimesh.creation.box((10, 10, 10))
+    with pytest.raises(InputError, match=f"{name} must be at most 1000 mm .MAX_LENGTH_MM.") as err:
+        texture_mesh(box, Triplanar(standard_texture(1.0)), **kwargs)
+    assert err.value.parameter == name
+    with pytest.raises(InputError, match="radius_mm must be at most") as err:
+        wrap(standard_texture(1.0), "cylinder", axis_of((0, 0, 0), (0, 0, 1)), 1e300)
+    assert err.value.parameter == "radius_mm"

@@ -78,6 +78,13 @@ LIBRARY_ONLY = {
     "pressure": "SpectralSimulator(pressure): a study parameter; the CLI uses the flat state's pressure",
     "client": "dataset.build.build(client): a dask.distributed.Client; the CLI takes --scheduler(-file)",
     "picture": "roughness.tactile_image(picture): an RGB or grey array from Python; the CLI reads a PICTURE file",
+    "heights": "Heightmap(heights): an array from Python; a file's heights are checked as it is read, naming it",
+    "options": "roughness.predict(options=PredictOptions(...)): the CLI has a flag per field",
+    "config": "Simulator(config) / fem_roughness(config=SimConfig(...)): the CLI builds it from its flags",
+    "simulator": "fem_roughness(simulator=Simulator(...)): a prepared simulator from Python",
+    "max_blocks": "Simulator(max_blocks): blocks kept per process; the CLI keeps the default",
+    "factor_range": "roughness.tune(factor_range=(lo, hi)): the CLI has --min-factor and --max-factor",
+    "path": "load_scale(path): another scale table from Python; the CLI uses the shipped one",
     **{name: "printer profile field (a JSON profile's; load_profile reports it under --printer)"
        for name in ("nozzle_mm", "layer_mm", "line_width_mm", "closing_radius_mm")},
 }
@@ -350,3 +357,17 @@ def test_a_missing_optional_dependency_names_its_extra(module, extra, argv, work
                          text=True)
     assert out.returncode == 2, out.stderr
     assert module in out.stderr and f"roughness[{extra}]" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_a_physics_answer_is_never_called_out_of_domain():
+    """``in_domain`` is the surrogate's domain: where auto climbed to a physics engine, the line says why the
+    surrogate did not answer and which engine did, not that the answer is OUT OF DOMAIN."""
+    from roughness.cli.predict import domain_words
+
+    notes = ["feature size 0.1 mm below the training range"]
+    for engine in ("spectral", "fem"):
+        words = domain_words(SimpleNamespace(in_domain=False, engine=engine, domain_notes=notes))
+        assert words == f"outside the surrogate's domain ({notes[0]}), so the {engine} engine answered"
+    assert domain_words(SimpleNamespace(in_domain=False, engine="surrogate", domain_notes=notes)) == \
+        f"OUT OF DOMAIN: {notes[0]}"
+    assert domain_words(SimpleNamespace(in_domain=True, engine="spectral", domain_notes=[])) == "in domain"

@@ -333,16 +333,15 @@ def test_curved_fem_on_request_runs_the_curved_fem_on_the_cylinder_under_the_foo
     from roughness import prediction
 
     calls = []
-    flat_predict = prediction.predict
+    flat_predictions = prediction.predictions
 
-    def predict_stub(heightmaps, engine="auto", **kwargs):
+    def predictions_stub(named, engine="auto", **kwargs):
         if engine != "fem":
-            return flat_predict(heightmaps, engine=engine, **kwargs)
+            return flat_predictions(named, engine=engine, **kwargs)
         calls.append(kwargs["options"].curved)
-        [p] = flat_predict(heightmaps, engine="spectral")
-        return [p]
+        return flat_predictions(named, engine="spectral")
 
-    monkeypatch.setattr(prediction, "predict", predict_stub)
+    monkeypatch.setattr(prediction, "predictions", predictions_stub)
     mesh, side = _cylinder(10.0)
     feel = feel_map(mesh, Wrap(10.0), {"side": side}, spacing_mm=10.0, curved="fem")
     judged = [m for m in feel.method if m != "refused"]

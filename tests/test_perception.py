@@ -544,3 +544,52 @@ def test_design_writes_printable_plates_of_every_stimulus(tmp_path):
     assert main(args) == 2  # outputs exist: refused without --overwrite
     small = [*args[:-6], "--out", str(tmp_path / "e.csv"), "--plates", str(tmp_path / "p2"), "--plate-mm", "25"]
     assert main(small) == 2 and not (tmp_path / "p2").exists()  # the 6 mm scan cannot make a 25 mm plate
+
+
+@pytest.mark.parametrize("coordinates", ["equal", "excluded equal"])
+def test_fit_with_undefined_correlations_says_undefined(tmp_path, capsys, coordinates):
+    """An embedding whose coordinates are all equal (or equal among the included stimuli) has no Pearson R: the
+    text, the JSON and the plot's title say "undefined" / null (the plot raised on a None R)."""
+    names = ["standard-0.625", "standard-1.0", "standard-1.625", "flattop-0.5"]
+    table = _write(tmp_path / "stimuli.csv", "stimulus,texture,seed\n" + "".join(f"{n},{n},0\n" for n in names))
+    values = [0.0, 0.0, 0.0, 0.0] if coordinates == "equal" else [0.0, 0.0, 0.0, 1.0]
+    embedding = _write(tmp_path / "embedding.csv", "stimulus,coordinate,low,high\n" + "".join(
+        f"{n},{c},{c - 0.1},{c + 0.1}\n" for n, c in zip(names, values)))
+    exclude = [] if coordinates == "equal" else ["--exclude", "flattop-0.5"]
+    assert main(["perception", "fit", str(embedding), "--stimuli", str(table), "--out", str(tmp_path / "fit"),
+                 "--engine", "surrogate", *exclude]) == 0
+    out = capsys.readouterr().out
+    summary = json.loads((tmp_path / "fit" / "fit.json").read_text())
+    part = "all" if coordinates == "equal" else "included"
+    assert summary["correlations"]["V"][part]["pearson"] is None and "R undefined" in out
+    assert (tmp_path / "fit" / "fit.png").stat().st_size > 1000
+
+
+@pytest.mark.parametrize("after_lines", [0, 1, 3])
+def test_ctrl_c_with_two_workers_stops_cleanly(tmp_path, after_lines):
+    """Ctrl-C reaches every process of the terminal's group: the workers ignore it, the parent stops them and says
+    "interrupted" (exit 130); no process prints a traceback (1 run in 6 did), whenever it comes."""
+    import os
+    import signal
+    import subprocess
+
+    rng = np.random.default_rng(0)
+    truth = np.linspace(0, 1, 14)
+    rows = []
+    for _ in range(3000):
+        r, a, b = rng.choice(14, 3, replace=False)
+        rows.append(f"p1,s{r},s{a},s{b},{'left' if abs(truth[r] - truth[a]) < abs(truth[r] - truth[b]) else 'right'}")
+    trials = _write(tmp_path / "trials.csv", "subject,reference,left,right,answer\n" + "\n".join(rows) + "\n")
+    proc = subprocess.Popen([sys.executable, "-m", "roughness.cli", "perception", "embed", str(trials), "--out",
+                             str(tmp_path / "emb"), "--folds", "2", "--resamples", "40", "--workers", "2"],
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    seen = []
+    for line in proc.stderr:  # progress lines: interrupt once the solves are under way
+        seen.append(line)
+        if "solves" in line and sum("solves" in s for s in seen) > after_lines:
+            break
+    os.killpg(proc.pid, signal.SIGINT)
+    rest = proc.stderr.read()
+    assert proc.wait(timeout=60) == 130, "".join(seen) + rest
+    assert "Traceback" not in rest and "interrupted" in rest, rest

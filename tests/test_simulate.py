@@ -134,7 +134,7 @@ def test_footprint_of_too_few_pixels_is_refused(sim, pixel_mm):
 
 def test_small_heightmap_needs_tile(sim):
     small = standard_texture(1.0, seed=0, size_mm=5.0)
-    with pytest.raises(InputError, match="--tile"):
+    with pytest.raises(InputError, match="pass tile=True"):  # the command line words it as --tile
         sim.run(small)
     tiled = sim.run(small, tile=True)
     assert _finite(tiled)

@@ -101,8 +101,9 @@ def test_footprint_patch_of_a_005mm_map_averages_2x2_pixels():
     heights = np.random.default_rng(2).random((240, 240))
     expected = heights[20:220, 20:220].reshape(100, 2, 100, 2).mean(axis=(1, 3))
     np.testing.assert_allclose(footprint_patch(Heightmap(heights, 0.05)), expected - expected.max(), atol=1e-6)
-    with pytest.raises(InputError, match="--tile"):
+    with pytest.raises(InputError, match="pass tile=True") as err:  # the command line words it as --tile
         footprint_patch(Heightmap(heights[:150, :150], 0.05))
+    assert err.value.parameter == "tile"
 
 
 @pytest.mark.parametrize("pixel_mm, step_mm, tile", [(0.05, 0.5, False), (0.034, 0.3, False), (0.05, 0.37, False),
@@ -420,7 +421,7 @@ def test_extreme_inputs_give_finite_answers_or_are_flagged():
         "tiny pixels": (standard_texture(1.0, seed=4).resampled(0.01).heights, 0.01, True),
         "huge pixels": (standard_texture(1.0, seed=4).resampled(0.5).heights, 0.5, True),
     }
-    answers = {name: predict(Heightmap(h, px), engine="surrogate", model=model)[0]
+    answers = {name: predict(Heightmap(h, px), engine="surrogate", model=model, units_ok=True)[0]  # 1 um: mm
                for name, (h, px, _) in cases.items()}
     for name, p in answers.items():
         assert np.isfinite(p.roughness) and p.roughness >= 0, name

@@ -23,11 +23,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from roughness.core.checks import positive
-from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, MAX_MAP_POSITIONS, Limit, check_size
+from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, Limit, check_size
 from roughness.surface.heightmap import Heightmap
 
 from ..config import SimConfig
-from ..footprints import RoughnessMap, centre_count, centres
+from ..footprints import RoughnessMap, centres, map_positions
 from ..variation import PairSampling
 from .contact import solve_contact
 from .engine import fluctuation, lambda3, tissue_of
@@ -81,8 +81,7 @@ def spectral_map(heightmap: Heightmap, step_mm: float = 1.0, tile: bool = False,
     heightmap.require_footprint(config.width_mm, None, tile)
     pixel = heightmap.pixel_mm
     width, height = heightmap.size_mm
-    count = centre_count(width, config.width_mm, step_mm, tile) * centre_count(height, config.width_mm, step_mm, tile)
-    check_size("footprint positions", count, MAX_MAP_POSITIONS, "step_mm")  # before the positions are made
+    map_positions(heightmap.size_mm, config.width_mm, step_mm, tile)  # before the positions are made
     xs, ys = centres(width, config.width_mm, step_mm, tile), centres(height, config.width_mm, step_mm, tile)
     check_size("pixels of the map (resample it to a coarser pixel)", heightmap.heights.size, MAX_HEIGHTMAP_PIXELS,
                "pixel_mm")

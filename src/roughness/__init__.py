@@ -40,14 +40,15 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time the names load
     from roughness.simulate.model import Simulator
     from roughness.simulate.model import roughness as fem_roughness
     from roughness.simulate.result import Result
-    from roughness.surface.heightmap import Heightmap, as_heightmap
+    from roughness.surface.arguments import as_heightmap
+    from roughness.surface.heightmap import Heightmap
     from roughness.surface.io import load_heightmap, save_heightmap
 
     __version__: str
 
 _HOMES = {
     "Heightmap": "roughness.surface.heightmap",
-    "as_heightmap": "roughness.surface.heightmap",
+    "as_heightmap": "roughness.surface.arguments",
     "InputError": "roughness.core.errors",
     "SimulationError": "roughness.core.errors",
     "load_heightmap": "roughness.surface.io",

@@ -9,6 +9,7 @@ would be mislabelled.
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import os
 import signal
@@ -19,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from roughness.core.checks import file_path
 from roughness.core.errors import InputError
 
 if TYPE_CHECKING:
@@ -49,9 +51,8 @@ class ClusterChoice:
         if scheduler is not None and (not isinstance(scheduler, str) or not scheduler.strip()):
             raise InputError(f"scheduler must be a scheduler's address such as tcp://host:8786, got {scheduler!r}",
                              parameter="scheduler")
-        if scheduler_file is not None and not Path(scheduler_file).is_file():
-            raise InputError(f"scheduler file {scheduler_file} does not exist (it is written by "
-                             f"`dask scheduler --scheduler-file {scheduler_file}`)", parameter="scheduler_file")
+        if scheduler_file is not None:
+            scheduler_address(file_path("scheduler_file", scheduler_file))
         if client is not None:
             from dask.distributed import Client
 
@@ -77,14 +78,39 @@ class ClusterChoice:
         from dask.distributed import Client
 
         parameter = "scheduler" if self.scheduler is not None else "scheduler_file"
+        address = self.scheduler if self.scheduler is not None else scheduler_address(self.scheduler_file)
         try:
-            if self.scheduler is not None:
-                return Client(self.scheduler, timeout=CONNECT_TIMEOUT_S)
-            return Client(scheduler_file=self.scheduler_file, timeout=CONNECT_TIMEOUT_S)
+            return Client(address, timeout=CONNECT_TIMEOUT_S)
         except (OSError, TimeoutError, ValueError, KeyError) as err:  # unreachable, refused, or not a scheduler file
             where = self.scheduler or f"the address in {self.scheduler_file}"
             raise InputError(f"cannot reach a Dask scheduler at {where} ({type(err).__name__}: {err})",
                              parameter=parameter) from None
+
+
+MAX_SCHEDULER_FILE_BYTES = 1 << 20  # a scheduler file is a few hundred bytes of JSON
+
+
+def scheduler_address(path: str | os.PathLike) -> str:
+    """The scheduler's address in the file ``dask scheduler --scheduler-file FILE`` writes (a JSON object whose
+    ``address`` is text such as tcp://host:8786); InputError for ``scheduler_file`` naming what is wrong."""
+    path = Path(path)
+    written = f"(it is written by `dask scheduler --scheduler-file {path}`)"
+    if not path.is_file():
+        raise InputError(f"scheduler file {path} does not exist {written}" if not path.exists() else
+                         f"scheduler file {path} is not a regular file {written}", parameter="scheduler_file")
+    try:
+        if path.stat().st_size > MAX_SCHEDULER_FILE_BYTES:
+            raise ValueError(f"{path.stat().st_size:,} bytes, above {MAX_SCHEDULER_FILE_BYTES:,}")
+        record = json.loads(path.read_text())
+    except (OSError, ValueError) as err:  # UnicodeDecodeError and JSONDecodeError are ValueErrors
+        raise InputError(f"cannot read {path} as a Dask scheduler file {written}: {err}",
+                         parameter="scheduler_file") from None
+    address = record.get("address") if isinstance(record, dict) else None
+    if not isinstance(address, str) or not address.strip():
+        shown = repr(address) if len(repr(address)) <= 60 else repr(address)[:57] + "..."
+        raise InputError(f"{path} is not a Dask scheduler file {written}: expected a JSON object whose \"address\" is "
+                         f"the scheduler's address such as tcp://host:8786, got {shown}", parameter="scheduler_file")
+    return address.strip()
 
 
 def versions() -> dict[str, Any]:

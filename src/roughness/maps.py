@@ -18,11 +18,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughness.core.checks import integer
+from roughness.cluster import ClusterChoice
+from roughness.core.checks import flag, function, integer, positive
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_BATCH, MAX_PARALLEL, check_size
 from roughness.core.provenance import Provenance
 from roughness.core.reprs import short_repr
-from roughness.surface.heightmap import Heightmap, as_heightmap
+from roughness.simulate.footprints import map_positions
+from roughness.surface.arguments import heightmap_argument
+from roughness.surface.heightmap import Heightmap
+from roughness.surface.tiling import check_tile
 
 if TYPE_CHECKING:
     from dask.distributed import Client
@@ -51,53 +56,55 @@ def predict_map(heightmap: Heightmap | np.ndarray, engine: str = "surrogate", st
                 tile: bool = False, model: SurrogateModel | str | Path | None = None, batch_size: int = 256,
                 pixel_mm: float | None = None, progress: Callable[[int, int], None] | None = None,
                 workers: int | None = None, scheduler: str | None = None, scheduler_file: str | None = None,
-                client: Client | None = None, quiet: bool = True) -> MapPrediction:
+                client: Client | None = None, quiet: bool = True, units_ok: bool = False) -> MapPrediction:
     """The roughness map of a whole object: V at footprint centres ``step_mm`` apart.
 
     Parameters
     ----------
     heightmap : Heightmap or 2-D array of heights (mm)
-        The object's texture; an array needs ``pixel_mm``.
+        The object's texture; an array (or nested list of rows) needs ``pixel_mm``.
     engine : {"surrogate", "spectral", "auto"}
         ``auto`` is the surrogate. ``spectral``: one solve, or overlapping windows above ``MAX_MAP_PIXELS``.
     step_mm : float
-        Distance between footprint centres (mm).
+        Distance between footprint centres (mm); at most ``MAX_MAP_POSITIONS`` positions.
     tile : bool
         The map is one period of a periodic texture.
     model : SurrogateModel or path, optional
         The surrogate (default: the shipped one).
     batch_size : int
-        Surrogate footprints per network call.
+        Surrogate footprints per network call (at most ``MAX_BATCH``).
     pixel_mm : float, optional
         Pixel size (mm) of an array input.
     progress : callable, optional
         ``progress(done, total)`` in footprint positions.
     workers : int, optional
         Spectral windows: local Dask worker processes, one thread each (default 2; 1: here, one after the
-        other, without Dask).
+        other, without Dask; at most ``MAX_PARALLEL``).
     scheduler, scheduler_file, client : optional
         Spectral windows on a running Dask cluster: its scheduler's address, the file ``dask scheduler
         --scheduler-file`` wrote, or a connected ``dask.distributed.Client`` (left open). Its workers must run
         this roughness version (checked).
     quiet : bool
         No Dask messages (dashboard, workers) on stderr.
+    units_ok : bool
+        The map's numbers are mm even though they look like metres or micrometres (default: refuse them).
 
     Returns
     -------
     MapPrediction
         The map, its engine, notes (windows, partial contact) and provenance.
+
+    Raises
+    ------
+    InputError
+        A bad argument, named by its ``parameter``; all are checked before any engine runs or any Dask worker starts.
     """
-    from roughness.cluster import ClusterChoice
     from roughness.engines import model_provenance, spectral_provenance
 
-    if engine not in MAP_ENGINES:
-        raise InputError(f"a map's engine is one of {', '.join(MAP_ENGINES)} (the FEM would take hours), got "
-                         f"{engine!r}", parameter="engine")
+    request = _MapRequest.of(heightmap, engine, step_mm, tile, batch_size, pixel_mm, progress, workers, quiet,
+                             units_ok)
     where = ClusterChoice.of(scheduler, scheduler_file, client)
-    if workers is not None:
-        integer("workers", workers, minimum=1)
-    heightmap = as_heightmap(heightmap, pixel_mm)
-    if engine != "spectral":
+    if request.engine != "spectral":
         given = [name for name, value in (("workers", workers), ("scheduler", scheduler),
                                           ("scheduler_file", scheduler_file), ("client", client)) if value is not None]
         if given:
@@ -107,14 +114,51 @@ def predict_map(heightmap: Heightmap | np.ndarray, engine: str = "surrogate", st
         from roughness.surrogate.roughness_map import roughness_map
 
         model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
-        result = roughness_map(model, heightmap, step_mm, tile, batch_size, progress=progress)
+        request.check_positions(model.footprint_mm)
+        result = roughness_map(model, request.heightmap, step_mm, tile, batch_size, progress=progress)
         return MapPrediction(result, "surrogate", [], model_provenance(model))
+    from roughness.simulate.config import SimConfig
     from roughness.simulate.spectral.maps import spectral_map
 
+    if model is not None:
+        raise InputError("the spectral engine uses no surrogate model; model is for engine='surrogate'",
+                         parameter="model")
+    request.check_positions(SimConfig().width_mm)
     runner = None
     if not where.local or (workers or WORKERS) > 1:
         from roughness.simulate.spectral.distributed import dask_runner
 
         runner = dask_runner(where, workers or WORKERS, quiet)
-    result, notes = spectral_map(heightmap, step_mm, tile, progress=progress, runner=runner)
+    result, notes = spectral_map(request.heightmap, step_mm, tile, progress=progress, runner=runner)
     return MapPrediction(result, "spectral", notes, spectral_provenance())
+
+
+@dataclass(frozen=True)
+class _MapRequest:
+    """``predict_map``'s arguments, checked as ``roughness predict --map`` checks its options and file."""
+
+    heightmap: Heightmap
+    engine: str
+    step_mm: float
+    tile: bool
+
+    @classmethod
+    def of(cls, heightmap: object, engine: object, step_mm: object, tile: object, batch_size: object,
+           pixel_mm: float | None, progress: object, workers: object, quiet: object, units_ok: bool) -> _MapRequest:
+        if engine not in MAP_ENGINES:
+            raise InputError(f"a map's engine is one of {', '.join(MAP_ENGINES)} (the FEM would take hours), got "
+                             f"{engine!r}", parameter="engine")
+        step_mm, tile = positive("step_mm", step_mm), flag("tile", tile)
+        check_size("footprints per batch", integer("batch_size", batch_size, minimum=1), MAX_BATCH, "batch_size")
+        if workers is not None:
+            check_size("Dask workers", integer("workers", workers, minimum=1), MAX_PARALLEL, "workers")
+        function("progress", progress)
+        flag("quiet", quiet)
+        return cls(heightmap_argument(heightmap, pixel_mm, "heightmap", units_ok), str(engine), step_mm, tile)
+
+    def check_positions(self, footprint_mm: float) -> None:
+        """InputError unless the footprint fits on the map (or it is tiled) and the positions are few enough."""
+        self.heightmap.require_footprint(footprint_mm, None, self.tile)
+        if self.tile:
+            check_tile(self.heightmap, "heightmap", footprint_mm)
+        map_positions(self.heightmap.size_mm, footprint_mm, self.step_mm, self.tile)

@@ -34,12 +34,14 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from pathlib import Path
 
 import numpy as np
 
+from roughness.core.checks import file_path
 from roughness.core.errors import InputError
 from roughness.models import MODELS_DIR
 
@@ -47,6 +49,7 @@ WEBER_FRACTION = 0.19  # the paper's just-noticeable difference of bump waveleng
 LOG_JND = math.log(1 + WEBER_FRACTION)  # one JND in ln(lambda): ln(1.19)
 SCALE_PATH = MODELS_DIR / "standard_scale.json"
 FLOOR_LAMBDA_MM = 4 * 0.05  # dataset.textures.MIN_PIXELS_PER_LAMBDA pixels of the standard 0.05 mm (dataset.grid)
+LOG_FLOAT_MAX = math.log(sys.float_info.max)  # exp of more overflows
 
 
 @dataclass(frozen=True)
@@ -123,7 +126,8 @@ class StandardScale:
         if log_lambda[0] <= x <= log_lambda[-1]:
             return float(np.exp(np.interp(x, log_lambda, log_v)))
         end = 0 if x < log_lambda[0] else -1
-        return float(math.exp(log_v[end] + self.power_law[1] * (x - log_lambda[end])))
+        log_at = log_v[end] + self.power_law[1] * (x - log_lambda[end])
+        return math.exp(log_at) if log_at < LOG_FLOAT_MAX else math.inf  # inf for an absurd lambda, never an error
 
     def place(self, roughness: float) -> Placement:
         """Equivalent lambda (mm) and signed JND distance (on lambda) from the nearest standard texture;
@@ -214,11 +218,22 @@ def jnd_distance(scale: StandardScale, v_a: float, v_b: float, se_a: float | Non
     return JndDistance(jnd(scale.floored_lambda(v_a), scale.floored_lambda(v_b)), se, a, b)
 
 
-@lru_cache(maxsize=8)
 def load_scale(fidelity: str, path: str | Path = SCALE_PATH) -> StandardScale:
-    """The shipped standard scale for a FEM fidelity ("coarse", "default", "fine")."""
-    tables = json.loads(Path(path).read_text())["tables"]
+    """The shipped standard scale for a FEM fidelity ("coarse", "default", "fine") or the spectral engine
+    ("spectral"); InputError naming ``fidelity`` or ``path`` if there is none."""
+    if not isinstance(fidelity, str):
+        raise InputError(f"fidelity must be a string such as 'fine', got {fidelity!r}", parameter="fidelity")
+    return _scale(fidelity, file_path("path", path))
+
+
+@lru_cache(maxsize=8)
+def _scale(fidelity: str, path: Path) -> StandardScale:
+    """``load_scale``, read once per (fidelity, path)."""
+    if not path.is_file():
+        raise InputError(f"no standard-scale file {path}", parameter="path")
+    tables = json.loads(path.read_text())["tables"]
     if fidelity not in tables:
-        raise InputError(f"no standard-scale table for fidelity {fidelity!r} in {path}; has {sorted(tables)}")
+        raise InputError(f"no standard-scale table for fidelity {fidelity!r} in {path}; has {sorted(tables)}",
+                         parameter="fidelity")
     table = tables[fidelity]
     return StandardScale(tuple(table["lambda_mm"]), tuple(table["V_mean"]), fidelity)

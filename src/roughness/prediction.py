@@ -13,6 +13,7 @@ of its own engine and fidelity.
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -21,14 +22,18 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughness.core.checks import integer, positive
+from roughness.core.checks import choice, flag, function, in_range, integer, positive, real
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_BATCH, check_size
 from roughness.core.provenance import Provenance, make_provenance
 from roughness.core.reprs import short_repr, v_text
 from roughness.models import MODELS_DIR
-from roughness.surface.heightmap import Heightmap, as_heightmap
+from roughness.simulate.config import CHOICES, CURVED_FIELDS, SimConfig
+from roughness.surface.arguments import heightmap_argument
+from roughness.surface.heightmap import Heightmap, check_centre
+from roughness.surface.tiling import check_tile
 
-from .engines import FemEngine, SpectralEngine, model_provenance
+from .engines import FEM_FIDELITIES, FemEngine, SpectralEngine, model_provenance
 
 if TYPE_CHECKING:
     from roughness.perceptual_scale import Placement
@@ -52,6 +57,14 @@ class CurvedBase:
     shape: str = "cylinder"  # "cylinder" or "sphere"
     axis: str = "x"  # a cylinder's axis
     texture_along: str = "normal"  # heights laid off along the base's normal, or along z
+
+    def __post_init__(self) -> None:
+        if real("radius_mm", self.radius_mm) == 0:
+            raise InputError("radius_mm is a signed radius (> 0 convex, < 0 concave); 0 is not a radius (leave the "
+                             "base out for a flat one)", parameter="radius_mm")
+        choice("shape", self.shape, CHOICES["base"])
+        choice("axis", self.axis, CHOICES["curvature_axis"])
+        choice("texture_along", self.texture_along, CHOICES["texture_along"])
 
     def simulation(self) -> dict:
         """The ``SimConfig`` fields of this base."""
@@ -78,6 +91,23 @@ class PredictOptions:
     max_std: float | None = None
     batch_size: int = 256
     curved: CurvedBase | None = None
+
+    def __post_init__(self) -> None:
+        """Each field checked as the command line checks its option (InputError naming the field)."""
+        tile = flag("tile", self.tile)
+        if self.centre_mm is not None:
+            check_centre(self.centre_mm, tile)
+        if self.fidelity is not None:
+            choice("fidelity", self.fidelity, FEM_FIDELITIES)
+        if self.tolerance is not None:
+            in_range("tolerance", positive("tolerance", self.tolerance), 0.0, 1.0)
+        if self.max_std is not None:
+            positive("max_std", self.max_std)
+        check_size("inputs per surrogate batch", integer("batch_size", self.batch_size, minimum=1), MAX_BATCH,
+                   "batch_size")
+        if self.curved is not None and not isinstance(self.curved, CurvedBase):
+            raise InputError(f"curved must be a CurvedBase (or None for a flat base), got {self.curved!r}",
+                             parameter="curved")
 
 
 @dataclass(frozen=True)
@@ -159,7 +189,7 @@ class Prediction:
 
 
 def predict(inputs: Inputs, engine: str = "auto", model: SurrogateModel | str | Path | None = None,
-            options: PredictOptions | None = None, *, pixel_mm: float | None = None,
+            options: PredictOptions | None = None, *, pixel_mm: float | None = None, units_ok: bool = False,
             on_result: Callable[[Prediction], None] | None = None) -> list[Prediction]:
     """Predict the roughness V (dimensionless strain variation) of each heightmap.
 
@@ -167,7 +197,8 @@ def predict(inputs: Inputs, engine: str = "auto", model: SurrogateModel | str | 
     ----------
     inputs : Heightmap, 2-D array of heights (mm), a mapping name -> either, or an iterable of them or of
         (name, heightmap) pairs
-        The textures (arrays need ``pixel_mm``); names label the results (default: ``heightmap 0``, ...).
+        The textures (arrays, and nested lists of rows, need ``pixel_mm``); names label the results (default:
+        ``heightmap 0``, ...). Missing points (NaN, masked) are refused: ``as_heightmap(..., fill=True)`` fills them.
     engine : {"auto", "surrogate", "spectral", "fem"}
         See the module docstring: ``auto`` is the surrogate, climbing to the spectral engine or the FEM where
         the input is outside its domain or too uncertain.
@@ -177,6 +208,9 @@ def predict(inputs: Inputs, engine: str = "auto", model: SurrogateModel | str | 
         Footprint position, periodic maps, FEM fidelity, auto's threshold, batch size, a curved base.
     pixel_mm : float, optional
         Pixel size (mm) of array inputs.
+    units_ok : bool
+        The heights and pixel size are mm even though their relief, slope or pixel size look like metres or
+        micrometres (``roughness.surface.units``; default: refuse them, as the command line does).
     on_result : callable, optional
         Called with each ``Prediction`` as it is ready.
 
@@ -188,15 +222,25 @@ def predict(inputs: Inputs, engine: str = "auto", model: SurrogateModel | str | 
     Raises
     ------
     InputError
-        A bad option or input (an array without ``pixel_mm``, NaN/Inf heights, not 2-D).
+        A bad argument or input (an array without ``pixel_mm``, missing or infinite heights, not 2-D, numbers that
+        look like metres or micrometres, a map smaller than the footprint without ``tile``), named by its
+        ``parameter``; every input is checked before an engine runs on it.
     """
-    options = options or PredictOptions()
-    if engine not in PREDICT_ENGINES:
-        raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(PREDICT_ENGINES)}", parameter="engine")
-    integer("batch_size", options.batch_size, minimum=1)
-    named = named_heightmaps(inputs, pixel_mm)
+    options = _options(options)
+    function("on_result", on_result)
+    flag("units_ok", units_ok)
+    return predictions(_checked_inputs(inputs, pixel_mm, units_ok, options), engine, model, options, on_result)
+
+
+def predictions(named: Iterable[tuple[str, Heightmap]], engine: str = "auto",
+                model: SurrogateModel | str | Path | None = None, options: PredictOptions | None = None,
+                on_result: Callable[[Prediction], None] | None = None) -> list[Prediction]:
+    """``predict`` of (name, Heightmap) pairs already checked as inputs (by ``predict``, or by the command line
+    as it loads each file; the design tools' own variants of a checked texture): the engines only."""
+    engine = choice("engine", engine, PREDICT_ENGINES)
+    options = _options(options)
     if engine == "spectral":
-        return _predict_spectral(named, options, on_result)
+        return _predict_spectral(named, _spectral_engine(options), on_result)
     dispatch = _Dispatch.make(engine, model, options)
     results: list[Prediction] = []
     batch: list[tuple[str, Heightmap]] = []
@@ -210,12 +254,37 @@ def predict(inputs: Inputs, engine: str = "auto", model: SurrogateModel | str | 
     return results
 
 
-def named_heightmaps(inputs: Inputs, pixel_mm: float | None = None) -> Iterator[tuple[str, Heightmap]]:
-    """(name, ``Heightmap``) of each input, lazily: a mapping's keys, a pair's name, else ``heightmap i``.
+def _options(options: object) -> PredictOptions:
+    """``options``, or the defaults for None; InputError for anything but a PredictOptions."""
+    if options is None:
+        return PredictOptions()
+    if not isinstance(options, PredictOptions):
+        raise InputError(f"options must be a roughness.PredictOptions (or None), got {type(options).__name__}",
+                         parameter="options")
+    return options
 
-    An array is always one map (a 3-D array is refused, not split); ``pixel_mm`` as in ``as_heightmap``.
+
+def _checked_inputs(inputs: Inputs, pixel_mm: float | None, units_ok: bool,
+                    options: PredictOptions) -> Iterator[tuple[str, Heightmap]]:
+    """The named inputs, each checked as the command line checks a file as it loads it, before an engine sees it:
+    a Heightmap of heights in mm (``surface.arguments``: units too), the skin footprint on it (at
+    ``options.centre_mm``, or tiled) and, for a tiled patch smaller than the footprint, its fitness as a tile
+    (``surface.tiling``)."""
+    footprint_mm = SimConfig.width_mm  # the skin footprint of every engine (the surrogate's patch too)
+    for name, value in _named_inputs(inputs):
+        hm = heightmap_argument(value, pixel_mm, "inputs", units_ok, name)
+        hm.require_footprint(footprint_mm, options.centre_mm, options.tile)
+        if options.tile:
+            check_tile(hm, name, footprint_mm)
+        yield name, hm
+
+
+def _named_inputs(inputs: Inputs) -> Iterator[tuple[str, object]]:
+    """(name, value) of each input, lazily: a mapping's keys, a pair's name, else ``heightmap i``.
+
+    A Heightmap, an array or a nested list of numbers is one input (a 3-D array is refused later, not split).
     """
-    if isinstance(inputs, (Heightmap, np.ndarray)):
+    if isinstance(inputs, (Heightmap, np.ndarray)) or _numbers(inputs):
         inputs = [inputs]
     elif isinstance(inputs, Mapping):
         inputs = inputs.items()
@@ -224,8 +293,17 @@ def named_heightmaps(inputs: Inputs, pixel_mm: float | None = None) -> Iterator[
                          f"an iterable of them, got {type(inputs).__name__}", parameter="inputs")
     for i, item in enumerate(inputs):
         named = isinstance(item, tuple) and len(item) == 2 and isinstance(item[0], str)
-        name, heights = item if named else (f"heightmap {i}", item)
-        yield name, as_heightmap(heights, pixel_mm, "inputs")
+        yield item if named else (f"heightmap {i}", item)
+
+
+def _numbers(value: object) -> bool:
+    """True for a list or tuple of numbers or of lists or tuples of them: one map's heights (or a malformed one)."""
+    if not isinstance(value, (list, tuple)) or not value:
+        return False
+    first = value[0]
+    if isinstance(first, (list, tuple)):
+        first = first[0] if first else None
+    return isinstance(first, numbers.Number)
 
 
 @dataclass
@@ -245,15 +323,14 @@ class _Dispatch:
         from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
         model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
-        curved = options.curved.simulation() if options.curved else {}
-        tolerance = {} if options.tolerance is None else {"tolerance": options.tolerance}
-        simulation = {**model.meta.simulation, **tolerance, **curved}
+        simulation = _fem_simulation(model, options)
         fem = FemEngine.of(options.fidelity or model.fidelity, simulation, options.centre_mm, options.tile)
-        off_base = [CurvatureRange.load().outside(options.curved.radius_mm, options.curved.shape)] if curved else []
+        off_base = [CurvatureRange.load().outside(options.curved.radius_mm, options.curved.shape)] \
+            if options.curved else []
         # auto climbs surrogate -> spectral -> FEM: the spectral engine answers for a flat base where its measured
         # error allows (``SPECTRAL_MIN_CONTACT``), unless a FEM fidelity was asked for
         spectral = SpectralEngine.of(simulation, options.centre_mm, options.tile) \
-            if engine == "auto" and not curved and options.fidelity is None else None
+            if engine == "auto" and not options.curved and options.fidelity is None else None
         return cls(engine, model, options, uncertainty_limit(model, options.max_std), fem, spectral,
                    [why for why in off_base if why])
 
@@ -353,9 +430,24 @@ def _spectral_prediction(source: str, result: SpectralResult, in_domain: bool, n
                       provenance=make_provenance("spectral", "spectral", identity, model))
 
 
-def _predict_spectral(named: Iterable[tuple[str, Heightmap]], options: PredictOptions,
-                      on_result: Callable[[Prediction], None] | None) -> list[Prediction]:
-    """``predict`` with the spectral engine: the paper's parameters, no surrogate loaded."""
+def _fem_simulation(model: SurrogateModel, options: PredictOptions) -> dict:
+    """The FEM's ``SimConfig`` fields for this call: the model's, with the options' tolerance and curved base,
+    checked together before any engine is made (a base the configuration refuses is an InputError naming
+    ``curved``)."""
+    curved = options.curved.simulation() if options.curved else {}
+    tolerance = {} if options.tolerance is None else {"tolerance": options.tolerance}
+    simulation = {**model.meta.simulation, **tolerance, **curved}
+    try:
+        SimConfig(**simulation)
+    except InputError as err:
+        if err.parameter in CURVED_FIELDS:  # SimConfig's name for a field of options.curved
+            raise InputError(str(err), parameter="curved") from None
+        raise
+    return simulation
+
+
+def _spectral_engine(options: PredictOptions) -> SpectralEngine:
+    """The spectral engine with the paper's parameters; InputError for an option it has no use for."""
     for name in ("fidelity", "tolerance", "max_std"):
         if getattr(options, name) is not None:
             raise InputError(f"the spectral engine has no {'ensemble' if name == 'max_std' else 'mesh'}: this option "
@@ -363,7 +455,12 @@ def _predict_spectral(named: Iterable[tuple[str, Heightmap]], options: PredictOp
     if options.curved is not None:
         raise InputError("the spectral engine models a flat skin layer; curved bases need engine='fem'",
                          parameter="curved")
-    spectral = SpectralEngine.of(centre_mm=options.centre_mm, tile=options.tile)
+    return SpectralEngine.of(centre_mm=options.centre_mm, tile=options.tile)
+
+
+def _predict_spectral(named: Iterable[tuple[str, Heightmap]], spectral: SpectralEngine,
+                      on_result: Callable[[Prediction], None] | None) -> list[Prediction]:
+    """``predict`` with the spectral engine: no surrogate loaded."""
     results = []
     for source, hm in named:
         result = _spectral_prediction(source, spectral.simulate(hm), True, [], spectral.identity)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import zipfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -48,6 +49,7 @@ class ResultCache:
         self.folder, self.before_first = folder, before_first
         self.path = folder / RESULTS_FILE
         self.entries: dict[tuple[str, str], dict] = {}
+        self.notes: list[str] = []  # damaged entries found, each computed again (``arrays``)
         if self.path.exists():
             text = self.path.read_text()
             if text and not text.endswith("\n"):  # a line torn by an interruption: dropped, computed again
@@ -58,20 +60,35 @@ class ResultCache:
                 try:
                     entry = json.loads(line)
                 except json.JSONDecodeError:
-                    raise InputError(f"{self.path} line {number} is not JSON: remove that line to recompute it") from None
-                if entry.get("identity") == identities.get(entry.get("engine")):
+                    entry = None
+                if not (isinstance(entry, dict) and isinstance(entry.get("engine"), str)
+                        and isinstance(entry.get("key"), str)):
+                    raise InputError(f"{self.path} line {number} is not a result (a JSON object with engine and "
+                                     "key): the cache is damaged; remove that line to recompute it")
+                if entry.get("identity") == identities.get(entry["engine"]):
                     self.entries[(entry["engine"], entry["key"])] = entry
 
     def get(self, engine: str, key: str) -> dict | None:
         return self.entries.get((engine, key))
 
-    def arrays(self, engine: str, key: str) -> dict[str, np.ndarray]:
-        """The arrays stored with a result (empty if none were)."""
+    def arrays(self, engine: str, key: str, required: tuple[str, ...] = ()) -> dict[str, np.ndarray]:
+        """The arrays stored with a result (empty if none were). A damaged arrays file (unreadable, or without the
+        ``required`` arrays) reads as none, noted in ``notes``: the caller computes the result again and ``put``
+        replaces the file."""
         path = self._arrays_path(engine, key)
         if not path.is_file():
             return {}
-        with np.load(path, allow_pickle=False) as data:
-            return {name: data[name] for name in data.files}
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                arrays = {name: data[name] for name in data.files}
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as err:
+            return self._damaged(path, f"{type(err).__name__}: {err}")
+        missing = [name for name in required if name not in arrays]
+        return self._damaged(path, f"no array {', '.join(missing)}") if missing else arrays
+
+    def _damaged(self, path: Path, why: str) -> dict[str, np.ndarray]:
+        self.notes.append(f"{path}: a damaged entry of the result cache {self.folder} ({why}): computed again")
+        return {}
 
     def put(self, engine: str, key: str, arrays: dict[str, np.ndarray] | None = None, **fields) -> None:
         """Store a result: its fields as a line, its ``arrays`` (if any) in an .npz file first."""

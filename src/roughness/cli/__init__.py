@@ -55,7 +55,16 @@ EXTRA_OF = {"trimesh": "objects", "rtree": "objects", "lxml": "objects", "torch"
 
 
 def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
+    """Run the command line ``argv`` (default: the process's); its exit code. Ctrl-C at any point, building the
+    parser included, ends with "interrupted" and 130, not a traceback."""
+    try:
+        return _main(sys.argv[1:] if argv is None else argv)
+    except KeyboardInterrupt:
+        print("roughness: interrupted", file=sys.stderr)
+        return 130
+
+
+def _main(argv: list[str]) -> int:
     parser = build_parser(_command(argv))
     try:
         args = parser.parse_args(argv)
@@ -83,6 +92,3 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as err:
         print(f"roughness: error: {err}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("roughness: interrupted", file=sys.stderr)
-        return 130

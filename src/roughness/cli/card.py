@@ -12,7 +12,8 @@ def add_parser(sub) -> None:
     p = sub.add_parser("card", help="write the model card (Markdown) of an exported surrogate and its accuracy and "
                                     "training plots, from its training run")
     p.add_argument("run_dir", metavar="RUN", help="folder of the model's `roughness train` run (predictions.csv, "
-                                              "history.csv; an ensemble's member 0)")
+                                              "history.csv, metrics.json; an ensemble's member 0); refused unless "
+                                              "it made MODEL")
     p.add_argument("model", metavar="MODEL", help="exported ONNX model")
     p.add_argument("--card", required=True, metavar="FILE", help="Markdown file to write; refused if it exists "
                                                                  "unless --overwrite")
@@ -31,8 +32,8 @@ def run(args: argparse.Namespace) -> int:
 
     folder, plots = Path(args.run_dir), Path(args.plots)
     check_distinct({"--card": args.card, "--plots": [plots / ACCURACY_PNG, plots / TRAINING_PNG]},
-                   {"RUN": [folder / "predictions.csv", folder / "history.csv"], "MODEL": args.model,
-                    "--latency": args.latency})
+                   {"RUN": [folder / name for name in ("predictions.csv", "history.csv", "metrics.json")],
+                    "MODEL": args.model, "--latency": args.latency})
     write_card(folder, Path(args.model), Path(args.card), plots, Path(args.latency) if args.latency else None,
                args.overwrite)
     return 0

@@ -11,8 +11,19 @@ import sys
 from typing import TYPE_CHECKING
 
 from roughness.core.errors import InputError, OutputExists
-from roughness.core.limits import MAX_BATCH, MAX_CHANNELS, MAX_PARALLEL
-from roughness.surface.cleanup import LEVELS, MAX_FILL_FRACTION
+from roughness.core.limits import (
+    MAX_BATCH,
+    MAX_CHANNELS,
+    MAX_FORCE_N,
+    MAX_HEIGHT_MM,
+    MAX_JND,
+    MAX_LENGTH_MM,
+    MAX_PARALLEL,
+    MAX_PIXEL_MM,
+    MAX_SCALE_FACTOR,
+    MAX_WAVELENGTH_MM,
+)
+from roughness.surface.cleanup import LEVELS, MAX_DESPIKE, MAX_FILL_FRACTION
 
 if TYPE_CHECKING:
     from roughness.surface.heightmap import Heightmap
@@ -47,8 +58,10 @@ def count_list(text: str) -> tuple[int, ...]:
 class Number:
     """An argparse type for a number with a declared domain; ``invalid`` lists values it refuses.
 
-    Every numeric option uses one (tests/test_bad_inputs.py sweeps each option's ``invalid``
-    values through the whole CLI), so no option accepts NaN, infinity or an out-of-range value.
+    Every numeric option uses one with an upper bound (tests/test_bad_inputs.py sweeps each option's
+    ``invalid`` values through the whole CLI), so no option accepts NaN, infinity or an out-of-range
+    value, nor a size that nothing touchable needs. A bound that is a named limit (roughness.core.limits)
+    is shown with its name.
     """
 
     def __init__(self, kind: type, low: float | None = None, high: float | None = None,
@@ -61,7 +74,7 @@ class Number:
         parts = []
         for bound, sign in ((self.low, ">" if self.low_open else ">="), (self.high, "<" if self.high_open else "<=")):
             if bound is not None:
-                parts.append(f"{sign} {bound if self.kind is int else format(bound, 'g')}")
+                parts.append(f"{sign} {_bound_text(bound)}")
         return what + (" " + " and ".join(parts) if parts else "")
 
     def __call__(self, text: str) -> int | float:
@@ -83,18 +96,54 @@ class Number:
         out = ["abc", "", "nan", "inf"] + (["1.5"] if self.kind is int else [])
         for bound, is_open, sign in ((self.low, self.low_open, -1), (self.high, self.high_open, 1)):
             if bound is not None:
-                step = 1 if self.kind is int else 1e-9 * max(1.0, abs(bound))
-                out.append(f"{bound:g}" if is_open else f"{bound + sign * step:.12g}")
+                out.append(_just_outside(self.kind, bound, is_open, sign))
         return out
 
 
-POSITIVE = Number(float, low=0, low_open=True)
-COUNT = Number(int, low=1)
+def _just_outside(kind: type, bound: float, is_open: bool, sign: int) -> str:
+    """The text of the value just outside ``bound`` (the bound itself if open; ``sign`` +1: above, -1: below)."""
+    if kind is int:
+        return str(int(bound) + sign * (0 if is_open else 1))  # exact at any size (.12g would print 9.2e+18)
+    return f"{bound:g}" if is_open else f"{bound + sign * 1e-9 * max(1.0, abs(bound)):.12g}"
+
+
+def _bound_text(bound: float) -> str:
+    """A bound for messages: ``<= 10,000 (MAX_WINDOWS)`` for a named limit, else the number."""
+    name = getattr(bound, "name", None)
+    if not isinstance(bound, int):
+        number = f"{bound:g}"
+    else:
+        number = f"{bound:,}" if name else str(bound)
+    return f"{number} ({name})" if name else number
+
+
+def positive(high: float) -> Number:
+    """A number > 0 and <= ``high``."""
+    return Number(float, low=0, high=high, low_open=True)
+
+
+def count(high: int, low: int = 1) -> Number:
+    """A whole number from ``low`` to ``high``."""
+    return Number(int, low=low, high=high)
+
+
+# The option domains the commands share; each upper end is what a touchable texture or object can need (the
+# physical ones are roughness.core.limits' bounds, with their reasons there).
 SEED = Number(int, low=0, high=2**32 - 1)
 POISSON = Number(float, low=-1, high=0.5, low_open=True, high_open=True)
 FRACTION = Number(float, low=0, high=1, low_open=True, high_open=True)
-BATCH = Number(int, low=1, high=MAX_BATCH)  # roughness.core.limits
-PARALLEL = Number(int, low=1, high=MAX_PARALLEL)  # threads or worker processes
+BATCH = count(MAX_BATCH)
+PARALLEL = count(MAX_PARALLEL)  # threads or worker processes
+LENGTH = positive(MAX_LENGTH_MM)  # mm: sizes, steps, widths, radii of textures, plates and objects
+PIXEL = positive(MAX_PIXEL_MM)
+HEIGHT = positive(MAX_HEIGHT_MM)
+FORCE = positive(MAX_FORCE_N)
+WAVELENGTH = positive(MAX_WAVELENGTH_MM)  # an equivalent wavelength on the standard scale (mm)
+FACTOR = positive(MAX_SCALE_FACTOR)  # a scale factor of a texture's heights or lateral size
+JND = positive(MAX_JND)  # a distance in JND of equivalent wavelength
+# Textures of a palette, colours of a tactile image: --min-jnd apart on the 22 JND from the standard scale's floor
+# to the footprint, a palette holds tens at most.
+MAX_PALETTE = 100
 
 
 def add_heightmap_args(p: argparse.ArgumentParser) -> None:
@@ -110,11 +159,11 @@ def add_heightmap_args(p: argparse.ArgumentParser) -> None:
 def add_reading_args(p: argparse.ArgumentParser) -> None:
     """How heightmaps are loaded: --pixel-mm, --height-mm, --resample-square, the unit check's --units-ok, and
     the scan clean-up options (roughness.surface.loading)."""
-    p.add_argument("--pixel-mm", type=POSITIVE, metavar="MM",
+    p.add_argument("--pixel-mm", type=PIXEL, metavar="MM",
                    help="pixel size in mm (required unless the file states it; refused if it differs from what a "
                         "file states, except TIFF resolution tags, which it replaces with a note; "
                         "FILE:pixel-mm=MM for one file)")
-    p.add_argument("--height-mm", type=POSITIVE, metavar="MM",
+    p.add_argument("--height-mm", type=HEIGHT, metavar="MM",
                    help="height of full-scale white in mm (8/16-bit PNG/TIFF; unless the file states it; with several "
                         "inputs it applies to those that need it; FILE:height-mm=MM for one file)")
     p.add_argument("--resample-square", action="store_true",
@@ -127,7 +176,7 @@ def add_reading_args(p: argparse.ArgumentParser) -> None:
                    help="interpolate missing points (NaN) of a scan, reported (default: refuse them)")
     p.add_argument("--max-fill", type=FRACTION, default=MAX_FILL_FRACTION, metavar="FRACTION",
                    help=f"--fill refuses maps with more missing than this fraction (default: {MAX_FILL_FRACTION:g})")
-    p.add_argument("--despike", type=POSITIVE, metavar="K",
+    p.add_argument("--despike", type=positive(MAX_DESPIKE), metavar="K",
                    help="replace spikes: pixels further than K RMS height steps from their 3 x 3 median "
                         "(5 leaves the product's textures untouched; default: off)")
     p.add_argument("--level", choices=tuple(LEVELS),

@@ -5,7 +5,9 @@ import argparse
 import sys
 from functools import partial
 
-from .common import COUNT, add_overwrite, add_quiet, add_reading_args, finish, load, log, show_notes
+from roughness.core.limits import MAX_DATASET_SAMPLES
+
+from .common import add_overwrite, add_quiet, add_reading_args, count, finish, load, log, show_notes
 
 COMPARE_ENGINES = ("fem:coarse", "fem:default", "surrogate", "ra", "p90", "glcm_sum_of_squares", "glcm_sum_variance")
 REFERENCE = "fem:fine"
@@ -23,7 +25,7 @@ def add_parser(sub) -> None:
                           f"glcm_sum_of_squares glcm_sum_variance (default: {' '.join(COMPARE_ENGINES)})")
     cmp.add_argument("--reference", default=REFERENCE,
                      help=f"engine the others are scored against (default: {REFERENCE})")
-    cmp.add_argument("--n", type=COUNT, help="number of textures, the first n (default: all; required for a recipe)")
+    cmp.add_argument("--n", type=count(MAX_DATASET_SAMPLES), help="number of textures, the first n (default: all; required for a recipe)")
     add_reading_args(cmp)
     add_quiet(cmp)
     add_overwrite(cmp)

@@ -4,7 +4,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import COUNT, FRACTION, SEED, add_cluster_args, add_overwrite, finish, json_text, write_stdout
+from roughness.core.limits import MAX_DATASET_SAMPLES
+
+from .common import FRACTION, SEED, add_cluster_args, add_overwrite, count, finish, json_text, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -16,7 +18,7 @@ def add_parser(sub) -> None:
     b = data_sub.add_parser("build", help="simulate a recipe's samples in parallel (Dask), resumable")
     b.add_argument("--out", required=True, metavar="DATASET",
                    help="HDF5 dataset file: created, or resumed if it is a dataset of the same configuration")
-    b.add_argument("--n", type=COUNT, required=True, help="number of samples (the first n of the recipe)")
+    b.add_argument("--n", type=count(MAX_DATASET_SAMPLES), required=True, help="number of samples (the first n of the recipe)")
     b.add_argument("--recipe", metavar="JSON", help="recipe file (default: the built-in recipe, bump textures only)")
     b.add_argument("--engine", choices=ENGINES, default="fem",
                    help="what labels the samples: fem, or spectral (the skin as an infinite layer, no mesh: "

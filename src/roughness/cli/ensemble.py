@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import COUNT, add_overwrite, finish, json_text
+from .common import add_overwrite, count, finish, json_text
 from .train import require_torch, write_int8
 
 
@@ -22,7 +22,9 @@ def add_parser(sub) -> None:
     p.add_argument("--int8", metavar="FILE", help="also write the int8 graph of the ensemble (surrogate/quantize.py; "
                                                   "nothing is written if it strays from fp32 beyond its limits) "
                                                   "(default: none); refused if it exists unless --overwrite")
-    p.add_argument("--model-version", type=COUNT, default=1,
+    from roughness.surrogate.versioning import MAX_MODEL_VERSION
+
+    p.add_argument("--model-version", type=count(MAX_MODEL_VERSION), default=1,
                    help="the model's version (ONNX model_version), the next whole number (default: 1)")
     add_overwrite(p)
     finish(p, run, checkpoint="CHECKPOINT", checkpoints="CHECKPOINT")

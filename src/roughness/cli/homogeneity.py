@@ -3,12 +3,14 @@ from __future__ import annotations
 
 import argparse
 
+from roughness.core.limits import MAX_WINDOWS
+
 from .common import (
-    COUNT,
-    POSITIVE,
+    LENGTH,
     SEED,
     add_model_tail,
     add_reading_args,
+    count,
     defaults,
     finish,
     json_text,
@@ -28,10 +30,10 @@ def add_parser(sub) -> None:
                                            "relative variance, spread in JNDs, verdict")
     p.add_argument("heightmap", metavar="HEIGHTMAP", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .npz, .h5")
     add_reading_args(p)
-    p.add_argument("--window-mm", type=POSITIVE,
+    p.add_argument("--window-mm", type=LENGTH,
                    help="window side in mm (default: the 10 mm skin footprint; a smaller window, such as the "
                         "paper's 5 mm, is felt alone, mirror-tiled)")
-    p.add_argument("--n", type=COUNT, default=given["n"], help=f"number of windows, >= 3 (default {given['n']})")
+    p.add_argument("--n", type=count(MAX_WINDOWS), default=given["n"], help=f"number of windows, >= 3 (default {given['n']})")
     p.add_argument("--seed", type=SEED, default=given["seed"], help="seed of the window placement (default 0)")
     p.add_argument("--engine", choices=ENGINES, default=given["engine"],
                    help="surrogate (milliseconds) or fem: the verifier of --verify, per window (the FEM: seconds, "

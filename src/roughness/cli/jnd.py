@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 
 from .common import add_reading_args, defaults, finish, json_text, load_input, readings, write_stdout
+from .predict import domain_words
 
 
 def add_parser(sub) -> None:
@@ -26,10 +27,10 @@ def add_parser(sub) -> None:
 def run(args: argparse.Namespace) -> int:
     from roughness.core.provenance import combined
     from roughness.perceptual_scale import jnd_distance, load_scale
-    from roughness.prediction import predict
+    from roughness.prediction import predictions
 
     maps = [load_input(args, path, several=True) for path in (args.a, args.b)]
-    pa, pb = predict(list(zip([args.a, args.b], maps)), engine=args.engine, model=args.model)
+    pa, pb = predictions(list(zip([args.a, args.b], maps)), args.engine, args.model)  # checked as they were loaded
     scale = load_scale(pa.fidelity)
     distance = jnd_distance(scale, pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
     if args.json:
@@ -67,4 +68,4 @@ def _distance_line(distance, kinds: str) -> str:
 def _line(p) -> str:
     se = _uncertainty(p)
     v = f"V = {p.roughness:.4f}" + (f" ± {se:.4f}" if se is not None else "")
-    return f"{p.source}: {v} ({p.engine}, {'in domain' if p.in_domain else 'OUT OF DOMAIN'}), {p.placement.describe()}"
+    return f"{p.source}: {v} ({p.engine}, {domain_words(p)}), {p.placement.describe()}"

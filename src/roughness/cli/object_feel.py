@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .common import (
-    POSITIVE,
+    LENGTH,
     add_overwrite,
     add_quiet,
     add_reading_args,
@@ -29,11 +29,12 @@ if TYPE_CHECKING:
 def add_object_args(p: argparse.ArgumentParser) -> None:
     """The textured object: the mesh, the texture, its mapping (as object texture's) and the regions (shared by feel
     and tune)."""
-    add_mesh_and_texture_args(p, "the untextured object: STL, OBJ, PLY or 3MF (mm unless the file states units)")
+    add_mesh_and_texture_args(p, "the untextured object: STL, OBJ, PLY or 3MF (mm unless the file states units; a largest "
+                                 "extent outside 2 mm to 1 m is refused unless --units-ok)")
     p.add_argument("--region", action="append", metavar="SPEC",
                    help="faces to texture, repeatable (each a row of the table): all, cone:AX,AY,AZ,DEG (normals within "
                         "DEG of the axis), box:X0,Y0,Z0,X1,Y1,Z1 (mm), colour:R,G,B[,TOL] (painted) (default: all)")
-    p.add_argument("--spacing-mm", type=POSITIVE, metavar="MM",
+    p.add_argument("--spacing-mm", type=LENGTH, metavar="MM",
                    help="distance between evaluation points (default: 5, half the 10 mm footprint)")
     p.add_argument("--engine", choices=("spectral", "surrogate"), default="spectral",
                    help="the flat engine judging the texture under each footprint (default: spectral)")
@@ -63,7 +64,7 @@ def read_object(args: argparse.Namespace) -> ObjectInputs:
     from roughness.objects.regions import parse_region
 
     check_mapping_args(args)
-    read = read_mesh(args.mesh)
+    read = read_mesh(args.mesh, units_ok=args.units_ok)
     texture, texture_notes = read_texture(args)
     regions = {}
     for text in args.region or ["all"]:

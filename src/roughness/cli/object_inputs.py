@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import POSITIVE, SEED, Number, load_input
+from .common import LENGTH, SEED, Number, load_input
 
 # Python names of the mapping's parameters -> the flags that give them (for error messages)
 MAPPING_FLAGS = {"mesh": "MESH", "texture": "--texture", "mapping": "--mapping", "axis": "--axis",
@@ -28,12 +28,12 @@ def add_mesh_and_texture_args(p: argparse.ArgumentParser, mesh_help: str) -> Non
     p.add_argument("--axis", metavar="PX,PY,PZ,DX,DY,DZ",
                    help="cylinder: its axis (a point and a direction, mm); sphere: its centre and polar axis "
                         "(default: fitted to the textured faces)")
-    p.add_argument("--radius-mm", type=POSITIVE, metavar="MM",
+    p.add_argument("--radius-mm", type=LENGTH, metavar="MM",
                    help="cylinder/sphere: the radius to fit whole tiles around (default: fitted)")
     p.add_argument("--blend-deg", type=Number(float, *BLEND_RANGE_DEG), default=DEFAULT_BLEND_DEG, metavar="DEG",
                    help=f"width (degrees of the normal) over which two projections are blended at a seam "
                         f"(default {DEFAULT_BLEND_DEG:g})")
-    p.add_argument("--uv-mm", type=POSITIVE, metavar="MM",
+    p.add_argument("--uv-mm", type=LENGTH, metavar="MM",
                    help="uv: mm per UV unit (default: the texture at its own size on average)")
 
 

@@ -3,8 +3,10 @@ from __future__ import annotations
 
 import argparse
 
+from roughness.core.limits import MAX_LENGTH_MM
+
 from .common import (
-    POSITIVE,
+    LENGTH,
     Number,
     add_overwrite,
     add_quiet,
@@ -23,17 +25,18 @@ def add_parser(actions) -> None:
 
     p = actions.add_parser("texture", help="put a texture on a mesh: remesh the textured faces to the texture's pixel, "
                                            "displace them, write a watertight STL or 3MF")
-    add_mesh_and_texture_args(p, "the object: .stl, .obj, .ply or .3mf (mm unless the file states units)")
+    add_mesh_and_texture_args(p, "the object: .stl, .obj, .ply or .3mf (mm unless the file states units; a largest extent "
+                                 "outside 2 mm to 1 m is refused unless --units-ok)")
     p.add_argument("--region", default="all", metavar="REGION",
                    help="faces to texture: all, cone:AX,AY,AZ,DEG (normal within DEG of the axis), "
                         "box:X0,Y0,Z0,X1,Y1,Z1 (centre in the box, mm), colour:R,G,B[,TOL] (painted vertex or face "
                         "colours, 0-255) (default: all)")
-    p.add_argument("--edge-mm", type=POSITIVE, metavar="MM",
+    p.add_argument("--edge-mm", type=LENGTH, metavar="MM",
                    help="longest edge of a textured triangle (default: sqrt(2) x the texture's pixel on the surface)")
-    p.add_argument("--normal-radius-mm", type=Number(float, low=0), default=DEFAULT_NORMAL_RADIUS_MM, metavar="MM",
+    p.add_argument("--normal-radius-mm", type=Number(float, low=0, high=MAX_LENGTH_MM), default=DEFAULT_NORMAL_RADIUS_MM, metavar="MM",
                    help="smooth the displacement's normals over about this radius (default 0: area-weighted vertex "
                         "normals)")
-    p.add_argument("--border-mm", type=Number(float, low=0), default=DEFAULT_BORDER_MM, metavar="MM",
+    p.add_argument("--border-mm", type=Number(float, low=0, high=MAX_LENGTH_MM), default=DEFAULT_BORDER_MM, metavar="MM",
                    help="the heights ramp from 0 on the region's border to full height over this distance, so the "
                         f"border and the faces beside it keep their shape (0: no ramp) (default {DEFAULT_BORDER_MM:g})")
     p.add_argument("--no-intersection-check", action="store_true",
@@ -62,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     region = parse_region(args.region)
     check_mapping_args(args)
     texture, texture_notes = read_texture(args)
-    read = read_mesh(args.mesh)
+    read = read_mesh(args.mesh, units_ok=args.units_ok)
     mapping = mapping_for(args, texture, read.mesh, region.faces(read.mesh))
     log(args, f"object texture: {read.triangles:,} triangles in {args.mesh}; texturing")
     result = texture_mesh(read.mesh, mapping, region, args.edge_mm, args.normal_radius_mm,

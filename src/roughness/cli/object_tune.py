@@ -8,7 +8,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .common import (
-    POSITIVE,
+    FACTOR,
+    JND,
+    WAVELENGTH,
     Number,
     add_overwrite,
     add_quiet,
@@ -33,7 +35,7 @@ def add_parser(sub) -> None:
                                     "(not only the flat texture); reports both")
     add_object_args(p)
     target = p.add_mutually_exclusive_group(required=True)
-    target.add_argument("--target-lambda", type=POSITIVE, metavar="MM",
+    target.add_argument("--target-lambda", type=WAVELENGTH, metavar="MM",
                         help="target equivalent wavelength on the standard scale (mm)")
     target.add_argument("--jnd", type=Number(float, low=-MAX_RELATIVE_JND, high=MAX_RELATIVE_JND), metavar="N",
                         help="N JNDs rougher than --reference (negative: smoother)")
@@ -41,9 +43,9 @@ def add_parser(sub) -> None:
     p.add_argument("--by", choices=KNOBS, default="height",
                    help="scale the heights or the lateral size (default: height)")
     ranges = ", ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in FACTOR_RANGE.items())
-    p.add_argument("--min-factor", type=POSITIVE, help=f"smallest scale factor searched (default: {ranges})")
-    p.add_argument("--max-factor", type=POSITIVE, help="largest scale factor searched (default: see --min-factor)")
-    p.add_argument("--tolerance-jnd", type=POSITIVE, default=TOLERANCE_JND,
+    p.add_argument("--min-factor", type=FACTOR, help=f"smallest scale factor searched (default: {ranges})")
+    p.add_argument("--max-factor", type=FACTOR, help="largest scale factor searched (default: see --min-factor)")
+    p.add_argument("--tolerance-jnd", type=JND, default=TOLERANCE_JND,
                    help=f"stop when the curved parts are this close to the target, in JND (default {TOLERANCE_JND:g})")
     p.add_argument("--out", required=True, metavar="FILE",
                    help="the tuned texture: .npz, .npy, .h5 (mm), .png (16-bit), .tif")

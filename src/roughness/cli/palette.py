@@ -4,11 +4,13 @@ from __future__ import annotations
 import argparse
 
 from .common import (
-    COUNT,
-    POSITIVE,
+    JND,
+    LENGTH,
+    MAX_PALETTE,
     SEED,
     add_model_tail,
     add_reading_args,
+    count,
     defaults,
     finish,
     json_text,
@@ -27,8 +29,8 @@ def add_parser(sub) -> None:
 
     given = defaults(family_palette)
     p = sub.add_parser("palette", help="K textures pairwise at least M JND apart (FEM-verified), with a preview sheet")
-    p.add_argument("--k", type=COUNT, required=True, help="number of textures, >= 2")
-    p.add_argument("--min-jnd", type=POSITIVE, default=given["min_jnd"],
+    p.add_argument("--k", type=count(MAX_PALETTE), required=True, help="number of textures, >= 2")
+    p.add_argument("--min-jnd", type=JND, default=given["min_jnd"],
                    help=f"smallest pairwise distance in JNDs of equivalent wavelength (default {given['min_jnd']:g})")
     source = p.add_mutually_exclusive_group()
     source.add_argument("--family", default=DEFAULT_FAMILY,
@@ -39,14 +41,14 @@ def add_parser(sub) -> None:
     p.add_argument("--by", choices=KNOBS, default=given["by"],
                    help=f"--family: scale the heights or the lateral size (default {given['by']})")
     p.add_argument("--seed", type=SEED, default=given["seed"], help="--family: the texture's seed (default 0)")
-    p.add_argument("--tolerance-jnd", type=POSITIVE, default=given["tolerance_jnd"],
+    p.add_argument("--tolerance-jnd", type=JND, default=given["tolerance_jnd"],
                    help=f"--family: each member within this of its target, FEM (default {given['tolerance_jnd']:g})")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="--from: the heightmaps are periodic tiles")
     p.add_argument("--out", required=True, metavar="DIR",
                    help="new folder: texture-N.npz (mm), palette.json (V, lambda, pairwise JNDs), preview.png")
     p.add_argument("--stl", action="store_true", help="also write each texture as a printable plate texture-N.stl")
-    p.add_argument("--base-mm", type=POSITIVE,
+    p.add_argument("--base-mm", type=LENGTH,
                    help=f"--stl: plate thickness below the texture's lowest point in mm (default {DEFAULT_BASE_MM:g})")
     add_printer_arg(p, "the textures are chosen and spaced as printed; the files are the digital designs, whose "
                        "own V and the differences in JND are reported")

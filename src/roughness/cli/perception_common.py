@@ -14,17 +14,20 @@ if TYPE_CHECKING:
 
     from roughness.perception.observer import Observer
 
-NON_NEGATIVE = Number(float, low=0)
 PROBABILITY = Number(float, low=0, high=1)
+SIGMA = Number(float, low=0, high=10.0)  # observer noise SD on ln(V)/2 (default 0.18): at 10 the answers are random
 
 
-def number_list(kind, what: str):
-    """An argparse type for ``a,b,c``: each parsed by ``kind`` (a common.Number), sorted, duplicates dropped."""
+def number_list(kind: Number, what: str):
+    """An argparse type for ``a,b,c``: each parsed by ``kind`` (a common.Number, kept as the type's ``kind``
+    attribute), sorted, duplicates dropped."""
     def parse(text: str) -> list:
         try:
             return sorted({kind(v) for v in text.split(",")})
         except argparse.ArgumentTypeError:
-            raise argparse.ArgumentTypeError(f"expected comma-separated {what}, got {text!r}") from None
+            raise argparse.ArgumentTypeError(f"expected comma-separated {what}, each {kind.describe()}, got "
+                                             f"{text!r}") from None
+    parse.kind = kind
     return parse
 
 
@@ -40,7 +43,7 @@ def add_truth_args(p: argparse.ArgumentParser) -> None:
 
 def add_observer_args(p: argparse.ArgumentParser, seed_of: str, outputs: str) -> None:
     """The simulated observer (``--sigma``, ``--lapse``), ``--seed`` (of ``seed_of``) and ``--out`` (``outputs``)."""
-    p.add_argument("--sigma", type=NON_NEGATIVE, default=None,
+    p.add_argument("--sigma", type=SIGMA, default=None,
                    help="the observer's noise SD on the coordinate ln(V)/2 (default 0.18, from the Weber fraction 0.19)")
     p.add_argument("--lapse", type=PROBABILITY, default=0.0,
                    help="the observer's lapse rate: the probability of a random answer (default 0)")

@@ -4,22 +4,24 @@ from __future__ import annotations
 import argparse
 import re
 
-from .common import COUNT, POSITIVE, SEED, add_overwrite, finish
+from roughness.core.limits import MAX_TRIALS
+
+from .common import LENGTH, SEED, add_overwrite, count, finish
 from .perception_common import check_trials
 
 
 def add_parser(sub) -> None:
     des = sub.add_parser("design", help="a balanced, randomised triplet trial list for an experiment")
     des.add_argument("--stimuli", required=True, metavar="TABLE", help="stimuli table (its ids are used)")
-    des.add_argument("--trials", required=True, type=COUNT, help="trials per subject")
-    des.add_argument("--subjects", type=COUNT, default=1, help="number of subjects s1..sN (default 1)")
+    des.add_argument("--trials", required=True, type=count(MAX_TRIALS), help="trials per subject")
+    des.add_argument("--subjects", type=count(MAX_TRIALS), default=1, help="number of subjects s1..sN (default 1)")
     des.add_argument("--seed", type=SEED, default=0, help="seed of the trial order (default: %(default)s)")
     des.add_argument("--out", required=True, metavar="CSV", help="trial list (answer column left blank)")
     des.add_argument("--plates", metavar="DIR", help="also write every stimulus as a printable plate DIR/<id>.stl "
                                                      "(default: none)")
-    des.add_argument("--plate-mm", type=POSITIVE, default=25.0, help="side of the plates in mm (default: %(default)s, "
+    des.add_argument("--plate-mm", type=LENGTH, default=25.0, help="side of the plates in mm (default: %(default)s, "
                                                                      "as in the paper)")
-    des.add_argument("--base-mm", type=POSITIVE, default=2.0, help="plate thickness below the texture in mm "
+    des.add_argument("--base-mm", type=LENGTH, default=2.0, help="plate thickness below the texture in mm "
                                                                    "(default: %(default)s)")
     add_overwrite(des)
     finish(des, run_design)

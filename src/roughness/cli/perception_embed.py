@@ -5,8 +5,15 @@ import argparse
 import os
 import sys
 
-from .common import PARALLEL, SEED, Number, add_overwrite, add_quiet, finish, log
-from .perception_common import NON_NEGATIVE, made, output_files
+from roughness.core.limits import MAX_TRIALS
+
+from .common import PARALLEL, SEED, Number, add_overwrite, add_quiet, count, finish, log
+from .perception_common import made, output_files
+
+# --lambda: above lambda_max of any experiment within MAX_TRIALS trials (the largest eigenvalue of their summed
+# margins, a few per trial) the embedding is 0
+REGULARISER = Number(float, low=0, high=10.0 * MAX_TRIALS)
+MAX_RESAMPLES = 10_000  # --resamples: enough to pin the 5-95% interval's ends to a percent (default 500)
 
 
 def add_parser(sub) -> None:
@@ -18,10 +25,10 @@ def add_parser(sub) -> None:
     emb.add_argument("--stimuli", metavar="TABLE", help="stimuli table: every id in TRIALS must be listed in it")
     emb.add_argument("--roughest", metavar="ID", help="a stimulus known to be rough: orients the scale so that it "
                                                       "is positive (default: arbitrary sign, said in the summary)")
-    emb.add_argument("--lambda", dest="lam", type=NON_NEGATIVE, metavar="L",
+    emb.add_argument("--lambda", dest="lam", type=REGULARISER, metavar="L",
                      help="fixed regulariser (skips cross-validation)")
-    emb.add_argument("--folds", type=Number(int, low=2), default=10, help="cross-validation folds (default 10)")
-    emb.add_argument("--resamples", type=Number(int, low=0), default=500,
+    emb.add_argument("--folds", type=count(MAX_TRIALS, low=2), default=10, help="cross-validation folds (default 10)")
+    emb.add_argument("--resamples", type=count(MAX_RESAMPLES, low=0), default=500,
                      help="bootstrap resamples for the 5-95%% intervals (default 500; 0: none)")
     emb.add_argument("--workers", type=PARALLEL, default=min(os.cpu_count() or 1, PARALLEL.high),
                      help="processes for cross-validation and bootstrap (default: all cores)")

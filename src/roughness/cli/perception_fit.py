@@ -4,10 +4,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import POSITIVE, Number, add_overwrite, add_quiet, finish, log
+from .common import FORCE, LENGTH, add_overwrite, add_quiet, count, finish, log
 from .perception_common import made, number_list, output_files
 
-positive_list = number_list(POSITIVE, "positive numbers")  # 0.4,0.8,1.2 (mm or N)
+length_list = number_list(LENGTH, "lengths in mm")  # 0.4,0.8,1.2
+force_list = number_list(FORCE, "forces in N")
+MAX_STIMULI = 1000  # --exclude-least-homogeneous: an experiment has tens of stimuli (the paper 29)
 
 
 def id_list(text: str) -> list[str]:
@@ -27,15 +29,15 @@ def add_parser(sub) -> None:
                                                     "configuration, shareable between runs")
     fit.add_argument("--exclude", type=id_list, default=[], metavar="ID,ID",
                      help="stimuli left out of the 'included' fit (e.g. the least homogeneous ones)")
-    fit.add_argument("--exclude-least-homogeneous", type=Number(int, low=0), default=0, metavar="N",
+    fit.add_argument("--exclude-least-homogeneous", type=count(MAX_STIMULI, low=0), default=0, metavar="N",
                      help="also leave out the N least homogeneous stimuli, as the paper did (N = 5): largest spread "
                           "in JNDs from the stimuli table's 'homogeneity' column, else computed with the "
                           "surrogate (roughness homogeneity); default 0")
-    fit.add_argument("--distances", type=positive_list, default=[0.4, 0.6, 0.8, 1.0, 1.2, 1.6], metavar="MM,MM",
+    fit.add_argument("--distances", type=length_list, default=[0.4, 0.6, 0.8, 1.0, 1.2, 1.6], metavar="MM,MM",
                      help="pair distances d of the re-fit (mm)")
-    fit.add_argument("--radii", type=positive_list, default=[0.2, 0.4, 0.6, 0.8, 1.0, 1.2], metavar="MM,MM",
+    fit.add_argument("--radii", type=length_list, default=[0.2, 0.4, 0.6, 0.8, 1.0, 1.2], metavar="MM,MM",
                      help="disk radii r of the re-fit (mm)")
-    fit.add_argument("--forces", type=positive_list, default=[], metavar="N,N",
+    fit.add_argument("--forces", type=force_list, default=[], metavar="N,N",
                      help="forces (N) of a re-fit over force (new FEM runs, cached; default: none)")
     add_overwrite(fit)
     add_quiet(fit)
@@ -47,7 +49,14 @@ def run_fit(args: argparse.Namespace) -> int:
 
     from roughness.core.errors import InputError
     from roughness.perception.analysis import read_embedding_csv, write_json
-    from roughness.perception.fit import Fit, classical_measures, homogeneity_spreads, least_homogeneous, sampling_fit
+    from roughness.perception.fit import (
+        Fit,
+        classical_measures,
+        homogeneity_spreads,
+        least_homogeneous,
+        r_text,
+        sampling_fit,
+    )
     from roughness.perception.plots import plot_fit, plot_sampling
     from roughness.perception.stimuli import read_stimuli
     from roughness.perception.trials import listed
@@ -109,10 +118,11 @@ def run_fit(args: argparse.Namespace) -> int:
     if fem:
         plot_sampling(fit, files["sampling.png"])
     c = summary["correlations"]["V"]
-    line = f"V ({args.engine}) vs embedding: Pearson R {_fmt(c['all']['pearson'])}, Spearman {_fmt(c['all']['spearman'])}"
+    line = (f"V ({args.engine}) vs embedding: Pearson R {r_text(c['all']['pearson'])}, "
+            f"Spearman {r_text(c['all']['spearman'])}")
     if excluded:
-        line += (f"; without {len(excluded)} excluded: R {_fmt(c['included']['pearson'])}, "
-                 f"Spearman {_fmt(c['included']['spearman'])}")
+        line += (f"; without {len(excluded)} excluded: R {r_text(c['included']['pearson'])}, "
+                 f"Spearman {r_text(c['included']['spearman'])}")
     print(line)
     log(args, f"wrote {', '.join(str(p) for p in files.values())}")
     return 0
@@ -127,10 +137,6 @@ def _table_subset(table, ids):
     if missing:
         raise InputError(listed("stimuli not in the stimuli table", missing), parameter="stimuli")
     return [by_id[i] for i in ids]
-
-
-def _fmt(x) -> str:
-    return "undefined" if x is None else f"{x:.3f}"
 
 
 def _write_fit_csv(path: Path, fit) -> None:

@@ -4,7 +4,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import COUNT, POSITIVE, Number, add_overwrite, add_quiet, finish, log
+from roughness.core.limits import MAX_TRIALS
+
+from .common import add_overwrite, add_quiet, count, finish, log, positive
 from .perception_common import (
     PROBABILITY,
     add_observer_args,
@@ -14,7 +16,8 @@ from .perception_common import (
     observer_run,
 )
 
-count_list = number_list(COUNT, "whole numbers >= 1")  # 500,1000,2000
+count_list = number_list(count(MAX_TRIALS), "numbers of trials")  # 500,1000,2000
+MAX_EXPERIMENTS = 1000  # --experiments: each a simulated experiment and fit; 1,000 pin a share to about 1.5%
 
 def add_parser(sub) -> None:
     pla = sub.add_parser("plan", help="how many trials for R within a tolerance? simulated experiments at several "
@@ -22,9 +25,9 @@ def add_parser(sub) -> None:
     add_truth_args(pla)
     pla.add_argument("--trials", required=True, type=count_list, metavar="N,N",
                      help="numbers of trials to try, e.g. 500,1000,2000,4000")
-    pla.add_argument("--experiments", type=Number(int, low=2), default=20,
+    pla.add_argument("--experiments", type=count(MAX_EXPERIMENTS, low=2), default=20,
                      help="simulated experiments per number of trials (default 20)")
-    pla.add_argument("--tolerance", type=POSITIVE, default=0.05,
+    pla.add_argument("--tolerance", type=positive(2.0), default=0.05,
                      help="|R - R_inf| wanted (default 0.05; R_inf = R with unlimited trials)")
     pla.add_argument("--share", type=PROBABILITY, default=0.9,
                      help="share of experiments that must reach the tolerance (default 0.9)")

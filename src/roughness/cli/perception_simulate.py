@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import COUNT, add_overwrite, add_quiet, finish, json_text, log
+from roughness.core.limits import MAX_TRIALS
+
+from .common import add_overwrite, add_quiet, count, finish, json_text, log
 from .perception_common import (
     add_observer_args,
     add_truth_args,
@@ -19,8 +21,8 @@ def add_parser(sub) -> None:
     sim = sub.add_parser("simulate", help="answer a balanced trial list with a simulated observer (Thurstone, "
                                          "Weber noise on ln V / 2), for testing and planning")
     add_truth_args(sim)
-    sim.add_argument("--trials", required=True, type=COUNT, help="trials per subject")
-    sim.add_argument("--subjects", type=COUNT, default=1, help="number of simulated subjects (default 1)")
+    sim.add_argument("--trials", required=True, type=count(MAX_TRIALS), help="trials per subject")
+    sim.add_argument("--subjects", type=count(MAX_TRIALS), default=1, help="number of simulated subjects (default 1)")
     add_observer_args(sim, "the observer's noise", "trials.csv, truth.csv")
     add_overwrite(sim)
     add_quiet(sim)

@@ -10,8 +10,8 @@ import time
 from .common import (
     BATCH,
     FRACTION,
+    LENGTH,
     PARALLEL,
-    POSITIVE,
     add_cluster_args,
     add_overwrite,
     add_quiet,
@@ -24,6 +24,7 @@ from .common import (
     load,
     load_input,
     log,
+    positive,
     readings,
     show_notes,
 )
@@ -31,6 +32,8 @@ from .printer import add_printer_arg
 from .simulate import add_curvature_args, curved_base
 
 MAP_PROGRESS_SECONDS = 10.0  # interval of --map progress messages
+# --max-std: an ensemble spread of 10 x (V + 0.001) is no answer at all (the shipped threshold is 0.06).
+MAX_RELATIVE_SPREAD = 10.0
 
 
 def add_parser(sub) -> None:
@@ -50,7 +53,7 @@ def add_parser(sub) -> None:
                     help=f"surrogate (ms), spectral (the skin as an infinite layer: tens of ms, no mesh), fem "
                          f"(seconds), or auto: the surrogate, FEM for inputs outside its domain "
                          f"(default: {given['engine']})")
-    pr.add_argument("--max-std", type=POSITIVE,
+    pr.add_argument("--max-std", type=positive(MAX_RELATIVE_SPREAD),
                     help="ensemble models: --engine auto also runs the FEM where the relative spread "
                          "roughness_std / (V + 0.001) exceeds this (default: the threshold measured when the "
                          "ensemble was exported; single-network models give no spread)")
@@ -70,18 +73,19 @@ def add_parser(sub) -> None:
     pr.add_argument("--map", metavar="FILE", help="roughness map of a whole object (one input): the footprint slid "
                     "over the map, saved as .png (figure) or .npy (V per position); refused if FILE exists "
                     "unless --overwrite")
-    pr.add_argument("--step-mm", type=POSITIVE, default=mapping["step_mm"],
+    pr.add_argument("--step-mm", type=LENGTH, default=mapping["step_mm"],
                     help=f"--map: distance between footprint positions in mm (default: {mapping['step_mm']:g})")
     add_cluster_args(pr, "solve the windows of a spectral --map", WORKERS, None)
     add_printer_arg(pr, "the digital texture's V and the difference in JND are reported too")
     add_quiet(pr)
     add_overwrite(pr)
-    finish(pr, run, centre_mm="--centre", curved="--curvature-mm")
+    finish(pr, run, centre_mm="--centre", curved="--curvature-mm", radius_mm="--curvature-mm", shape="--base",
+           axis="--curvature-axis")
 
 
 def run(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
-    from roughness.prediction import PredictOptions, predict
+    from roughness.prediction import PredictOptions, predictions
     from roughness.simulate.config import SimConfig
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
@@ -143,8 +147,8 @@ def run(args: argparse.Namespace) -> int:
 
     options = PredictOptions(centre_mm=args.centre, tile=args.tile, fidelity=args.fidelity, tolerance=args.tolerance,
                              max_std=args.max_std, batch_size=args.batch_size, curved=curved_base(args))
-    predict(reader.named() if pairs is None else pairs.named(), engine=args.engine, model=model, options=options,
-            on_result=show)
+    # each input was checked as it was loaded (surface.loading; the reader skips those that fail)
+    predictions(reader.named() if pairs is None else pairs.named(), args.engine, model, options, on_result=show)
     for source, error in reader.errors:
         message = error_message(error, args.flags)
         print(f"roughness: error: {message}", file=sys.stderr)
@@ -176,7 +180,7 @@ def _predict_map(args: argparse.Namespace, model) -> int:
 
     made = predict_map(hm, args.engine, args.step_mm, args.tile, model, args.batch_size, progress=progress,
                        workers=args.workers, scheduler=args.scheduler, scheduler_file=args.scheduler_file,
-                       quiet=args.quiet)
+                       quiet=args.quiet, units_ok=True)  # units checked as the file was loaded (--units-ok)
     result, notes, provenance = made.map, made.notes, made.provenance
     save_map(result, args.map, args.overwrite)
     summary = {"input": args.inputs[0], "map": args.map, "engine": args.engine, **result.summary(), "notes": notes,
@@ -212,6 +216,18 @@ def _show_printed(args: argparse.Namespace, digital, printed, result, readings: 
     print("\n".join(lines), flush=True)
 
 
+def domain_words(p) -> str:
+    """Whose domain ``p.in_domain`` is, in words: the surrogate's. A surrogate answer outside it is OUT OF DOMAIN; a
+    physics engine's answer (``auto`` climbed, or asked for) is its own, so it only says why the surrogate did not
+    answer."""
+    notes = "; ".join(p.domain_notes)
+    if p.in_domain:
+        return "in domain"
+    if p.engine == "surrogate":
+        return f"OUT OF DOMAIN: {notes}"
+    return f"outside the surrogate's domain ({notes}), so the {p.engine} engine answered"
+
+
 def _prediction_line(p) -> str:
     where = p.placement
     jnd = None if where.jnd_from_nearest is None else round(where.jnd_from_nearest, 1) + 0.0  # no "-0.0"
@@ -221,7 +237,7 @@ def _prediction_line(p) -> str:
              f"from {where.nearest_standard}" if where.on_scale else
              f"off the standard scale: ~ lambda {where.equivalent_lambda_mm:.3f} mm extrapolated by the scale's power "
              f"law, {jnd:+.1f} JND from {where.nearest_standard}")
-    domain = "in domain" if p.in_domain else "OUT OF DOMAIN: " + "; ".join(p.domain_notes)
+    domain = domain_words(p)
     corrected = [n for n in p.domain_notes if n.startswith("curved base (")]  # the curvature correction applied
     uncertain = [n for n in p.domain_notes if n not in corrected]
     if p.in_domain and uncertain:  # an ensemble's answer above the spread limit (auto would run the FEM)

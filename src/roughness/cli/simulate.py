@@ -6,11 +6,13 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
+from roughness.core.limits import MAX_RADIUS_MM
+
 from . import common
 from .common import (
+    FORCE,
     FRACTION,
     POISSON,
-    POSITIVE,
     SEED,
     Number,
     add_heightmap_args,
@@ -23,7 +25,7 @@ from .common import (
 if TYPE_CHECKING:
     from roughness.prediction import CurvedBase
 
-SIGNED_RADIUS = Number(float)  # a signed radius in mm; 0 is refused by SimConfig (not a radius)
+SIGNED_RADIUS = Number(float, -MAX_RADIUS_MM, MAX_RADIUS_MM)  # a signed radius in mm; 0 is refused by SimConfig
 
 
 def add_parser(sub) -> None:
@@ -38,7 +40,7 @@ def add_parser(sub) -> None:
                           "the estimated discretization error of V is below --tolerance (default: %(default)s)")
     sim.add_argument("--tolerance", type=FRACTION, default=d.tolerance,
                      help="--fidelity converged: target relative discretization error of V (default: %(default)s)")
-    sim.add_argument("--force", type=POSITIVE, default=d.force_n, help="normal force in N (default: %(default)s)")
+    sim.add_argument("--force", type=FORCE, default=d.force_n, help="normal force in N (default: %(default)s)")
     sim.add_argument("--poisson", type=POISSON, default=d.poisson, help="tissue Poisson ratio (default: %(default)s)")
     sim.add_argument("--contact", choices=CHOICES["contact"], default=d.contact,
                      help="skin-texture contact: stick (no slip) or frictionless (default: %(default)s)")

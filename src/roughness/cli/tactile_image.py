@@ -6,7 +6,23 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .common import COUNT, POSITIVE, add_model_tail, defaults, finish, json_text, log, write_stdout
+from .common import (
+    HEIGHT,
+    JND,
+    LENGTH,
+    MAX_PALETTE,
+    PIXEL,
+    add_model_tail,
+    count,
+    defaults,
+    finish,
+    json_text,
+    log,
+    positive,
+    write_stdout,
+)
+
+MAX_DELTA_E = 300.0  # --colour-tolerance: beyond the largest CIELAB Delta E between two sRGB colours (259)
 
 if TYPE_CHECKING:
     from roughness.design.colours import PictureColours
@@ -29,28 +45,28 @@ def add_parser(sub) -> None:
     p.add_argument("--out", required=True, metavar="DIR",
                    help="new folder: plate.npz (mm), plate.stl, plate.json, clustered.png (the picture in its "
                         "flat colours), relief.png, roughness_map.png/.npy, strain.png (with --strain)")
-    p.add_argument("--size-mm", type=POSITIVE, default=given["width_mm"],
+    p.add_argument("--size-mm", type=LENGTH, default=given["width_mm"],
                    help=f"plate width in mm; the height follows the picture (default {given['width_mm']:g})")
-    p.add_argument("--pixel-mm", type=POSITIVE, default=given["pixel_mm"],
+    p.add_argument("--pixel-mm", type=PIXEL, default=given["pixel_mm"],
                    help=f"plate pixel size in mm (default {given['pixel_mm']:g})")
     source = p.add_mutually_exclusive_group()
     source.add_argument("--palette", metavar="DIR", help="textures from a `roughness palette` folder")
-    source.add_argument("--k", type=COUNT,
+    source.add_argument("--k", type=count(MAX_PALETTE),
                         help="make a palette of K textures first (default: as many as the picture has colours)")
-    p.add_argument("--colour-tolerance", type=POSITIVE, default=TOLERANCE, metavar="DELTA_E",
+    p.add_argument("--colour-tolerance", type=positive(MAX_DELTA_E), default=TOLERANCE, metavar="DELTA_E",
                    help="colours closer than this (CIELAB Delta E) are one flat colour: JPEG noise and anti-aliased "
                         f"edges join the nearest (default {TOLERANCE:g})")
-    p.add_argument("--min-jnd", type=POSITIVE, default=pal["min_jnd"],
+    p.add_argument("--min-jnd", type=JND, default=pal["min_jnd"],
                    help=f"new palette: smallest pairwise distance in JND (default {pal['min_jnd']:g})")
     p.add_argument("--family", default="standard-1.0", help="new palette: the texture to scale (default standard-1.0)")
-    p.add_argument("--outline-mm", type=POSITIVE, help="width of smooth raised lines along region edges (default: none)")
-    p.add_argument("--outline-height-mm", type=POSITIVE,
+    p.add_argument("--outline-mm", type=LENGTH, help="width of smooth raised lines along region edges (default: none)")
+    p.add_argument("--outline-height-mm", type=HEIGHT,
                    help="height of the raised lines in mm (default: 1.2 x the tallest texture)")
-    p.add_argument("--step-mm", type=POSITIVE, default=given["step_mm"],
+    p.add_argument("--step-mm", type=LENGTH, default=given["step_mm"],
                    help=f"roughness map: distance between footprint positions in mm (default {given['step_mm']:g})")
     p.add_argument("--strain", action="store_true",
                    help="also the FEM strain image (one FEM run per 8 mm of plate squared: minutes)")
-    p.add_argument("--base-mm", type=POSITIVE,
+    p.add_argument("--base-mm", type=LENGTH,
                    help=f"plate thickness below the relief's lowest point in mm (default {DEFAULT_BASE_MM:g})")
     add_model_tail(p, "print plate.json's content (default: text)")
     finish(p, run, width_mm="--size-mm")

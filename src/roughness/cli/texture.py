@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import POSITIVE, SEED, add_overwrite, finish, json_text, write_stdout
+from .common import HEIGHT, LENGTH, PIXEL, SEED, add_overwrite, finish, json_text, write_stdout
 
 
 def add_parser(sub) -> None:
@@ -19,11 +19,11 @@ def add_parser(sub) -> None:
     make.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                       help="family parameter, repeatable (default: the family's defaults)")
     make.add_argument("--seed", type=SEED, default=0, help="random seed, an integer >= 0 (default 0)")
-    make.add_argument("--size-mm", type=POSITIVE, default=SIZE_MM, help=f"side of the square map in mm (default {SIZE_MM:g})")
-    make.add_argument("--pixel-mm", type=POSITIVE, default=PIXEL_MM, help=f"pixel size in mm (default {PIXEL_MM:g})")
-    make.add_argument("--height-mm", type=POSITIVE,
+    make.add_argument("--size-mm", type=LENGTH, default=SIZE_MM, help=f"side of the square map in mm (default {SIZE_MM:g})")
+    make.add_argument("--pixel-mm", type=PIXEL, default=PIXEL_MM, help=f"pixel size in mm (default {PIXEL_MM:g})")
+    make.add_argument("--height-mm", type=HEIGHT,
                       help="PNG only: height in mm of full-scale white (default: the height range)")
-    make.add_argument("--base-mm", type=POSITIVE,
+    make.add_argument("--base-mm", type=LENGTH,
                       help=f"STL only: plate thickness below the texture's lowest point in mm (default {DEFAULT_BASE_MM:g})")
     make.add_argument("--out", required=True, metavar="FILE",
                       help="output file: .npz, .npy, .h5 (mm), .png (16-bit), .tif (float mm), .stl (printable plate)")

@@ -4,11 +4,32 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import COUNT, FRACTION, POSITIVE, SEED, add_overwrite, count_list, defaults, finish, json_text
+from roughness.core.limits import MAX_CHANNELS
+
+from .common import (
+    BATCH,
+    FRACTION,
+    LENGTH,
+    PARALLEL,
+    SEED,
+    add_overwrite,
+    count,
+    count_list,
+    defaults,
+    finish,
+    json_text,
+    positive,
+)
+
+MAX_EPOCHS = 100_000  # --max-epochs: an epoch of the shipped 3,000 samples takes seconds; --max-minutes stops sooner
+MAX_MINUTES = 10_080.0  # --max-minutes: a week
+MAX_FEM_WEIGHT = 1000.0  # --fem-weight: beyond, the spectral labels weigh nothing (train on FEM data alone)
+MAX_LOG_OFFSET = 1.0  # --log-offset: above every V of the training sets (< 0.5): log(V + offset) resolves no V
 
 
 def add_parser(sub) -> None:
     from roughness.surrogate.config import TrainConfig
+    from roughness.surrogate.versioning import MAX_MODEL_VERSION
 
     d = defaults(TrainConfig)
     tr = sub.add_parser("train", help="train the CNN surrogate on a dataset file (CPU, needs torch)")
@@ -23,18 +44,18 @@ def add_parser(sub) -> None:
                     help="family (or comma-separated families, e.g. knit,waffle) never trained on, scored as "
                          "out-of-family, with every mixture or shallow texture made of it (default: the dataset "
                          "recipe's; 'none' to train on all)")
-    tr.add_argument("--batch-size", type=COUNT, default=d["batch_size"],
+    tr.add_argument("--batch-size", type=BATCH, default=d["batch_size"],
                     help=f"training batch size (default: {d['batch_size']})")
-    tr.add_argument("--max-epochs", type=COUNT, default=d["max_epochs"],
+    tr.add_argument("--max-epochs", type=count(MAX_EPOCHS), default=d["max_epochs"],
                     help=f"epochs of the cosine schedule (default: {d['max_epochs']})")
-    tr.add_argument("--max-minutes", type=POSITIVE, default=d["max_minutes"],
+    tr.add_argument("--max-minutes", type=positive(MAX_MINUTES), default=d["max_minutes"],
                     help=f"wall-clock budget for the epochs in minutes (default: {d['max_minutes']:g})")
     tr.add_argument("--widths", type=count_list, default=d["widths"], metavar="W1,W2,...",
                     help="channels of the convolution stages; each stage halves the grid (default: "
                          f"{','.join(map(str, d['widths']))})")
-    tr.add_argument("--hidden", type=COUNT, default=d["hidden"],
+    tr.add_argument("--hidden", type=count(MAX_CHANNELS), default=d["hidden"],
                     help=f"units of the dense layer (default: {d['hidden']})")
-    tr.add_argument("--threads", type=COUNT, default=d["threads"], help=f"torch threads (default: {d['threads']})")
+    tr.add_argument("--threads", type=PARALLEL, default=d["threads"], help=f"torch threads (default: {d['threads']})")
     tr.add_argument("--levels", choices=("last", "all"), default=d["levels"],
                     help="labels: 'last', each sample's V; 'all', every mesh level the FEM solved for it (a default "
                          "build holds each texture's coarse V too), the contact spacing an input of the network "
@@ -43,15 +64,15 @@ def add_parser(sub) -> None:
                     help="--levels all: more datasets under the same physics, e.g. a fine build of the recipe's first "
                          "N samples, or FEM builds beside a spectral one (the engine is then an input and the model "
                          "answers as the FEM) (default: none)")
-    tr.add_argument("--query-h-mm", type=POSITIVE, default=d["query_h_mm"],
+    tr.add_argument("--query-h-mm", type=LENGTH, default=d["query_h_mm"],
                     help="--levels all: the contact spacing in mm the model answers for (default: the finest "
                          "labelled)")
     tr.add_argument("--max-label-error", type=FRACTION, default=d["max_label_error"], metavar="FRACTION",
                     help="keep only the FEM labels whose estimated discretization error is at most FRACTION (e.g. "
                          "0.03), each at its finest level (default: all)")
-    tr.add_argument("--fem-weight", type=POSITIVE, default=d["fem_weight"],
+    tr.add_argument("--fem-weight", type=positive(MAX_FEM_WEIGHT), default=d["fem_weight"],
                     help=f"loss weight of a FEM label relative to a spectral one (default: {d['fem_weight']:g})")
-    tr.add_argument("--log-offset", type=POSITIVE, default=d["log_offset"],
+    tr.add_argument("--log-offset", type=positive(MAX_LOG_OFFSET), default=d["log_offset"],
                     help="the network predicts log(V + offset); a smaller offset resolves smaller V (default: "
                          f"{d['log_offset']:g})")
     tr.add_argument("--resume", action="store_true",
@@ -64,7 +85,7 @@ def add_parser(sub) -> None:
     ex.add_argument("--out", required=True, help="ONNX file to write; refused if it exists unless --overwrite")
     ex.add_argument("--int8", metavar="FILE", help="also write an int8 model (static QDQ, per-channel weights) "
                                                    "(default: none); refused if it exists unless --overwrite")
-    ex.add_argument("--model-version", type=COUNT, default=1,
+    ex.add_argument("--model-version", type=count(MAX_MODEL_VERSION), default=1,
                     help="the model's version, written as the ONNX model_version: the next whole number after the "
                          "model it replaces (the shipped models are 2) (default: 1)")
     add_overwrite(ex)

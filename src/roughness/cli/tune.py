@@ -5,20 +5,27 @@ from __future__ import annotations
 import argparse
 
 from .common import (
-    COUNT,
-    POSITIVE,
+    FACTOR,
+    JND,
+    LENGTH,
+    WAVELENGTH,
     Number,
     add_model_tail,
     add_reading_args,
+    count,
     defaults,
     finish,
     json_text,
     load_input,
     log,
+    positive,
     readings,
     write_stdout,
 )
 from .printer import add_printer_arg, print_report, printer_of
+
+MAX_TARGET_V = 10.0  # --target-v: the standard scale's V at the 10 mm footprint is 7.5 (MAX_WAVELENGTH_MM)
+MAX_FEM_RUNS = 100  # --max-fem: each verification is an FEM run of seconds to minutes; searches settle in 2-4
 
 
 def add_parser(sub) -> None:
@@ -30,9 +37,9 @@ def add_parser(sub) -> None:
                                     "(surrogate search, FEM-verified)")
     p.add_argument("heightmap", metavar="HEIGHTMAP", help="texture to scale: .npy (mm), 8/16-bit .png/.tif, .npz, .h5")
     target = p.add_mutually_exclusive_group(required=True)
-    target.add_argument("--target-lambda", type=POSITIVE, metavar="MM",
+    target.add_argument("--target-lambda", type=WAVELENGTH, metavar="MM",
                         help="target equivalent wavelength on the standard scale (mm)")
-    target.add_argument("--target-v", type=POSITIVE, metavar="V", help="target roughness V (FEM scale)")
+    target.add_argument("--target-v", type=positive(MAX_TARGET_V), metavar="V", help="target roughness V (FEM scale)")
     target.add_argument("--like", metavar="REF", help="feel like this texture (its FEM V is the target)")
     target.add_argument("--jnd", type=Number(float, low=-MAX_RELATIVE_JND, high=MAX_RELATIVE_JND), metavar="N",
                         help="N JNDs rougher than the input (negative: smoother), e.g. +1 or -0.5: the input's FEM "
@@ -41,21 +48,21 @@ def add_parser(sub) -> None:
                    help=f"scale the heights or the lateral size (default: {given['by']})")
     p.add_argument("--out", required=True, metavar="FILE",
                    help="the scaled texture: .npz, .npy, .h5 (mm), .png (16-bit), .tif, or .stl (printable plate)")
-    p.add_argument("--base-mm", type=POSITIVE,
+    p.add_argument("--base-mm", type=LENGTH,
                    help=f"STL only: plate thickness below the texture's lowest point in mm (default {DEFAULT_BASE_MM:g})")
     ranges = ", ".join(f"{k} {lo:g}..{hi:g}" for k, (lo, hi) in FACTOR_RANGE.items())
-    p.add_argument("--min-factor", type=POSITIVE, help=f"smallest scale factor searched (default: {ranges})")
-    p.add_argument("--max-factor", type=POSITIVE, help="largest scale factor searched (default: see --min-factor)")
-    p.add_argument("--tolerance-jnd", type=POSITIVE, default=given["tolerance_jnd"],
+    p.add_argument("--min-factor", type=FACTOR, help=f"smallest scale factor searched (default: {ranges})")
+    p.add_argument("--max-factor", type=FACTOR, help="largest scale factor searched (default: see --min-factor)")
+    p.add_argument("--tolerance-jnd", type=JND, default=given["tolerance_jnd"],
                    help=f"stop when the FEM is this close to the target, in JND (default {given['tolerance_jnd']:g})")
-    p.add_argument("--max-fem", type=COUNT, default=given["max_fem"],
+    p.add_argument("--max-fem", type=count(MAX_FEM_RUNS), default=given["max_fem"],
                    help=f"most FEM verifications (default {given['max_fem']})")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="the texture is a periodic tile (for maps under 10 mm)")
     add_printer_arg(p, "the input, --like and the result are judged as printed; --out is the digital design, "
                        "whose own V and the difference in JND are reported")
     add_model_tail(p, "one JSON object (default: text)")
-    finish(p, run)
+    finish(p, run, target_lambda_mm="--target-lambda")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -6,36 +6,56 @@ the CLI subcommands do (without the CLI's files and printing).
 """
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
+from roughness.core.checks import choice, file_path, flag, integer, positive
 from roughness.core.errors import InputError
-from roughness.surface.heightmap import Heightmap, as_heightmap
+from roughness.surface.arguments import heightmap_argument
+from roughness.surface.heightmap import Heightmap, pixel_size
 
 from . import homogeneity as _homogeneity
 from . import palette as _palette
 from . import tactile_image as _tactile
 from . import tune as _tune
 from .colours import cluster_colours
-from .evaluation import Evaluator
+from .evaluation import VERIFIERS, Evaluator
 
 HeightmapLike = Heightmap | np.ndarray | str | Path
 
 
 def heightmap_arg(value: HeightmapLike, pixel_mm: float | None = None, height_mm: float | None = None,
-                  parameter: str = "heightmap") -> Heightmap:
+                  parameter: str = "heightmap", units_ok: bool = False) -> Heightmap:
     """A ``Heightmap`` from a ``Heightmap``, a 2-D array of heights (mm) with ``pixel_mm`` (mm), or a file path
-    (read with ``roughness.load_heightmap(path, pixel_mm, height_mm)``: units the file lacks must be given)."""
+    (read with ``roughness.load_heightmap(path, pixel_mm, height_mm)``: units the file lacks must be given); its
+    units checked as the command line checks a file's (``surface.arguments``; ``units_ok`` confirms them)."""
     if isinstance(value, (str, Path)):
         from roughness.surface.io import load_heightmap
 
-        return load_heightmap(value, pixel_mm=pixel_mm, height_mm=height_mm)
+        hm = load_heightmap(value, pixel_mm=pixel_mm, height_mm=height_mm)
+        return heightmap_argument(hm, None, parameter, units_ok, str(value))
     if height_mm is not None:
         raise InputError("height_mm applies to image files only: an array holds heights in mm",
                          parameter="height_mm")
-    return as_heightmap(value, pixel_mm, parameter)
+    return heightmap_argument(value, pixel_mm, parameter, units_ok)
+
+
+def evaluator_arg(model: str | Path | None, verify: str | None = None) -> Evaluator:
+    """The ``Evaluator`` of a design tool's ``model`` (an ONNX path, default the shipped one) and ``verify`` (a FEM
+    fidelity or "spectral", default the model's labels'), both checked before anything is loaded."""
+    if verify is not None:
+        choice("verify", verify, VERIFIERS)
+    return Evaluator(None if model is None else str(file_path("model", model)), verify)
+
+
+def family_arg(family: object) -> str:
+    """``family`` if it names a texture a palette can vary (``roughness texture list``), else InputError."""
+    from roughness.dataset.catalogue import names
+
+    return choice("family", family, [name for name in names() if name != "bumps"])  # bumps needs its parameters
 
 
 def rgb_array(picture: np.ndarray) -> np.ndarray:
@@ -43,12 +63,17 @@ def rgb_array(picture: np.ndarray) -> np.ndarray:
     (as ``matplotlib.pyplot.imread`` gives); InputError for anything else."""
     from roughness.core.limits import MAX_IMAGE_PIXELS, check_size
 
-    a = np.asarray(picture)
+    try:
+        a = np.asarray(picture)
+    except (TypeError, ValueError):  # rows of different lengths
+        a = np.asarray(None)
     if a.dtype.kind not in "uif" or a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] != 3) or 0 in a.shape:
         raise InputError(f"picture must be an (h, w) grey or (h, w, 3) RGB array of numbers, got shape {a.shape}, "
                          f"dtype {a.dtype}", parameter="picture")
     check_size(f"picture pixels ({a.shape[0]:,} x {a.shape[1]:,})", a.shape[0] * a.shape[1], MAX_IMAGE_PIXELS,
                "picture")
+    if np.ma.getmask(picture) is not np.ma.nomask and np.ma.getmaskarray(picture).any():
+        raise InputError("picture has masked pixels: every pixel needs a colour", parameter="picture")
     top = 1.0 if a.dtype.kind == "f" else 255
     if not np.all(np.isfinite(a)) or a.min() < 0 or a.max() > top:
         raise InputError(f"picture values must be finite and within 0..{top:g} ({a.dtype})", parameter="picture")
@@ -60,7 +85,7 @@ def tune(heightmap: HeightmapLike, *, target_lambda_mm: float | None = None, tar
          like: HeightmapLike | None = None, jnd: float | None = None, by: str = "height",
          pixel_mm: float | None = None, height_mm: float | None = None, factor_range: tuple[float, float] | None = None,
          tolerance_jnd: float = _tune.TOLERANCE_JND, max_fem: int = _tune.MAX_FEM, tile: bool = False,
-         verify: str | None = None, model: str | Path | None = None) -> _tune.TuneResult:
+         verify: str | None = None, model: str | Path | None = None, units_ok: bool = False) -> _tune.TuneResult:
     """Scale a texture by height or lateral size until it feels like a target roughness.
 
     Parameters
@@ -92,6 +117,8 @@ def tune(heightmap: HeightmapLike, *, target_lambda_mm: float | None = None, tar
         The verifier: a FEM fidelity ("coarse", "default", "fine") or "spectral" (default: the model's labels').
     model : str or Path, optional
         ONNX surrogate model (default: the shipped one).
+    units_ok : bool
+        The heights are mm even though they look like metres or micrometres (default: refuse them).
 
     Returns
     -------
@@ -99,17 +126,34 @@ def tune(heightmap: HeightmapLike, *, target_lambda_mm: float | None = None, tar
         ``.heightmap`` the scaled texture, ``.factor``, ``.achieved`` (V, its standard error, wavelength in mm),
         ``.jnd_error`` and ``.reached``.
     """
-    hm = heightmap_arg(heightmap, pixel_mm, height_mm)
-    reference = None if like is None else heightmap_arg(like, pixel_mm, height_mm, "like")
-    evaluator = Evaluator(None if model is None else str(model), verify)
+    hm = heightmap_arg(heightmap, pixel_mm, height_mm, units_ok=units_ok)
+    reference = None if like is None else heightmap_arg(like, pixel_mm, height_mm, "like", units_ok)
+    choice("by", by, _tune.KNOBS)
+    factor_range = None if factor_range is None else _factor_range(factor_range)
+    positive("tolerance_jnd", tolerance_jnd)
+    integer("max_fem", max_fem, minimum=1)
+    tile = flag("tile", tile)
+    evaluator = evaluator_arg(model, verify)
     target = _tune.target_of(evaluator, target_lambda_mm, target_v, reference, "reference", tile, jnd, hm)
     return _tune.tune(hm, target, by, evaluator, factor_range, tolerance_jnd, max_fem, tile)
+
+
+def _factor_range(value: object) -> tuple[float, float]:
+    """``factor_range`` as two rising positive factors, or InputError naming it."""
+    pair = list(value) if isinstance(value, (tuple, list)) else []
+    if len(pair) != 2:
+        raise InputError(f"factor_range must be two factors (smallest, largest), got {value!r}",
+                         parameter="factor_range")
+    lo, hi = (positive("factor_range", f) for f in pair)
+    if not lo < hi:
+        raise InputError(f"factor_range must rise (smallest, largest), got {lo:g}..{hi:g}", parameter="factor_range")
+    return lo, hi
 
 
 def palette(k: int, *, min_jnd: float = 2.0, family: str = _palette.DEFAULT_FAMILY, by: str = "height",
             candidates: str | Path | Mapping[str, HeightmapLike] | None = None, pixel_mm: float | None = None,
             tolerance_jnd: float = _tune.TOLERANCE_JND, seed: int = 0, tile: bool = False,
-            verify: str | None = None, model: str | Path | None = None) -> _palette.Palette:
+            verify: str | None = None, model: str | Path | None = None, units_ok: bool = False) -> _palette.Palette:
     """``k`` textures that feel different from each other, at least ``min_jnd`` apart (verified).
 
     Parameters
@@ -130,7 +174,7 @@ def palette(k: int, *, min_jnd: float = 2.0, family: str = _palette.DEFAULT_FAMI
         Seed of the family's texture.
     tile : bool
         Candidates are periodic tiles.
-    verify, model
+    verify, model, units_ok
         As in ``roughness.tune``.
 
     Returns
@@ -139,21 +183,43 @@ def palette(k: int, *, min_jnd: float = 2.0, family: str = _palette.DEFAULT_FAMI
         ``.members`` (name, heightmap, verified V) smoothest first, ``.closest_jnd`` and ``.verified``;
         ``roughness.design.palette.save_palette`` writes it as the CLI does.
     """
-    evaluator = Evaluator(None if model is None else str(model), verify)
+    integer("k", k, minimum=2)
+    positive("min_jnd", min_jnd)
+    if pixel_mm is not None:
+        pixel_size(pixel_mm)
+    family_arg(family)
+    choice("by", by, _tune.KNOBS)
+    positive("tolerance_jnd", tolerance_jnd)
+    integer("seed", seed, minimum=0)
+    tile = flag("tile", tile)
+    evaluator = evaluator_arg(model, verify)
     if candidates is None:
         return _palette.family_palette(k, min_jnd, family, by, evaluator, tolerance_jnd, seed=seed)
+    return _palette.folder_palette(_candidates(candidates, pixel_mm, units_ok), k, min_jnd, evaluator, tile)
+
+
+def _candidates(candidates: object, pixel_mm: float | None, units_ok: bool) -> list[tuple[str, Heightmap]]:
+    """A palette's (name, heightmap) candidates from a folder or a mapping of name to heightmap, checked."""
     if isinstance(candidates, (str, Path)):
         from roughness.surface.io import heightmap_files, load_heightmap
 
-        files = heightmap_files(candidates)
-        pairs = [(name, load_heightmap(f, pixel_mm=pixel_mm))
-                 for name, f in zip(_palette.candidate_names(files), files)]
-    elif isinstance(candidates, Mapping):
-        pairs = [(str(name), heightmap_arg(hm, pixel_mm, parameter="candidates")) for name, hm in candidates.items()]
-    else:
-        raise InputError("candidates must be a folder of heightmaps or a mapping of name to heightmap, got "
-                         f"{type(candidates).__name__}", parameter="candidates")
-    return _palette.folder_palette(pairs, k, min_jnd, evaluator, tile)
+        files = heightmap_files(_folder("candidates", candidates))
+        return [(name, heightmap_arg(load_heightmap(f, pixel_mm=pixel_mm), parameter="candidates", units_ok=units_ok))
+                for name, f in zip(_palette.candidate_names(files), files)]
+    if isinstance(candidates, Mapping):
+        return [(str(name), heightmap_arg(hm, pixel_mm, parameter="candidates", units_ok=units_ok))
+                for name, hm in candidates.items()]
+    raise InputError("candidates must be a folder of heightmaps or a mapping of name to heightmap, got "
+                     f"{type(candidates).__name__}", parameter="candidates")
+
+
+def _folder(parameter: str, value: str | Path) -> Path:
+    """``value`` as a Path, or InputError naming ``parameter`` unless it is an existing folder."""
+    folder = file_path(parameter, value)
+    if not folder.is_dir():
+        raise InputError(f"{parameter}: {folder} is not a folder" + ("" if folder.exists() else " (it does not exist)"),
+                         parameter=parameter)
+    return folder
 
 
 def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Sequence[HeightmapLike] | None = None, *,
@@ -162,7 +228,7 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
                   texture_pixel_mm: float | None = None, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = _tactile.STEP_MM, strain: bool = False,
                   colour_tolerance: float = _tactile.TOLERANCE, verify: str | None = None,
-                  model: str | Path | None = None) -> _tactile.TactilePlate:
+                  model: str | Path | None = None, units_ok: bool = False) -> _tactile.TactilePlate:
     """A printable plate on which each flat colour of a picture is a texture that feels different.
 
     Parameters
@@ -186,8 +252,8 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         Also compute the FEM strain image (slow).
     colour_tolerance : float
         Colours within this CIE Delta E are one colour.
-    verify, model
-        As in ``roughness.tune``.
+    verify, model, units_ok
+        As in ``roughness.tune`` (``units_ok``: of the texture arrays).
 
     Returns
     -------
@@ -195,25 +261,55 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         ``.heightmap`` the plate (mm), ``.regions`` (colour, texture, V on the plate); ``figures(plate)`` in
         ``roughness.design.tactile_image`` draws it.
     """
-    rgb = _tactile.read_image(picture) if isinstance(picture, (str, Path)) else rgb_array(picture)
-    found = cluster_colours(rgb, colour_tolerance)
-    evaluator = Evaluator(None if model is None else str(model), verify)
+    with _renamed(image="picture"):  # the command line's name for the picture
+        rgb = _tactile.read_image(picture) if isinstance(picture, (str, Path)) else rgb_array(picture)
+        found = cluster_colours(rgb, colour_tolerance)
+    _tactile.check_outline(outline_mm, outline_height_mm)
+    positive("min_jnd", min_jnd)
+    family_arg(family)
+    strain = flag("strain", strain)
+    if k is not None:
+        integer("k", k, minimum=2)
+        if textures is not None:
+            raise InputError("k is the size of a palette made for the picture; give k or textures, not both",
+                             parameter="k")
+    evaluator = evaluator_arg(model, verify)
     _tactile.plate_shape(rgb.shape, size_mm, pixel_mm, step_mm, evaluator.footprint_mm)  # refused before any palette
-    if textures is None:
+    with _renamed(palette="textures", pixel_mm="texture_pixel_mm"):  # the command line's --palette, this pixel
+        chosen = _plate_textures(textures, texture_pixel_mm, units_ok) if textures is not None else None
+    if chosen is None:
         made = _palette.family_palette(k or len(found.colours), min_jnd, family, "height", evaluator)
         chosen = [(m.name, m.heightmap, m.fem.roughness) for m in made.members]
-    elif isinstance(textures, (str, Path)):
-        chosen = [(name, hm, meta.get("fem_roughness")) for name, hm, meta in _palette.load_palette(textures)]
-    else:
-        chosen = [(f"texture {i + 1}", heightmap_arg(t, texture_pixel_mm, parameter="textures"), None)
-                  for i, t in enumerate(textures)]
     return _tactile.tactile_image(found, chosen, size_mm, pixel_mm, outline_mm, outline_height_mm, step_mm, strain,
                                   evaluator)
 
 
+@contextmanager
+def _renamed(**names: str) -> Iterator[None]:
+    """InputErrors raised inside, their parameter renamed from a lower layer's name to this function's."""
+    try:
+        yield
+    except InputError as err:
+        err.parameter = names.get(err.parameter or "", err.parameter)
+        raise
+
+
+def _plate_textures(textures: object, pixel_mm: float | None, units_ok: bool
+                    ) -> list[tuple[str, Heightmap, float | None]]:
+    """A plate's (name, heightmap, FEM V or None) textures from a palette folder or a list of heightmaps."""
+    if isinstance(textures, (str, Path)):
+        return [(name, hm, meta.get("fem_roughness")) for name, hm, meta in _palette.load_palette(textures)]
+    if not isinstance(textures, (list, tuple)):
+        raise InputError(f"textures must be a palette folder or a list of heightmaps, got {type(textures).__name__}",
+                         parameter="textures")
+    return [(f"texture {i + 1}", heightmap_arg(t, pixel_mm, parameter="textures", units_ok=units_ok), None)
+            for i, t in enumerate(textures)]
+
+
 def homogeneity(heightmap: HeightmapLike, *, pixel_mm: float | None = None, height_mm: float | None = None,
                 engine: str = "surrogate", window_mm: float | None = None, n: int = _homogeneity.N_WINDOWS,
-                seed: int = 0, tile: bool = False, model: str | Path | None = None) -> _homogeneity.Homogeneity:
+                seed: int = 0, tile: bool = False, model: str | Path | None = None, units_ok: bool = False
+                ) -> _homogeneity.Homogeneity:
     """Does a texture feel the same everywhere? V over ``n`` windows, its spread in JND and the verdicts.
 
     Parameters
@@ -232,6 +328,8 @@ def homogeneity(heightmap: HeightmapLike, *, pixel_mm: float | None = None, heig
         The map is one period of a periodic texture.
     model : str or Path, optional
         ONNX surrogate model (default: the shipped one).
+    units_ok : bool
+        The heights are mm even though they look like metres or micrometres (default: refuse them).
 
     Returns
     -------
@@ -239,6 +337,5 @@ def homogeneity(heightmap: HeightmapLike, *, pixel_mm: float | None = None, heig
         ``.verdict``, ``.range_jnd`` and ``.spread_jnd`` (JND), ``.relative_variance`` (the paper's measure);
         ``save_map(result, heightmap)`` in ``roughness.design.homogeneity`` draws it.
     """
-    hm = heightmap_arg(heightmap, pixel_mm, height_mm)
-    evaluator = Evaluator(None if model is None else str(model))
-    return _homogeneity.homogeneity(hm, engine, window_mm, n, seed, tile, evaluator)
+    hm = heightmap_arg(heightmap, pixel_mm, height_mm, units_ok=units_ok)
+    return _homogeneity.homogeneity(hm, engine, window_mm, n, seed, tile, evaluator_arg(model))

@@ -96,12 +96,12 @@ class Evaluator:
     def surrogate(self, heightmaps: Sequence[Heightmap], tile: bool = False,
                   centres_mm: Sequence[tuple[float, float]] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Surrogate V of each heightmap (at each centre, if given) and whether it was in the model's domain."""
-        from roughness.prediction import PredictOptions, predict
+        from roughness.prediction import PredictOptions, predictions
 
         heightmaps = [self.as_printed(hm, tile) for hm in heightmaps]
         if centres_mm is None or all(c is None for c in centres_mm):
-            results = predict(list(heightmaps), engine="surrogate", model=self.model,
-                              options=PredictOptions(tile=tile))
+            results = predictions([(f"heightmap {i}", hm) for i, hm in enumerate(heightmaps)], "surrogate",
+                                  self.model, PredictOptions(tile=tile))  # the tools' own variants of checked maps
         else:  # one footprint centre per map: batched through the model directly
             model = self.model
             values, reasons = model.run(np.stack([model.patch(hm, c, tile) for hm, c in zip(heightmaps, centres_mm)]))

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from roughness.core.checks import integer, positive
+from roughness.core.checks import flag, integer, positive
 from roughness.core.errors import InputError
 from roughness.core.figures import new_figure, save_figure
 from roughness.core.limits import MAX_WINDOWS, MAX_WORKING_VALUES, check_size
@@ -162,7 +162,7 @@ def homogeneity(heightmap: Heightmap, engine: str = "surrogate", window_mm: floa
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}", parameter="engine")
     n = check_size("windows", integer("n", n, minimum=3), MAX_WINDOWS, "n")
-    seed = integer("seed", seed, minimum=0)
+    seed, tile = integer("seed", seed, minimum=0), flag("tile", tile)
     evaluator = evaluator or Evaluator()
     footprint = evaluator.footprint_mm
     window_mm = footprint if window_mm is None else positive("window_mm", window_mm)

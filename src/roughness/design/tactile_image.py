@@ -27,13 +27,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy import ndimage
 
-from roughness.core.checks import non_negative, positive
+from roughness.core.checks import flag, non_negative, positive
 from roughness.core.errors import InputError
 from roughness.core.figures import new_figure, save_figure
 from roughness.core.limits import MAX_IMAGE_PIXELS, MAX_MAP_POSITIONS, MAX_PLATE_PIXELS, check_size
 from roughness.core.reprs import short_repr
 from roughness.perceptual_scale import jnd
-from roughness.surface.heightmap import Heightmap
+from roughness.surface.heightmap import Heightmap, pixel_size
 
 from .colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
 from .evaluation import Evaluator
@@ -182,6 +182,8 @@ def plate_shape(picture_shape: tuple[int, ...], width_mm: float, pixel_mm: float
     ``step_mm`` and ``footprint_mm``) above MAX_MAP_POSITIONS: checked before a palette is made or a plate composed."""
     from roughness.surrogate.roughness_map import centre_count
 
+    width_mm, pixel_mm = positive("size_mm", width_mm), pixel_size(pixel_mm)
+    step_mm = None if step_mm is None else positive("step_mm", step_mm)
     h, w = picture_shape[:2]
     across = width_mm / pixel_mm
     check_size(f"pixels across a {width_mm:g} mm plate at {pixel_mm:g} mm", across, MAX_PLATE_PIXELS, "size_mm")
@@ -194,6 +196,14 @@ def plate_shape(picture_shape: tuple[int, ...], width_mm: float, pixel_mm: float
                    centre_count(nx * pixel_mm, footprint_mm, step_mm, False)
                    * centre_count(ny * pixel_mm, footprint_mm, step_mm, False), MAX_MAP_POSITIONS, "step_mm")
     return ny, nx
+
+
+def check_outline(outline_mm: object, outline_height_mm: object) -> None:
+    """InputError unless the outline's width (mm) is None or positive and its height (mm) None or >= 0."""
+    if outline_mm is not None:
+        positive("outline_mm", outline_mm)
+    if outline_height_mm is not None:
+        non_negative("outline_height_mm", outline_height_mm)
 
 
 def outline(labels: np.ndarray, pixel_mm: float, width_mm: float, height_mm: float) -> np.ndarray:
@@ -250,10 +260,8 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     FEM footprint of the strain image (stage "strain image").
     """
     width_mm, pixel_mm, step_mm = positive("size_mm", width_mm), positive("pixel_mm", pixel_mm), positive("step_mm", step_mm)
-    if outline_mm is not None:
-        positive("outline_mm", outline_mm)
-    if outline_height_mm is not None:
-        non_negative("outline_height_mm", outline_height_mm)
+    check_outline(outline_mm, outline_height_mm)
+    strain = flag("strain", strain)
     evaluator = evaluator or Evaluator()
     found = picture if isinstance(picture, PictureColours) else cluster_colours(picture, tolerance)
     colours, picture_labels = found.colours, found.labels

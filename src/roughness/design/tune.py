@@ -26,8 +26,9 @@ from typing import NoReturn
 
 import numpy as np
 
-from roughness.core.checks import in_range, integer, positive
+from roughness.core.checks import flag, in_range, integer, positive
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_HEIGHT_MM, MAX_JND
 from roughness.core.reprs import short_repr, v_text
 from roughness.perceptual_scale import LOG_JND, WEBER_FRACTION, jnd
 from roughness.surface.heightmap import Heightmap
@@ -41,7 +42,7 @@ TOLERANCE_JND = 0.1
 MAX_FEM = 4
 WIDEN = 3.0  # out of the surrogate's reach: the spectral engine also looks this much beyond each end of the range
 SPECTRAL_GRID = 17  # spectral evaluations over that wider range (0.03 to 1 s each: tall reliefs take longest)
-MAX_RELATIVE_JND = 30.0  # a relative target: at most this many JNDs from the input (a factor 184 in lambda)
+MAX_RELATIVE_JND = MAX_JND  # a relative target: at most this many JNDs from the input (a factor 184 in lambda)
 
 
 @dataclass(frozen=True)
@@ -57,7 +58,7 @@ class Target:
     @property
     def parameter(self) -> str:
         """The option the target came from (the CLI names it in errors about the target)."""
-        return {"lambda": "target_lambda", "roughness": "target_v", "jnd": "jnd"}.get(self.given_as, "like")
+        return {"lambda": "target_lambda_mm", "roughness": "target_v", "jnd": "jnd"}.get(self.given_as, "like")
 
     def describe(self) -> str:
         """The target in words: ``V 0.0612, lambda 0.912 mm (+1 JND from the input: V 0.0501, lambda 0.800 mm)``."""
@@ -148,7 +149,7 @@ def target_of(evaluator: Evaluator, lambda_mm: float | None = None, roughness: f
               jnd: float | None = None, heightmap: Heightmap | None = None) -> Target:
     """The target from exactly one of an equivalent wavelength (mm), a V, a reference texture (its FEM V), or
     ``jnd`` JNDs from ``heightmap`` (the texture to tune: its FEM V's equivalent wavelength times 1.19^jnd)."""
-    given = [name for name, v in (("target_lambda", lambda_mm), ("target_v", roughness), ("like", like),
+    given = [name for name, v in (("target_lambda_mm", lambda_mm), ("target_v", roughness), ("like", like),
                                   ("jnd", jnd)) if v is not None]
     if len(given) != 1:
         raise InputError("give exactly one target: an equivalent wavelength, a V, a reference texture, or JNDs "
@@ -158,21 +159,34 @@ def target_of(evaluator: Evaluator, lambda_mm: float | None = None, roughness: f
         steps = in_range("jnd", jnd, -MAX_RELATIVE_JND, MAX_RELATIVE_JND)
         if heightmap is None:
             raise InputError("a relative target (jnd) needs the texture it is relative to", parameter="jnd")
-        fem = evaluator.verify(heightmap, tile=tile)
-        if fem.roughness < evaluator.scale.floor:
-            raise InputError(f"the input's V {fem.roughness:.4g} ({evaluator.verifier}) is below the standard scale's "
-                             f"floor {evaluator.scale.floor:.4g}: it has no equivalent wavelength to count JNDs from; "
-                             "give an absolute target (--target-lambda or --target-v)", parameter="jnd")
+        fem = _on_scale(evaluator, evaluator.verify(heightmap, tile=tile), "the input",
+                        "it has no equivalent wavelength to count JNDs from", "jnd")
         lam = fem.equivalent_lambda_mm * (1 + WEBER_FRACTION) ** steps
         return Target(evaluator.scale.roughness_at(lam), lam, "jnd", fem, steps)
     if lambda_mm is not None:
-        lam = positive("target_lambda", lambda_mm)
-        return Target(evaluator.scale.roughness_at(lam), lam, "lambda")
+        lam = positive("target_lambda_mm", lambda_mm)
+        v = evaluator.scale.roughness_at(lam)
+        if not 0 < v < math.inf:
+            raise InputError(f"target lambda {lam:g} mm is beyond where the standard scale's power law gives a V "
+                             f"(it spans {evaluator.scale.lambdas_mm[0]:g}..{evaluator.scale.lambdas_mm[-1]:g} mm)",
+                             parameter="target_lambda_mm")
+        return Target(v, lam, "lambda")
     if roughness is not None:
         v = positive("target_v", roughness)
         return Target(v, evaluator.lambda_of(v), "roughness")
-    fem = evaluator.verify(like, tile=tile)
+    fem = _on_scale(evaluator, evaluator.verify(like, tile=tile), f"the reference {like_name}",
+                    "a texture cannot be tuned to feel like no texture at all", "like")
     return Target(fem.roughness, fem.equivalent_lambda_mm, f"like {like_name}", fem)
+
+
+def _on_scale(evaluator: Evaluator, fem, what: str, why: str, parameter: str):
+    """``fem`` (a verified answer) if its V is on the standard scale (at or above its floor); else InputError:
+    a flat or near-flat texture gives no target (its V is 0 or below what the scale can place)."""
+    if not fem.roughness >= evaluator.scale.floor:
+        raise InputError(f"{what}'s V {fem.roughness:.4g} ({evaluator.verifier}) is below the standard scale's floor "
+                         f"{evaluator.scale.floor:.4g} (flat or nearly): {why}; give an absolute target "
+                         "(--target-lambda or --target-v)", parameter=parameter)
+    return fem
 
 
 @dataclass(frozen=True)
@@ -216,8 +230,9 @@ def tune(heightmap: Heightmap, target: Target, by: str = "height", evaluator: Ev
     ``progress(message)`` receives a line per FEM verification.
     """
     lo, hi = _factor_range(by, factor_range)
+    _check_reach(heightmap, by, hi)
     tolerance_jnd = positive("tolerance_jnd", tolerance_jnd)
-    max_fem = integer("max_fem", max_fem, minimum=1)
+    max_fem, tile = integer("max_fem", max_fem, minimum=1), flag("tile", tile)
     evaluator = evaluator or Evaluator()
     if not tile:
         heightmap.require_footprint(evaluator.footprint_mm)
@@ -236,6 +251,18 @@ def _factor_range(by: str, factor_range: tuple[float, float] | None) -> tuple[fl
     if not lo < hi:
         raise InputError(f"the factor range must rise, got {lo:g}..{hi:g}", parameter="min_factor")
     return lo, hi
+
+
+def _check_reach(heightmap: Heightmap, by: str, hi: float) -> None:
+    """InputError (parameter ``max_factor``) if the height factor ``hi`` makes heights a heightmap cannot hold."""
+    if by != "height":
+        return
+    h = heightmap.heights
+    top = float(h.min()) + float(np.ptp(h)) * hi
+    if max(abs(float(h.min())), abs(top)) > MAX_HEIGHT_MM:
+        raise InputError(f"the largest height factor {hi:g} (max_factor) would raise the texture's {np.ptp(h):.3g} mm "
+                         f"relief to {top:.4g} mm, beyond the {MAX_HEIGHT_MM:g} mm a heightmap may hold "
+                         "(MAX_HEIGHT_MM): search a smaller range", parameter="max_factor")
 
 
 def _search(problem: _Problem, target: Target) -> _Search:

@@ -201,7 +201,7 @@ def evaluation_points(samples: SurfaceSamples, in_region: np.ndarray, spacing_mm
 def reference_of(name_or_map: str | Heightmap | Reference, engine: str, scale, model=None) -> Reference:
     """A reference texture (a name such as ``standard-1.0``, or a heightmap) judged flat by ``engine`` (``model``:
     the surrogate's, default the shipped one; a ``Reference`` as it is: e.g. a target)."""
-    from roughness.prediction import predict
+    from roughness.prediction import predictions
 
     if isinstance(name_or_map, Reference):
         return name_or_map
@@ -215,7 +215,7 @@ def reference_of(name_or_map: str | Heightmap | Reference, engine: str, scale, m
         except InputError as err:
             raise InputError(f"reference {name_or_map!r}: {err}", parameter="reference") from None
         name = name_or_map
-    [p] = predict(hm, engine=engine, model=model)
+    [p] = predictions([(name, hm)], engine=engine, model=model)  # a named texture, or a map checked as it was read
     return Reference(name, p.roughness, scale.floored_lambda(p.roughness))
 
 
@@ -349,11 +349,12 @@ def _judge_flat(maps: dict[int, Heightmap], engine: str, model, flat: np.ndarray
                 flat_error: np.ndarray) -> dict[int, list[str]]:
     """The flat engine's V and its error for each unrolled footprint, written into ``flat``/``flat_error``; returns
     the engine's notes by point (the surrogate: why a footprint lies outside its domain)."""
-    from roughness.prediction import predict
+    from roughness.prediction import predictions
 
     keys = list(maps)
     notes: dict[int, list[str]] = {}
-    for i, p in zip(keys, predict([maps[i] for i in keys], engine=engine, model=model) if keys else []):
+    # footprints of the object's texture, checked (units included) as it was read: the engines only
+    for i, p in zip(keys, predictions([(str(i), maps[i]) for i in keys], engine=engine, model=model)):
         flat[i] = p.roughness
         flat_error[i] = p.roughness_stderr if p.roughness_stderr is not None else (p.roughness_std or 0.0)
         if p.domain_notes:
@@ -363,7 +364,7 @@ def _judge_flat(maps: dict[int, Heightmap], engine: str, model, flat: np.ndarray
 
 def _curved_fem(hm: Heightmap, k1: float, k2: float) -> tuple[float, float, str]:
     """V, its Monte Carlo error and a note from the curved FEM, for a cylinder- or sphere-like base."""
-    from roughness.prediction import CurvedBase, PredictOptions, predict
+    from roughness.prediction import CurvedBase, PredictOptions, predictions
 
     big, small = (k1, k2) if abs(k1) >= abs(k2) else (k2, k1)
     if abs(small) <= CURVED_FEM_AXIS_RATIO * abs(big):
@@ -374,7 +375,7 @@ def _curved_fem(hm: Heightmap, k1: float, k2: float) -> tuple[float, float, str]
     else:
         raise InputError(f"principal radii {1 / k1:.3g} and {1 / k2:.3g} mm: the curved FEM models cylinders and "
                          "spheres only", parameter="curved")
-    [p] = predict(hm, engine="fem", options=PredictOptions(curved=CurvedBase(1 / k, base, axis)))
+    [p] = predictions([("footprint", hm)], engine="fem", options=PredictOptions(curved=CurvedBase(1 / k, base, axis)))
     return p.roughness, p.roughness_stderr or 0.0, f"curved FEM on a {base} of radius {1 / k:.3g} mm"
 
 

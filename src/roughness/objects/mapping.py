@@ -12,7 +12,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from roughness.core.checks import in_range, positive
+from roughness.core.checks import in_range, length
 from roughness.core.errors import InputError
 from roughness.surface.heightmap import Heightmap
 
@@ -244,7 +244,7 @@ class Wrap:
 def wrap(texture: Heightmap, kind: str, axis: Axis, radius_mm: float, blend_deg: float = DEFAULT_BLEND_DEG) -> Wrap:
     """A Wrap of ``kind`` around ``axis`` with the whole number of tiles around 2 pi ``radius_mm`` that stretches
     the texture least."""
-    radius = positive("radius_mm", radius_mm)
+    radius = length("radius_mm", radius_mm)
     tiles, stretch = whole_tiles(2 * math.pi * radius, texture.size_mm[0])
     return Wrap(texture, kind, axis, radius, tiles, stretch, blend_deg)
 

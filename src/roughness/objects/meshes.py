@@ -7,7 +7,9 @@ data (no code runs; 3MF's XML with entities, DTDs and network access off). Polyg
 """
 from __future__ import annotations
 
+import mmap
 import os
+import re
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,6 +22,7 @@ from roughness.core.files import atomic_write
 from roughness.core.limits import MAX_MESH_FILE_BYTES, MAX_MESH_TRIANGLES, check_size
 from roughness.surface.solid import SolidCheck
 from roughness.surface.stl import require_solid, write_stl
+from roughness.surface.units import CONFIRM
 
 READ_SUFFIXES = (".stl", ".obj", ".ply", ".3mf")
 WRITE_SUFFIXES = (".stl", ".3mf")
@@ -41,11 +44,13 @@ class ReadMesh:
         return len(self.mesh.faces)
 
 
-def read_mesh(path: str | Path, watertight: bool = True, parameter: str = "mesh") -> ReadMesh:
+def read_mesh(path: str | Path, watertight: bool = True, parameter: str = "mesh", units_ok: bool = False) -> ReadMesh:
     """The triangle mesh in ``path`` (STL, OBJ, PLY, 3MF; several bodies are joined), in mm, with its duplicate
     vertices merged and degenerate faces dropped (noted). InputError for a file that is missing, too large, not a
-    mesh, empty, without triangles, or (``watertight``) open or inconsistently wound; a mesh wound inside-out is
-    turned (noted)."""
+    mesh, damaged (a binary STL whose triangle count is not its size's, an OBJ face with index 0, vertices that are
+    not finite numbers), empty, without triangles, or (``watertight``) open or inconsistently wound; a mesh wound
+    inside-out is turned (noted). A size implausible for a touchable object (``check_object_size``) is an
+    InputError unless ``units_ok``."""
     import trimesh
 
     path = Path(path)
@@ -56,7 +61,7 @@ def read_mesh(path: str | Path, watertight: bool = True, parameter: str = "mesh"
     if not path.exists():
         raise InputError(f"cannot read {path}: no such file", parameter=parameter)
     if not path.is_file():
-        raise InputError(f"cannot read {path}: not a file", parameter=parameter)
+        raise InputError(f"cannot read {path}: not a regular file", parameter=parameter)
     size = path.stat().st_size
     if size > MAX_MESH_FILE_BYTES:
         raise InputError(f"{path} is {size:,} bytes, above the limit of {MAX_MESH_FILE_BYTES:,} (MAX_MESH_FILE_BYTES)",
@@ -65,36 +70,80 @@ def read_mesh(path: str | Path, watertight: bool = True, parameter: str = "mesh"
         raise InputError(f"{path} is empty", parameter=parameter)
     if suffix == ".stl":
         _check_binary_stl(path, size, parameter)
+    if suffix == ".obj":
+        _check_obj_indices(path, parameter)
     if suffix == ".3mf":
         _check_zip(path, parameter)
-    try:
-        loaded = trimesh.load(str(path), file_type=suffix[1:], force="mesh", process=True)
+    try:  # unprocessed: trimesh's processing would silently drop the faces of non-finite vertices
+        loaded = trimesh.load(str(path), file_type=suffix[1:], force="mesh", process=False)
     except Exception as err:  # trimesh raises many kinds for a malformed file
         raise InputError(f"cannot read {path} as a {suffix[1:].upper()} mesh: {err or type(err).__name__}",
                          parameter=parameter) from None
     if not isinstance(loaded, trimesh.Trimesh) or len(getattr(loaded, "faces", ())) == 0:
         raise InputError(f"{path} holds no triangles (points or lines only, or nothing)", parameter=parameter)
     check_size(f"triangles in {path}", len(loaded.faces), MAX_MESH_TRIANGLES, parameter)
+    bad = ~np.isfinite(loaded.vertices).all(axis=1)
+    if bad.any():
+        raise InputError(f"{path}: {int(bad.sum()):,} of its {len(bad):,} vertices have coordinates that are not "
+                         "finite numbers (NaN or infinite): the file is damaged; export it again", parameter=parameter)
+    loaded.process()
     read = ReadMesh(loaded, str(path))
-    _to_mm(read)
+    stated = _to_mm(read)
     _clean(read)
     if watertight:
         require_closed(read.mesh, str(path), parameter)
         if read.mesh.volume < 0:
             read.mesh.invert()
             read.notes.append(f"{path}: the mesh was wound inside-out (negative volume): turned")
+    check_object_size(read, stated, units_ok)
     return read
 
 
 def _check_binary_stl(path: Path, size: int, parameter: str) -> None:
-    """A binary STL's declared triangle count against the limit and the file's size (ASCII STL passes)."""
+    """A binary STL's declared triangle count against the limit and the file's size (an ASCII STL passes): a
+    count that does not fit the size is a damaged (truncated, or mis-written) file."""
     with open(path, "rb") as f:
-        head = f.read(84)
+        head = f.read(STL_TEXT_PROBE)
     if len(head) < 84:
         return
     (count,) = struct.unpack("<I", head[80:84])
     if 84 + 50 * count == size:
         check_size(f"triangles declared in {path}", count, MAX_MESH_TRIANGLES, parameter)
+    elif not _is_text_stl(head):
+        holds = (f"{(size - 84) // 50:,} triangles" if (size - 84) % 50 == 0 else
+                 f"{size - 84:,} bytes of triangles, not a whole number of 50-byte records")
+        raise InputError(f"{path}: a binary STL whose header declares {count:,} triangles ({84 + 50 * count:,} "
+                         f"bytes), but the file has {size:,} bytes ({holds}): it is truncated or its triangle count "
+                         "is wrong; export it again", parameter=parameter)
+
+
+STL_TEXT_PROBE = 1024
+"""Bytes read from the start of an STL to tell ASCII from binary."""
+
+
+def _is_text_stl(head: bytes) -> bool:
+    """Whether the start of an STL is ASCII text beginning with ``solid`` (a binary header may begin so too, but its
+    count and records hold bytes that are not text)."""
+    text = head.lstrip()
+    return text[:5].lower() == b"solid" and not any(b < 32 and b not in b"\t\r\n" for b in head)
+
+
+OBJ_ZERO_INDEX = re.compile(rb"^[ \t]*f[ \t](?:[^\n]*?[ \t])?0(?=[/ \t\r\n]|$)", re.MULTILINE)
+"""An OBJ face line with a vertex index 0 (OBJ counts vertices from 1, or from -1 backwards)."""
+
+
+def _check_obj_indices(path: Path, parameter: str) -> None:
+    """InputError if an OBJ face names vertex 0 (an exporter that counts from 0: trimesh would read it as the last
+    vertex and build wrong triangles). The file is searched mapped, not loaded."""
+    with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
+        found = OBJ_ZERO_INDEX.search(data)
+        if found is None:
+            return
+        end, chunk = found.start(), 1 << 24
+        line = 1 + sum(data[i:min(i + chunk, end)].count(b"\n") for i in range(0, end, chunk))
+    raise InputError(f"{path}, line {line}: a face names vertex 0, but OBJ numbers vertices from 1: the file was "
+                     "written with 0-based indices; export it again (or add 1 to every face index)",
+                     parameter=parameter)
 
 
 def _check_zip(path: Path, parameter: str) -> None:
@@ -111,11 +160,12 @@ def _check_zip(path: Path, parameter: str) -> None:
                          "(MAX_MESH_FILE_BYTES)", parameter=parameter)
 
 
-def _to_mm(read: ReadMesh) -> None:
+def _to_mm(read: ReadMesh) -> str | None:
+    """Scale the mesh to mm by the units its file states (noted); returns them (None: none stated, read as mm)."""
     units = getattr(read.mesh, "units", None)
     if not units:
         read.notes.append(f"{read.path}: no units stated: read as mm")
-        return
+        return None
     scale = UNIT_MM.get(str(units).lower())
     if scale is None:
         raise InputError(f"{read.path} states units {units!r}, which are not a length this tool knows "
@@ -123,6 +173,35 @@ def _to_mm(read: ReadMesh) -> None:
     if scale != 1.0:
         read.mesh.apply_scale(scale)
         read.notes.append(f"{read.path}: units {units}: scaled by {scale:g} to mm")
+    return str(units)
+
+
+MIN_OBJECT_MM = 2.0
+MAX_OBJECT_MM = 1000.0
+"""Bounds of a mesh's largest extent (mm, its bounding box's longest side) for a touchable object in mm.
+
+The product's objects span a 20 mm tall knob to a 104 mm long handle (examples/textured_objects.py); as for
+heightmaps (roughness.surface.units) the bounds lie about ten times beyond them: under 2 mm an object is a
+fifth of the 10 mm fingertip footprint, no larger than the features of the coarser textures; over 1 m it is
+furniture, not a printed object to texture. A mesh without units in metres (every object under 2 m) or micrometres (every object over 1 mm)
+falls outside; in inches or centimetres only objects under 2 inches or 2 cm do: larger ones are read 25.4 or 10
+times too small, and only the file's unit (a 3MF states it) can tell."""
+
+
+def check_object_size(read: ReadMesh, stated: str | None, units_ok: bool = False) -> None:
+    """InputError (parameter ``units_ok``) unless the mesh's largest extent (mm) lies within MIN_OBJECT_MM and
+    MAX_OBJECT_MM, or ``units_ok`` confirms it is mm."""
+    extent = float(np.ptp(read.mesh.vertices, axis=0).max())
+    if units_ok or MIN_OBJECT_MM <= extent <= MAX_OBJECT_MM:
+        return
+    small = extent < MIN_OBJECT_MM
+    unit = f"its units {stated!r}" if stated else "no units stated: read as mm"
+    likely = ("metres or inches (scale it by 1000 or 25.4)" if small else "micrometres (scale it by 0.001)")
+    raise InputError(f"{read.path}: its largest extent is {extent:.3g} mm ({unit}), {'below' if small else 'above'} "
+                     f"{MIN_OBJECT_MM if small else MAX_OBJECT_MM:g} mm: implausible for a touchable object (the "
+                     f"bounds lie 10 times beyond the product's objects, a 20 mm knob to a 104 mm handle; see "
+                     f"roughness.objects.meshes). It looks like {likely}: convert the file to mm (or save it as 3MF "
+                     f"with its unit), or pass {CONFIRM} if it really is this size in mm", parameter=CONFIRM)
 
 
 def _clean(read: ReadMesh) -> None:

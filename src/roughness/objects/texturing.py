@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from roughness.core.checks import non_negative, positive
+from roughness.core.checks import length
 from roughness.core.errors import InputError
 from roughness.surface.stl import require_solid
 
@@ -156,9 +156,9 @@ def _checked_input(mesh, mapping: TextureMapping, region: Region, edge_mm: float
                    border_mm: float) -> _Input:
     """texture_mesh's input as arrays, checked (InputError naming the parameter at fault)."""
     require_closed(mesh, "the mesh")
-    edge = positive("edge_mm", math.sqrt(2) * mapping.pixel_mm if edge_mm is None else edge_mm)
-    radius = non_negative("normal_radius_mm", normal_radius_mm)
-    border = non_negative("border_mm", border_mm)
+    edge = length("edge_mm", math.sqrt(2) * mapping.pixel_mm if edge_mm is None else edge_mm)
+    radius = length("normal_radius_mm", normal_radius_mm, zero=True)
+    border = length("border_mm", border_mm, zero=True)
     selected = np.asarray(region.faces(mesh), dtype=bool)
     if not selected.any():
         raise InputError(f"the region ({region.describe()}) selects no face of the mesh", parameter="region")

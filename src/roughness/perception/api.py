@@ -10,9 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
+from roughness.core.checks import choice, file_path, in_range, integer, non_negative
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_PARALLEL, check_size
 
-from .analysis import EmbeddingAnalysis, analyse, read_embedding_csv
+from .analysis import SCALES, EmbeddingAnalysis, analyse, read_embedding_csv
 from .fit import Fit, classical_measures
 from .thurstone import DEFAULT_LAPSE
 
@@ -55,10 +57,27 @@ def embed_trials(trials: str | Path, stimuli: str | Path | None = None, *, lam: 
     from .stimuli import read_stimuli
     from .trials import read_trials
 
+    _check_embedding_options(lam, folds, resamples, seed, workers, roughest, scale, lapse)
+    trials, stimuli = file_path("trials", trials), None if stimuli is None else file_path("stimuli", stimuli)
     require_cvxpy()
     ids = [s.stimulus for s in read_stimuli(stimuli)] if stimuli is not None else None
     return analyse(read_trials(trials, ids, repeats), lam=lam, folds=folds, resamples=resamples, seed=seed,
                    workers=workers, roughest=roughest, scale=scale, lapse=lapse)
+
+
+def _check_embedding_options(lam: object, folds: object, resamples: object, seed: object, workers: object,
+                             roughest: object, scale: object, lapse: object) -> None:
+    """InputError naming the first of ``embed_trials``'s options that is out of its domain (before any solve)."""
+    if lam is not None:
+        non_negative("lam", lam)
+    integer("folds", folds, minimum=2)
+    integer("resamples", resamples, minimum=0)
+    integer("seed", seed, minimum=0)
+    check_size("worker processes", integer("workers", workers, minimum=1), MAX_PARALLEL, "workers")
+    if roughest is not None and not isinstance(roughest, str):
+        raise InputError(f"roughest must be a stimulus id (a string), got {roughest!r}", parameter="roughest")
+    choice("scale", scale, SCALES)
+    in_range("lapse", lapse, 0.0, 1.0)
 
 
 def fit_embedding(embedding: EmbeddingAnalysis | str | Path, stimuli: str | Path, *, engine: str = "surrogate",
@@ -86,9 +105,18 @@ def fit_embedding(embedding: EmbeddingAnalysis | str | Path, stimuli: str | Path
     """
     from .stimuli import read_stimuli
     from .trials import listed
-    from .values import stimulus_values
+    from .values import check_engine, stimulus_values
 
-    table = (read_embedding_csv(embedding) if isinstance(embedding, (str, Path)) else embedding)
+    check_engine(engine)
+    if isinstance(exclude, str) or not isinstance(exclude, (list, tuple, set)) or \
+            not all(isinstance(i, str) for i in exclude):
+        raise InputError(f"exclude must be a list of stimulus ids (strings), got {exclude!r}", parameter="exclude")
+    cache = None if cache is None else file_path("cache", cache)
+    if not isinstance(embedding, (str, Path, EmbeddingAnalysis)):
+        raise InputError(f"embedding must be an embed_trials result or the path of an embedding.csv, got "
+                         f"{type(embedding).__name__}", parameter="embedding")
+    table = read_embedding_csv(embedding) if isinstance(embedding, (str, Path)) else embedding
+    stimuli = file_path("stimuli", stimuli)
     ids = list(table.stimuli)
     by_id = {s.stimulus: s for s in read_stimuli(stimuli)}
     missing = [i for i in ids if i not in by_id]
@@ -101,7 +129,7 @@ def fit_embedding(embedding: EmbeddingAnalysis | str | Path, stimuli: str | Path
         raise InputError(f"{len(set(exclude))} of {len(ids)} stimuli excluded: the fit needs at least 3",
                          parameter="exclude")
     heightmaps = [by_id[i].heightmap() for i in ids]
-    values = stimulus_values(ids, heightmaps, engine, None if cache is None else Path(cache))
+    values = stimulus_values(ids, heightmaps, engine, cache)
     nan = np.full(len(ids), np.nan)
     low = nan if table.low is None else table.low
     high = nan if table.high is None else table.high

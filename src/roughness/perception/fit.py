@@ -35,6 +35,12 @@ def _finite(x: float) -> float | None:
     return float(x) if math.isfinite(x) else None
 
 
+def r_text(x: float | None) -> str:
+    """A correlation as shown in text and plot titles: three decimals, or "undefined" (None or NaN: a constant
+    variable, or fewer than three stimuli)."""
+    return "undefined" if x is None or not math.isfinite(x) else f"{x:.3f}"
+
+
 def correlate(x: np.ndarray, y: np.ndarray) -> Correlation:
     """Pearson and Spearman of two equal-length arrays (NaN when either is constant or n < 3)."""
     x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)

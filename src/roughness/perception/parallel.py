@@ -6,6 +6,7 @@ limited to one thread per worker so that ``workers`` processes use ``workers`` c
 from __future__ import annotations
 
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -34,6 +35,9 @@ def _start_worker(n: int, triplets: np.ndarray) -> None:
     global _SDP
     from threadpoolctl import threadpool_limits
 
+    # Ctrl-C reaches every process of the terminal's group: the parent handles it (stops the pool, says
+    # "interrupted"); a worker that raised KeyboardInterrupt itself would print its own traceback
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     threadpool_limits(1)
     _SDP = TripletSDP(n, triplets)
 
@@ -53,14 +57,28 @@ def solve_tasks(n: int, triplets: np.ndarray, tasks: Sequence[SolveTask], worker
             if progress:
                 progress(i + 1, len(tasks))
         return results
-    with _one_thread_each(), ProcessPoolExecutor(min(workers, len(tasks)), mp_context=_context(),
-                                                 initializer=_start_worker, initargs=(n, triplets)) as pool:
-        futures = {pool.submit(_solve, task): i for i, task in enumerate(tasks)}
+    pool = ProcessPoolExecutor(min(workers, len(tasks)), mp_context=_context(), initializer=_start_worker,
+                               initargs=(n, triplets))
+    try:
+        with _one_thread_each():  # the workers start as tasks are submitted
+            futures = {pool.submit(_solve, task): i for i, task in enumerate(tasks)}
         for done, future in enumerate(as_completed(futures), 1):
             results[futures[future]] = future.result()
             if progress:
                 progress(done, len(tasks))
+    except BaseException:  # Ctrl-C or a failed solve: stop the workers now, not after the solves under way
+        _stop(pool)
+        raise
+    pool.shutdown()
     return results
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """Cancel the pool's queued tasks and end its workers at once (they ignore Ctrl-C)."""
+    workers = list((getattr(pool, "_processes", None) or {}).values())  # the executor's record (shutdown clears it)
+    for process in workers:
+        process.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _context():

@@ -13,7 +13,7 @@ import numpy as np
 from roughness.core.figures import new_figure, save_figure
 
 from .analysis import EmbeddingAnalysis
-from .fit import Fit
+from .fit import Fit, r_text
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -87,9 +87,9 @@ def plot_fit(fit: Fit, path: str | Path | None = None) -> Figure:
     for i, name in enumerate(fit.stimuli):
         ax.annotate(name, (fit.coordinate[i], v[i]), fontsize=6, xytext=(3, 2), textcoords="offset points")
     c = fit.correlations()["V"]
-    title = f"R = {c['all']['pearson']:.3f} (all)"
-    if not np.all(keep) and c["included"]["pearson"] is not None:
-        title += f", {c['included']['pearson']:.3f} (included)"
+    title = f"R = {r_text(c['all']['pearson'])} (all)"
+    if not np.all(keep):
+        title += f", {r_text(c['included']['pearson'])} (included)"
     ax.set_title(title)
     ax.set_xlabel("perceptual coordinate (embedding units)")
     ax.set_ylabel(f"strain variation V ({fit.values[0].engine}; dimensionless)")
@@ -104,7 +104,8 @@ def plot_sampling(fit: Fit, path: str | Path | None = None) -> Figure:
     axes = np.atleast_1d(axes)
     s = fit.sampling
     ax = axes[0]
-    image = ax.imshow(s.pearson.T, origin="lower", aspect="auto", vmin=min(0.5, np.nanmin(s.pearson)), vmax=1.0,
+    finite = s.pearson[np.isfinite(s.pearson)]
+    image = ax.imshow(s.pearson.T, origin="lower", aspect="auto", vmin=min(0.5, *finite), vmax=1.0,
                       cmap="viridis")  # one cell per grid value (the grid need not be evenly spaced)
     for i in range(len(s.distances_mm)):
         for j in range(len(s.radii_mm)):
@@ -120,8 +121,9 @@ def plot_sampling(fit: Fit, path: str | Path | None = None) -> Figure:
         corr = fit.force_correlations()
         forces = sorted(fit.forces)
         r = [corr[f"{f:g}"]["pearson"] for f in forces]
-        axes[1].plot(forces, r, "o-")
-        axes[1].set_ylim(min(0.5, min(x for x in r if x is not None) - 0.05), 1.0)
+        defined = [x for x in r if x is not None]
+        axes[1].plot(forces, [np.nan if x is None else x for x in r], "o-")
+        axes[1].set_ylim(min(0.5, *(x - 0.05 for x in defined)), 1.0)
         axes[1].set_xlabel("normal force (N)")
         axes[1].set_ylabel("Pearson R of V with the embedding")
         axes[1].set_title("R over force")

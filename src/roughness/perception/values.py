@@ -9,6 +9,7 @@ later without new FEM runs.
 """
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +22,7 @@ from roughness.result_cache import ResultCache, content_key
 from roughness.surface.heightmap import Heightmap
 
 ENGINES = ("surrogate", "auto", "fem:coarse", "fem:default", "fem:fine")
+FIELD_ARRAYS = ("fluctuation", "grid_axis_mm")  # stored with each FEM result
 
 
 @dataclass
@@ -44,10 +46,11 @@ def check_engine(engine: str) -> str:
 
 def fem_value(stimulus: str, heightmap: Heightmap, cache: ResultCache, engine: FemEngine
               ) -> tuple[StimulusValue, bool]:
-    """(FEM V of ``heightmap``, whether it came from the cache); runs and stores it on a miss."""
+    """(FEM V of ``heightmap``, whether it came from the cache); runs and stores it on a miss, and on a damaged
+    cache entry (noted in ``cache.notes``)."""
     key = content_key(heightmap)
     entry = cache.get(engine.spec, key)
-    arrays = cache.arrays(engine.spec, key) if entry is not None else {}
+    arrays = cache.arrays(engine.spec, key, FIELD_ARRAYS) if entry is not None else {}
     config = engine.config.as_dict()
     if arrays:
         return StimulusValue(stimulus, entry["value"], entry["stderr"], engine.spec, arrays["fluctuation"],
@@ -60,6 +63,10 @@ def fem_value(stimulus: str, heightmap: Heightmap, cache: ResultCache, engine: F
               texture=stimulus, value=value.roughness, stderr=value.roughness_stderr, seconds=result.seconds,
               resolved_config=result.config.as_dict())
     return value, False
+
+
+def _warn(message: str) -> None:
+    warnings.warn(message, stacklevel=3)
 
 
 def stimulus_values(ids: Sequence[str], heightmaps: Sequence, engine: str, cache: Path | None = None,
@@ -82,6 +89,9 @@ def stimulus_values(ids: Sequence[str], heightmaps: Sequence, engine: str, cache
     for i, (s, hm) in enumerate(zip(ids, heightmaps), 1):
         value, cached = fem_value(s, hm, results, fem)
         out.append(value)
+        for note in results.notes:  # a damaged entry, computed again: said even without progress
+            (progress or _warn)(f"note: {note}")
+        results.notes.clear()
         if progress:
             progress(f"{engine} {i}/{len(ids)} {s}: V = {value.roughness:.4f}"
                      f"{' (cached)' if cached else ''}")

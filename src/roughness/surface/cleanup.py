@@ -24,13 +24,20 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from roughness.core.checks import real
 from roughness.core.errors import InputError
-from roughness.core.limits import MAX_FILL_PIXELS, check_size
+from roughness.core.limits import MAX_FILL_PIXELS, MAX_WORKING_VALUES, check_size
 
 from .heightmap import Heightmap
 
 MAX_FILL_FRACTION = 0.2  # default limit of --fill (see docs/how-to/real-surfaces.md: the clean-up table)
 LEVELS = {"plane": 1, "poly2": 2, "poly3": 3}
+# Largest despike k: a spike's residual is at most about sqrt(pixels) times the RMS step it inflates (10,000 at
+# MAX_HEIGHTMAP_PIXELS), so no larger k can find one.
+MAX_DESPIKE = 10_000.0
+# Map-sized arrays despike holds at once beside the map (measured 5.1: its median, the residual, the candidate,
+# the differences of the RMS step, the spike masks).
+DESPIKE_MAPS = 6
 
 
 @dataclass(frozen=True)
@@ -44,10 +51,10 @@ class Cleanup:
     level: str | None = None
 
     def __post_init__(self) -> None:
-        if not 0 < self.max_fill < 1:
+        if not 0 < real("max_fill", self.max_fill) < 1:
             raise InputError(f"max_fill must be a fraction between 0 and 1, got {self.max_fill!r}",
                              parameter="max_fill")
-        if self.despike is not None and not self.despike > 0:
+        if self.despike is not None and not real("despike", self.despike) > 0:
             raise InputError(f"despike must be a positive number of RMS steps, got {self.despike!r}",
                              parameter="despike")
         if self.level is not None and self.level not in LEVELS:
@@ -129,7 +136,7 @@ def clean(heights: np.ndarray, pixel_mm: float, spec: Cleanup, source: str = "he
         steps.append(step)
     if spec.level is not None:
         trend = polynomial_fit(heights, LEVELS[spec.level])
-        heights = heights - trend
+        heights -= trend  # heights is this function's own copy
         steps.append(Levelled(spec.level, float(np.ptp(trend))))
     return Heightmap(heights, pixel_mm), Cleaned(tuple(steps))
 
@@ -171,11 +178,15 @@ def fill_holes(heights: np.ndarray) -> np.ndarray:
 def despike(heights: np.ndarray, sigmas: float) -> tuple[np.ndarray, Despiked]:
     """``heights`` with spikes replaced by their 3 x 3 median: pixels whose residual from it exceeds
     ``sigmas`` times the map's RMS height step between neighbouring pixels (np.gradient per pixel),
-    that step measured again once the first spikes are out (they inflate it)."""
+    that step measured again once the first spikes are out (they inflate it). Its working arrays (DESPIKE_MAPS
+    maps) are checked against MAX_WORKING_VALUES first."""
     from scipy.ndimage import median_filter
 
+    check_size(f"values despike holds at once ({DESPIKE_MAPS} maps of {heights.size:,} pixels)",
+               DESPIKE_MAPS * heights.size, MAX_WORKING_VALUES, "despike")
     median = median_filter(heights, size=3, mode="nearest")
-    residual = np.abs(heights - median)
+    residual = heights - median
+    np.abs(residual, out=residual)
     spikes = np.zeros(heights.shape, bool)
     for _ in range(2):
         step = _rms_step(np.where(spikes, median, heights))
@@ -184,19 +195,36 @@ def despike(heights: np.ndarray, sigmas: float) -> tuple[np.ndarray, Despiked]:
 
 
 def _rms_step(heights: np.ndarray) -> float:
-    """RMS height difference (mm) between neighbouring pixels (central differences, np.gradient)."""
-    gy, gx = np.gradient(heights)
-    return float(np.sqrt(np.mean(gx**2 + gy**2)))
+    """RMS height difference (mm) between neighbouring pixels: np.gradient's (central differences inside,
+    one-sided at the edges), one difference array at a time."""
+    total = 0.0
+    for h in (heights, heights.T):
+        inner = (h[:, 2:] - h[:, :-2]).ravel(order="K")  # "K": no copy of the transposed axis's differences
+        edges = np.concatenate([h[:, 1] - h[:, 0], h[:, -1] - h[:, -2]])
+        total += float(inner @ inner) / 4 + float(edges @ edges)
+    return float(np.sqrt(total / heights.size))
 
 
 def polynomial_fit(heights: np.ndarray, degree: int) -> np.ndarray:
-    """The least-squares polynomial of total ``degree`` in x and y over the map (coordinates as in
-    detrend.quadratic_fit: centred, in units of the map's side)."""
+    """The least-squares polynomial of total ``degree`` in x and y over the map (coordinates centred, in units
+    of the map's side).
+
+    On a grid, products of polynomials orthonormal along each axis are orthonormal, and those of total degree
+    <= ``degree`` span the same space as the monomials x^a y^b: the fit is their projection, computed from
+    (degree + 1) values per row and column, with no basis matrix of a value per pixel and monomial (4 GB for a
+    50 Mpx map at degree 3): memory one map, time a few passes over it.
+    """
     ny, nx = heights.shape
-    y, x = np.mgrid[0:ny, 0:nx]
-    x = (x - nx / 2) / nx
-    y = (y - ny / 2) / ny
-    basis = np.stack([x**a * y**b for total in range(degree + 1) for b in range(total + 1)
-                      for a in (total - b,)], axis=-1).reshape(-1, (degree + 1) * (degree + 2) // 2)
-    coef, *_ = np.linalg.lstsq(basis, heights.ravel(), rcond=None)
-    return (basis @ coef).reshape(heights.shape)
+    qy, qx = _orthonormal(ny, degree), _orthonormal(nx, degree)
+    coef = qy.T @ heights @ qx  # coef[b, a]: of q_b(y) q_a(x)
+    b, a = np.indices(coef.shape)
+    coef[a + b > degree] = 0.0
+    return (qy @ coef) @ qx.T
+
+
+def _orthonormal(n: int, degree: int) -> np.ndarray:
+    """(n, k) orthonormal columns, column j a polynomial of degree j in the centred pixel coordinate (i - n/2) / n
+    (k = degree + 1, or n if fewer pixels: they span every function on them)."""
+    t = (np.arange(n) - n / 2) / n
+    q, _ = np.linalg.qr(np.vander(t, degree + 1, increasing=True))
+    return q

@@ -16,7 +16,9 @@ import numpy as np
 
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_LENGTH_MM, MAX_WORKING_VALUES, check_size
 
+from .cleanup import polynomial_fit
 from .heightmap import Heightmap
 
 METHODS = ("lowpass",)
@@ -27,6 +29,9 @@ METHODS = ("lowpass",)
 # within the targets (flat < 1%, curved < 5%).
 CUTOFF_WAVELENGTHS = 12.0
 LONGEST_TEXTURE_FRACTION = 0.25  # the texture's wavelength is sought below this fraction of the map's side
+# Map-sized float arrays detrend holds at once (measured: the mirrored map, its spectrum and the 2-D FFT's
+# intermediate are 4 each).
+DETREND_MAPS = 14
 
 
 @dataclass(frozen=True)
@@ -72,14 +77,18 @@ def parse_detrend(text: str) -> Detrend:
         value = float(cutoff)
     except ValueError:
         raise InputError(f"the cut-off in {text!r} must be a number of mm", parameter="detrend") from None
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"the cut-off in {text!r} must be a positive finite number of mm", parameter="detrend")
+    if not (math.isfinite(value) and 0 < value <= MAX_LENGTH_MM):
+        raise InputError(f"the cut-off in {text!r} must be a number of mm above 0 and at most {MAX_LENGTH_MM:g} "
+                         "(MAX_LENGTH_MM)", parameter="detrend")
     return Detrend(method, value)
 
 
 def detrend(heightmap: Heightmap, spec: Detrend = Detrend()) -> tuple[Heightmap, Separation]:
-    """The texture of ``heightmap`` (its shape removed) and what was removed."""
+    """The texture of ``heightmap`` (its shape removed) and what was removed; its working arrays (DETREND_MAPS
+    maps) are checked against MAX_WORKING_VALUES first."""
     heights = heightmap.heights
+    check_size(f"values the low-pass holds at once ({DETREND_MAPS} maps of {heights.size:,} pixels)",
+               DETREND_MAPS * heights.size, MAX_WORKING_VALUES, "detrend")
     p = heightmap.pixel_mm
     wavelength = dominant_wavelength_mm(heights - quadratic_fit(heights), p)
     cutoff = spec.cutoff_mm if spec.cutoff_mm is not None else CUTOFF_WAVELENGTHS * wavelength
@@ -90,14 +99,8 @@ def detrend(heightmap: Heightmap, spec: Detrend = Detrend()) -> tuple[Heightmap,
 
 
 def quadratic_fit(heights: np.ndarray) -> np.ndarray:
-    """Least-squares quadratic surface in the pixel coordinates."""
-    ny, nx = heights.shape
-    y, x = np.mgrid[0:ny, 0:nx]
-    x = (x - nx / 2) / nx
-    y = (y - ny / 2) / ny
-    basis = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=-1).reshape(-1, 6)
-    coef, *_ = np.linalg.lstsq(basis, heights.ravel(), rcond=None)
-    return (basis @ coef).reshape(heights.shape)
+    """Least-squares quadratic surface in the pixel coordinates (cleanup.polynomial_fit of degree 2)."""
+    return polynomial_fit(heights, 2)
 
 
 def lowpass(heights: np.ndarray, pixel_mm: float, cutoff_mm: float) -> np.ndarray:
@@ -106,11 +109,11 @@ def lowpass(heights: np.ndarray, pixel_mm: float, cutoff_mm: float) -> np.ndarra
     rest = heights - trend
     ny, nx = rest.shape
     mirrored = np.pad(rest, ((0, ny), (0, nx)), mode="symmetric")
-    fy = np.fft.fftfreq(2 * ny, pixel_mm)[:, None]
-    fx = np.fft.rfftfreq(2 * nx, pixel_mm)[None, :]
-    gain = np.exp(-math.log(2) * (np.hypot(fx, fy) * cutoff_mm) ** 2)
-    smooth = np.fft.irfft2(np.fft.rfft2(mirrored) * gain, s=mirrored.shape)[:ny, :nx]
-    return trend + smooth
+    spectrum = np.fft.rfft2(mirrored)
+    del mirrored
+    for f in (np.fft.fftfreq(2 * ny, pixel_mm)[:, None], np.fft.rfftfreq(2 * nx, pixel_mm)[None, :]):
+        spectrum *= np.exp(-math.log(2) * (f * cutoff_mm) ** 2)  # the Gaussian gain, separable: one axis at a time
+    return trend + np.fft.irfft2(spectrum, s=(2 * ny, 2 * nx))[:ny, :nx]
 
 
 def dominant_wavelength_mm(heights: np.ndarray, pixel_mm: float) -> float:

@@ -245,10 +245,14 @@ def _write_h5(path: str, hm: Heightmap) -> None:
 
 
 def _existing_file(path: Path) -> Path:
+    """``path`` if it is a regular file (or a link to one); a FIFO, socket or device is refused unopened (reading
+    one could block)."""
     if path.is_dir():
         raise InputError(f"{path} is a directory, not a heightmap file")
     if not path.exists():
         raise InputError(f"heightmap file not found: {path}")
+    if not path.is_file():
+        raise InputError(f"{path} is not a regular file (a FIFO, socket or device): give a heightmap file")
     return path
 
 
@@ -418,7 +422,10 @@ def _shape_text(shape: tuple[int, ...]) -> str:
 
 
 def _float_mm(path: Path, values: np.ndarray) -> np.ndarray:
-    """Heights of a file that holds millimetres: integers are refused (their unit is a guess)."""
+    """Heights of a file that holds millimetres: an empty array and integers (their unit is a guess) are refused."""
+    if values.size == 0:
+        raise InputError(f"{path} holds no heights: an empty array ({_shape_text(values.shape)} values of "
+                         f"{values.dtype})")
     if values.dtype.kind in "iu":
         raise InputError(f"{path} holds integers ({values.dtype}, {values.min()} to {values.max()}); "
                          f"{path.suffix} heights are millimetres as floating-point numbers: convert them to mm "

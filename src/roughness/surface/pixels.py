@@ -13,6 +13,8 @@ from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
 
 from .heightmap import bracket
 
+CHUNK_VALUES = 1 << 20  # values per block of output rows (8 MB: the temporaries stay small)
+
 
 @dataclass(frozen=True)
 class Resampling:
@@ -36,7 +38,11 @@ class Resampling:
 
 def square(heights: np.ndarray, pixel_x_mm: float, pixel_y_mm: float) -> tuple[np.ndarray, Resampling]:
     """``heights`` (ny, nx) on pixels of ``pixel_x_mm`` x ``pixel_y_mm`` resampled bilinearly to square pixels
-    of the smaller size, covering the same extent (sides rounded to whole pixels); the size is checked first."""
+    of the smaller size, covering the same extent (sides rounded to whole pixels).
+
+    The size is checked first (MAX_HEIGHTMAP_PIXELS), and the output is made in blocks of rows, so that
+    resampling holds the output and temporaries of CHUNK_VALUES values, whatever the ratio of the pixel sizes
+    (whole-map temporaries took five times the output: gigabytes at a 1000:1 ratio)."""
     ny, nx = heights.shape
     pixel = min(pixel_x_mm, pixel_y_mm)
     mx, my = max(2, round(nx * pixel_x_mm / pixel)), max(2, round(ny * pixel_y_mm / pixel))
@@ -44,6 +50,10 @@ def square(heights: np.ndarray, pixel_x_mm: float, pixel_y_mm: float) -> tuple[n
                mx * my, MAX_HEIGHTMAP_PIXELS, "resample_square")
     j0, j1, fx = bracket((np.arange(mx) + 0.5) * pixel / pixel_x_mm - 0.5, nx, False)
     i0, i1, fy = bracket((np.arange(my) + 0.5) * pixel / pixel_y_mm - 0.5, ny, False)
-    rows = heights[i0] * (1 - fy)[:, None] + heights[i1] * fy[:, None]  # (my, nx)
-    out = rows[:, j0] * (1 - fx) + rows[:, j1] * fx
+    out = np.empty((my, mx))
+    block = max(1, CHUNK_VALUES // max(nx, mx))
+    for start in range(0, my, block):
+        b = slice(start, start + block)
+        rows = heights[i0[b]] * (1 - fy[b])[:, None] + heights[i1[b]] * fy[b, None]  # (block, nx)
+        out[b] = rows[:, j0] * (1 - fx) + rows[:, j1] * fx
     return out, Resampling((ny, nx), (pixel_x_mm, pixel_y_mm), (my, mx), pixel)

@@ -47,6 +47,10 @@ Sources of the shipped profiles' parameters (``PROFILES``; each profile's ``sour
 Resolution: the morphology works on the heightmap's pixels. A bead narrower than 2 pixels cannot be
 represented (refused: resample the map finer); an LCD pixel or a blur below the map's pixel leaves
 that step without effect at this resolution (said in the notes).
+
+Work: the disks filter row by row (a 1-D filter per row of the disk), so a wide bead costs time, not
+memory; the per-layer steps (bead ends, light bleed) run once per distinct layer. Before anything is
+filtered, layers x pixels (MAX_LAYER_PIXELS) and pixels x kernel taps (MAX_FILTER_TAPS) are checked.
 """
 from __future__ import annotations
 
@@ -57,14 +61,22 @@ from pathlib import Path
 
 import numpy as np
 
-from roughness.core.checks import in_range
+from roughness.core.checks import in_range, real
 from roughness.core.errors import InputError
-from roughness.core.limits import MAX_PRINT_LAYERS, check_size
+from roughness.core.limits import (
+    MAX_FILTER_TAPS,
+    MAX_LAYER_PIXELS,
+    MAX_PRINT_LAYERS,
+    PIXEL_RTOL,
+    Limit,
+    check_size,
+)
 
 from .heightmap import Heightmap
 
 MIN_BEAD_PIXELS = 2  # a bead narrower than this many map pixels: its morphology is meaningless
 COARSE_BEAD_PIXELS = 4  # below this, the bead's rounding is resolved only roughly (a note says so)
+MIN_BLEED_PIXELS = 0.5  # a light bleed (standard deviation) below half a map pixel has no effect
 AUTO_WIDTH = 1.125  # PrusaSlicer's automatic extrusion width, x nozzle diameter (0.45 mm for 0.4 mm)
 MAX_PROFILE_BYTES = 65_536  # a printer profile is a few lines of JSON
 
@@ -191,20 +203,26 @@ def load_profile(path: str | Path) -> PrintProfile:
         raise InputError(f"printer profile {path}: unknown field(s) {', '.join(unknown)}; a {kind} profile has "
                          f"{', '.join(sorted(allowed))}", parameter="printer")
     values = dict(data)
-    if kind == "fdm":
-        if isinstance(values.get("nozzle_mm"), (int, float)) and not isinstance(values.get("nozzle_mm"), bool):
-            values.setdefault("line_width_mm", AUTO_WIDTH * values["nozzle_mm"])
-        values.setdefault("closing_radius_mm", 0.049)
     values.setdefault("name", path.stem)
-    missing = sorted(allowed - set(values))
-    if missing:
-        raise InputError(f"printer profile {path}: missing field(s) {', '.join(missing)}", parameter="printer")
-    if not isinstance(values["name"], str) or not values["name"]:
-        raise InputError(f"printer profile {path}: \"name\" must be a non-empty string", parameter="printer")
     try:
+        if kind == "fdm":
+            _fdm_defaults(values)
+        missing = sorted(allowed - set(values))
+        if missing:
+            raise InputError(f"missing field(s) {', '.join(missing)}")
+        if not isinstance(values["name"], str) or not values["name"]:
+            raise InputError("\"name\" must be a non-empty string")
         return cls(**values, source=f"custom profile {path.name}")
     except InputError as err:
         raise InputError(f"printer profile {path}: {err}", parameter="printer") from None
+
+
+def _fdm_defaults(values: dict) -> None:
+    """An FDM profile's defaults set in ``values``: the line width from the nozzle (checked first, so that a nozzle
+    that is no number is named as such) and PrusaSlicer's gap closing radius."""
+    if "nozzle_mm" in values:
+        values.setdefault("line_width_mm", AUTO_WIDTH * real("nozzle_mm", values["nozzle_mm"]))
+    values.setdefault("closing_radius_mm", 0.049)
 
 
 def _no_constant(name: str) -> None:
@@ -224,6 +242,7 @@ def printed(heightmap: Heightmap, profile: PrintProfile, periodic: bool = False)
     layers = relief / profile.layer_mm
     check_size(f"print layers of the {relief:g} mm relief at {profile.layer_mm:g} mm", layers + 1, MAX_PRINT_LAYERS,
                "printer")
+    _check_work(h.size, layers + 1, heightmap.pixel_mm, profile)
     notes = []
     if relief < 0.5 * profile.layer_mm:
         notes.append(f"the texture's relief {relief:.3g} mm is below half a {profile.layer_mm:g} mm layer: it prints "
@@ -240,11 +259,68 @@ def _quantised(h: np.ndarray, base: float, layer_mm: float) -> np.ndarray:
     return base + layer_mm * np.floor((h - base) / layer_mm + 0.5)
 
 
-def _disk(radius_px: float) -> np.ndarray:
-    """Boolean footprint of the pixels whose centres lie within ``radius_px`` of the centre pixel's."""
-    r = int(math.floor(radius_px))
-    y, x = np.mgrid[-r:r + 1, -r:r + 1]
-    return x**2 + y**2 <= radius_px**2 + 1e-9
+def _check_work(pixels: int, layers: float, pixel_mm: float, profile: PrintProfile) -> None:
+    """InputError (parameter ``printer``) if printing a map of ``pixels`` with ``layers`` layers would filter more
+    than MAX_LAYER_PIXELS layer-pixels or MAX_FILTER_TAPS pixel-taps (nothing is allocated to find out)."""
+    if isinstance(profile, FdmProfile):
+        per_layer = True  # the bead ends
+        radii = [profile.closing_radius_mm / pixel_mm, profile.line_width_mm / pixel_mm / 2]
+        taps = pixels * sum(2 * (2 * math.floor(r) + 1) for r in radii if r >= 1)  # two passes (min, max) per disk
+        what = f"the {profile.line_width_mm:g} mm bead's disk filters on {pixels:,} pixels of {pixel_mm:g} mm"
+    else:
+        sigma_px = profile.bleed_mm / pixel_mm
+        per_layer = sigma_px >= MIN_BLEED_PIXELS
+        taps = pixels * layers * _gaussian_taps(sigma_px) if per_layer else 0
+        what = f"the {1e3 * profile.bleed_mm:g} um light bleed on {pixels:,} pixels of {pixel_mm:g} mm, each layer"
+    if per_layer:
+        _check_print(f"layers x pixels the print filters ({layers:,.0f} layers of {pixels:,} pixels, each distinct "
+                     "layer once)", layers * pixels, MAX_LAYER_PIXELS)
+    _check_print(f"pixel-taps of {what}", taps, MAX_FILTER_TAPS)
+
+
+def _check_print(what: str, count: float, limit: Limit) -> None:
+    """``check_size`` for the print, naming ``printer`` and what would make the print smaller."""
+    try:
+        check_size(what, count, limit, "printer")
+    except InputError as err:
+        raise InputError(f"{err}: use a coarser or smaller map, or a profile with thicker layers or a narrower "
+                         "bead", parameter="printer") from None
+
+
+def _gaussian_taps(sigma_px: float) -> int:
+    """Taps per pixel of scipy's Gaussian filter of ``sigma_px`` (its two 1-D kernels, truncated at 4 sigma)."""
+    return 2 * (2 * int(4.0 * sigma_px + 0.5) + 1)
+
+
+def _reach(radius_px: float) -> float:
+    """``radius_px`` squared, widened by the pixel size's precision: a disk that reaches a pixel centre up to
+    round-off (a 0.5 mm line on 0.0500001 mm pixels) reaches it."""
+    return (radius_px * (1 + PIXEL_RTOL)) ** 2
+
+
+def _disk_rows(radius_px: float) -> list[int]:
+    """Half-widths (pixels) of the rows dy = 0, 1, ... of the disk of the pixels whose centres lie within
+    ``radius_px`` of the centre pixel's."""
+    r = int(math.floor(radius_px * (1 + PIXEL_RTOL)))
+    return [math.isqrt(math.floor(_reach(radius_px) - dy * dy)) for dy in range(r + 1)]
+
+
+def _disk_filter(h: np.ndarray, radius_px: float, mode: str, largest: bool) -> np.ndarray:
+    """The largest (``largest``) or smallest value of ``h`` over the disk of ``radius_px`` around each pixel: scipy's
+    grey dilation or erosion with that (flat, symmetric) footprint, as the extreme over the disk's rows of 1-D
+    filters along x, each shifted by its row's dy. Memory a few maps, time a 1-D pass per row, whatever the disk."""
+    from scipy import ndimage
+
+    line_filter = ndimage.maximum_filter1d if largest else ndimage.minimum_filter1d
+    extreme = np.maximum if largest else np.minimum
+    rows = np.arange(h.shape[0])
+    out = None
+    for dy, half in enumerate(_disk_rows(radius_px)):
+        line = line_filter(h, 2 * half + 1, axis=1, mode=mode)
+        for shift in {dy, -dy}:
+            index = (rows + shift) % len(rows) if mode == "wrap" else np.clip(rows + shift, 0, len(rows) - 1)
+            out = line[index] if out is None else extreme(out, line[index], out=out)
+    return out
 
 
 def _rounded_edges(h: np.ndarray, base: float, layer_mm: float, pixel_mm: float, periodic: bool) -> np.ndarray:
@@ -252,16 +328,23 @@ def _rounded_edges(h: np.ndarray, base: float, layer_mm: float, pixel_mm: float,
 
     A pixel on top of layer k at horizontal distance d (mm) from that layer's edge lies lower by
     r - sqrt(r^2 - (r - d)^2) for d < r = layer / 2: down to the layer's middle at the edge itself.
+    Each distinct layer is one distance transform (checked beforehand: MAX_LAYER_PIXELS).
     """
     from scipy import ndimage
 
     cap = layer_mm / 2
-    pad = int(math.ceil(cap / pixel_mm)) + 1  # beyond this the edge's distance does not matter
     levels = np.rint((h - base) / layer_mm).astype(np.int64)
-    padded = np.pad(levels, pad, mode="wrap" if periodic else "edge")
+    # Periodic: the wrapped neighbours within reach of the edge (beyond the cap the distance does not matter, and
+    # one period holds every pixel). Else none: a pixel beyond the edge repeats an edge pixel, which is nearer.
+    pad = min(int(math.ceil(cap / pixel_mm)) + 1, max(levels.shape)) if periodic else 0
+    padded = np.pad(levels, pad, mode="wrap")
+    inner = tuple(slice(pad, n + pad) for n in levels.shape)
     drop = np.zeros(levels.shape)
     for k in np.unique(levels[levels > 0]):
-        inside = ndimage.distance_transform_edt(padded >= k)[pad:-pad, pad:-pad]
+        layer = padded >= k
+        if layer.all():  # the layer covers the map: it has no edge (and the transform no background to measure to)
+            continue
+        inside = ndimage.distance_transform_edt(layer)[inner]
         top = levels == k
         d = np.clip(inside[top] * pixel_mm - pixel_mm / 2, 0.0, cap)  # pixel centre to the edge between pixels
         drop[top] = cap - np.sqrt(cap**2 - (cap - d) ** 2)
@@ -269,8 +352,6 @@ def _rounded_edges(h: np.ndarray, base: float, layer_mm: float, pixel_mm: float,
 
 
 def _fdm(h: np.ndarray, base: float, pixel_mm: float, p: FdmProfile, mode: str, notes: list[str]) -> tuple:
-    from scipy import ndimage
-
     width_px = p.line_width_mm / pixel_mm
     if width_px < MIN_BEAD_PIXELS:
         raise InputError(f"the {p.line_width_mm:g} mm bead of printer {p.name} spans {width_px:.2f} pixels of "
@@ -283,14 +364,14 @@ def _fdm(h: np.ndarray, base: float, pixel_mm: float, p: FdmProfile, mode: str, 
     steps = []
     closing_px = p.closing_radius_mm / pixel_mm
     if closing_px >= 1:
-        h = ndimage.grey_closing(h, footprint=_disk(closing_px), mode=mode)
+        h = _disk_filter(_disk_filter(h, closing_px, mode, largest=True), closing_px, mode, largest=False)
         steps.append(f"slicer gap closing: cracks narrower than {2 * p.closing_radius_mm:g} mm filled")
     elif p.closing_radius_mm > 0:
         notes.append(f"the slicer's {p.closing_radius_mm:g} mm gap closing is below one {pixel_mm:g} mm pixel: "
                      "no effect at this resolution")
     h = _quantised(h, base, p.layer_mm)
     steps.append(f"layer quantisation: heights rounded to whole {p.layer_mm:g} mm layers above the lowest point")
-    h = ndimage.grey_opening(h, footprint=_disk(width_px / 2), mode=mode)
+    h = _disk_filter(_disk_filter(h, width_px / 2, mode, largest=False), width_px / 2, mode, largest=True)
     steps.append(f"bead width: parts of a layer narrower than the {p.line_width_mm:g} mm line removed (opening with "
                  "a disk of the line width)")
     out = _rounded_edges(h, base, p.layer_mm, pixel_mm, mode == "wrap")
@@ -311,10 +392,12 @@ def _sla(h: np.ndarray, base: float, pixel_mm: float, p: SlaProfile, mode: str, 
         notes.append(f"the printer's {1e3 * p.pixel_mm:g} um pixel is not coarser than the map's {1e3 * pixel_mm:g} "
                      "um: its pixel grid has no effect at this resolution")
     sigma_px = p.bleed_mm / pixel_mm
-    if sigma_px >= 0.5:
+    if sigma_px >= MIN_BLEED_PIXELS:
         cured = np.zeros(levels.shape, dtype=np.int64)
-        for k in range(1, int(levels.max()) + 1):
-            cured += ndimage.gaussian_filter((levels >= k).astype(float), sigma_px, mode=mode) >= 0.5
+        below = 0
+        for k in np.unique(levels[levels > 0]):  # layers below + 1 .. k expose one set: filtered once, counted each
+            cured += (k - below) * (ndimage.gaussian_filter((levels >= k).astype(float), sigma_px, mode=mode) >= 0.5)
+            below = k
         levels = cured
         steps.append(f"light bleed: each layer's exposure blurred by {1e3 * p.bleed_mm:g} um (Gaussian), cured "
                      "where it reaches half the dose")

@@ -5,7 +5,8 @@ the units and pixel sizes they state; here they become millimetres, per axis, wi
 convention of this package (row i is y index i; SurfaceTopography indexes [x, y]). Only formats
 that state their length units and were read cleanly are routed here (``FORMATS``); the reader is
 chosen by suffix, not by sniffing. The size a file declares is checked against
-MAX_HEIGHTMAP_PIXELS before its heights are read.
+MAX_HEIGHTMAP_PIXELS before its heights are read, and the MD5 checksum an .x3p states for its
+point data against the data; a file with no height channel (lengths on every axis) is refused.
 
 None of these readers executes anything from a file (checked in SurfaceTopography 1.27): they
 parse binary headers, XML (x3p, with the standard library's parser), HDF5 (datx, through h5py) and
@@ -15,14 +16,17 @@ not routed here.
 """
 from __future__ import annotations
 
+import hashlib
 import math
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
+from xml.parsers import expat
 
 import numpy as np
 
 from roughness.core.errors import InputError
-from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, check_size
+from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, Limit, check_size
 
 EXTRA = 'pip install "roughness[scans]"'
 # suffix -> SurfaceTopography format id; each states its length units and was read cleanly
@@ -59,6 +63,10 @@ def read_scan(path: Path) -> Scan:
     kind = _format_name(fmt, path.suffix)
     try:
         reader = SurfaceTopography.open_topography(str(path), format=fmt)
+        if not reader.channels:
+            raise InputError(f"{path} holds no height map: none of its channels has heights and lateral axes in "
+                             "units of length (a channel in volts, amperes or degrees is no height map); export "
+                             "the height channel from the instrument's software")
         channel = reader.default_channel
         grid = tuple(int(n) for n in channel.nb_grid_pts)  # (nx, ny)
     except InputError:
@@ -70,6 +78,8 @@ def read_scan(path: Path) -> Scan:
                          "height map")
     check_size(f"{path}: pixels its channel {channel.name!r} declares ({grid[0]:,} x {grid[1]:,})",
                math.prod(grid), MAX_HEIGHTMAP_PIXELS)
+    if fmt == "x3p":
+        check_x3p_checksum(path)
     if not getattr(channel, "is_uniform", True):
         raise InputError(f"{path}: its channel {channel.name!r} is not on a uniform grid; resample it in the "
                          "instrument's software")
@@ -90,6 +100,55 @@ def read_scan(path: Path) -> Scan:
     nx, ny = heights.shape  # SurfaceTopography: [x, y]
     return Scan(heights.T * scale, float(sizes[0]) * scale / nx, float(sizes[1]) * scale / ny, kind, unit,
                 str(channel.name))
+
+
+def check_x3p_checksum(path: Path) -> None:
+    """InputError unless the MD5 that an .x3p's main.xml states for its point data (MD5ChecksumPointData, ISO
+    25178-72) is the data's; a file that states none passes. The data are hashed as they unpack (no copy)."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            fields = _x3p_fields(path, archive.read("main.xml"), ("PointDataLink", "MD5ChecksumPointData"))
+            link, stated = fields["PointDataLink"].strip(), fields["MD5ChecksumPointData"].strip().upper()
+            if not link or not stated:
+                return
+            check_size(f"{path}: bytes of its point data {link}", archive.getinfo(link).file_size,
+                       Limit(8 * MAX_HEIGHTMAP_PIXELS, "8 x MAX_HEIGHTMAP_PIXELS"))
+            md5 = hashlib.md5()
+            with archive.open(link) as data:
+                for block in iter(lambda: data.read(1 << 20), b""):
+                    md5.update(block)
+    except (KeyError, OSError, EOFError, zipfile.BadZipFile) as err:
+        raise InputError(f"cannot read {path} as X3P: {_reason(err)}") from None
+    if md5.hexdigest().upper() != stated:
+        raise InputError(f"{path}: its point data ({link}) do not match the MD5 checksum its main.xml states "
+                         f"({stated}; the data's is {md5.hexdigest().upper()}): the file is damaged or was changed "
+                         "after it was written; export it again from the instrument's software")
+
+
+def _x3p_fields(path: Path, text: bytes, names: tuple[str, ...]) -> dict[str, str]:
+    """The text of the elements ``names`` (local names) in an .x3p's main.xml ("" if absent), read with expat; an
+    XML entity declaration is refused (an .x3p has none, and entities can expand without bound)."""
+    found = dict.fromkeys(names, "")
+    open_names: list[str] = []
+    parser = expat.ParserCreate()
+
+    def refuse(*_: object) -> None:
+        raise InputError(f"{path}: its main.xml declares XML entities, which an .x3p never has: refused")
+
+    def text_of(data: str) -> None:
+        if open_names and open_names[-1] in found:
+            found[open_names[-1]] += data
+
+    parser.StartElementHandler = lambda name, _: open_names.append(name.rpartition(":")[2])
+    parser.EndElementHandler = lambda _: open_names.pop()
+    parser.CharacterDataHandler = text_of
+    parser.EntityDeclHandler = refuse
+    parser.UnparsedEntityDeclHandler = refuse
+    try:
+        parser.Parse(text, True)
+    except expat.ExpatError as err:
+        raise InputError(f"cannot read {path}: its main.xml is not XML ({expat.ErrorString(err.code)})") from None
+    return found
 
 
 def _format_name(fmt: str, suffix: str) -> str:

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from roughness.core.errors import InputError
+from roughness.core.limits import HEIGHT_RTOL
 
 from .heightmap import Heightmap
 
@@ -57,16 +58,20 @@ class TileFit:
 
 
 def tile_fit(hm: Heightmap) -> TileFit:
-    """The measures of ``hm`` as a tile (a flat patch: infinitely many periods, no seam)."""
+    """The measures of ``hm`` as a tile (a flat patch: infinitely many periods, no seam).
+
+    An axis along which the heights change by no more than their precision (HEIGHT_RTOL times the largest
+    |height|: round-off, as along a grating's ridges) has no seam."""
     side = min(hm.size_mm)
     feature = hm.feature_size_mm()
     h = hm.heights
+    resolution = HEIGHT_RTOL * float(np.abs(h).max())
     seams = []
     for axis in (0, 1):
         inside = np.diff(h, axis=axis)
         wrap = np.take(h, 0, axis=axis) - np.take(h, -1, axis=axis)
         step = math.sqrt(float(np.mean(inside**2)))
-        seams.append(math.sqrt(float(np.mean(wrap**2))) / step if step > 0 else 0.0)
+        seams.append(math.sqrt(float(np.mean(wrap**2))) / step if step > resolution else 0.0)
     return TileFit(side, feature, side / feature if math.isfinite(feature) else math.inf, max(seams))
 
 

@@ -108,7 +108,8 @@ class FileUnits:
 
 
 def split_input(text: str) -> tuple[str, FileUnits]:
-    """``FILE`` or ``FILE:pixel-mm=P,height-mm=H`` (either key, in any order) as the path and its units.
+    """``FILE`` or ``FILE:pixel-mm=P,height-mm=H`` (either key, each at most once, in any order) as the path and its
+    units.
 
     An existing path is always taken whole (a file whose name has a colon); otherwise the part
     after the last colon is units if it is ``key=value`` pairs, and an InputError names a bad one.
@@ -121,6 +122,8 @@ def split_input(text: str) -> tuple[str, FileUnits]:
         key, _, value = pair.partition("=")
         if key not in FILE_UNIT_KEYS:
             raise InputError(f"{text}: unknown unit {key!r} after the colon; expected FILE:pixel-mm=MM,height-mm=MM")
+        if FILE_UNIT_KEYS[key] in values:
+            raise InputError(f"{text}: {key} is given twice after the colon; give each unit once")
         try:
             number = float(value)
         except ValueError:
