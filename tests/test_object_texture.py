@@ -487,3 +487,53 @@ def test_needle_shaped_input_faces_are_noted():
     flat = Heightmap(np.zeros((40, 40)), 1.0)
     result = texture_mesh(capsule, Triplanar(flat), check_intersections=False)
     assert any("needle-shaped" in note for note in result.notes)
+
+
+# --- --printer: the edge from the printer, the plan before refining -----------------------------------------------
+
+def test_the_printer_sets_the_edge_but_never_below_the_texture_pixel():
+    from roughness.objects.print_plan import printer_edge
+    from roughness.surface.printing import PROFILES
+
+    fdm = printer_edge(PROFILES["fdm-0.4-0.2"], 0.05)
+    assert fdm.edge_mm == pytest.approx(0.225) and "line width" in fdm.note()  # half the 0.45 mm line
+    sla = printer_edge(PROFILES["msla-35um"], 0.01)
+    assert sla.edge_mm == pytest.approx(0.035)  # one LCD pixel
+    coarse = printer_edge(PROFILES["msla-35um"], 0.05)  # the texture is coarser than the printer
+    assert coarse.edge_mm == pytest.approx(math.sqrt(2) * 0.05) and "texture's (" in coarse.note()
+
+
+def test_a_mesh_too_large_for_slicers_is_warned_before_refining():
+    from roughness.objects.print_plan import SLICER_TRIANGLES, mesh_plan
+
+    box = trimesh.creation.box((6, 6, 6))
+    faces = np.asarray(box.faces)
+    small = mesh_plan(np.asarray(box.vertices), faces, np.ones(len(faces), bool), 0.2)
+    assert small.warning() is None and small.triangles == math.ceil(216 / (0.2**2 / 8))
+    assert small.stl_bytes == 84 + 50 * small.triangles
+    huge = mesh_plan(np.asarray(box.vertices), faces, np.ones(len(faces), bool), 0.005)  # only estimated
+    assert huge.triangles > SLICER_TRIANGLES and "slicers handle comfortably" in huge.warning()
+    unchecked = mesh_plan(np.asarray(box.vertices), faces, np.ones(len(faces), bool), 0.005, False)
+    assert 0 < unchecked.seconds < huge.seconds  # the self-intersection check costs time
+
+
+def test_cli_printer_sets_the_edge_and_reports_digital_and_printed_v(tmp_path, monkeypatch, capsys):
+    trimesh.creation.box((6, 6, 6)).export(tmp_path / "box.stl")
+    monkeypatch.chdir(tmp_path)
+    argv = ["object", "texture", "box.stl", "--texture", "standard-1.0", "--height-mm", "0.3", "--printer",
+            "fdm-0.4-0.2", "--out", "b.stl", "--json"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    out = json.loads(captured.out)
+    assert out["result"]["edge_mm"] == pytest.approx(0.225) == out["plan"]["edge_mm"]
+    assert out["plan"]["triangles"] >= out["triangles"]  # the estimate is from above
+    printing = out["printing"]
+    assert printing["printer"]["name"] == "fdm-0.4-0.2"
+    assert printing["printed"]["roughness"] < printing["digital"]["roughness"]  # the bead rounds the bumps off
+    assert "expected: about" in captured.err and "as printed (fdm-0.4-0.2)" in captured.err
+    assert any("from the printer fdm-0.4-0.2" in n for n in out["notes"])
+
+
+def test_cli_unknown_printer_exits_2(knob_file, capsys):
+    argv = ["object", "texture", "knob.stl", "--texture", "standard-1.0", "--printer", "nosuch", "--out", "k.stl"]
+    _expect_refusal(argv, knob_file, capsys, ("nosuch",))

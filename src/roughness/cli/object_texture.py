@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from roughness.core.limits import MAX_LENGTH_MM
 
@@ -18,6 +19,7 @@ from .common import (
     write_stdout,
 )
 from .object_inputs import MAPPING_FLAGS, add_mesh_and_texture_args, check_mapping_args, mapping_for, read_texture
+from .printer import add_printer_arg, printer_of
 
 
 def add_parser(actions) -> None:
@@ -32,7 +34,9 @@ def add_parser(actions) -> None:
                         "box:X0,Y0,Z0,X1,Y1,Z1 (centre in the box, mm), colour:R,G,B[,TOL] (painted vertex or face "
                         "colours, 0-255) (default: all)")
     p.add_argument("--edge-mm", type=LENGTH, metavar="MM",
-                   help="longest edge of a textured triangle (default: sqrt(2) x the texture's pixel on the surface)")
+                   help="longest edge of a textured triangle (default: with --printer, the larger of half the FDM "
+                        "line width or the SLA pixel and sqrt(2) x the texture's pixel on the surface; without, "
+                        "sqrt(2) x the texture's pixel on the surface)")
     p.add_argument("--normal-radius-mm", type=Number(float, low=0, high=MAX_LENGTH_MM), default=DEFAULT_NORMAL_RADIUS_MM, metavar="MM",
                    help="smooth the displacement's normals over about this radius (default 0: area-weighted vertex "
                         "normals)")
@@ -44,6 +48,8 @@ def add_parser(actions) -> None:
     p.add_argument("--out", required=True, metavar="FILE", help="the textured mesh: .stl (binary) or .3mf")
     p.add_argument("--preview", metavar="PNG", help="also write a picture of the textured object")
     p.add_argument("--json", action="store_true", help="one JSON object (default: text)")
+    add_printer_arg(p, "sets the default --edge-mm from what the printer reproduces, and reports the texture's V "
+                       "as printed beside its digital V (the mesh written is the digital design)")
     add_reading_args(p)
     add_quiet(p)
     add_overwrite(p)
@@ -57,6 +63,8 @@ def run(args: argparse.Namespace) -> int:
     from roughness.objects.regions import parse_region
     from roughness.objects.texturing import texture_mesh
 
+    from .object_printing import texture_print
+
     check_distinct({"--out": args.out, "--preview": args.preview}, {"MESH": args.mesh, "--texture": args.texture})
     out = require_mesh_format(check_output(args.out, args.overwrite, "out"), "out")
     preview = check_output(args.preview, args.overwrite, "preview") if args.preview else None
@@ -64,11 +72,22 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"the preview is a PNG picture, got {preview.name}", "preview")
     region = parse_region(args.region)
     check_mapping_args(args)
+    printer = printer_of(args)
     texture, texture_notes = read_texture(args)
     read = read_mesh(args.mesh, units_ok=args.units_ok)
     mapping = mapping_for(args, texture, read.mesh, region.faces(read.mesh))
-    log(args, f"object texture: {read.triangles:,} triangles in {args.mesh}; texturing")
-    result = texture_mesh(read.mesh, mapping, region, args.edge_mm, args.normal_radius_mm,
+    printing = texture_print(texture, printer) if printer is not None else None
+    for line in printing.lines() if printing else []:
+        log(args, line)
+    edge_mm, plan, plan_notes = _plan(args, read.mesh, region, mapping, printer)
+    log(args, f"object texture: {read.triangles:,} triangles in {args.mesh}")
+    for note in plan_notes:
+        if note == plan.warning():
+            print(f"roughness: warning: {note}", file=sys.stderr, flush=True)  # even with --quiet
+        else:
+            log(args, f"  {note}")
+    log(args, "object texture: texturing")
+    result = texture_mesh(read.mesh, mapping, region, edge_mm, args.normal_radius_mm,
                           check_intersections=not args.no_intersection_check, progress=lambda line: log(args, line),
                           border_mm=args.border_mm)
     written = write_mesh(result.mesh, out, args.overwrite)
@@ -78,19 +97,49 @@ def run(args: argparse.Namespace) -> int:
 
         save_figure(preview_figure(result, f"{args.mesh} with {args.texture}"), preview, dpi=100,
                     overwrite=args.overwrite)
-    notes = [*read.notes, *texture_notes, *result.notes]
+    notes = [*read.notes, *texture_notes, *plan_notes, *result.notes]
     if args.json:
         write_stdout(json_text({"mesh": args.mesh, "texture": args.texture, "mapping": args.mapping,
                                 "region": region.describe(), "out": written.path, "triangles": written.triangles,
                                 "bytes": written.bytes, "check": written.check.as_dict(), "preview": None if preview is None else str(preview),
+                                "plan": plan.as_dict(),
+                                "printing": None if printing is None else printing.as_dict(),
                                 "result": result.as_dict(), "notes": notes, "readings": readings(args)}))
     else:
         lines = [written.line(),
                  f"textured {result.textured_faces_in:,} of {result.triangles_in:,} faces "
                  f"({result.textured_area_mm2:.1f} mm^2); heights up to {result.max_height_mm:.3f} mm, mean "
                  f"{result.mean_height_mm:.3f} mm; volume {result.volume_in_mm3:.1f} -> {result.volume_out_mm3:.1f} mm^3",
+                 *(printing.lines() if printing else []),
                  *(f"note: {n}" for n in notes)]
         if preview is not None:
             lines.append(f"wrote {preview}")
         write_stdout("\n".join(lines))
     return 0
+
+
+def _plan(args: argparse.Namespace, mesh, region, mapping, printer):
+    """The edge length (mm: --edge-mm, else from --printer, else sqrt(2) x the texture's pixel on the surface), the
+    ``MeshPlan`` of refining to it, and notes: the plan, then the slicer warning if the mesh would be too large."""
+    import math
+
+    import numpy as np
+
+    from roughness.objects.print_plan import mesh_plan, printer_edge
+
+    notes = []
+    if args.edge_mm is not None:
+        edge_mm = args.edge_mm
+    elif printer is not None:
+        choice = printer_edge(printer, mapping.pixel_mm)
+        edge_mm = choice.edge_mm
+        notes.append(choice.note())
+    else:
+        edge_mm = math.sqrt(2) * mapping.pixel_mm
+    selected = np.asarray(region.faces(mesh), dtype=bool)
+    plan = mesh_plan(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces), selected, edge_mm,
+                     not args.no_intersection_check)
+    notes.append(plan.line())
+    if plan.warning():
+        notes.append(plan.warning())
+    return edge_mm, plan, notes
