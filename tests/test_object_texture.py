@@ -537,3 +537,38 @@ def test_cli_printer_sets_the_edge_and_reports_digital_and_printed_v(tmp_path, m
 def test_cli_unknown_printer_exits_2(knob_file, capsys):
     argv = ["object", "texture", "knob.stl", "--texture", "standard-1.0", "--printer", "nosuch", "--out", "k.stl"]
     _expect_refusal(argv, knob_file, capsys, ("nosuch",))
+
+
+# --- progress of the long steps --------------------------------------------------------------------------------------
+
+def test_long_steps_report_rising_fractions_that_end_at_one(tmp_path):
+    box = trimesh.creation.box((6, 6, 6))
+    faces = np.asarray(box.faces)
+    seen: dict[str, list[float]] = {"refine": [], "cross": [], "write": []}
+    refined = refine(np.asarray(box.vertices), faces, np.ones(len(faces), bool), 0.3, seen["refine"].append)
+    self_intersections(refined.vertices, refined.faces, progress=seen["cross"].append)
+    write_mesh(trimesh.Trimesh(refined.vertices, refined.faces, process=False), tmp_path / "b.stl",
+               progress=seen["write"].append)
+    for name, fractions in seen.items():
+        assert fractions and fractions[-1] == 1.0, name
+        assert all(0 <= a <= b <= 1 for a, b in zip(fractions, fractions[1:])), (name, fractions)
+    assert len(seen["refine"]) == refined.rounds + 1  # one per round, then done
+
+
+def test_time_left_scales_the_time_so_far_by_the_work_left():
+    from roughness.objects.progress import StageMeter, eta_seconds
+
+    assert eta_seconds(10.0, 0.25) == pytest.approx(30.0)
+    assert eta_seconds(10.0, 0.0) is None and eta_seconds(10.0, 1.0) == 0
+    text = StageMeter().text("refine", 0.5, 20.0)
+    assert "refine:  50%" in text and "about 20 s left" in text
+
+
+def test_cli_progress_is_plain_lines_when_stderr_is_not_a_terminal(knob_file, capsys):
+    argv = ["object", "texture", "knob.stl", "--texture", "standard-1.0", "--region", "box:-9,-9,9,9,9,14",
+            "--edge-mm", "1", "--out", "k.stl", "--preview", "k.png"]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "\r" not in err
+    for line in ("refine: 100%", "self-intersection check: 100%", "writing k.stl: 100%", "preview k.png: 100%"):
+        assert line in err

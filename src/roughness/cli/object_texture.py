@@ -60,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
     from roughness.core.files import check_distinct, check_output
     from roughness.objects.meshes import read_mesh, require_mesh_format, write_mesh
+    from roughness.objects.progress import StageMeter
     from roughness.objects.regions import parse_region
     from roughness.objects.texturing import texture_mesh
 
@@ -87,16 +88,26 @@ def run(args: argparse.Namespace) -> int:
         else:
             log(args, f"  {note}")
     log(args, "object texture: texturing")
+    meter = StageMeter("  ")
+
+    def step_done(line: str) -> None:
+        meter.close()
+        log(args, line)
+
+    stage = None if args.quiet else meter.stage
     result = texture_mesh(read.mesh, mapping, region, edge_mm, args.normal_radius_mm,
-                          check_intersections=not args.no_intersection_check, progress=lambda line: log(args, line),
-                          border_mm=args.border_mm)
-    written = write_mesh(result.mesh, out, args.overwrite)
+                          check_intersections=not args.no_intersection_check, progress=step_done,
+                          border_mm=args.border_mm, meter=stage)
+    written = write_mesh(result.mesh, out, args.overwrite, progress=stage and stage(f"writing {out.name}"))
+    meter.close()
     if preview is not None:
         from roughness.core.figures import save_figure
         from roughness.objects.preview import preview_figure
 
-        save_figure(preview_figure(result, f"{args.mesh} with {args.texture}"), preview, dpi=100,
+        save_figure(preview_figure(result, f"{args.mesh} with {args.texture}",
+                                   progress=stage and stage(f"preview {preview.name}")), preview, dpi=100,
                     overwrite=args.overwrite)
+        meter.close()
     notes = [*read.notes, *texture_notes, *plan_notes, *result.notes]
     if args.json:
         write_stdout(json_text({"mesh": args.mesh, "texture": args.texture, "mapping": args.mapping,

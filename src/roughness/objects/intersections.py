@@ -12,6 +12,7 @@ displacement that folds neighbours over each other turns a face over, which ``fo
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,9 +41,11 @@ class Intersections:
         return len(self.pairs)
 
 
-def self_intersections(vertices: np.ndarray, faces: np.ndarray, moved: np.ndarray | None = None) -> Intersections:
+def self_intersections(vertices: np.ndarray, faces: np.ndarray, moved: np.ndarray | None = None,
+                       progress: Callable[[float], object] | None = None) -> Intersections:
     """The pairs of faces of (``vertices``, ``faces``) that cross each other (module docstring). ``moved``: a mask of
-    the faces that may have moved; pairs of two unmoved faces are not tested (the input mesh is taken as sound)."""
+    the faces that may have moved; pairs of two unmoved faces are not tested (the input mesh is taken as sound).
+    ``progress``: called after each slab with the fraction of the faces' slabs done (1 at the end)."""
     faces = np.asarray(faces, dtype=np.int64)
     moved = np.ones(len(faces), dtype=bool) if moved is None else np.asarray(moved, dtype=bool)
     mins = np.empty((len(faces), 3), dtype=np.float32)  # rounded outwards: boxes only grow
@@ -66,7 +69,9 @@ def self_intersections(vertices: np.ndarray, faces: np.ndarray, moved: np.ndarra
     small = np.flatnonzero(~large)
     order = small[np.argsort(lo_x[small], kind="stable")]
     cuts = [int(lo_x[order[k]]) for k in range(0, len(order), SLAB_FACES)] + [int(hi_x.max()) + 1]
-    for x0, x1 in zip(cuts[:-1], cuts[1:]):
+    for slab, (x0, x1) in enumerate(zip(cuts[:-1], cuts[1:])):
+        if progress is not None and slab:
+            progress(slab / len(cuts))
         if x1 <= x0:
             continue
         members = small[(lo_x[small] < x1) & (hi_x[small] >= x0)]
@@ -79,6 +84,8 @@ def self_intersections(vertices: np.ndarray, faces: np.ndarray, moved: np.ndarra
             t, hits = _test(vertices, faces, moved, mins, maxs, i[keep], j[keep])
             tested, found = tested + t, found + [hits]
     pairs = np.concatenate(found) if found else np.empty((0, 2), dtype=np.int64)
+    if progress is not None:
+        progress(1.0)
     return Intersections(pairs, tested)
 
 

@@ -11,6 +11,7 @@ import mmap
 import os
 import re
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -259,24 +260,29 @@ def require_mesh_format(path: str | Path, parameter: str = "out") -> Path:
     return path
 
 
-def write_mesh(mesh, path: str | Path, overwrite: bool = False, parameter: str = "out") -> Written:
+def write_mesh(mesh, path: str | Path, overwrite: bool = False, parameter: str = "out",
+               progress: Callable[[float], object] | None = None) -> Written:
     """Write ``mesh`` as binary STL (streamed) or 3MF (mm), atomically, after the independent check of the mesh as
     the file will hold it (``roughness.surface.solid``: float32 corners in an STL, float64 in a 3MF): SimulationError,
-    and nothing written, unless it is a closed solid; refused if the file exists and not ``overwrite``."""
+    and nothing written, unless it is a closed solid; refused if the file exists and not ``overwrite``.
+    ``progress``: called with the fraction written (an STL after each chunk, a 3MF once at the end)."""
     path = require_mesh_format(path, parameter)
     stl = path.suffix.lower() == ".stl"
     vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     check = require_solid(vertices, faces, str(path), np.float32 if stl else np.float64)
     if stl:
-        atomic_write(path, lambda tmp: _write_stl(vertices, faces, tmp), overwrite)
+        atomic_write(path, lambda tmp: _write_stl(vertices, faces, tmp, progress), overwrite)
     else:
         atomic_write(path, lambda tmp: _write_3mf(vertices, faces, tmp), overwrite)
+        if progress is not None:
+            progress(1.0)
     return Written(str(path), len(faces), os.path.getsize(path), check)
 
 
-def _write_stl(vertices: np.ndarray, faces: np.ndarray, tmp: str) -> None:
+def _write_stl(vertices: np.ndarray, faces: np.ndarray, tmp: str,
+               progress: Callable[[float], object] | None = None) -> None:
     with open(tmp, "wb") as f:
-        write_stl(f, vertices, faces, b"roughness textured object, mm")
+        write_stl(f, vertices, faces, b"roughness textured object, mm", progress)
 
 
 def _write_3mf(vertices: np.ndarray, faces: np.ndarray, tmp: str) -> None:

@@ -2,6 +2,7 @@
 plotting, so meshes of millions of triangles draw in seconds)."""
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -19,9 +20,11 @@ VIEWS = {"top": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0)), "front": ((0.0, -1.0, 0.0), 
 LIGHT = np.array([-0.4, 0.5, 0.77])
 
 
-def preview_figure(mesh, title: str = "", pixels: int = 500) -> Figure:
+def preview_figure(mesh, title: str = "", pixels: int = 500,
+                   progress: Callable[[float], object] | None = None) -> Figure:
     """A Figure with the mesh (a trimesh or TexturedMesh) seen from each direction of VIEWS, shaded by the
-    surface's slope under a light from the upper left; the scale bar is in mm."""
+    surface's slope under a light from the upper left; the scale bar is in mm. ``progress``: called with the
+    fraction of the views drawn after each."""
     mesh = getattr(mesh, "mesh", mesh)
     vertices = np.asarray(mesh.vertices)
     centre = (vertices.min(axis=0) + vertices.max(axis=0)) / 2
@@ -36,6 +39,8 @@ def preview_figure(mesh, title: str = "", pixels: int = 500) -> Figure:
                   extent=(-radius, radius, -radius, radius))
         ax.set_title(name)
         ax.set_xlabel("mm")
+        if progress is not None:
+            progress((k + 1) / len(VIEWS))
     if title:
         fig.suptitle(title)
     fig.tight_layout()

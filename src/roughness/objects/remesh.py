@@ -10,6 +10,7 @@ so flat faces stay flat. Orientation is kept, so a consistently wound mesh stays
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,12 +45,15 @@ def predicted_triangles(vertices: np.ndarray, faces: np.ndarray, textured: np.nd
     return area / (edge_mm**2 / 8) + float((~textured).sum())
 
 
-def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_mm: float) -> Refined:
-    """Split edges of textured faces until none is longer than ``edge_mm`` (mm) (module docstring)."""
+def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_mm: float,
+           progress: Callable[[float], object] | None = None) -> Refined:
+    """Split edges of textured faces until none is longer than ``edge_mm`` (mm) (module docstring). ``progress``:
+    called after each round with the fraction done, the triangles so far over ``predicted_triangles`` (an estimate
+    from above, so it may end below 1; 1 when done)."""
     if not edge_mm > 0:
         raise InputError(f"edge length must be positive, got {edge_mm!r}", parameter="edge_mm")
-    check_size("triangles after refinement (estimated)", predicted_triangles(vertices, faces, textured, edge_mm),
-               MAX_MESH_TRIANGLES, "edge_mm")
+    expected = predicted_triangles(vertices, faces, textured, edge_mm)
+    check_size("triangles after refinement (estimated)", expected, MAX_MESH_TRIANGLES, "edge_mm")
     v = np.ascontiguousarray(vertices, dtype=float)
     f = np.ascontiguousarray(faces, dtype=np.int64)
     tex = np.asarray(textured, dtype=bool).copy()
@@ -57,6 +61,8 @@ def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_m
     while True:
         split = _edges_to_split(v, f, tex, edge_mm)
         if split.size == 0:
+            if progress is not None:
+                progress(1.0)
             return Refined(v, f, tex, rounds)
         rounds += 1
         n = len(v)
@@ -67,6 +73,8 @@ def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_m
         tex = np.concatenate([p[1] for p in pieces])
         del pieces
         check_size("triangles during refinement", len(f), MAX_MESH_TRIANGLES, "edge_mm")
+        if progress is not None:
+            progress(min(len(f) / max(expected, 1.0), 0.99))
 
 
 def _edge_keys(f: np.ndarray, n_vertices: int) -> np.ndarray:

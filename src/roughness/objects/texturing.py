@@ -114,7 +114,8 @@ class _Relief:
 def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_mm: float | None = None,
                  normal_radius_mm: float = DEFAULT_NORMAL_RADIUS_MM, check_intersections: bool = True,
                  progress: Callable[[str], object] | None = None,
-                 border_mm: float = DEFAULT_BORDER_MM) -> TexturedMesh:
+                 border_mm: float = DEFAULT_BORDER_MM,
+                 meter: Callable[[str], Callable[[float], object]] | None = None) -> TexturedMesh:
     """``mesh`` (a closed trimesh, mm) with ``mapping``'s texture on the faces of ``region`` (module docstring).
 
     ``edge_mm``: longest edge of a textured face (default: sqrt(2) times the mapping's ``pixel_mm``, so that the
@@ -122,9 +123,11 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     the displacement's normals over about this radius (0: area-weighted vertex normals only);
     ``check_intersections``: test the result for faces crossing each other (the slow part of large meshes);
     ``progress``: called with a line as each step ends (its time in ``TexturedMesh.seconds``); ``border_mm``: the
-    heights ramp from 0 on the region's border to full height over this distance (0: no ramp, the border moves).
+    heights ramp from 0 on the region's border to full height over this distance (0: no ramp, the border moves);
+    ``meter``: given a step's name ("refine", "self-intersection check"), the callback to which that step reports
+    the fraction of its work done (``progress.StageMeter.stage``).
     """
-    clock = _Clock(progress)
+    clock = _Clock(progress, meter)
     given = _checked_input(mesh, mapping, region, edge_mm, normal_radius_mm, border_mm)
     notes = _input_notes(given, mapping, region)
     volume_in = signed_volume(given.vertices, given.faces)
@@ -181,7 +184,7 @@ def _input_notes(given: _Input, mapping: TextureMapping, region: Region) -> list
 
 def _refined(given: _Input, clock: _Clock, notes: list[str]) -> Refined:
     """The textured faces refined to edges of at most ``edge_mm`` (step 1; noted in ``notes``)."""
-    refined = refine(given.vertices, given.faces, given.selected, given.edge_mm)
+    refined = refine(given.vertices, given.faces, given.selected, given.edge_mm, clock.meter("refine"))
     clock.step("check input, refine", f"{len(refined.faces):,} triangles")
     notes.append(f"remeshed the textured faces to edges of at most {given.edge_mm:.4g} mm ({refined.rounds} rounds of "
                  f"edge splitting): {len(given.faces):,} -> {len(refined.faces):,} triangles; untextured faces kept "
@@ -255,7 +258,7 @@ def _check_crossings(refined: Refined, displaced: np.ndarray, relief: _Relief, c
                      notes: list[str]) -> int:
     """InputError if two faces of the result cross (step 5); the pairs of faces tested (noted in ``notes``)."""
     f = refined.faces
-    crossing = self_intersections(displaced, f, relief.moving[f].any(axis=1))
+    crossing = self_intersections(displaced, f, relief.moving[f].any(axis=1), clock.meter("self-intersection check"))
     if crossing.count:
         i, j = crossing.pairs.T
         before = triangles_cross(refined.vertices[f[i]], refined.vertices[f[j]])
@@ -308,12 +311,18 @@ def border_ramp(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, w
 
 
 class _Clock:
-    """Times the steps of texture_mesh and tells ``progress`` as each ends."""
+    """Times the steps of texture_mesh and tells ``progress`` as each ends; ``meter`` gives the long steps' progress
+    callbacks."""
 
-    def __init__(self, progress: Callable[[str], object] | None) -> None:
-        self.progress = progress
+    def __init__(self, progress: Callable[[str], object] | None,
+                 meter: Callable[[str], Callable[[float], object]] | None = None) -> None:
+        self.progress, self._meter = progress, meter
         self.seconds: dict[str, float] = {}
         self.last = time.perf_counter()
+
+    def meter(self, name: str) -> Callable[[float], object] | None:
+        """The progress callback of the long step ``name`` (None without a meter)."""
+        return None if self._meter is None else self._meter(name)
 
     def step(self, name: str, detail: str = "") -> None:
         now = time.perf_counter()

@@ -9,6 +9,7 @@ is first checked as a reader will see it (``roughness.surface.solid``).
 from __future__ import annotations
 
 import io
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import BinaryIO
 
@@ -77,9 +78,11 @@ def require_solid(vertices: np.ndarray, faces: np.ndarray, what: str, precision:
     return check
 
 
-def write_stl(f: BinaryIO, vertices: np.ndarray, faces: np.ndarray, header: bytes) -> None:
+def write_stl(f: BinaryIO, vertices: np.ndarray, faces: np.ndarray, header: bytes,
+              progress: Callable[[float], object] | None = None) -> None:
     """Binary STL (mm) of ``faces`` over ``vertices`` to ``f``: an 80-byte header, the triangle count, one 50-byte
-    record per triangle, packed STL_CHUNK_FACES at a time."""
+    record per triangle, packed STL_CHUNK_FACES at a time (``progress``: called with the fraction written after
+    each chunk)."""
     f.write(header.ljust(80, b" ")[:80])
     f.write(np.uint32(len(faces)).tobytes())
     for start in range(0, len(faces), STL_CHUNK_FACES):
@@ -89,3 +92,5 @@ def write_stl(f: BinaryIO, vertices: np.ndarray, faces: np.ndarray, header: byte
         records = np.zeros(len(corners), dtype=STL_RECORD)
         records["normal"], records["vertices"] = normals, corners
         f.write(records.tobytes())
+        if progress is not None:
+            progress(min(start + STL_CHUNK_FACES, len(faces)) / max(len(faces), 1))
