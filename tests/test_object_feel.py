@@ -380,3 +380,41 @@ def test_object_tune_writes_the_textured_mesh_only_when_it_can_be_built(tmp_path
     argv[argv.index("--mesh-out") + 1] = str(tmp_path / "again.stl")
     assert main(argv) == 2 and "too deep" in capsys.readouterr().err
     assert not (tmp_path / "again.npz").exists() and not (tmp_path / "again.stl").exists()
+
+
+# --- --printer: the printed object -----------------------------------------------------------------------------------
+
+def test_the_tile_is_printed_at_its_pixel_on_the_surface_and_handed_back_at_its_own():
+    from roughness.objects.printed import printed_tile
+    from roughness.surface.printing import PROFILES, printed
+
+    texture = standard_texture(1.0)
+    fdm = PROFILES["fdm-0.4-0.2"]
+    plain = printed_tile(texture, fdm)
+    assert plain.heightmap.pixel_mm == texture.pixel_mm
+    assert np.array_equal(plain.heightmap.heights, printed(texture, fdm, periodic=True).heightmap.heights)
+    stretched = printed_tile(texture, fdm, 1.5 * texture.pixel_mm)  # a wrap's stretch: the bead is fewer pixels
+    assert stretched.heightmap.pixel_mm == texture.pixel_mm
+    assert not np.array_equal(stretched.heightmap.heights, plain.heightmap.heights)
+
+
+def test_object_feel_and_tune_with_a_printer_report_printed_beside_digital(tmp_path, capsys):
+    from roughness.cli import main
+
+    mesh, _ = _cylinder(8.0, height_mm=30.0)
+    mesh.export(tmp_path / "rod.stl")
+    common = [str(tmp_path / "rod.stl"), "--texture", "standard-1.0", "--mapping", "cylinder", "--region",
+              "cone:0,0,1,100", "--spacing-mm", "10", "--printer", "fdm-0.4-0.2"]
+    assert main(["object", "feel", *common, "--json", "--quiet"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    printed_row, digital_row = out["printing"]["printed_regions"][0], out["printing"]["digital_regions"][0]
+    assert out["regions"][0]["roughness_median"] == printed_row["roughness_median"]  # the map is the print's
+    assert printed_row["roughness_median"] < digital_row["roughness_median"]  # the bead rounds the bumps off
+    assert main(["object", "feel", *common, "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("as printed (fdm-0.4-0.2)") and "; digital V " in text
+    assert main(["object", "tune", *common, "--target-lambda", "1.0", "--out", str(tmp_path / "t.npz"),
+                 "--quiet"]) in (0, 1)
+    text = capsys.readouterr().out
+    assert "on the object as printed (fdm-0.4-0.2)" in text and "digital (the design as written" in text
+    assert (tmp_path / "t.npz").exists()

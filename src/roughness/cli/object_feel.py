@@ -19,6 +19,7 @@ from .common import (
     show_notes,
 )
 from .object_inputs import MAPPING_FLAGS, add_mesh_and_texture_args, check_mapping_args, mapping_for, read_texture
+from .printer import add_printer_arg, printer_of
 
 if TYPE_CHECKING:
     import trimesh
@@ -98,6 +99,8 @@ def add_parser(sub) -> None:
                    help="--picture: colour by V or by JND from --reference (default: jnd with --reference, else V)")
     p.add_argument("--picture", metavar="PNG", help="write a picture of the object coloured by how it feels")
     p.add_argument("--json", action="store_true", help="one JSON object: table, refusals, every point (default: text)")
+    add_printer_arg(p, "the map is of the printed object (the texture tile printed before it is mapped), the "
+                       "digital object's table beside it")
     add_quiet(p)
     add_overwrite(p)
     p.set_defaults(spacing_default=DEFAULT_SPACING_MM)
@@ -116,14 +119,18 @@ def run(args: argparse.Namespace) -> int:
     if args.picture:
         check_distinct({"--picture": args.picture}, {"MESH": args.mesh, "--texture": args.texture})
         check_output(args.picture, args.overwrite, "picture")
+    printer = printer_of(args)
     inputs = read_object(args)
     mapping = mapping_of(args, inputs.texture, inputs)
     notes = inputs.notes + list(getattr(mapping, "notes", lambda: [])())
     show_notes(args, notes)
+    printing = _printed(args, inputs, mapping, printer) if printer is not None else None
 
     def progress(done: int, total: int) -> None:
-        log(args, f"feel: {done}/{total} footprints judged")
+        log(args, f"feel: {done}/{total} footprints judged" + (" (as printed)" if printing else ""))
 
+    if printing is not None:
+        mapping = mapping_of(args, printing.result.heightmap, inputs)
     feel = feel_map(inputs.mesh, mapping, inputs.regions, args.spacing_mm or args.spacing_default, args.engine,
                     args.curved, args.reference, progress=progress)
     if args.picture:
@@ -132,10 +139,65 @@ def run(args: argparse.Namespace) -> int:
                     args.overwrite)
     if args.json:
         print(json_text({"mesh": args.mesh, "texture": inputs.texture_name, "mapping": args.mapping, "notes": notes,
-                         "picture": args.picture, "readings": readings(args), **feel.as_dict()}))
+                         "picture": args.picture, "readings": readings(args), **feel.as_dict(),
+                         "printing": None if printing is None else printing.as_dict(feel)}))
     else:
-        print("\n".join(feel_lines(feel, args.mesh, args.picture)))
+        lines = feel_lines(feel, args.mesh, args.picture)
+        if printing is not None:
+            lines = [f"as printed ({printer.name}): {lines[0]}", *lines[1:], *printing.lines(feel)]
+        print("\n".join(lines))
     return 0
+
+
+@dataclass(frozen=True)
+class PrintedFeel:
+    """--printer: the tile's print (``result``, a ``PrintResult``) and the map of the digital object (``digital``,
+    a ``FeelMap``), to set beside the printed object's."""
+
+    result: object
+    digital: object
+
+    def lines(self, printed) -> list[str]:
+        """Each region's median V as printed beside digital (uncertainty: the map's median ± V), and the print's
+        steps."""
+        name = self.result.profile.name
+        out = [f"printer {self.result.profile.describe()}; each region's median V as printed beside digital:"]
+        for p, d in zip(printed.table(), self.digital.table()):
+            out.append(f"  {p.name}: as printed ({name}) {_median(p)}; digital {_median(d)}{_jnd_change(p, d)}")
+        return [*out, *(f"print: {step}" for step in self.result.steps),
+                *(f"print note: {note}" for note in self.result.notes)]
+
+    def as_dict(self, printed) -> dict:
+        return {**self.result.as_dict(), "digital_regions": [row.as_dict() for row in self.digital.table()],
+                "printed_regions": [row.as_dict() for row in printed.table()]}
+
+
+def _printed(args: argparse.Namespace, inputs: ObjectInputs, mapping, printer) -> PrintedFeel:
+    """The tile printed at its pixel on the surface, and the digital object's map (judged first, logged)."""
+    from roughness.objects.feel import feel_map
+    from roughness.objects.printed import printed_tile
+
+    result = printed_tile(inputs.texture, printer, mapping.pixel_mm)
+    log(args, f"feel: the digital object first, then as printed by {printer.name}")
+    digital = feel_map(inputs.mesh, mapping, inputs.regions, args.spacing_mm or args.spacing_default, args.engine,
+                       args.curved, args.reference)
+    return PrintedFeel(result, digital)
+
+
+def _median(row) -> str:
+    """A region's median V ± its median uncertainty, or that none was judged."""
+    if row.roughness_median is None:
+        return "no point judged"
+    return f"V {row.roughness_median:.4f} ± {row.uncertainty_median:.4f}"
+
+
+def _jnd_change(printed, digital) -> str:
+    """The printed region's median against the digital's, in JND of equivalent wavelength (empty if undefined)."""
+    from roughness.perceptual_scale import jnd
+
+    if printed.lambda_median_mm is None or digital.lambda_median_mm is None:
+        return ""
+    return f" ({jnd(printed.lambda_median_mm, digital.lambda_median_mm):+.2f} JND)"
 
 
 def feel_lines(feel, mesh: str, picture: str | None = None) -> list[str]:

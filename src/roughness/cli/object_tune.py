@@ -22,6 +22,7 @@ from .common import (
 )
 from .object_feel import ObjectInputs, add_object_args, feel_lines, mapping_of, read_object
 from .object_inputs import MAPPING_FLAGS
+from .printer import add_printer_arg, printer_of
 
 if TYPE_CHECKING:
     from roughness.objects.tuning import ObjectTuneResult
@@ -51,6 +52,9 @@ def add_parser(sub) -> None:
                    help="the tuned texture: .npz, .npy, .h5 (mm), .png (16-bit), .tif")
     p.add_argument("--mesh-out", metavar="FILE", help="also the textured object with the tuned texture: .stl or .3mf")
     p.add_argument("--json", action="store_true", help="one JSON object (default: text)")
+    add_printer_arg(p, "curvature and printer are corrected in one tune: the tuned texture is judged as printed on "
+                       "the curved object; --out and --mesh-out are the digital design, whose own feel is reported "
+                       "beside")
     add_quiet(p)
     add_overwrite(p)
     finish(p, run, regions="--region", spacing_mm="--spacing-mm", target_lambda="--target-lambda",
@@ -88,22 +92,65 @@ def run(args: argparse.Namespace) -> int:
     out = _checked_out(args)
     mesh_region = _union_region(args) if args.mesh_out else None
     _check_factor_range(args)
+    printer = printer_of(args)
     inputs = read_object(args)
     target = _target(args)
     mappings = _LastMapping(args, inputs)
     show_notes(args, inputs.notes)
     result = tune_on_object(inputs.mesh, inputs.texture, mappings, target.lambda_mm, inputs.regions, args.by,
                             args.spacing_mm or DEFAULT_SPACING_MM, args.tolerance_jnd,
-                            progress=lambda message: log(args, message), **_factor_options(args))
+                            progress=lambda message: log(args, message), printer=printer, **_factor_options(args))
     show_notes(args, list(getattr(mappings.last, "notes", lambda: [])()))
-    textured = _textured(args, inputs, mappings.last, mesh_region)  # before anything is written
+    digital = mapping_of(args, result.heightmap, inputs)  # the design as written (mappings.last: its print's)
+    beside = _digital_on_object(args, inputs, digital, target) if printer is not None else None
+    textured = _textured(args, inputs, digital, mesh_region)  # before anything is written
     save_heightmap(result.heightmap, out, overwrite=args.overwrite)
     written = _write_mesh(args, textured)
     if args.json:
-        print(json_text(_summary(args, inputs, target, result)))
+        summary = _summary(args, inputs, target, result)
+        if printer is not None:
+            summary["printing"] = {"printer": printer.as_dict(), "on_object_as": f"printed ({printer.name})",
+                                   "digital_on_object": {**beside[0].__dict__, "uncertainty_median": beside[1]}}
+        print(json_text(summary))
         return 0
-    print("\n".join(_text_lines(args, target, result, written)))
+    lines = _text_lines(args, target, result, written)
+    if printer is not None:
+        lines = _printed_lines(lines, printer, beside)
+    print("\n".join(lines))
     return 0
+
+
+def _digital_on_object(args: argparse.Namespace, inputs: ObjectInputs, mapping, target: _Target):
+    """The tuned digital texture's ``ObjectResult`` on the object (the map of the design as written, not printed) and
+    the median uncertainty (V) of its judged footprints."""
+    import numpy as np
+
+    from roughness.objects.feel import DEFAULT_SPACING_MM, feel_map
+    from roughness.objects.tuning import object_result
+
+    log(args, "the tuned texture on the object as designed (digital), for comparison")
+    feel = feel_map(inputs.mesh, mapping, inputs.regions, args.spacing_mm or DEFAULT_SPACING_MM, "spectral")
+    judged = np.isfinite(feel.uncertainty)
+    return object_result(feel, target.lambda_mm), float(np.median(feel.uncertainty[judged]))
+
+
+def _printed_lines(lines: list[str], printer, beside) -> list[str]:
+    """``_text_lines`` with the object's line said to be as printed, the digital design's beside it."""
+    digital, uncertainty = beside
+    out = []
+    for line in lines:
+        if line.startswith("on the object ("):
+            line = line.replace("on the object (", f"on the object as printed ({printer.name}) (", 1)
+            out.append(line)
+            out.append(f"  digital (the design as written, unprinted): median V {digital.roughness:.4f} (± "
+                       f"{uncertainty:.4f} per footprint, median) over {digital.points} footprints, lambda "
+                       f"{digital.lambda_mm:.3f} mm, {digital.jnd_error:+.2f} JND from the target")
+        elif line.startswith("flat texture:"):
+            out.append(line.replace("flat texture:", f"flat texture (judged as printed by {printer.name}):", 1))
+        else:
+            out.append(line)
+    return [*out, f"printer {printer.describe()}: every texture judged as printed; the files written are the "
+                  "digital design"]
 
 
 def _check_options(args: argparse.Namespace) -> None:

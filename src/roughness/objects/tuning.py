@@ -8,6 +8,10 @@ curvature study's correction applies to; all judged points where none is curved)
 the object is mapped again with the tuned texture, and while the curved parts' median misses the target by more
 than ``tolerance_jnd`` the flat target is moved by the ratio of the target to the curved parts' median
 (``MAX_ROUNDS``).
+
+With a ``printer``, curvature and printer are corrected in one tune: every texture is judged as printed (the flat
+tile by the evaluator's printer, the object's map with the tile printed before it is mapped: ``printed``), so the
+tuned digital texture is the one whose print feels as wanted on the curved object.
 """
 from __future__ import annotations
 
@@ -97,14 +101,18 @@ def object_result(feel: FeelMap, target_lambda_mm: float) -> ObjectResult:
 def tune_on_object(mesh, texture: Heightmap, mapping_for: Callable[[Heightmap], object], target_lambda_mm: float,
                    regions: dict[str, np.ndarray] | None = None, by: str = "height", spacing_mm: float = 5.0,
                    tolerance_jnd: float = TOLERANCE_JND, progress: Callable[[str], None] | None = None,
-                   **tune_options) -> ObjectTuneResult:
+                   printer=None, **tune_options) -> ObjectTuneResult:
     """Scale ``texture`` so that the object's curved parts feel like equivalent wavelength ``target_lambda_mm``
     (module docstring). ``mapping_for(heightmap)`` lays a texture on the object; the spectral engine judges and
-    verifies throughout (its standard scale)."""
+    verifies throughout (its standard scale); ``printer`` (a ``PrintProfile``): judge every texture as printed."""
     from roughness.design.evaluation import Evaluator
     from roughness.design.tune import Target, tune
 
-    evaluator = Evaluator(fidelity="spectral")
+    from .printed import printed_mappings
+
+    if printer is not None:
+        mapping_for = printed_mappings(mapping_for, printer)
+    evaluator = Evaluator(fidelity="spectral", printer=printer)
     scale = evaluator.scale
     target_v = scale.roughness_at(target_lambda_mm)
     flat_tile = evaluator.verify(texture, tile=True).roughness
