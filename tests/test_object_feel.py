@@ -298,11 +298,15 @@ def test_object_tune_meets_the_target_on_the_curved_part_and_reports_flat_and_ob
     (["--texture", "standard-1.0", "--axis", "0,0,0,0,0,1"], "--axis"),  # triplanar has no axis
     (["--texture", "standard-1.0", "--mapping", "cylinder", "--axis", "0,0,1"], "--axis"),
     (["--texture", "standard-1.0", "--mapping", "cylinder", "--uv-mm", "2"], "--uv-mm"),
+    (["--texture", "standard-1.0", "--printer", "no-such-printer"], "--printer"),
+    (["--texture", "coarse.npy", "--pixel-mm", "0.25", "--printer", "fdm-0.4-0.2"], "--printer"),  # 1.8 px bead
 ])
-def test_bad_object_feel_inputs_exit_2(tmp_path, capsys, extra, flag):
+def test_bad_object_feel_inputs_exit_2(tmp_path, capsys, extra, flag, monkeypatch):
     from roughness.cli import main
 
     knob = _knob(tmp_path / "knob.stl")
+    np.save(tmp_path / "coarse.npy", np.random.default_rng(0).random((48, 48)) * 0.3)
+    monkeypatch.chdir(tmp_path)
     code = main(["object", "feel", str(knob), *extra])
     err = capsys.readouterr().err
     assert code == 2 and flag in err and "Traceback" not in err, err
@@ -314,6 +318,7 @@ def test_bad_object_feel_inputs_exit_2(tmp_path, capsys, extra, flag):
     (["--target-lambda", "1", "--engine", "surrogate"], "--engine"),
     (["--target-lambda", "1", "--min-factor", "2", "--max-factor", "1"], "--min-factor"),
     (["--target-lambda", "1", "--mesh-out", "m.obj"], "--mesh-out"),
+    (["--target-lambda", "1", "--printer", "no-such-printer"], "--printer"),
 ])
 def test_bad_object_tune_inputs_exit_2(tmp_path, capsys, extra, flag, monkeypatch):
     from roughness.cli import main

@@ -572,3 +572,10 @@ def test_cli_progress_is_plain_lines_when_stderr_is_not_a_terminal(knob_file, ca
     assert "\r" not in err
     for line in ("refine: 100%", "self-intersection check: 100%", "writing k.stl: 100%", "preview k.png: 100%"):
         assert line in err
+
+
+def test_cli_texture_too_coarse_for_the_printer_exits_2_before_meshing(knob_file, capsys):
+    np.save(knob_file / "coarse.npy", np.random.default_rng(0).random((48, 48)) * 0.3)
+    argv = ["object", "texture", "knob.stl", "--texture", "coarse.npy", "--pixel-mm", "0.25", "--printer",
+            "fdm-0.4-0.2", "--out", "k.stl"]
+    _expect_refusal(argv, knob_file, capsys, ("--printer",))
