@@ -34,14 +34,17 @@ class TexturePrint:
                 "difference": self.difference().as_dict()}
 
 
-def texture_print(texture, profile) -> TexturePrint:
-    """The texture tile (a ``Heightmap``, periodic) printed by ``profile`` and both V, flat (InputError naming
-    --printer's parameters if the texture's pixel is too coarse for the printer)."""
+def texture_print(texture, profile, surface_pixel_mm: float | None = None) -> TexturePrint:
+    """The texture tile (a ``Heightmap``, periodic) at its pixel on the surface (``surface_pixel_mm``, mm: a
+    mapping's stretch; default its own) printed by ``profile``, and both V, flat (InputError naming --printer if
+    the pixel is too coarse for the printer)."""
     from roughness.prediction import PredictOptions, predictions
+    from roughness.surface.heightmap import Heightmap
     from roughness.surface.printing import printed
 
-    result = printed(texture, profile, periodic=True)
-    digital, as_printed = predictions([("texture", texture), ("texture printed", result.heightmap)], "surrogate",
+    laid = texture if surface_pixel_mm is None else Heightmap(texture.heights, surface_pixel_mm)
+    result = printed(laid, profile, periodic=True)
+    digital, as_printed = predictions([("texture", laid), ("texture printed", result.heightmap)], "surrogate",
                                       None, PredictOptions(tile=True))
     return TexturePrint(result, digital, as_printed)
 

@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     texture, texture_notes = read_texture(args)
     read = read_mesh(args.mesh, units_ok=args.units_ok)
     mapping = mapping_for(args, texture, read.mesh, region.faces(read.mesh))
-    printing = texture_print(texture, printer) if printer is not None else None
+    printing = texture_print(texture, printer, mapping.pixel_mm) if printer is not None else None
     for line in printing.lines() if printing else []:
         log(args, line)
     edge_mm, plan, plan_notes = _plan(args, read.mesh, region, mapping, printer)

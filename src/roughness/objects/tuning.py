@@ -130,7 +130,8 @@ def tune_on_object(mesh, texture: Heightmap, mapping_for: Callable[[Heightmap], 
     if not before.curved:
         notes.append("no judged part of the object is curved enough to need the correction: tuned as flat")
     say = progress or (lambda message: None)
-    say(f"as given, the curved parts feel like lambda {before.lambda_mm:.3f} mm ({before.jnd_error:+.2f} JND from the "
+    as_printed = "" if printer is None else f" as printed by {printer.name}"
+    say(f"as given{as_printed}, the curved parts feel like lambda {before.lambda_mm:.3f} mm ({before.jnd_error:+.2f} JND from the "
         f"target); the object's correction x {correction:.3f}")
     for rounds in range(1, MAX_ROUNDS + 1):
         flat_v = target_v / correction
@@ -140,7 +141,7 @@ def tune_on_object(mesh, texture: Heightmap, mapping_for: Callable[[Heightmap], 
         feel = feel_map(mesh, mapping_for(flat.heightmap), regions, spacing_mm, "spectral")
         result = object_result(feel, target_lambda_mm)
         say(f"round {rounds}: flat target lambda {flat_target.lambda_mm:.3f} mm, {by} x {flat.factor:.4g}: on the "
-            f"object lambda {result.lambda_mm:.3f} mm, {result.jnd_error:+.2f} JND from the target")
+            f"object{as_printed} lambda {result.lambda_mm:.3f} mm, {result.jnd_error:+.2f} JND from the target")
         if abs(result.jnd_error) <= tolerance_jnd or rounds == MAX_ROUNDS:
             break
         # the next flat target is this one moved by the object's miss: that takes out the object's correction at
