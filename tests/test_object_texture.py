@@ -579,3 +579,16 @@ def test_cli_texture_too_coarse_for_the_printer_exits_2_before_meshing(knob_file
     argv = ["object", "texture", "knob.stl", "--texture", "coarse.npy", "--pixel-mm", "0.25", "--printer",
             "fdm-0.4-0.2", "--out", "k.stl"]
     _expect_refusal(argv, knob_file, capsys, ("--printer",))
+
+
+def test_cli_warns_on_stderr_and_in_the_notes_when_slicers_would_struggle(knob_file, capsys, monkeypatch):
+    from roughness.objects import print_plan
+
+    monkeypatch.setattr(print_plan, "SLICER_TRIANGLES", 1_000)  # the knob's top at 1 mm edges is more
+    argv = ["object", "texture", "knob.stl", "--texture", "standard-1.0", "--region", "box:-9,-9,9,9,9,14",
+            "--edge-mm", "1", "--out", "k.stl", "--json", "--quiet"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    out = json.loads(captured.out)
+    assert out["plan"]["too_large_for_slicers"] and "roughness: warning:" in captured.err  # even with --quiet
+    assert any("slicers handle comfortably" in n for n in out["notes"])
