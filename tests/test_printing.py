@@ -215,3 +215,100 @@ def test_a_recipe_with_printers_makes_the_printed_twins_of_its_unprinted_samples
         Recipe(print_probability=0.5, printers=["no-such-printer"])
     with pytest.raises(InputError, match="needs printers"):
         Recipe(print_probability=0.5)
+
+
+@pytest.fixture
+def no_default(monkeypatch, tmp_path):
+    """No project default printer from the tester's environment or config files."""
+    monkeypatch.delenv("ROUGHNESS_PRINTER", raising=False)
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    return tmp_path
+
+
+def test_default_printer_precedence_flag_env_folder_user(no_default, monkeypatch):
+    from roughness.surface.printing import choose_printer, chosen_profile
+
+    work, user = no_default / "work", no_default / "config" / "roughness"
+    work.mkdir(), user.mkdir(parents=True)
+    monkeypatch.chdir(work)
+    assert chosen_profile(choose_printer()) is None
+    (user / "config.toml").write_text('printer = "fdm-0.4-0.1"\n')
+    assert chosen_profile(choose_printer()).name == "fdm-0.4-0.1"
+    (work / "roughness.toml").write_text('printer = "sla1s-47um"\n')
+    profile = chosen_profile(choose_printer())
+    assert profile.name == "sla1s-47um" and "(from roughness.toml)" in profile.describe()
+    monkeypatch.setenv("ROUGHNESS_PRINTER", "msla-35um")
+    profile = chosen_profile(choose_printer())
+    assert profile == PROFILES["msla-35um"] and profile.describe().endswith("(from ROUGHNESS_PRINTER)")
+    flagged = chosen_profile(choose_printer("fdm-0.4-0.2"))
+    assert flagged is FDM and "(from" not in flagged.describe()
+    assert chosen_profile(choose_printer("none")) is None  # --printer none beats every default
+    monkeypatch.setenv("ROUGHNESS_PRINTER", "NONE")
+    assert chosen_profile(choose_printer()) is None
+
+
+@pytest.mark.parametrize("text, words", [('printer = 3\n', "printer must be a profile name"),
+                                         ('printr = "fdm-0.4-0.2"\n', "unknown key(s) printr"),
+                                         ('printer = "fdm\n', "not valid TOML"),
+                                         ('printer = "prusa-xl"\n', "from roughness.toml")])
+def test_a_bad_config_file_is_refused_naming_it(no_default, monkeypatch, text, words):
+    from roughness.surface.printing import choose_printer, chosen_profile
+
+    monkeypatch.chdir(no_default)
+    (no_default / "roughness.toml").write_text(text)
+    with pytest.raises(InputError, match="roughness.toml") as err:
+        chosen_profile(choose_printer())
+    assert words in str(err.value) and err.value.parameter == "printer"
+
+
+def test_a_config_file_profile_path_is_read_from_the_config_folder(no_default, monkeypatch):
+    from roughness.surface.printing import choose_printer, chosen_profile
+
+    (no_default / "mine.json").write_text('{"kind": "fdm", "nozzle_mm": 0.6, "layer_mm": 0.3}')
+    (no_default / "roughness.toml").write_text('printer = "mine.json"\n')
+    sub = no_default / "sub"
+    sub.mkdir()
+    monkeypatch.chdir(no_default)
+    assert chosen_profile(choose_printer()).nozzle_mm == 0.6
+
+
+def test_homogeneity_judges_the_print_with_the_digital_beside(no_default, capsys):
+    path = no_default / "s.npy"
+    np.save(path, standard_texture(1.0).heights)
+    args = ["homogeneity", str(path), "--pixel-mm", "0.05", "--n", "5"]
+    assert main([*args, "--printer", "fdm-0.4-0.2", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["printing"]["printer"]["name"] == "fdm-0.4-0.2"
+    assert out["mean_roughness"] < out["digital"]["mean_roughness"]  # the 0.45 mm line cuts the caps
+    assert main([*args, "--printer", "fdm-0.4-0.2"]) == 0
+    text = capsys.readouterr().out
+    assert "as printed: HOMOGENEOUS" in text and "digital design: HOMOGENEOUS" in text
+
+
+def test_jnd_between_prints_names_a_default_printer_and_none_switches_it_off(no_default, monkeypatch, capsys):
+    a, b = no_default / "a.npy", no_default / "b.npy"
+    np.save(a, standard_texture(1.0).heights)
+    np.save(b, standard_texture(0.625).heights)
+    monkeypatch.setenv("ROUGHNESS_PRINTER", "fdm-0.4-0.2")
+    args = ["jnd", str(a), str(b), "--pixel-mm", "0.05", "--engine", "spectral"]
+    assert main([*args, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["printer"]["chosen_by"] == "ROUGHNESS_PRINTER"
+    assert out["a"]["roughness"] < out["digital"]["a"]["roughness"] and out["jnd"] != out["digital"]["jnd"]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "as printed: V = " in text and "(from ROUGHNESS_PRINTER)" in text and "digital distance" in text
+    assert main([*args, "--printer", "none"]) == 0
+    text = capsys.readouterr().out
+    assert "printed" not in text and "printer" not in text
+
+
+def test_api_homogeneity_takes_a_printer(no_default):
+    import roughness
+
+    result = roughness.homogeneity(standard_texture(1.0), n=4, printer="fdm-0.4-0.2")
+    assert result.printed.mean_roughness < result.digital.mean_roughness
+    assert result.print_result.profile is FDM
+    with pytest.raises(InputError) as err:
+        roughness.homogeneity(standard_texture(1.0), n=4, printer=3)
+    assert err.value.parameter == "printer"

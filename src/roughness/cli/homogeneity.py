@@ -19,6 +19,7 @@ from .common import (
     readings,
     write_stdout,
 )
+from .printer import add_printer_arg, printer_of
 
 
 def add_parser(sub) -> None:
@@ -40,6 +41,8 @@ def add_parser(sub) -> None:
                         f"the reference; spectral: tens of milliseconds) (default: {given['engine']})")
     p.add_argument("--tile", action="store_true", help="the map is a periodic tile: windows anywhere, wrapping")
     p.add_argument("--map", metavar="FILE.png", help="picture of the windows coloured by their V")
+    add_printer_arg(p, "the verdict, V and spreads are of the printed surface, the digital texture's beside them "
+                       "(same windows)")
     add_model_tail(p, "one JSON object (default: text)")
     finish(p, run)
 
@@ -48,30 +51,46 @@ def run(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
     from roughness.core.files import check_distinct, check_output
     from roughness.design.evaluation import Evaluator
-    from roughness.design.homogeneity import homogeneity, save_map
+    from roughness.design.homogeneity import homogeneity, homogeneity_as_printed, save_map
     from roughness.engines import model_provenance
 
-    check_distinct({"--map": args.map}, {"HEIGHTMAP": args.heightmap, "--model": args.model})
+    check_distinct({"--map": args.map}, {"HEIGHTMAP": args.heightmap, "--model": args.model, "--printer": args.printer})
     if args.map:
         if not args.map.lower().endswith(".png"):
             raise InputError(f"cannot write {args.map}: the map is a .png picture", parameter="map")
         check_output(args.map, args.overwrite, "map")
     if args.n < 3:
         raise InputError(f"needs at least 3 windows, got {args.n}", parameter="n")
+    printer = printer_of(args)  # an unknown printer is refused before the map is read
     hm = load_input(args, args.heightmap)
-    evaluator = Evaluator(args.model, args.verify)
+    evaluator = Evaluator(args.model, args.verify, printer=printer)
     engine = evaluator.verifier if args.engine == "fem" else args.engine
-    log(args, f"homogeneity: {args.n} windows with the {engine}")
-    result = homogeneity(hm, args.engine, args.window_mm, args.n, args.seed, args.tile, evaluator,
-                         progress=lambda done, total: log(args, f"  {engine} window {done}/{total}"))
+    log(args, f"homogeneity: {args.n} windows with the {engine}"
+        + (f", as printed by {evaluator.printer.name} and digital" if evaluator.printer else ""))
+    run_test = homogeneity_as_printed if evaluator.printer else homogeneity
+    outcome = run_test(hm, args.engine, args.window_mm, args.n, args.seed, args.tile, evaluator,
+                       progress=lambda done, total: log(args, f"  {engine} window {done}/{total}"))
+    result = outcome.printed if evaluator.printer else outcome
     if args.map:
-        save_map(result, hm, args.map, args.overwrite)
+        save_map(result, outcome.print_result.heightmap if evaluator.printer else hm, args.map, args.overwrite)
     provenance = evaluator.provenance if args.engine == "fem" else model_provenance(evaluator.model)
-    summary = {"input": args.heightmap, **result.summary(), "verifier": engine, "readings": readings(args),
+    summary = {"input": args.heightmap, **outcome.summary(), "verifier": engine, "readings": readings(args),
                "provenance": provenance.as_dict()}
     if args.json:
         write_stdout(json_text(summary))
         return 0
+    what = f"{args.heightmap} as printed" if evaluator.printer else args.heightmap
+    lines = [f"{what}: {_verdict_text(result, engine)}" + (f"; map written to {args.map}" if args.map else "")]
+    if evaluator.printer:
+        lines += [f"  digital design: {_verdict_text(outcome.digital, engine)}",
+                  f"  printer {evaluator.printer.describe()}",
+                  *(f"  print note: {note}" for note in outcome.print_result.notes)]
+    write_stdout("\n".join(lines))
+    return 0
+
+
+def _verdict_text(result, engine: str) -> str:
+    """The verdict, mean V, relative variance and spreads of one ``Homogeneity`` in words."""
     stats = ""  # every window below the scale: the note says so
     if result.spread_jnd is not None:
         paper = ("undefined (mean V below the scale)" if result.relative_variance is None else
@@ -80,8 +99,5 @@ def run(args: argparse.Namespace) -> int:
         stats = (f", relative variance {paper}; spread {result.spread_jnd:.2f} JND (SD), 10-90% range "
                  f"{result.range_jnd:.2f} JND (a fingertip tells parts apart at >= 1)")
     note = f"; {result.note}" if result.note else ""
-    write_stdout(
-        f"{args.heightmap}: {summary['verdict'].upper()} - V over {summary['windows']} windows of "
-        f"{result.window_mm:g} mm ({engine}): mean {result.mean_roughness:.4f}{stats}{note}"
-        + (f"; map written to {args.map}" if args.map else ""))
-    return 0
+    return (f"{result.verdict.upper()} - V over {len(result.roughness)} windows of {result.window_mm:g} mm "
+            f"({engine}): mean {result.mean_roughness:.4f}{stats}{note}")

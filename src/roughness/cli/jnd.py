@@ -5,6 +5,7 @@ import argparse
 
 from .common import add_reading_args, defaults, finish, json_text, load_input, readings, write_stdout
 from .predict import domain_words
+from .printer import add_printer_arg, printer_of
 
 
 def add_parser(sub) -> None:
@@ -20,30 +21,58 @@ def add_parser(sub) -> None:
                         f"(default: {given['engine']})")
     p.add_argument("--model", help="ONNX surrogate (default: the shipped model)")
     add_reading_args(p)
+    add_printer_arg(p, "the distance and verdict are between the two printed textures; the digital ones' are "
+                       "reported beside them")
     p.add_argument("--json", action="store_true", help="one JSON object (default: text)")
     finish(p, run)
 
 
 def run(args: argparse.Namespace) -> int:
     from roughness.core.provenance import combined
-    from roughness.perceptual_scale import jnd_distance, load_scale
     from roughness.prediction import predictions
 
+    printer = printer_of(args)  # an unknown printer is refused before any file is read
     maps = [load_input(args, path, several=True) for path in (args.a, args.b)]
-    pa, pb = predictions(list(zip([args.a, args.b], maps)), args.engine, args.model)  # checked as they were loaded
-    scale = load_scale(pa.fidelity)
-    distance = jnd_distance(scale, pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
+    named = list(zip([args.a, args.b], maps))
+    prints = []
+    if printer is not None:
+        from roughness.surface.printing import printed
+
+        prints = [printed(hm, printer) for hm in maps]
+        named = [(f"{name} as printed", result.heightmap) for name, result in zip([args.a, args.b], prints)] + named
+    results = predictions(named, args.engine, args.model)  # checked as they were loaded
+    pa, pb = results[:2]
+    distance = _distance(pa, pb)
+    digital = _distance(*results[2:]) if printer is not None else None
     if args.json:
-        write_stdout(json_text({"a": pa.as_dict(), "b": pb.as_dict(), **distance.as_dict(),
+        extra = {} if digital is None else {
+            "digital": {"a": results[2].as_dict(), "b": results[3].as_dict(), **digital.as_dict()},
+            "printer": printer.as_dict(), "print_notes": list(dict.fromkeys(n for r in prints for n in r.notes))}
+        write_stdout(json_text({"a": pa.as_dict(), "b": pb.as_dict(), **distance.as_dict(), **extra,
                                 "readings": readings(args),
-                                "provenance": combined([pa.provenance, pb.provenance]).as_dict()}))
+                                "provenance": combined([p.provenance for p in results]).as_dict()}))
         return 0
     lines = [_line(p) for p in (pa, pb)]
-    kinds = " and ".join(dict.fromkeys("Monte Carlo of V" if p.roughness_stderr is not None else "ensemble spread"
-                                       for p in (pa, pb)))
-    lines.append(_distance_line(distance, kinds))
+    lines.append(_distance_line(distance, _kinds(pa, pb)))
+    if digital is not None:
+        lines += [f"printer {printer.describe()}", *("digital " + _line(p) for p in results[2:]),
+                  "digital " + _distance_line(digital, _kinds(*results[2:])),
+                  *(f"print note: {n}" for n in dict.fromkeys(n for r in prints for n in r.notes))]
     write_stdout("\n".join(lines))
     return 0
+
+
+def _distance(pa, pb):
+    """The ``JndDistance`` of two predictions on the standard scale of the first's fidelity."""
+    from roughness.perceptual_scale import jnd_distance, load_scale
+
+    return jnd_distance(load_scale(pa.fidelity), pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
+
+
+def _kinds(pa, pb) -> str:
+    """Where the two V's uncertainties come from, in words."""
+    return " and ".join(dict.fromkeys("Monte Carlo of V" if p.roughness_stderr is not None else "ensemble spread"
+                                      for p in (pa, pb)))
 
 
 def _uncertainty(p) -> float | None:

@@ -7,18 +7,35 @@ from dataclasses import dataclass
 
 
 def add_printer_arg(p: argparse.ArgumentParser, what: str) -> None:
-    from roughness.surface.printing import PROFILES
+    from roughness.surface.printing import CONFIG_NAME, PRINTER_ENV, PROFILES
 
-    p.add_argument("--printer", metavar="NAME|FILE",
+    p.add_argument("--printer", metavar="NAME|FILE|none", action=_PrinterAction,
                    help=f"answer for the plate as this printer would print it: a profile ({', '.join(PROFILES)}) or "
-                        f"a JSON profile file (see docs/how-to/printing.md); {what}")
+                        f"a JSON profile file (see docs/how-to/printing.md); {what}. Default: ${PRINTER_ENV}, else "
+                        f"printer = \"...\" in ./{CONFIG_NAME}, else in ~/.config/roughness/config.toml; "
+                        "none: the digital texture")
+
+
+class _PrinterAction(argparse.Action):
+    """--printer NAME|FILE, or ``none``: stored as ``printer`` None and ``printer_off`` True (so that a command's
+    ``if args.printer`` sees no printer, and ``printer_of`` skips the project's default)."""
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        off = str(values).strip().lower() == "none"
+        setattr(namespace, self.dest, None if off else values)
+        namespace.printer_off = off
 
 
 def printer_of(args: argparse.Namespace):
-    """The ``PrintProfile`` of --printer, or None (InputError naming --printer if unknown or invalid)."""
-    from roughness.surface.printing import printer_profile
+    """The ``PrintProfile`` of --printer, else of the project's default (``choose_printer``: $ROUGHNESS_PRINTER,
+    ./roughness.toml, the user's config file), or None (--printer none, or no default). A default profile says
+    where it came from (``chosen_by``, shown by ``describe()``). InputError naming --printer if unknown or
+    invalid."""
+    from roughness.surface.printing import choose_printer, chosen_profile
 
-    return printer_profile(args.printer) if args.printer else None
+    if getattr(args, "printer_off", False):
+        return None
+    return chosen_profile(choose_printer(getattr(args, "printer", None)))
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,7 @@ from .common import (
     positive,
     write_stdout,
 )
+from .printer import add_printer_arg, printer_of
 
 MAX_DELTA_E = 300.0  # --colour-tolerance: beyond the largest CIELAB Delta E between two sRGB colours (259)
 
@@ -68,6 +69,8 @@ def add_parser(sub) -> None:
                    help="also the FEM strain image (one FEM run per 8 mm of plate squared: minutes)")
     p.add_argument("--base-mm", type=LENGTH,
                    help=f"plate thickness below the relief's lowest point in mm (default {DEFAULT_BASE_MM:g})")
+    add_printer_arg(p, "the new palette is made of textures that stay --min-jnd apart as printed, and the plate's "
+                       "roughness map is of the printed plate (the files are the digital design)")
     add_model_tail(p, "print plate.json's content (default: text)")
     finish(p, run, width_mm="--size-mm")
 
@@ -101,10 +104,12 @@ def run(args: argparse.Namespace) -> int:
     from roughness.design.evaluation import Evaluator
     from roughness.design.tactile_image import plate_shape, tactile_image
 
-    check_distinct({"--out": args.out}, {"IMAGE": args.image, "--palette": args.palette, "--model": args.model})
+    check_distinct({"--out": args.out}, {"IMAGE": args.image, "--palette": args.palette, "--model": args.model,
+                                         "--printer": args.printer})
     out = check_output_folder(args.out, args.overwrite, "out")
+    printer = printer_of(args)
     found = _picture_colours(args)
-    evaluator = Evaluator(args.model, args.verify)
+    evaluator = Evaluator(args.model, args.verify, printer=printer)
     # the plate's size, checked before any palette is made
     plate_shape(found.labels.shape, args.size_mm, args.pixel_mm, args.step_mm, evaluator.footprint_mm)
     textures = _textures(args, len(found.colours), evaluator)
@@ -113,7 +118,8 @@ def run(args: argparse.Namespace) -> int:
     plate = tactile_image(found, textures.members, args.size_mm, args.pixel_mm, args.outline_mm,
                           args.outline_height_mm, args.step_mm, args.strain, evaluator, _Progress(args))
     summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier,
-               "provenance": evaluator.provenance.as_dict()}
+               "provenance": evaluator.provenance.as_dict(),
+               **({"printer": printer.as_dict()} if printer else {})}
     _write(args, out, plate, textures.made, summary)
     if args.json:
         write_stdout(json_text(summary))
@@ -191,10 +197,15 @@ def _text_lines(args: argparse.Namespace, out: Path, plate: TactilePlate, summar
     lines = [f"plate {summary['width_mm']:.1f} x {summary['height_mm']:.1f} mm, relief {summary['relief_mm']:.2f} mm, "
              f"written to {out} (plate.npz, plate.stl, plate.json, clustered.png, relief.png, roughness_map.png"
              + (", strain.png)" if args.strain else ")"), f"colours: {plate.colours.describe()}"]
+    printed = " as printed" if "printer" in summary else ""
+    made = printed if not args.palette else " (as its palette.json says)"  # a --palette folder: its own values
     for r in plate.regions:
-        fem = f"texture V {r.fem_roughness:.4f} ({verifier})" if r.fem_roughness else "texture V not verified"
-        on_plate = (f"on the plate V {r.plate_roughness:.4f}, lambda {r.plate_lambda_mm:.3f} mm over {r.footprints} "
-                    "footprints" if r.plate_roughness else "no footprint fits inside the region")
+        fem = (f"texture V{made} {r.fem_roughness:.4f} ({verifier})" if r.fem_roughness else
+               "texture V not verified")
+        digital = (f" (digital {r.digital_plate_roughness:.4f})" if r.digital_plate_roughness is not None else "")
+        on_plate = (f"on the plate{printed} V {r.plate_roughness:.4f}{digital}, lambda {r.plate_lambda_mm:.3f} mm "
+                    f"over {r.footprints} footprints (surrogate: no uncertainty of its own)" if r.plate_roughness else
+                    "no footprint fits inside the region")
         lines.append(f"{hex_colour(r.colour)} -> {r.texture}: {fem}; {on_plate}")
     d = plate.distances_jnd("plate")
     pairs = [abs(d[i, j]) for i in range(len(d)) for j in range(i + 1, len(d)) if not np.isnan(d[i, j])]

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +24,9 @@ from . import tactile_image as _tactile
 from . import tune as _tune
 from .colours import cluster_colours
 from .evaluation import VERIFIERS, Evaluator
+
+if TYPE_CHECKING:
+    from roughness.surface.printing import PrintProfile
 
 HeightmapLike = Heightmap | np.ndarray | str | Path
 
@@ -43,12 +47,31 @@ def heightmap_arg(value: HeightmapLike, pixel_mm: float | None = None, height_mm
     return heightmap_argument(value, pixel_mm, parameter, units_ok)
 
 
-def evaluator_arg(model: str | Path | None, verify: str | None = None) -> Evaluator:
-    """The ``Evaluator`` of a design tool's ``model`` (an ONNX path, default the shipped one) and ``verify`` (a FEM
-    fidelity or "spectral", default the model's labels'), both checked before anything is loaded."""
+def printer_arg(printer: object) -> PrintProfile | None:
+    """A print profile from ``printer``: None or "none" (the digital texture), a profile (``PROFILES``), its name,
+    a JSON profile file, or "default" (the project's default: $ROUGHNESS_PRINTER, ./roughness.toml, the user's
+    config file; ``roughness.surface.printing.choose_printer``); InputError naming ``printer`` otherwise."""
+    from roughness.surface.printing import FdmProfile, SlaProfile, choose_printer, chosen_profile, printer_profile
+
+    if printer is None or isinstance(printer, (FdmProfile, SlaProfile)):
+        return printer
+    if not isinstance(printer, (str, Path)):
+        raise InputError(f"printer must be a profile, its name, a JSON profile file, \"default\" or None, got "
+                         f"{type(printer).__name__}", parameter="printer")
+    spec = str(printer).strip()
+    if spec.lower() == "none":
+        return None
+    return chosen_profile(choose_printer()) if spec.lower() == "default" else printer_profile(spec)
+
+
+def evaluator_arg(model: str | Path | None, verify: str | None = None, printer: object = None) -> Evaluator:
+    """The ``Evaluator`` of a design tool's ``model`` (an ONNX path, default the shipped one), ``verify`` (a FEM
+    fidelity or "spectral", default the model's labels') and ``printer`` (``printer_arg``), checked before anything
+    is loaded."""
     if verify is not None:
         choice("verify", verify, VERIFIERS)
-    return Evaluator(None if model is None else str(file_path("model", model)), verify)
+    profile = printer_arg(printer)
+    return Evaluator(None if model is None else str(file_path("model", model)), verify, printer=profile)
 
 
 def family_arg(family: object) -> str:
@@ -85,7 +108,8 @@ def tune(heightmap: HeightmapLike, *, target_lambda_mm: float | None = None, tar
          like: HeightmapLike | None = None, jnd: float | None = None, by: str = "height",
          pixel_mm: float | None = None, height_mm: float | None = None, factor_range: tuple[float, float] | None = None,
          tolerance_jnd: float = _tune.TOLERANCE_JND, max_fem: int = _tune.MAX_FEM, tile: bool = False,
-         verify: str | None = None, model: str | Path | None = None, units_ok: bool = False) -> _tune.TuneResult:
+         verify: str | None = None, model: str | Path | None = None, units_ok: bool = False,
+         printer: object = None) -> _tune.TuneResult:
     """Scale a texture by height or lateral size until it feels like a target roughness.
 
     Parameters
@@ -119,6 +143,9 @@ def tune(heightmap: HeightmapLike, *, target_lambda_mm: float | None = None, tar
         ONNX surrogate model (default: the shipped one).
     units_ok : bool
         The heights are mm even though they look like metres or micrometres (default: refuse them).
+    printer : str, profile or None
+        Judge every texture as this printer prints it (``roughness.surface.printing.PROFILES`` name, a profile, a
+        JSON profile file, or "default": the project's default printer); None: the digital texture.
 
     Returns
     -------
@@ -133,7 +160,7 @@ def tune(heightmap: HeightmapLike, *, target_lambda_mm: float | None = None, tar
     positive("tolerance_jnd", tolerance_jnd)
     integer("max_fem", max_fem, minimum=1)
     tile = flag("tile", tile)
-    evaluator = evaluator_arg(model, verify)
+    evaluator = evaluator_arg(model, verify, printer)
     target = _tune.target_of(evaluator, target_lambda_mm, target_v, reference, "reference", tile, jnd, hm)
     return _tune.tune(hm, target, by, evaluator, factor_range, tolerance_jnd, max_fem, tile)
 
@@ -153,7 +180,8 @@ def _factor_range(value: object) -> tuple[float, float]:
 def palette(k: int, *, min_jnd: float = 2.0, family: str = _palette.DEFAULT_FAMILY, by: str = "height",
             candidates: str | Path | Mapping[str, HeightmapLike] | None = None, pixel_mm: float | None = None,
             tolerance_jnd: float = _tune.TOLERANCE_JND, seed: int = 0, tile: bool = False,
-            verify: str | None = None, model: str | Path | None = None, units_ok: bool = False) -> _palette.Palette:
+            verify: str | None = None, model: str | Path | None = None, units_ok: bool = False,
+            printer: object = None) -> _palette.Palette:
     """``k`` textures that feel different from each other, at least ``min_jnd`` apart (verified).
 
     Parameters
@@ -174,8 +202,8 @@ def palette(k: int, *, min_jnd: float = 2.0, family: str = _palette.DEFAULT_FAMI
         Seed of the family's texture.
     tile : bool
         Candidates are periodic tiles.
-    verify, model, units_ok
-        As in ``roughness.tune``.
+    verify, model, units_ok, printer
+        As in ``roughness.tune`` (with a printer, the members are chosen and verified as printed).
 
     Returns
     -------
@@ -192,7 +220,7 @@ def palette(k: int, *, min_jnd: float = 2.0, family: str = _palette.DEFAULT_FAMI
     positive("tolerance_jnd", tolerance_jnd)
     integer("seed", seed, minimum=0)
     tile = flag("tile", tile)
-    evaluator = evaluator_arg(model, verify)
+    evaluator = evaluator_arg(model, verify, printer)
     if candidates is None:
         return _palette.family_palette(k, min_jnd, family, by, evaluator, tolerance_jnd, seed=seed)
     return _palette.folder_palette(_candidates(candidates, pixel_mm, units_ok), k, min_jnd, evaluator, tile)
@@ -228,7 +256,8 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
                   texture_pixel_mm: float | None = None, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = _tactile.STEP_MM, strain: bool = False,
                   colour_tolerance: float = _tactile.TOLERANCE, verify: str | None = None,
-                  model: str | Path | None = None, units_ok: bool = False) -> _tactile.TactilePlate:
+                  model: str | Path | None = None, units_ok: bool = False,
+                  printer: object = None) -> _tactile.TactilePlate:
     """A printable plate on which each flat colour of a picture is a texture that feels different.
 
     Parameters
@@ -252,8 +281,9 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         Also compute the FEM strain image (slow).
     colour_tolerance : float
         Colours within this CIE Delta E are one colour.
-    verify, model, units_ok
-        As in ``roughness.tune`` (``units_ok``: of the texture arrays).
+    verify, model, units_ok, printer
+        As in ``roughness.tune`` (``units_ok``: of the texture arrays; with a printer, a new palette is made of
+        textures that stay ``min_jnd`` apart as printed and the roughness map is of the printed plate).
 
     Returns
     -------
@@ -273,7 +303,7 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         if textures is not None:
             raise InputError("k is the size of a palette made for the picture; give k or textures, not both",
                              parameter="k")
-    evaluator = evaluator_arg(model, verify)
+    evaluator = evaluator_arg(model, verify, printer)
     _tactile.plate_shape(rgb.shape, size_mm, pixel_mm, step_mm, evaluator.footprint_mm)  # refused before any palette
     with _renamed(palette="textures", pixel_mm="texture_pixel_mm"):  # the command line's --palette, this pixel
         chosen = _plate_textures(textures, texture_pixel_mm, units_ok) if textures is not None else None
@@ -308,8 +338,8 @@ def _plate_textures(textures: object, pixel_mm: float | None, units_ok: bool
 
 def homogeneity(heightmap: HeightmapLike, *, pixel_mm: float | None = None, height_mm: float | None = None,
                 engine: str = "surrogate", window_mm: float | None = None, n: int = _homogeneity.N_WINDOWS,
-                seed: int = 0, tile: bool = False, model: str | Path | None = None, units_ok: bool = False
-                ) -> _homogeneity.Homogeneity:
+                seed: int = 0, tile: bool = False, model: str | Path | None = None, units_ok: bool = False,
+                printer: object = None) -> _homogeneity.Homogeneity | _homogeneity.PrintedHomogeneity:
     """Does a texture feel the same everywhere? V over ``n`` windows, its spread in JND and the verdicts.
 
     Parameters
@@ -330,12 +360,18 @@ def homogeneity(heightmap: HeightmapLike, *, pixel_mm: float | None = None, heig
         ONNX surrogate model (default: the shipped one).
     units_ok : bool
         The heights are mm even though they look like metres or micrometres (default: refuse them).
+    printer : str, profile or None
+        Judge every texture as this printer prints it (``roughness.surface.printing.PROFILES`` name, a profile, a
+        JSON profile file, or "default": the project's default printer); None: the digital texture.
 
     Returns
     -------
-    Homogeneity
-        ``.verdict``, ``.range_jnd`` and ``.spread_jnd`` (JND), ``.relative_variance`` (the paper's measure);
+    Homogeneity, or PrintedHomogeneity with a printer
+        ``.verdict``, ``.range_jnd`` and ``.spread_jnd`` (JND), ``.relative_variance`` (the paper's measure); with a
+        printer, ``.printed`` and ``.digital`` (each a Homogeneity, same windows) and ``.print_result``;
         ``save_map(result, heightmap)`` in ``roughness.design.homogeneity`` draws it.
     """
     hm = heightmap_arg(heightmap, pixel_mm, height_mm, units_ok=units_ok)
-    return _homogeneity.homogeneity(hm, engine, window_mm, n, seed, tile, evaluator_arg(model))
+    evaluator = evaluator_arg(model, printer=printer)
+    test = _homogeneity.homogeneity_as_printed if evaluator.printer else _homogeneity.homogeneity
+    return test(hm, engine, window_mm, n, seed, tile, evaluator)

@@ -47,6 +47,8 @@ from .evaluation import ENGINES, Evaluator
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
+    from roughness.surface.printing import PrintResult
+
 PAPER_THRESHOLD = 1e-3  # relative variance above which the paper calls a texture inhomogeneous
 JND_RANGE = 1.0  # 10th-90th percentile range (JND) at and above which parts of a surface feel different
 N_WINDOWS = 50
@@ -200,6 +202,44 @@ def homogeneity(heightmap: Heightmap, engine: str = "surrogate", window_mm: floa
         spread, range_ = float(np.std(steps, ddof=1)), float(p90 - p10)
     return Homogeneity(window_mm, centres[:, 0], centres[:, 1], v, lam, in_domain, engine, relative_variance,
                        spread, range_, mean, floor, below)
+
+
+@dataclass(frozen=True)
+class PrintedHomogeneity:
+    """The homogeneity test of a texture as printed (``printed``), and of its digital design on the same windows
+    (``digital``), with what the printer did (``print_result``: ``roughness.surface.printing.PrintResult``)."""
+
+    printed: Homogeneity
+    digital: Homogeneity
+    print_result: PrintResult
+
+    def __repr__(self) -> str:
+        return short_repr(self, f"as printed by {self.print_result.profile.name}: {self.printed.verdict}",
+                          f"digital: {self.digital.verdict}")
+
+    def summary(self) -> dict:
+        """The printed test's summary, with the digital one under ``digital`` and the print under ``printing``."""
+        return {**self.printed.summary(), "digital": self.digital.summary(), "printing": self.print_result.as_dict()}
+
+
+def homogeneity_as_printed(heightmap: Heightmap, engine: str = "surrogate", window_mm: float | None = None,
+                           n: int = N_WINDOWS, seed: int = 0, tile: bool = False, evaluator: Evaluator | None = None,
+                           progress=None) -> PrintedHomogeneity:
+    """``homogeneity`` of the map as the evaluator's ``printer`` prints it (printed once, whole, then windowed) and
+    of the digital map on the same windows (same ``seed``); InputError (parameter ``printer``) without a printer."""
+    from dataclasses import replace
+
+    from roughness.surface.printing import printed
+
+    evaluator = evaluator or Evaluator()
+    if evaluator.printer is None:
+        raise InputError("homogeneity_as_printed needs an evaluator with a printer", parameter="printer")
+    result = printed(heightmap, evaluator.printer, flag("tile", tile))
+    plain = replace(evaluator, printer=None)  # the print is made once here, not once per window
+    as_printed = homogeneity(result.heightmap, engine, window_mm, n, seed, tile, plain, progress)
+    digital = homogeneity(heightmap, engine, window_mm, n, seed, tile, plain, progress)
+    evaluator.fem_runs = plain.fem_runs
+    return PrintedHomogeneity(as_printed, digital, result)
 
 
 def save_map(result: Homogeneity, heightmap: Heightmap, path: str | Path | None = None,

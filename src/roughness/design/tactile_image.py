@@ -56,6 +56,7 @@ class Region:
     plate_roughness: float | None  # median surrogate V over footprints wholly in the region (None: none fit)
     plate_lambda_mm: float | None
     footprints: int
+    digital_plate_roughness: float | None = None  # with a printer: the same median on the digital plate
 
 
 @dataclass(frozen=True)
@@ -90,6 +91,7 @@ class TactilePlate:
                 "regions": [{"colour": hex_colour(r.colour), "texture": r.texture, "pixels": r.pixels,
                              "fem_roughness": r.fem_roughness, "fem_lambda_mm": r.fem_lambda_mm,
                              "plate_roughness": r.plate_roughness, "plate_lambda_mm": r.plate_lambda_mm,
+                             "digital_plate_roughness": r.digital_plate_roughness,
                              "footprints_inside": r.footprints} for r in self.regions],
                 "colour_clustering": self.colours.summary(),
                 "plate_distances_jnd": _rounded(self.distances_jnd("plate")),
@@ -281,22 +283,28 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
                          f"{footprint:g} mm skin footprint: its roughness cannot be mapped", parameter="size_mm")
     from roughness.surrogate.roughness_map import roughness_map
 
-    rmap = roughness_map(evaluator.model, plate, step_mm,
-                         progress=(lambda done, total: progress("roughness map", done, total)) if progress else None)
+    map_progress = (lambda done, total: progress("roughness map", done, total)) if progress else None
+    felt = evaluator.as_printed(plate)  # the plate a fingertip touches
+    rmap = roughness_map(evaluator.model, felt, step_mm, progress=map_progress)
+    digital_map = roughness_map(evaluator.model, plate, step_mm) if evaluator.printer else None
+    if evaluator.printer:
+        notes.append(f"the roughness map is of the plate as printed by {evaluator.printer.describe()}; "
+                     "plate.npz and plate.stl are the digital design")
     clear = labels if not outline_mm else np.where(outline(labels, pixel_mm, outline_mm, 1.0) > 0, -1, labels)
     where = footprint_labels(clear, pixel_mm, rmap.x_mm, rmap.y_mm, footprint)
     regions = []
     for i, (colour, (name, _, fem_v)) in enumerate(zip(colours, textures)):
         inside = rmap.roughness[where == i]
         v = float(np.median(inside)) if inside.size else None
+        v_digital = float(np.median(digital_map.roughness[where == i])) if digital_map is not None and inside.size else None
         if v is None:
             notes.append(f"no {footprint:g} mm footprint fits wholly inside the region of colour "
                          f"{hex_colour(colour)}: its plate value is not measured")
         regions.append(Region(tuple(int(c) for c in colour), name, int((labels == i).sum()), fem_v,
                               evaluator.lambda_of(fem_v) if fem_v else None, v,
-                              evaluator.lambda_of(v) if v else None, int(inside.size)))
+                              evaluator.lambda_of(v) if v else None, int(inside.size), v_digital))
     strain_progress = (lambda done, total: progress("strain image", done, total)) if progress else None
-    strain_mosaic, extent = (strain_image(plate, evaluator, strain_progress) if strain else (None, None))
+    strain_mosaic, extent = (strain_image(felt, evaluator, strain_progress) if strain else (None, None))
     return TactilePlate(plate, labels, tuple(regions), rmap.x_mm, rmap.y_mm, rmap.roughness, where, found,
                         strain_mosaic, extent, tuple(notes))
 

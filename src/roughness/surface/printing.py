@@ -56,7 +56,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +92,7 @@ class FdmProfile:
     closing_radius_mm: float  # slicer's gap closing radius (cracks narrower than twice it are closed)
     source: str = "custom profile"
     kind: str = "fdm"
+    chosen_by: str = field(default="", compare=False)  # where a default printer came from (ROUGHNESS_PRINTER, ...)
 
     def __post_init__(self) -> None:
         nozzle = in_range("nozzle_mm", self.nozzle_mm, 0.05, 3.0)
@@ -108,9 +109,14 @@ class FdmProfile:
     def as_dict(self) -> dict:
         return asdict(self)
 
+    @property
+    def smallest_feature_mm(self) -> float:
+        """The narrowest part of a layer this printer makes (mm): one line (narrower parts are removed)."""
+        return self.line_width_mm
+
     def describe(self) -> str:
         return (f"{self.name} (FDM: {self.nozzle_mm:g} mm nozzle, {self.line_width_mm:g} mm lines, "
-                f"{self.layer_mm:g} mm layers)")
+                f"{self.layer_mm:g} mm layers){_origin(self)}")
 
 
 @dataclass(frozen=True)
@@ -123,6 +129,7 @@ class SlaProfile:
     bleed_mm: float  # standard deviation of the light's lateral bleed (Gaussian)
     source: str = "custom profile"
     kind: str = "sla"
+    chosen_by: str = field(default="", compare=False)  # where a default printer came from (ROUGHNESS_PRINTER, ...)
 
     def __post_init__(self) -> None:
         for name, low, high in (("pixel_mm", 0.005, 1.0), ("layer_mm", 0.005, 1.0), ("bleed_mm", 0.0, 1.0)):
@@ -131,9 +138,20 @@ class SlaProfile:
     def as_dict(self) -> dict:
         return asdict(self)
 
+    @property
+    def smallest_feature_mm(self) -> float:
+        """The narrowest part of a layer this printer makes (mm): two LCD pixels, or the width the light bleed
+        closes (about 4 standard deviations: a gap or ridge narrower than that does not reach half the dose)."""
+        return max(2 * self.pixel_mm, 4 * self.bleed_mm)
+
     def describe(self) -> str:
         return (f"{self.name} (SLA: {1e3 * self.pixel_mm:g} um pixels, {self.layer_mm:g} mm layers, "
-                f"{1e3 * self.bleed_mm:g} um light bleed)")
+                f"{1e3 * self.bleed_mm:g} um light bleed){_origin(self)}")
+
+
+def _origin(profile: FdmProfile | SlaProfile) -> str:
+    """`` (from ROUGHNESS_PRINTER)`` for a profile chosen by a project default, else nothing."""
+    return f" (from {profile.chosen_by})" if profile.chosen_by else ""
 
 
 PrintProfile = FdmProfile | SlaProfile
@@ -148,6 +166,86 @@ PROFILES: dict[str, PrintProfile] = {p.name: p for p in (
     SlaProfile("sla1s-47um", 0.04725, 0.05, 0.02, "Original Prusa SL1S (PrusaSlicer profile: 120.96 mm / 2560 "
                "pixels; 0.05 Normal layers); light bleed: estimate (Mrazek 2022)"),
 )}
+
+
+PRINTER_ENV = "ROUGHNESS_PRINTER"  # the project's default printer: a profile name, a JSON profile file or "none"
+CONFIG_NAME = "roughness.toml"  # in the current folder: ``printer = "fdm-0.4-0.2"``
+NO_PRINTER = "none"  # --printer none / ROUGHNESS_PRINTER=none: judge the digital texture
+
+
+@dataclass(frozen=True)
+class PrinterChoice:
+    """The printer a command uses and where it was chosen (``spec`` None: no printer)."""
+
+    spec: str | None
+    chosen_by: str  # "--printer", "ROUGHNESS_PRINTER", the config file's path, or "" (nothing chose one)
+    base: Path | None = None  # a config file's folder: a relative profile path is read from there
+
+
+def user_config() -> Path:
+    """The user's config file: $XDG_CONFIG_HOME/roughness/config.toml (default ~/.config/roughness/config.toml)."""
+    import os
+
+    home = os.environ.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
+    return Path(home) / "roughness" / "config.toml"
+
+
+def choose_printer(flag: str | None = None) -> PrinterChoice:
+    """The printer by precedence: ``flag`` (--printer) > $ROUGHNESS_PRINTER > ./roughness.toml > the user's
+    config file (``user_config``); ``none`` at any level switches printing off (and stops the search)."""
+    import os
+
+    if flag:
+        return PrinterChoice(None if flag.lower() == NO_PRINTER else flag, "--printer")
+    env = os.environ.get(PRINTER_ENV, "").strip()
+    if env:
+        return PrinterChoice(None if env.lower() == NO_PRINTER else env, PRINTER_ENV)
+    for path in (Path(CONFIG_NAME), user_config()):
+        if path.is_file():
+            spec = _config_printer(path)
+            if spec is not None:
+                return PrinterChoice(None if spec.lower() == NO_PRINTER else spec, str(path), path.parent)
+    return PrinterChoice(None, "")
+
+
+def _config_printer(path: Path) -> str | None:
+    """The ``printer`` of a TOML config file (None if it sets none); InputError if the file is not a config."""
+    import tomllib
+
+    if path.stat().st_size > MAX_PROFILE_BYTES:
+        raise InputError(f"config file {path}: {path.stat().st_size:,} bytes, above {MAX_PROFILE_BYTES:,} (a config "
+                         "is a few lines of TOML)", parameter="printer")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise InputError(f"config file {path} is not valid TOML: {err}", parameter="printer") from None
+    unknown = sorted(set(data) - {"printer"})
+    if unknown:
+        raise InputError(f"config file {path}: unknown key(s) {', '.join(unknown)}; it may set printer (a profile "
+                         f"name, a JSON profile file or \"none\")", parameter="printer")
+    spec = data.get("printer")
+    if spec is not None and (not isinstance(spec, str) or not spec.strip()):
+        raise InputError(f"config file {path}: printer must be a profile name, a JSON profile file or \"none\", got "
+                         f"{spec!r}", parameter="printer")
+    return None if spec is None else spec.strip()
+
+
+def chosen_profile(choice: PrinterChoice) -> PrintProfile | None:
+    """The profile of a ``PrinterChoice`` (None: no printer), marked with where a default came from; InputError
+    naming the source if the name or file is not a profile."""
+    if choice.spec is None:
+        return None
+    spec = choice.spec
+    if choice.base is not None and spec not in PROFILES and not Path(spec).is_absolute():
+        spec = str(choice.base / spec)
+    try:
+        profile = printer_profile(spec)
+    except InputError as err:
+        if choice.chosen_by == "--printer":
+            raise
+        raise InputError(f"{err} (the default printer, from {choice.chosen_by}; --printer none switches it off)",
+                         parameter="printer") from None
+    return profile if choice.chosen_by == "--printer" else replace(profile, chosen_by=choice.chosen_by)
 
 
 @dataclass(frozen=True)
@@ -197,7 +295,7 @@ def load_profile(path: str | Path) -> PrintProfile:
         raise InputError(f"printer profile {path}: \"kind\" must be one of {', '.join(map(repr, KINDS))}, got {kind!r}",
                          parameter="printer")
     cls = KINDS[kind]
-    allowed = {f.name for f in fields(cls)} - {"source"}
+    allowed = {f.name for f in fields(cls)} - {"source", "chosen_by"}
     unknown = sorted(set(data) - allowed)
     if unknown:
         raise InputError(f"printer profile {path}: unknown field(s) {', '.join(unknown)}; a {kind} profile has "
