@@ -104,3 +104,63 @@ def test_progress_names_the_verifier_that_answered():
     folder_palette(candidates, 2, 3.0, spectral, progress=lines.append)
     family_palette(2, 2.0, evaluator=spectral, progress=lines.append)
     assert len(lines) == 4 and all(line.count("spectral") == 1 and "FEM" not in line for line in lines), lines
+
+
+def test_a_palette_survives_the_printer():
+    """fdm-0.4-0.2 prints standard-1.0 below half a layer flat and its first layers not even rising: the members
+    are chosen among prints that keep their V, verified 2 JND apart as printed (they were three copies of height
+    x 0.118, 0 JND apart)."""
+    from roughness.surface.printing import PROFILES
+
+    printer = Evaluator(fidelity="spectral", printer=PROFILES["fdm-0.4-0.2"])
+    palette = family_palette(3, 2.0, evaluator=printer)
+    assert palette.verified and palette.closest_jnd >= 2.0
+    heights = [m.recipe["height_factor"] for m in palette.members]
+    assert len(set(heights)) == 3 and all(m.recipe["printer"] == "fdm-0.4-0.2" for m in palette.members)
+    for m in palette.members:  # the distances are between prints: the verifier's V is the printed texture's
+        assert m.fem.roughness == pytest.approx(printer.verify(m.heightmap).roughness, rel=1e-9)
+        digital = printer.verify(m.heightmap, digital=True)
+        assert abs(np.log(m.fem.equivalent_lambda_mm / digital.equivalent_lambda_mm)) / np.log(1.19) <= 1.2
+
+
+def test_a_printed_palette_that_cannot_fit_says_how_many_fit_and_why():
+    from roughness.surface.printing import PROFILES
+
+    printer = Evaluator(fidelity="spectral", printer=PROFILES["fdm-0.4-0.2"])
+    with pytest.raises(InputError, match=r"do not fit 4 JND apart as printed.*0.45 mm.*0.2 mm layers.*room for \d")\
+            as err:
+        family_palette(4, 4.0, evaluator=printer)
+    assert err.value.parameter == "k" and printer.fem_runs == 0  # refused before any verification
+
+
+def test_cli_writes_no_unverified_palette(tmp_path, capsys, monkeypatch):
+    """A palette whose closest pair misses --min-jnd is reported, exit 1, and no folder is written."""
+    from dataclasses import replace
+    from functools import wraps
+
+    import roughness.design.palette as design
+
+    real = design.family_palette
+
+    @wraps(real)  # the command's defaults are read from its signature
+    def unverified(k, min_jnd, *args, **kwargs):  # as if the verifier found two members alike
+        return replace(real(k, min_jnd, *args, **kwargs), distances_jnd=np.zeros((k, k)))
+
+    monkeypatch.setattr(design, "family_palette", unverified)
+    out = tmp_path / "pal"
+    code = main(["palette", "--k", "2", "--min-jnd", "2", "--verify", "spectral", "--out", str(out), "--quiet"])
+    text = capsys.readouterr().out
+    assert code == 1 and "closest pair 0.00 JND (spectral): NOT VERIFIED >= 2 JND; nothing written" in text
+    assert not out.exists()
+
+
+def test_a_print_at_a_threshold_is_not_kept_and_fits_counts_greedily():
+    from roughness.design.palette import _stable, fits
+
+    kept = np.array([True] * 5 + [False] + [True] * 4)
+    lam = np.exp(np.arange(10) * 0.05)  # neighbours 0.3 JND apart
+    assert _stable(kept, lam, 1).tolist() == [False, True, True, True, False, False, False, True, True, False]
+    jump = lam.copy()
+    jump[3:] *= 1.19 ** 1.5  # a print jumping 1.5 JND between neighbours 2 and 3 (a layer more)
+    assert _stable(kept, jump, 1).tolist()[1:5] == [True, False, False, False]
+    assert fits(np.array([0.0, 1.0, 2.1, 4.0]), 2.0) == 2 and fits(np.array([0.0, 2.0, 4.0]), 2.0) == 3

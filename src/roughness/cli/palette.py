@@ -98,8 +98,10 @@ def run(args: argparse.Namespace) -> int:
             printing.verify(m.heightmap, m.fem.roughness, args.tile and bool(args.candidates), m.name)
         palette = replace(palette, printing=printing.as_dict())
     palette = replace(palette, provenance=evaluator.provenance)
-    save_palette(palette, out, args.stl, args.base_mm, args.overwrite)
-    summary = {**palette.summary(), "verifier": evaluator.verifier, "readings": readings(args)}
+    if palette.verified:  # an unverified palette is no result: nothing is written that tactile-image could take
+        save_palette(palette, out, args.stl, args.base_mm, args.overwrite)
+    summary = {**palette.summary(), "verifier": evaluator.verifier, "readings": readings(args),
+               "written": str(out) if palette.verified else None}
     if args.json:
         write_stdout(json_text(summary))
     else:
@@ -107,6 +109,9 @@ def run(args: argparse.Namespace) -> int:
                  f"{m.fem.equivalent_lambda_mm:.3f} mm" + ("" if m.fem.on_scale else " (extrapolated off the scale)")
                  for m in palette.members]
         lines.append(f"closest pair {palette.closest_jnd:.2f} JND ({evaluator.verifier}): "
-                     f"{'VERIFIED' if palette.verified else 'NOT VERIFIED'} >= {args.min_jnd:g} JND; written to {out}")
+                     + (f"VERIFIED >= {args.min_jnd:g} JND; written to {out}" if palette.verified else
+                        f"NOT VERIFIED >= {args.min_jnd:g} JND; nothing written (ask for fewer textures or a smaller "
+                        "--min-jnd)"))
+        lines += [f"note: {n}" for n in palette.notes]
         write_stdout("\n".join(lines + (printing.lines() if printing else [])))
     return 0 if palette.verified else 1

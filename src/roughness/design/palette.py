@@ -12,12 +12,24 @@ smallest pairwise distance is largest are chosen (spread over the range), the FE
 the choice is repeated with the FEM's answers where known until the chosen K are all FEM-verified.
 
 Every distance reported is between FEM answers; ``verified`` says whether all pairs reach min_jnd.
+
+With a printer (the evaluator's ``printer``): a family palette is chosen among the textures the printer can
+make (``printable_palette``), not tuned to targets spread over the digital range. A printer maps a range of
+digital heights to one print (whole layers; parts narrower than a line removed), so the printed V of a family
+scaled by height is a staircase, flat below half a layer and not even rising over the first layers: a target
+there is met by no factor (three members at height x 0.118, 0 JND apart). Instead, the family scaled by the
+knob (and, if that cannot hold K, by both knobs on a grid) is printed; the candidates whose print is not flat
+and keeps its V (the surrogate's printed equivalent wavelength within ``MAX_PRINT_LOSS_JND`` of the digital one)
+are placed on the scale as printed (and only those whose neighbours on the grid print alike: no print at a
+layer's threshold), and the K farthest apart are verified as printed, as for a folder. If no K
+are ``min_jnd`` apart, it says how many fit and why, before anything is written.
 """
 from __future__ import annotations
 
 import math
 from collections import Counter
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -41,6 +53,8 @@ DEFAULT_FAMILY = "standard-1.0"
 MARGIN_JND = 0.2  # targets stay this far inside the reachable range (room for the FEM's correction)
 MAX_ROUNDS = 4  # folder mode: choose, verify, choose again with the FEM's answers
 PALETTE_FILE = "palette.json"
+MAX_PRINT_LOSS_JND = 1.0  # a printable candidate's print is within this of its digital texture (surrogate)
+PRINT_GRID = {"height": 25, "lateral": 9}  # the printable candidates: factors per knob on the two-knob grid
 
 
 @dataclass(frozen=True)
@@ -65,6 +79,7 @@ class Palette:
     notes: tuple[str, ...] = field(default=())
     printing: dict = field(default_factory=dict)  # --printer: the profile and each member's digital and printed V
     provenance: Provenance | None = None  # what verified it (``Evaluator.provenance``)
+    forecast: dict = field(default_factory=dict)  # a digital palette: how each member would print (print_forecast)
 
     def __repr__(self) -> str:
         members = ", ".join(f"{m.name} V {m.fem.roughness:.4g}" for m in self.members)
@@ -89,6 +104,7 @@ class Palette:
                              "surrogate_roughness": m.surrogate_roughness, "recipe": m.recipe} for m in self.members],
                 "distances_jnd": np.round(self.distances_jnd, 4).tolist(), "notes": list(self.notes),
                 **({"printing": self.printing} if self.printing else {}),
+                **({"print_forecast": self.forecast} if self.forecast else {}),
                 **({"provenance": self.provenance.as_dict()} if self.provenance else {})}
 
 
@@ -112,6 +128,8 @@ def family_palette(k: int, min_jnd: float = 2.0, family: str = DEFAULT_FAMILY, b
     base, recipe = make_texture(family, seed=seed)
     if by not in FACTOR_RANGE:
         raise InputError(f"unknown knob {by!r}; choose one of {', '.join(FACTOR_RANGE)}", parameter="by")
+    if evaluator.printer is not None:
+        return printable_palette(k, min_jnd, family, by, evaluator, seed, progress)
     lo, hi = FACTOR_RANGE[by]
     v, _ = evaluator.surrogate([scaled(base, by, f) for f in np.geomspace(lo, hi, GRID)])
     lam_lo, lam_hi = evaluator.lambda_of(float(v.min())), evaluator.lambda_of(float(v.max()))
@@ -133,6 +151,177 @@ def family_palette(k: int, min_jnd: float = 2.0, family: str = DEFAULT_FAMILY, b
             progress(f"texture {i + 1}/{k}: {by} x {result.factor:.3f}, {evaluator.verifier} lambda "
                      f"{result.achieved.equivalent_lambda_mm:.3f} mm ({result.jnd_error:+.2f} JND from {lam:.3f})")
     return Palette(tuple(members), min_jnd, _distances(members), f"family {family} by {by}")
+
+
+@dataclass(frozen=True)
+class Printable:
+    """Variants of a family scaled by (height, lateral) factors, each as the printer prints it: the surrogate's V
+    printed and digital, and whether the print keeps its V (``kept``: not flat, within ``MAX_PRINT_LOSS_JND``)."""
+
+    heightmaps: list[Heightmap]  # the digital designs
+    factors: list[tuple[float, float]]  # (height, lateral)
+    printed_lambda_mm: np.ndarray  # surrogate, as printed, on the standard scale
+    digital_lambda_mm: np.ndarray
+    kept: np.ndarray  # bool
+
+    def positions(self) -> np.ndarray:
+        """The kept candidates' printed equivalent wavelengths in JND steps (ln lambda / ln 1.19)."""
+        return np.log(self.printed_lambda_mm[self.kept]) / LOG_JND
+
+
+def printable_candidates(base: Heightmap, factors: list[tuple[float, float]], evaluator: Evaluator,
+                         rows: int = 1) -> Printable:
+    """``base`` scaled by each (height, lateral) factor pair (``rows`` rows of a grid, neighbours in a row one step
+    apart), printed (``evaluator.printer``) and placed on the standard scale by the surrogate, printed and
+    digital; kept if the print is not flat, keeps its V and its neighbours' (``_stable``)."""
+    maps = [scaled(scaled(base, "lateral", lateral), "height", height) if lateral != 1 else
+            scaled(base, "height", height) for height, lateral in factors]
+    v_printed, _ = evaluator.surrogate(maps)
+    v_digital, _ = replace(evaluator, printer=None).surrogate(maps)
+    floor = evaluator.scale.floor
+    printed_lam = np.array([evaluator.lambda_of(v) for v in v_printed])
+    digital_lam = np.array([evaluator.lambda_of(v) for v in v_digital])
+    loss = np.abs(np.log(printed_lam / digital_lam)) / LOG_JND
+    kept = (v_printed >= floor) & (v_digital >= floor) & (loss <= MAX_PRINT_LOSS_JND)
+    return Printable(maps, factors, printed_lam, digital_lam, _stable(kept, printed_lam, rows))
+
+
+def _stable(kept: np.ndarray, printed_lam: np.ndarray, rows: int) -> np.ndarray:
+    """``kept`` where both neighbours along the grid's inner axis (``rows`` rows of factors) are kept too and print
+    within ``MAX_PRINT_LOSS_JND`` of it: a print that jumps under a small change of the design (a layer more or
+    less, a cap cut by the line) is not one to rely on (a region of a plate resampled to its pixels may print as
+    the neighbour)."""
+    k = kept.reshape(rows, -1)
+    step = np.log(printed_lam.reshape(rows, -1)) / LOG_JND
+    near = np.abs(np.diff(step, axis=1)) <= MAX_PRINT_LOSS_JND
+    link = np.zeros_like(k)  # the link to the right neighbour: both kept and near
+    link[:, :-1] = k[:, :-1] & k[:, 1:] & near
+    stable = k.copy()
+    stable[:, 1:] &= link[:, :-1]  # the left neighbour's link
+    stable[:, :-1] &= link[:, :-1]  # its own link to the right
+    stable[:, [0, -1]] = False  # an end has one neighbour only
+    return stable.ravel()
+
+
+def fits(positions: np.ndarray, min_jnd: float) -> int:
+    """How many of ``positions`` (JND steps) can be chosen pairwise at least ``min_jnd`` apart (greedy, exact
+    in 1-D)."""
+    x = np.sort(positions)
+    count, last = 0, -math.inf
+    for value in x:
+        if value - last >= min_jnd:
+            count, last = count + 1, value
+    return count
+
+
+def _factor_grid(by: str, both: bool) -> list[tuple[float, float]]:
+    """(height, lateral) factor pairs: the knob ``by`` over its range (GRID points), or both knobs on a grid."""
+    if not both:
+        return [(f, 1.0) if by == "height" else (1.0, f) for f in np.geomspace(*FACTOR_RANGE[by], GRID)]
+    return [(float(h), float(lat)) for lat in np.geomspace(*FACTOR_RANGE["lateral"], PRINT_GRID["lateral"])
+            for h in np.geomspace(*FACTOR_RANGE["height"], PRINT_GRID["height"])]
+
+
+def printable_palette(k: int, min_jnd: float, family: str, by: str, evaluator: Evaluator, seed: int = 0,
+                      progress=None) -> Palette:
+    """K variants of a family that stay ``min_jnd`` apart as the evaluator's printer prints them (module
+    docstring): scaled by ``by`` alone, or by both knobs where that cannot hold K; InputError (parameter ``k``)
+    saying how many fit, and why, when no K do."""
+    from roughness.dataset.catalogue import make_texture
+
+    base, recipe = make_texture(family, seed=seed)
+    notes: list[str] = []
+    pool = printable_candidates(base, _factor_grid(by, False), evaluator)
+    if fits(pool.positions(), min_jnd) < k:
+        wide = printable_candidates(base, _factor_grid(by, True), evaluator, PRINT_GRID["lateral"])
+        notes.append(f"{family} scaled by {by} alone holds {fits(pool.positions(), min_jnd)} printable textures "
+                     f"{min_jnd:g} JND apart: the height and lateral size were both varied")
+        pool = wide
+    room = fits(pool.positions(), min_jnd)
+    if room < k:
+        raise InputError(_no_room(k, min_jnd, family, pool, room, evaluator), parameter="k")
+    index = np.flatnonzero(pool.kept)
+    candidates = [(f"candidate-{i}", pool.heightmaps[i]) for i in index]
+    try:
+        chosen = folder_palette(candidates, k, min_jnd, evaluator, progress=progress)
+    except InputError as err:  # the verifier's prints are closer than the surrogate's
+        raise InputError(f"{err} as printed by {evaluator.printer.name} ({evaluator.verifier}; the surrogate "
+                         f"placed {room}): ask for fewer textures or a smaller min_jnd", parameter="k") from None
+    members = []
+    for n, m in enumerate(chosen.members):
+        i = int(m.name.split("-")[1])  # the candidate-i name holds its index in the pool
+        height, lateral = pool.factors[i]
+        members.append(Member(f"texture-{n + 1}", m.heightmap, m.fem, m.surrogate_roughness,
+                              {**recipe, "height_factor": height, "lateral_factor": lateral,
+                               "printer": evaluator.printer.name,
+                               "surrogate_printed_lambda_mm": float(pool.printed_lambda_mm[i]),
+                               "surrogate_digital_lambda_mm": float(pool.digital_lambda_mm[i])}))
+    notes.append(f"chosen among {len(index)} of {len(pool.factors)} variants whose print by "
+                 f"{evaluator.printer.name} is not flat and keeps its V within {MAX_PRINT_LOSS_JND:g} JND, as do "
+                 "its neighbours'")
+    return Palette(tuple(members), min_jnd, _distances(members), f"family {family} as printed by "
+                   f"{evaluator.printer.name}", tuple(notes))
+
+
+def _no_room(k: int, min_jnd: float, family: str, pool: Printable, room: int, evaluator: Evaluator) -> str:
+    """Why K printable textures do not fit ``min_jnd`` apart: the range the printer leaves, and how many fit."""
+    printer = evaluator.printer
+    why = (f"{printer.describe()} makes no part narrower than {printer.smallest_feature_mm:g} mm and rounds "
+           f"heights to {printer.layer_mm:g} mm layers")
+    if not pool.kept.any():
+        return f"no variant of {family} keeps its V when printed: {why}"
+    lam = pool.printed_lambda_mm[pool.kept]
+    span = jnd(float(lam.max()), float(lam.min()))
+    return (f"{k} textures do not fit {min_jnd:g} JND apart as printed: of {len(pool.factors)} variants of {family} "
+            f"(height and lateral size), the {int(pool.kept.sum())} whose print keeps its V span lambda "
+            f"{lam.min():.3f}..{lam.max():.3f} mm ({span:.1f} JND, surrogate) once printed ({why}): room for {room} "
+            f"at {min_jnd:g} JND")
+
+
+@dataclass(frozen=True)
+class Forecast:
+    """How one texture would print on one profile: the surrogate's V digital and printed, and the JNDs between
+    their equivalent wavelengths (negative: the print feels smoother)."""
+
+    profile: str
+    digital_roughness: float
+    printed_roughness: float
+    jnd: float | None  # None: the digital or the printed V is below the standard scale's floor
+    in_domain: bool  # the surrogate's training domain, for both
+    notes: tuple[str, ...]  # what the print model could not resolve at the map's pixels
+
+    def as_dict(self) -> dict:
+        return {"digital_roughness": self.digital_roughness, "printed_roughness": self.printed_roughness,
+                "jnd": self.jnd, "surrogate_in_domain": self.in_domain, "notes": list(self.notes)}
+
+    def describe(self) -> str:
+        """``fdm-0.4-0.2 V 0.0412 (-0.40 JND)`` (surrogate: no uncertainty of its own)."""
+        change = "below the scale" if self.jnd is None else f"{self.jnd:+.2f} JND"
+        return f"{self.profile} V {self.printed_roughness:.4f} ({change}{'' if self.in_domain else ', out of domain'})"
+
+
+def print_forecast(members: Sequence[Member], evaluator: Evaluator, profiles: Sequence[str] | None = None
+                   ) -> dict[str, dict[str, Forecast]]:
+    """For each member (by name), how it would fare on each shipped profile (``PROFILES``, or ``profiles``): the
+    surrogate's V of its print against its digital V, in JND. Members no profile can print at their pixel size
+    get no entry for it."""
+    from roughness.surface.printing import PROFILES, printed
+
+    plain = replace(evaluator, printer=None)
+    maps = [m.heightmap for m in members]
+    v_digital, in_digital = plain.surrogate(maps)
+    floor = plain.scale.floor
+    out: dict[str, dict[str, Forecast]] = {m.name: {} for m in members}
+    for name in profiles or list(PROFILES):
+        for m, v0, ok0 in zip(members, v_digital, in_digital):
+            try:
+                result = printed(m.heightmap, PROFILES[name])
+            except InputError:
+                continue
+            v, ok = plain.surrogate([result.heightmap])
+            lost = jnd(plain.lambda_of(float(v[0])), plain.lambda_of(float(v0))) if min(v[0], v0) >= floor else None
+            out[m.name][name] = Forecast(name, float(v0), float(v[0]), lost, bool(ok[0] and ok0), result.notes)
+    return out
 
 
 def widest_selection(positions: np.ndarray, k: int) -> tuple[list[int], float]:
