@@ -112,3 +112,52 @@ def test_a_picture_of_a_few_pixels_has_its_flat_colours(pixels):
     assert (labels == (grey == 0)).all()
     with pytest.raises(InputError, match="fewer than 2 flat colours"):
         flat_colours(np.zeros((1, 2, 3), dtype=np.uint8))
+
+
+@pytest.fixture
+def two_stripes(tmp_path, monkeypatch):
+    """A 2-colour picture file; no project default printer from the tester's environment or config."""
+    from PIL import Image
+
+    monkeypatch.delenv("ROUGHNESS_PRINTER", raising=False)
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    rgb = np.zeros((24, 60, 3), dtype=np.uint8)
+    rgb[:, :30], rgb[:, 30:] = WHITE, BLACK
+    Image.fromarray(rgb).save(tmp_path / "picture.png")
+    return tmp_path / "picture.png"
+
+
+def test_a_digital_palette_forecasts_each_member_on_the_common_printers(two_stripes, capsys):
+    import json
+
+    from roughness.cli import main
+    from roughness.surface.printing import PROFILES
+
+    out = two_stripes.parent / "plate"
+    assert main(["tactile-image", str(two_stripes), "--out", str(out), "--verify", "spectral", "--step-mm", "4",
+                 "--json", "--quiet"]) == 0
+    forecast = json.loads(capsys.readouterr().out)["print_forecast"]
+    assert sorted(forecast) == ["texture-1", "texture-2"] and all(sorted(f) == sorted(PROFILES)
+                                                                  for f in forecast.values())
+    smooth = forecast["texture-1"]
+    assert smooth["msla-35um"]["jnd"] == pytest.approx(0, abs=0.5)  # resin keeps the texture
+    assert smooth["fdm-0.4-0.2"]["printed_roughness"] < smooth["fdm-0.4-0.2"]["digital_roughness"]  # FDM loses V
+    saved = json.loads((out / "palette" / "palette.json").read_text())
+    assert saved["print_forecast"] == forecast
+
+
+def test_tactile_image_with_a_printer_maps_the_printed_plate(two_stripes, capsys):
+    import json
+
+    from roughness.cli import main
+
+    out = two_stripes.parent / "plate"
+    assert main(["tactile-image", str(two_stripes), "--out", str(out), "--verify", "spectral", "--step-mm", "4",
+                 "--printer", "fdm-0.4-0.2", "--json", "--quiet"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["printer"]["name"] == "fdm-0.4-0.2" and "print_forecast" not in summary
+    members = json.loads((out / "palette" / "palette.json").read_text())["members"]
+    assert all(m["recipe"]["printer"] == "fdm-0.4-0.2" for m in members)
+    for region, member in zip(summary["regions"], members):  # the plate's printed regions feel as the palette's
+        assert region["digital_plate_roughness"] is not None
+        assert abs(np.log(region["plate_roughness"] / member["fem_roughness"])) < 0.5

@@ -82,6 +82,7 @@ class _Textures:
 
     members: list[tuple[str, Heightmap, float | None]]
     made: Palette | None
+    forecast: dict = field(default_factory=dict)  # member -> profile -> Forecast (a digital palette made here)
 
 
 @dataclass
@@ -118,13 +119,15 @@ def run(args: argparse.Namespace) -> int:
     plate = tactile_image(found, textures.members, args.size_mm, args.pixel_mm, args.outline_mm,
                           args.outline_height_mm, args.step_mm, args.strain, evaluator, _Progress(args))
     summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier,
+               **({"print_forecast": textures.made.forecast} if textures.forecast else {}),
                "provenance": evaluator.provenance.as_dict(),
                **({"printer": printer.as_dict()} if printer else {})}
     _write(args, out, plate, textures.made, summary)
     if args.json:
         write_stdout(json_text(summary))
         return 0
-    write_stdout("\n".join(_text_lines(args, out, plate, summary, evaluator.verifier)))
+    write_stdout("\n".join(_text_lines(args, out, plate, summary, evaluator.verifier)
+                            + _forecast_lines(textures.forecast)))
     return 0
 
 
@@ -161,6 +164,15 @@ def _textures(args: argparse.Namespace, colours: int, evaluator: Evaluator) -> _
     log(args, f"tactile-image: making a palette of {k} textures {args.min_jnd:g} JND apart")
     palette = family_palette(k, args.min_jnd, args.family, "height", evaluator,
                              progress=lambda line: log(args, "  " + line))
+    if evaluator.printer is None:  # a digital palette: how each member would fare on the common printers
+        from dataclasses import replace
+
+        from roughness.design.palette import print_forecast
+
+        forecast = print_forecast(palette.members, evaluator)
+        palette = replace(palette, forecast={name: {profile: f.as_dict() for profile, f in by_profile.items()}
+                                             for name, by_profile in forecast.items()})
+        return _Textures([(m.name, m.heightmap, m.fem.roughness) for m in palette.members], palette, forecast)
     return _Textures([(m.name, m.heightmap, m.fem.roughness) for m in palette.members], palette)
 
 
@@ -212,3 +224,18 @@ def _text_lines(args: argparse.Namespace, out: Path, plate: TactilePlate, summar
     if pairs:
         lines.append(f"closest regions on the plate's map: {min(pairs):.2f} JND apart (surrogate)")
     return lines + [f"note: {n}" for n in plate.notes]
+
+
+def _forecast_lines(forecast: dict) -> list[str]:
+    """A digital palette's forecast in words: per member, its V on each profile and the JNDs printing costs."""
+    if not forecast:
+        return []
+    lines = ["no printer: the textures are digital; printed (surrogate forecast, no uncertainty of its own; "
+             "--printer NAME chooses textures that survive that printer):"]
+    for name, by_profile in forecast.items():
+        first = next(iter(by_profile.values()), None)
+        digital = f"digital V {first.digital_roughness:.4f}; " if first else ""
+        lines.append(f"  {name}: {digital}" + ("; ".join(f.describe() for f in by_profile.values())
+                                                 or "no profile prints it at its pixel size"))
+    notes = dict.fromkeys(f"{f.profile}: {n}" for by in forecast.values() for f in by.values() for n in f.notes)
+    return lines + [f"  print note: {n}" for n in notes]
