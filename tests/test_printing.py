@@ -307,8 +307,9 @@ def test_api_homogeneity_takes_a_printer(no_default):
     import roughness
 
     result = roughness.homogeneity(standard_texture(1.0), n=4, printer="fdm-0.4-0.2")
-    assert result.printed.mean_roughness < result.digital.mean_roughness
-    assert result.print_result.profile is FDM
+    assert result.mean_roughness < result.digital.mean_roughness  # the print's, the digital one beside it
+    assert result.print_result.profile is FDM and result.digital.digital is None
+    assert roughness.homogeneity(standard_texture(1.0), n=4).digital is None
     with pytest.raises(InputError) as err:
         roughness.homogeneity(standard_texture(1.0), n=4, printer=3)
     assert err.value.parameter == "printer"

@@ -68,23 +68,22 @@ def run(args: argparse.Namespace) -> int:
     log(args, f"homogeneity: {args.n} windows with the {engine}"
         + (f", as printed by {evaluator.printer.name} and digital" if evaluator.printer else ""))
     run_test = homogeneity_as_printed if evaluator.printer else homogeneity
-    outcome = run_test(hm, args.engine, args.window_mm, args.n, args.seed, args.tile, evaluator,
-                       progress=lambda done, total: log(args, f"  {engine} window {done}/{total}"))
-    result = outcome.printed if evaluator.printer else outcome
+    result = run_test(hm, args.engine, args.window_mm, args.n, args.seed, args.tile, evaluator,
+                      progress=lambda done, total: log(args, f"  {engine} window {done}/{total}"))
     if args.map:
-        save_map(result, outcome.print_result.heightmap if evaluator.printer else hm, args.map, args.overwrite)
+        save_map(result, result.print_result.heightmap if result.print_result else hm, args.map, args.overwrite)
     provenance = evaluator.provenance if args.engine == "fem" else model_provenance(evaluator.model)
-    summary = {"input": args.heightmap, **outcome.summary(), "verifier": engine, "readings": readings(args),
+    summary = {"input": args.heightmap, **result.summary(), "verifier": engine, "readings": readings(args),
                "provenance": provenance.as_dict()}
     if args.json:
         write_stdout(json_text(summary))
         return 0
     what = f"{args.heightmap} as printed" if evaluator.printer else args.heightmap
     lines = [f"{what}: {_verdict_text(result, engine)}" + (f"; map written to {args.map}" if args.map else "")]
-    if evaluator.printer:
-        lines += [f"  digital design: {_verdict_text(outcome.digital, engine)}",
+    if result.digital is not None and result.print_result is not None:
+        lines += [f"  digital design: {_verdict_text(result.digital, engine)}",
                   f"  printer {evaluator.printer.describe()}",
-                  *(f"  print note: {note}" for note in outcome.print_result.notes)]
+                  *(f"  print note: {note}" for note in result.print_result.notes)]
     write_stdout("\n".join(lines))
     return 0
 

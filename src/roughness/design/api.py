@@ -339,7 +339,7 @@ def _plate_textures(textures: object, pixel_mm: float | None, units_ok: bool
 def homogeneity(heightmap: HeightmapLike, *, pixel_mm: float | None = None, height_mm: float | None = None,
                 engine: str = "surrogate", window_mm: float | None = None, n: int = _homogeneity.N_WINDOWS,
                 seed: int = 0, tile: bool = False, model: str | Path | None = None, units_ok: bool = False,
-                printer: object = None) -> _homogeneity.Homogeneity | _homogeneity.PrintedHomogeneity:
+                printer: object = None) -> _homogeneity.Homogeneity:
     """Does a texture feel the same everywhere? V over ``n`` windows, its spread in JND and the verdicts.
 
     Parameters
@@ -366,9 +366,9 @@ def homogeneity(heightmap: HeightmapLike, *, pixel_mm: float | None = None, heig
 
     Returns
     -------
-    Homogeneity, or PrintedHomogeneity with a printer
+    Homogeneity
         ``.verdict``, ``.range_jnd`` and ``.spread_jnd`` (JND), ``.relative_variance`` (the paper's measure); with a
-        printer, ``.printed`` and ``.digital`` (each a Homogeneity, same windows) and ``.print_result``;
+        printer, those of the print, with ``.digital`` (the digital texture's, same windows) and ``.print_result``;
         ``save_map(result, heightmap)`` in ``roughness.design.homogeneity`` draws it.
     """
     hm = heightmap_arg(heightmap, pixel_mm, height_mm, units_ok=units_ok)

@@ -77,6 +77,8 @@ class Homogeneity:
     mean_roughness: float
     floor: float = 0.0  # V of the standard scale's floor
     below_scale: int = 0  # windows whose V is below the floor
+    digital: Homogeneity | None = None  # judged as printed: the digital texture's test on the same windows
+    print_result: PrintResult | None = None  # judged as printed: what the printer did
 
     def __repr__(self) -> str:
         spread = "" if self.range_jnd is None else f"10-90% range {self.range_jnd:.2f} JND"
@@ -120,7 +122,9 @@ class Homogeneity:
                               "is felt alone, mirror-tiled); relative_variance = var(V_i) / mean(V_i)^2; "
                               "spread_jnd = SD of ln(lambda_i) / ln 1.19 (a V below the scale's floor counted at "
                               "it); range_jnd = its 10-90% range; verdict: inhomogeneous if range_jnd >= 1; "
-                              "relative_variance null if mean V is below the floor, spreads null if every V is"}
+                              "relative_variance null if mean V is below the floor, spreads null if every V is",
+                **({"digital": self.digital.summary()} if self.digital is not None else {}),
+                **({"printing": self.print_result.as_dict()} if self.print_result is not None else {})}
 
 
 def window_centres(heightmap: Heightmap, window_mm: float, footprint_mm: float, n: int, seed: int = 0,
@@ -204,29 +208,12 @@ def homogeneity(heightmap: Heightmap, engine: str = "surrogate", window_mm: floa
                        spread, range_, mean, floor, below)
 
 
-@dataclass(frozen=True)
-class PrintedHomogeneity:
-    """The homogeneity test of a texture as printed (``printed``), and of its digital design on the same windows
-    (``digital``), with what the printer did (``print_result``: ``roughness.surface.printing.PrintResult``)."""
-
-    printed: Homogeneity
-    digital: Homogeneity
-    print_result: PrintResult
-
-    def __repr__(self) -> str:
-        return short_repr(self, f"as printed by {self.print_result.profile.name}: {self.printed.verdict}",
-                          f"digital: {self.digital.verdict}")
-
-    def summary(self) -> dict:
-        """The printed test's summary, with the digital one under ``digital`` and the print under ``printing``."""
-        return {**self.printed.summary(), "digital": self.digital.summary(), "printing": self.print_result.as_dict()}
-
-
 def homogeneity_as_printed(heightmap: Heightmap, engine: str = "surrogate", window_mm: float | None = None,
                            n: int = N_WINDOWS, seed: int = 0, tile: bool = False, evaluator: Evaluator | None = None,
-                           progress=None) -> PrintedHomogeneity:
-    """``homogeneity`` of the map as the evaluator's ``printer`` prints it (printed once, whole, then windowed) and
-    of the digital map on the same windows (same ``seed``); InputError (parameter ``printer``) without a printer."""
+                           progress=None) -> Homogeneity:
+    """``homogeneity`` of the map as the evaluator's ``printer`` prints it (printed once, whole, then windowed), with
+    the digital map's on the same windows (same ``seed``) as its ``digital`` and the print as its ``print_result``;
+    InputError (parameter ``printer``) without a printer."""
     from dataclasses import replace
 
     from roughness.surface.printing import printed
@@ -239,7 +226,7 @@ def homogeneity_as_printed(heightmap: Heightmap, engine: str = "surrogate", wind
     as_printed = homogeneity(result.heightmap, engine, window_mm, n, seed, tile, plain, progress)
     digital = homogeneity(heightmap, engine, window_mm, n, seed, tile, plain, progress)
     evaluator.fem_runs = plain.fem_runs
-    return PrintedHomogeneity(as_printed, digital, result)
+    return replace(as_printed, digital=digital, print_result=result)
 
 
 def save_map(result: Homogeneity, heightmap: Heightmap, path: str | Path | None = None,
