@@ -164,3 +164,19 @@ def test_a_print_at_a_threshold_is_not_kept_and_fits_counts_greedily():
     jump[3:] *= 1.19 ** 1.5  # a print jumping 1.5 JND between neighbours 2 and 3 (a layer more)
     assert _stable(kept, jump, 1).tolist()[1:5] == [True, False, False, False]
     assert fits(np.array([0.0, 1.0, 2.1, 4.0]), 2.0) == 2 and fits(np.array([0.0, 2.0, 4.0]), 2.0) == 3
+
+
+def test_a_printed_palette_the_verifier_cannot_separate_is_refused_as_printed(monkeypatch):
+    """The surrogate placed K apart but the verifier's prints are closer: refused naming the printer (no folder)."""
+    import roughness.design.palette as design
+    from roughness.surface.printing import PROFILES
+
+    def too_close(candidates, k, min_jnd, *args, **kwargs):
+        raise InputError(f"no {k} of the {len(candidates)} textures are {min_jnd:g} JND apart", parameter="min_jnd")
+
+    monkeypatch.setattr(design, "folder_palette", too_close)
+    printer = Evaluator(fidelity="spectral", printer=PROFILES["sla1s-47um"])
+    with pytest.raises(InputError, match=r"JND apart as printed by sla1s-47um \(spectral; the surrogate placed \d+\)")\
+            as err:
+        family_palette(2, 2.0, evaluator=printer)
+    assert err.value.parameter == "k"
