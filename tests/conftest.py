@@ -36,6 +36,15 @@ def mesh_cache(tmp_path_factory):
     yield path
 
 
+@pytest.fixture(scope="session", autouse=True)
+def no_default_printer(tmp_path_factory):
+    """The suite judges what each test asks for: no project default printer from the user's environment or
+    config (ROUGHNESS_PRINTER, $XDG_CONFIG_HOME/roughness/config.toml); tests that need one set it themselves."""
+    os.environ.pop("ROUGHNESS_PRINTER", None)
+    os.environ["XDG_CONFIG_HOME"] = str(tmp_path_factory.mktemp("config-home"))
+    yield
+
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

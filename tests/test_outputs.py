@@ -50,9 +50,9 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
     ("tune",): ([0, "--like", "--model", "--printer"], ["--out"]),
     ("palette",): (["--from", "--model", "--printer"], ["--out"]),
     ("tactile-image",): ([0, "--palette", "--model", "--printer"], ["--out"]),
-    ("object", "texture"): ([0, "--texture"], ["--out", "--preview"]),
-    ("object", "feel"): ([0, "--texture"], ["--picture"]),
-    ("object", "tune"): ([0, "--texture"], ["--out", "--mesh-out"]),
+    ("object", "texture"): ([0, "--texture", "--printer"], ["--out", "--preview"]),
+    ("object", "feel"): ([0, "--texture", "--printer"], ["--picture"]),
+    ("object", "tune"): ([0, "--texture", "--printer"], ["--out", "--mesh-out"]),
     ("ensemble",): ([0, "--data"], ["--out", "--int8"]),
     ("card",): ([1, "--latency"], ["--card"]),
     ("model-version",): ([0], []),  # rewritten in place

@@ -117,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
     if args.colour_by == "jnd" and not args.reference:
         raise InputError("colouring by JND needs --reference", parameter="colour_by")
     if args.picture:
-        check_distinct({"--picture": args.picture}, {"MESH": args.mesh, "--texture": args.texture})
+        check_distinct({"--picture": args.picture}, {"MESH": args.mesh, "--texture": args.texture, "--printer": args.printer})
         check_output(args.picture, args.overwrite, "picture")
     printer = printer_of(args)
     inputs = read_object(args)

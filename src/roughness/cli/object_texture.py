@@ -66,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
 
     from .object_printing import texture_print
 
-    check_distinct({"--out": args.out, "--preview": args.preview}, {"MESH": args.mesh, "--texture": args.texture})
+    check_distinct({"--out": args.out, "--preview": args.preview}, {"MESH": args.mesh, "--texture": args.texture, "--printer": args.printer})
     out = require_mesh_format(check_output(args.out, args.overwrite, "out"), "out")
     preview = check_output(args.preview, args.overwrite, "preview") if args.preview else None
     if preview is not None and preview.suffix.lower() != ".png":

@@ -173,7 +173,7 @@ def _checked_out(args: argparse.Namespace) -> Path:
     from roughness.core.files import check_distinct, check_output
     from roughness.surface.io import SAVE_SUFFIXES
 
-    check_distinct({"--out": args.out, "--mesh-out": args.mesh_out}, {"MESH": args.mesh, "--texture": args.texture})
+    check_distinct({"--out": args.out, "--mesh-out": args.mesh_out}, {"MESH": args.mesh, "--texture": args.texture, "--printer": args.printer})
     out = check_output(args.out, args.overwrite, "out")
     if out.suffix.lower() not in SAVE_SUFFIXES or out.suffix.lower() == ".stl":
         raise InputError(f"cannot save {out}: unsupported format {out.suffix or '(no suffix)'!r}; supported: "
