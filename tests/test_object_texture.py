@@ -133,11 +133,17 @@ def test_texture_that_would_cross_a_narrow_gap_is_refused(texture):
 def test_a_refinement_beyond_the_triangle_limit_is_refused_before_it_starts(texture, monkeypatch):
     import roughness.objects.remesh as remesh
 
-    allocated = []
-    monkeypatch.setattr(remesh, "_split", lambda *a: allocated.append(1))
+    ball = trimesh.creation.icosphere(2, radius=500)
+    split, whole = remesh._split, []
+
+    def watched(v, f, *args):  # the estimate refines sampled faces one at a time; the refinement, the whole mesh
+        whole.append(len(f) == len(ball.faces))
+        return split(v, f, *args)
+
+    monkeypatch.setattr(remesh, "_split", watched)
     with pytest.raises(InputError, match="MAX_MESH_TRIANGLES") as err:  # a 1 m ball at 1 um: 1e13 triangles
-        texture_mesh(trimesh.creation.icosphere(2, radius=500), Triplanar(texture), edge_mm=0.001)
-    assert err.value.parameter == "edge_mm" and not allocated
+        texture_mesh(ball, Triplanar(texture), edge_mm=0.001)
+    assert err.value.parameter == "edge_mm" and whole and not any(whole)
 
 
 def test_depth_beyond_the_concave_radius_is_refused(texture):
@@ -509,7 +515,8 @@ def test_a_mesh_too_large_for_slicers_is_warned_before_refining():
     box = trimesh.creation.box((6, 6, 6))
     faces = np.asarray(box.faces)
     small = mesh_plan(np.asarray(box.vertices), faces, np.ones(len(faces), bool), 0.2)
-    assert small.warning() is None and small.triangles == math.ceil(216 / (0.2**2 / 8))
+    made = len(refine(np.asarray(box.vertices), faces, np.ones(len(faces), bool), 0.2).faces)
+    assert small.warning() is None and small.triangles == made  # congruent faces: the sample's count is exact
     assert small.stl_bytes == 84 + 50 * small.triangles
     huge = mesh_plan(np.asarray(box.vertices), faces, np.ones(len(faces), bool), 0.005)  # only estimated
     assert huge.triangles > SLICER_TRIANGLES and "slicers handle comfortably" in huge.warning()
@@ -526,7 +533,7 @@ def test_cli_printer_sets_the_edge_and_reports_digital_and_printed_v(tmp_path, m
     captured = capsys.readouterr()
     out = json.loads(captured.out)
     assert out["result"]["edge_mm"] == pytest.approx(0.225) == out["plan"]["edge_mm"]
-    assert out["plan"]["triangles"] >= out["triangles"]  # the estimate is from above
+    assert out["plan"]["triangles"] == out["triangles"]  # the box's faces are congruent: the measured estimate is exact
     printing = out["printing"]
     assert printing["printer"]["name"] == "fdm-0.4-0.2"
     assert printing["printed"]["roughness"] < printing["digital"]["roughness"]  # the bead rounds the bumps off
@@ -592,3 +599,21 @@ def test_cli_warns_on_stderr_and_in_the_notes_when_slicers_would_struggle(knob_f
     out = json.loads(captured.out)
     assert out["plan"]["too_large_for_slicers"] and "roughness: warning:" in captured.err  # even with --quiet
     assert any("slicers handle comfortably" in n for n in out["notes"])
+
+
+@pytest.mark.parametrize("shape", ["cylinder sides (needles)", "icosphere", "box"])
+def test_the_triangle_estimate_is_measured_not_assumed(shape):
+    """The estimate before refining is the sampled faces' own refinement scaled to the area: within 10% of what
+    refinement makes (congruent faces are counted exactly; joining neighbours and the untextured transition add a
+    few percent). The area rule it replaced said 1/8 of the triangles for a 96-sided cylinder's sides."""
+    from roughness.objects.remesh import predicted_triangles
+
+    if shape.startswith("cylinder"):
+        mesh = trimesh.creation.cylinder(radius=5, height=20, sections=48)
+        textured = np.abs(mesh.triangles_center[:, 2]) < 9.5
+    else:
+        mesh = trimesh.creation.icosphere(2, radius=5) if shape == "icosphere" else trimesh.creation.box((6, 6, 6))
+        textured = np.ones(len(mesh.faces), bool)
+    v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    made = len(refine(v, f, textured, 0.4).faces)
+    assert predicted_triangles(v, f, textured, 0.4) == pytest.approx(made, rel=0.1)

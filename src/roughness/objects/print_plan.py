@@ -14,7 +14,7 @@ The edge is never finer than sqrt(2) times the texture's pixel on the surface (t
 of longest-edge bisection then have legs of about one texture pixel), since below that there is no more texture to
 sample.
 
-Cost (``mesh_plan``): triangles from ``remesh.predicted_triangles`` (an upper estimate), bytes from
+Cost (``mesh_plan``): triangles from ``remesh.predicted_triangles`` (measured on a sample of the faces), bytes from
 ``meshes.stl_bytes``, time from the rates measured in benchmarks/results/object_texture.md (a 60 mm ball refined
 to 13,107,200 triangles: refine to displace and closed checks 113.1 s, self-intersection check 93.5 s, binary STL
 6.9 s, on 2 cores shared with other jobs, so a quiet machine is faster).
@@ -78,7 +78,7 @@ def printer_edge(profile, texture_pixel_mm: float) -> EdgeChoice:
 
 @dataclass(frozen=True)
 class MeshPlan:
-    """What refining to ``edge_mm`` (mm) will make: about ``triangles`` (from above), an STL of ``stl_bytes``, in
+    """What refining to ``edge_mm`` (mm) will make: about ``triangles`` (measured on a sample), an STL of ``stl_bytes``, in
     about ``seconds`` (texturing, checks and writing, at the benchmark's rates)."""
 
     edge_mm: float
@@ -93,7 +93,7 @@ class MeshPlan:
 
     def line(self) -> str:
         """The plan in one line; the time is an estimate, and said to be one."""
-        return (f"expected: about {self.triangles:,} triangles (an estimate from above), a binary STL of about "
+        return (f"expected: about {self.triangles:,} triangles (refined on a sample of the faces), a binary STL of about "
                 f"{_mb(self.stl_bytes)} MB, about {_duration(self.seconds)} (estimated from "
                 "benchmarks/results/object_texture.md; a busy or slower machine takes longer)")
 
