@@ -72,3 +72,20 @@ def test_surrogate_report_break_even_pays_the_training_back_per_engine(monkeypat
     out = {b["engine"]: b["textures"] for b in report.break_even(2.0, rows, "surrogate")}
     assert out.keys() == {"fem:fine", "spectral"}
     assert abs(out["fem:fine"] - 2.0 * 3600 / 10.0) < 1e-6 and out["spectral"] is None
+
+
+def test_textured_objects_example_writes_only_where_told(tmp_path):
+    """examples/textured_objects.py writes into a folder the user names (default: a new one under the current
+    directory), never over the committed examples/objects/, and refuses a folder holding files without --overwrite."""
+    script = ROOT / "examples" / "textured_objects.py"
+    committed = {p: p.stat().st_mtime_ns for p in (ROOT / "examples" / "objects").iterdir()}
+    out = subprocess.run([sys.executable, str(script), "--help"], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=60)
+    assert out.returncode == 0 and "textured-objects" in " ".join(out.stdout.split())
+    (tmp_path / "textured-objects").mkdir()
+    (tmp_path / "textured-objects" / "results.md").write_text("mine")
+    out = subprocess.run([sys.executable, str(script), "--case", "knob"], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=60)
+    assert out.returncode == 2 and "--overwrite" in out.stderr, out.stderr[-2000:]
+    assert (tmp_path / "textured-objects" / "results.md").read_text() == "mine"
+    assert {p: p.stat().st_mtime_ns for p in (ROOT / "examples" / "objects").iterdir()} == committed
