@@ -1,0 +1,203 @@
+"""Every result number the tutorials and how-to pages quote is what the code and model give now (issue 40).
+
+A quoted number is marked in the page by an HTML comment right after it, invisible in the built manual:
+``height × 0.951<!-- knob.factor -->``; a quoted code span (a printed line) the same way after its closing
+backtick; a quoted code block by a comment line ``<!-- block: KEY -->`` before it, which checks the block's
+last line. KEY names a value in ``current()``: small documented runs made here (seconds), or, for the
+perception example whose embedding and FEM fit take half an hour, the committed outputs of
+``examples/perception/run.sh``, whose first step (the simulated subject) is re-run here and must give the
+committed answers, so a model change that would move them fails too.
+
+A number passes when it is the current value rounded as printed: within half a unit of its last digit, plus
+NOISE (relative) for the round-off of float32 networks and BLAS between machines. Printed lines compare their
+text exactly and each number in them so; durations (``1.5 ms``) are not results and are skipped.
+
+``python tests/test_doc_numbers.py`` prints every key's current value (to update a page after a model change).
+"""
+from __future__ import annotations
+
+import csv
+import functools
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = sorted([*(ROOT / "docs" / "tutorials").glob("*.md"), *(ROOT / "docs" / "how-to").glob("*.md")])
+PERCEPTION = ROOT / "examples" / "perception"
+NOISE = 1e-5  # relative: float32 ensemble outputs and summation order differ at ~1e-7 between machines
+NUMBER = r"[−+-]?\d[\d,]*(?:\.\d+)?"
+MARKED = re.compile(rf"(`[^`\n]+`|{NUMBER})(%?)<!-- ([\w.:,-]+) -->")
+BLOCK = re.compile(r"<!-- block: ([\w.:,-]+) -->\n+(?:```[^\n]*\n(.*?)```|((?: {4}.*\n)+))", re.S)
+DURATION = re.compile(rf"{NUMBER} (?:ms|s)\b")
+
+
+def _float(text: str) -> float:
+    return float(text.replace("−", "-").replace(",", ""))
+
+
+def _matches(printed: str, value: float, percent: bool = False) -> bool:
+    """Is ``printed`` the value rounded to the printed digits (x100 when it is a percentage)?"""
+    decimals = len(printed.split(".")[1]) if "." in printed else 0
+    value = 100 * value if percent else value
+    return abs(_float(printed) - value) <= 0.5 * 10.0 ** -decimals + NOISE * abs(value)
+
+
+def _same_line(quoted: str, now: str) -> bool:
+    """The same text, each number within its printed precision; durations skipped."""
+    quoted, now = DURATION.sub("", quoted.strip()), DURATION.sub("", now.strip())
+    if re.split(NUMBER, quoted) != re.split(NUMBER, now):
+        return False
+    return all(_matches(q, _float(n)) for q, n in zip(re.findall(NUMBER, quoted), re.findall(NUMBER, now)))
+
+
+def _cli(*args: str, cwd: Path) -> str:
+    out = subprocess.run([sys.executable, "-m", "roughness.cli", *args], cwd=cwd, capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    return out.stdout
+
+
+def _predict() -> dict:
+    line = _cli("predict", "examples/standard-1.0mm.png", "--pixel-mm", "0.05", "--height-mm", "1", cwd=ROOT)
+    v, spread, lam = re.search(r"V = (\S+) ± (\S+) .* lambda (\S+) mm", line).groups()
+    return {"predict.line": line.strip(), "predict.V": float(v), "predict.spread": float(spread),
+            "predict.lambda": float(lam)}
+
+
+def _python() -> dict:
+    import roughness
+
+    [p] = roughness.predict(roughness.standard_texture(1.25, seed=1))
+    return {"python.repr": repr(p)}
+
+
+def _object(tmp: Path, case: str) -> dict:
+    """The case of examples/textured_objects.py, run into tmp."""
+    subprocess.run([sys.executable, str(ROOT / "examples" / "textured_objects.py"), "--out", str(tmp), "--case",
+                    case], check=True, capture_output=True, timeout=900)
+    [(name, n)] = json.loads((tmp / "results.json").read_text()).items()
+    out = {f"{name}.{k}": v for k, v in n.items() if k != "regions_jnd"}
+    out |= {f"{name}.jnd.{region}": v for region, v in n["regions_jnd"].items()}
+    return out
+
+
+def _perception(tmp: Path) -> dict:
+    """The committed outputs of examples/perception/run.sh, after checking that its first step still gives them."""
+    import numpy as np
+    from scipy.stats import spearmanr
+
+    tmp.mkdir()
+    (tmp / "stimuli.csv").write_bytes((PERCEPTION / "stimuli.csv").read_bytes())
+    summary = json.loads(_cli("perception", "simulate", "--stimuli", "stimuli.csv", "--engine", "surrogate",
+                              "--trials", "1500", "--seed", "1", "--out", "simulated", "--quiet", cwd=tmp))
+    for name in ("truth.csv", "trials.csv"):
+        now = list(csv.reader((tmp / "simulated" / name).open()))
+        committed = list(csv.reader((PERCEPTION / "simulated" / name).open()))
+        assert [r[:1] for r in now] == [r[:1] for r in committed]
+        for a, b in zip(now[1:], committed[1:]):  # truth: V to its 6 printed digits; trials: the same answers
+            assert all(x == y or _matches(y, float(x)) for x, y in zip(a, b)), (
+                f"examples/perception/simulated/{name} is stale ({a} now, {b} committed): run "
+                "sh examples/perception/run.sh and update docs/tutorials/perception-experiment.md")
+    e = json.loads((PERCEPTION / "embedding" / "embedding.json").read_text())
+    f = json.loads((PERCEPTION / "fit" / "fit.json").read_text())
+    plan = json.loads((PERCEPTION / "plan" / "plan.json").read_text())
+    cv = e["cross_validation"]
+    chosen = cv["lambdas"].index(e["lambda"])
+    truth = {r["stimulus"]: float(r["roughness"]) for r in csv.DictReader((PERCEPTION / "simulated" / "truth.csv").open())}
+    embedded = list(csv.DictReader((PERCEPTION / "embedding" / "embedding.csv").open()))
+    c = f["correlations"]
+    sampled = np.ravel(f["sampling"]["pearson"])  # R over the (d, r) grid
+    out = {"perception.noise_floor": summary["noise_floor"], "perception.lambda": e["lambda"],
+           "perception.cv_error": cv["test_error"][chosen], "perception.first_share": e["first_dimension_share"],
+           "perception.spearman_truth": spearmanr([float(r["coordinate"]) for r in embedded],
+                                                  [truth[r["stimulus"]] for r in embedded]).statistic,
+           "perception.R": c["V"]["all"]["pearson"], "perception.spearman": c["V"]["all"]["spearman"],
+           "perception.ra": c["ra"]["all"]["pearson"], "perception.p90": c["p90"]["all"]["pearson"],
+           "perception.glcm_sos": c["glcm_sum_of_squares"]["all"]["pearson"],
+           "perception.glcm_var": c["glcm_sum_variance"]["all"]["pearson"],
+           "perception.sampling_min": sampled.min(), "perception.sampling_max": sampled.max(), "perception.plan_limit": plan["limit_pearson"],
+           "perception.plan_needed": plan["needed_trials"]}
+    out |= {f"perception.R_{force}N": v["pearson"] for force, v in (f.get("forces") or {}).items()}
+    for step in plan["steps"]:
+        t = step["trials"]
+        out |= {f"perception.plan_{t}_5": step["pearson_5"], f"perception.plan_{t}_95": step["pearson_95"],
+                f"perception.plan_{t}_within": step["within_tolerance"]}
+    assert np.isfinite(list(out.values())).all()
+    return out
+
+
+@functools.cache
+def current(tmp: Path, slow: bool = False) -> dict:
+    """Every key's current value; the handle (minutes) only when slow."""
+    out = _predict() | _python() | _object(tmp / "knob", "knob") | _perception(tmp / "perception")
+    return out | _object(tmp / "handle", "handle") if slow else out
+
+
+def quoted(page: Path) -> list[tuple[str, str, str]]:
+    """(key, quoted text, kind) for every marked number, code span and block of a page."""
+    text = page.read_text()
+    found = [(m[3], m[1], "percent" if m[2] else "line" if m[1].startswith("`") else "number")
+             for m in MARKED.finditer(text)]
+    return found + [(m[1], (m[2] or m[3]).strip().splitlines()[-1], "line") for m in BLOCK.finditer(text)]
+
+
+def stale(page: Path, values: dict, root: Path = ROOT) -> list[str]:
+    """The page's quoted numbers that are not the current values (keys not in values are left to the slow run)."""
+    wrong = []
+    for key, text, kind in quoted(page):
+        if key not in values:
+            continue
+        now = values[key]
+        ok = (_same_line(text.strip("`"), now) if kind == "line"
+              else _matches(text, float(now), percent=kind == "percent"))
+        if not ok:
+            wrong.append(f"{page.relative_to(root)}: {key} quoted {text}, now {now}")
+    return wrong
+
+
+def test_marks_are_found_and_name_known_keys(tmp_path_factory):
+    """Pages quote through marks; a misspelt key is an error, not a silently skipped number."""
+    keys = {key for page in PAGES for key, _, _ in quoted(page)}
+    assert {"predict.line", "python.repr", "knob.factor", "perception.R"} <= keys
+    assert all(k.split(".")[0] in {"predict", "python", "knob", "handle", "perception"} for k in keys), keys
+
+
+def test_quoted_numbers_are_current(tmp_path_factory):
+    values = current(tmp_path_factory.mktemp("doc-numbers"))
+    keys = {key for page in PAGES for key, _, _ in quoted(page)}
+    assert keys - {k for k in keys if k.startswith("handle.")} <= values.keys()
+    assert [w for page in PAGES for w in stale(page, values)] == []
+
+
+@pytest.mark.slow
+def test_quoted_numbers_are_current_with_the_handle(tmp_path_factory):
+    values = current(tmp_path_factory.mktemp("doc-numbers-slow"), slow=True)
+    assert [w for page in PAGES for w in stale(page, values)] == []
+
+
+def test_a_drifted_number_fails(tmp_path):
+    """The check itself: a number off by one printed digit, or a changed word in a printed line, is stale."""
+    page = tmp_path / "page.md"
+    page.write_text("height × 0.928<!-- knob.factor --> and 28.0%<!-- f.share --> and `V = 0.0964 N`<!-- p.line -->\n"
+                    "\n<!-- block: q.line -->\n```\n$ cmd\nV = 0.0964 ± 0.0038 (surrogate, 1.5 ms)\n```\n")
+    good = {"knob.factor": 0.92849, "f.share": 0.28049, "p.line": "V = 0.09644 N",
+            "q.line": "V = 0.0964 ± 0.0038 (surrogate, 20.5 ms)"}
+    assert stale(page, good, tmp_path) == []
+    for drift in ({"knob.factor": 0.951}, {"knob.factor": 0.9286}, {"f.share": 0.2806}, {"p.line": "V = 0.0966 N"},
+                  {"q.line": "V = 0.0964 ± 0.0038 (spectral, 20.5 ms)"},
+                  {"q.line": "V = 0.0965 ± 0.0038 (surrogate, 20.5 ms)"}):
+        assert stale(page, good | drift, tmp_path) == [f"page.md: {k} quoted {t}, now {v}" for k, v in drift.items()
+                                                       for t in [dict((q[0], q[1]) for q in quoted(page))[k]]]
+
+
+if __name__ == "__main__":
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        for key, value in sorted(current(Path(folder), slow="--slow" in sys.argv).items()):
+            print(f"{key}: {value}")
