@@ -3,7 +3,7 @@
 A quoted number is marked in the page by an HTML comment right after it, invisible in the built manual:
 ``height × 0.951<!-- knob.factor -->``; a quoted code span (a printed line) the same way after its closing
 backtick; a quoted code block by a comment line ``<!-- block: KEY -->`` before it, which checks the block's
-last line. KEY names a value in ``current()``: small documented runs made here (seconds), or, for the
+output (its lines but the ``$ command``). KEY names a value in ``current()``: small documented runs made here (seconds), or, for the
 perception example whose embedding and FEM fit take half an hour, the committed outputs of
 ``examples/perception/run.sh``, whose first step (the simulated subject) is re-run here and must give the
 committed answers, so a model change that would move them fails too.
@@ -29,6 +29,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted([*(ROOT / "docs" / "tutorials").glob("*.md"), *(ROOT / "docs" / "how-to").glob("*.md")])
 PERCEPTION = ROOT / "examples" / "perception"
+SLOW = ("handle.", "jnd.")  # prefixes of the keys made only under -m slow
 NOISE = 1e-5  # relative: float32 ensemble outputs and summation order differ at ~1e-7 between machines
 NUMBER = r"[−+-]?\d[\d,]*(?:\.\d+)?"
 MARKED = re.compile(rf"(`[^`\n]+`|{NUMBER})(%?)<!-- ([\w.:,-]+) -->")
@@ -49,7 +50,9 @@ def _matches(printed: str, value: float, percent: bool = False) -> bool:
 
 def _same_line(quoted: str, now: str) -> bool:
     """The same text, each number within its printed precision; durations skipped."""
-    quoted, now = DURATION.sub("", quoted.strip()), DURATION.sub("", now.strip())
+    quoted, now = ("\n".join(line.strip() for line in DURATION.sub("", x).strip().splitlines()) for x in (quoted, now))
+    if quoted.count("\n") != now.count("\n"):
+        return False
     if re.split(NUMBER, quoted) != re.split(NUMBER, now):
         return False
     return all(_matches(q, _float(n)) for q, n in zip(re.findall(NUMBER, quoted), re.findall(NUMBER, now)))
@@ -74,6 +77,14 @@ def _python() -> dict:
 
     [p] = roughness.predict(roughness.standard_texture(1.25, seed=1))
     return {"python.repr": repr(p)}
+
+
+def _jnd(tmp: Path) -> dict:
+    """docs/how-to/compare-textures.md: two standard textures compared with the FEM (a minute)."""
+    tmp.mkdir()
+    for name, texture in (("a.npz", "standard-0.75"), ("b.npz", "standard-1.25")):
+        _cli("texture", "make", texture, "--out", name, cwd=tmp)
+    return {"jnd.fem": _cli("jnd", "a.npz", "b.npz", "--engine", "fem", cwd=tmp).strip()}
 
 
 def _object(tmp: Path, case: str) -> dict:
@@ -133,9 +144,9 @@ def _perception(tmp: Path) -> dict:
 
 @functools.cache
 def current(tmp: Path, slow: bool = False) -> dict:
-    """Every key's current value; the handle (minutes) only when slow."""
+    """Every key's current value; the keys in SLOW (minutes) only when slow."""
     out = _predict() | _python() | _object(tmp / "knob", "knob") | _perception(tmp / "perception")
-    return out | _object(tmp / "handle", "handle") if slow else out
+    return out | _object(tmp / "handle", "handle") | _jnd(tmp / "jnd") if slow else out
 
 
 def quoted(page: Path) -> list[tuple[str, str, str]]:
@@ -143,7 +154,9 @@ def quoted(page: Path) -> list[tuple[str, str, str]]:
     text = page.read_text()
     found = [(m[3], m[1], "percent" if m[2] else "line" if m[1].startswith("`") else "number")
              for m in MARKED.finditer(text)]
-    return found + [(m[1], (m[2] or m[3]).strip().splitlines()[-1], "line") for m in BLOCK.finditer(text)]
+    blocks = [(m[1], "\n".join(line.strip() for line in (m[2] or m[3]).strip().splitlines()
+                                if not line.strip().startswith("$ ")), "line") for m in BLOCK.finditer(text)]
+    return found + blocks
 
 
 def stale(page: Path, values: dict, root: Path = ROOT) -> list[str]:
@@ -164,13 +177,13 @@ def test_marks_are_found_and_name_known_keys(tmp_path_factory):
     """Pages quote through marks; a misspelt key is an error, not a silently skipped number."""
     keys = {key for page in PAGES for key, _, _ in quoted(page)}
     assert {"predict.line", "python.repr", "knob.factor", "perception.R"} <= keys
-    assert all(k.split(".")[0] in {"predict", "python", "knob", "handle", "perception"} for k in keys), keys
+    assert all(k.split(".")[0] in {"predict", "python", "knob", "handle", "perception", "jnd"} for k in keys), keys
 
 
 def test_quoted_numbers_are_current(tmp_path_factory):
     values = current(tmp_path_factory.mktemp("doc-numbers"))
     keys = {key for page in PAGES for key, _, _ in quoted(page)}
-    assert keys - {k for k in keys if k.startswith("handle.")} <= values.keys()
+    assert {k for k in keys if not k.startswith(SLOW)} <= values.keys()
     assert [w for page in PAGES for w in stale(page, values)] == []
 
 
@@ -184,13 +197,15 @@ def test_a_drifted_number_fails(tmp_path):
     """The check itself: a number off by one printed digit, or a changed word in a printed line, is stale."""
     page = tmp_path / "page.md"
     page.write_text("height × 0.928<!-- knob.factor --> and 28.0%<!-- f.share --> and `V = 0.0964 N`<!-- p.line -->\n"
-                    "\n<!-- block: q.line -->\n```\n$ cmd\nV = 0.0964 ± 0.0038 (surrogate, 1.5 ms)\n```\n")
+                    "\n<!-- block: q.line -->\n```\n$ cmd\nV = 0.0964 ± 0.0038 (surrogate, 1.5 ms)\nR 0.93\n```\n")
     good = {"knob.factor": 0.92849, "f.share": 0.28049, "p.line": "V = 0.09644 N",
-            "q.line": "V = 0.0964 ± 0.0038 (surrogate, 20.5 ms)"}
+            "q.line": "V = 0.0964 ± 0.0038 (surrogate, 20.5 ms)\nR 0.934"}
     assert stale(page, good, tmp_path) == []
     for drift in ({"knob.factor": 0.951}, {"knob.factor": 0.9286}, {"f.share": 0.2806}, {"p.line": "V = 0.0966 N"},
-                  {"q.line": "V = 0.0964 ± 0.0038 (spectral, 20.5 ms)"},
-                  {"q.line": "V = 0.0965 ± 0.0038 (surrogate, 20.5 ms)"}):
+                  {"q.line": "V = 0.0964 ± 0.0038 (spectral, 20.5 ms)\nR 0.934"},
+                  {"q.line": "V = 0.0965 ± 0.0038 (surrogate, 20.5 ms)\nR 0.934"},
+                  {"q.line": "V = 0.0964 ± 0.0038 (surrogate, 20.5 ms)\nR 0.936"},
+                  {"q.line": "V = 0.0964 ± 0.0038 (surrogate, 20.5 ms)"}):
         assert stale(page, good | drift, tmp_path) == [f"page.md: {k} quoted {t}, now {v}" for k, v in drift.items()
                                                        for t in [dict((q[0], q[1]) for q in quoted(page))[k]]]
 
