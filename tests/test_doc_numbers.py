@@ -113,7 +113,8 @@ def _perception(tmp: Path) -> dict:
         for a, b in zip(now[1:], committed[1:]):  # truth: V to its 6 printed digits; trials: the same answers
             assert all(x == y or _matches(y, float(x)) for x, y in zip(a, b)), (
                 f"examples/perception/simulated/{name} is stale ({a} now, {b} committed): run "
-                "sh examples/perception/run.sh and update docs/tutorials/perception-experiment.md")
+                "sh examples/perception/run.sh examples/perception --overwrite and update "
+                "docs/tutorials/perception-experiment.md")
     e = json.loads((PERCEPTION / "embedding" / "embedding.json").read_text())
     f = json.loads((PERCEPTION / "fit" / "fit.json").read_text())
     plan = json.loads((PERCEPTION / "plan" / "plan.json").read_text())
