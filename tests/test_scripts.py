@@ -89,3 +89,20 @@ def test_textured_objects_example_writes_only_where_told(tmp_path):
     assert out.returncode == 2 and "--overwrite" in out.stderr, out.stderr[-2000:]
     assert (tmp_path / "textured-objects" / "results.md").read_text() == "mine"
     assert {p: p.stat().st_mtime_ns for p in (ROOT / "examples" / "objects").iterdir()} == committed
+
+
+def test_perception_example_writes_only_where_told(tmp_path):
+    """examples/perception/run.sh needs its output folder, writes there (the stimuli table copied), and refuses
+    existing outputs without --overwrite: the committed examples/perception/ is written only when named."""
+    script = ROOT / "examples" / "perception" / "run.sh"
+    committed = {p: p.stat().st_mtime_ns for p in (ROOT / "examples" / "perception").rglob("*")}
+    env = os.environ | {"PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
+    out = subprocess.run(["sh", str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=60, env=env)
+    assert out.returncode == 2 and "usage" in out.stderr
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "design.csv").write_text("mine")
+    out = subprocess.run(["sh", str(script), "out"], cwd=tmp_path, capture_output=True, text=True, timeout=60, env=env)
+    assert out.returncode != 0 and "--overwrite" in out.stderr, out.stderr[-2000:]
+    assert (tmp_path / "out" / "design.csv").read_text() == "mine"
+    assert (tmp_path / "out" / "stimuli.csv").read_bytes() == (ROOT / "examples" / "perception" / "stimuli.csv").read_bytes()
+    assert {p: p.stat().st_mtime_ns for p in (ROOT / "examples" / "perception").rglob("*")} == committed
