@@ -29,11 +29,11 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted([*(ROOT / "docs" / "tutorials").glob("*.md"), *(ROOT / "docs" / "how-to").glob("*.md")])
 PERCEPTION = ROOT / "examples" / "perception"
-SLOW = ("handle.", "jnd.")  # prefixes of the keys made only under -m slow
+SLOW = ("handle.", "jnd.", "fem.")  # prefixes of the keys made only under -m slow
 NOISE = 1e-5  # relative: float32 ensemble outputs and summation order differ at ~1e-7 between machines
 NUMBER = r"[−+-]?\d[\d,]*(?:\.\d+)?"
 MARKED = re.compile(rf"(`[^`\n]+`|{NUMBER})(%?)<!-- ([\w.:,-]+) -->")
-BLOCK = re.compile(r"<!-- block: ([\w.:,-]+) -->\n+(?:```[^\n]*\n(.*?)```|((?: {4}.*\n)+))", re.S)
+BLOCK = re.compile(r"<!-- block: ([\w.:,-]+) -->\n+(?:```[^\n]*\n(.*?)```|((?: {4}[^\n]*\n)+))", re.S)
 DURATION = re.compile(rf"{NUMBER} (?:ms|s)\b")
 
 
@@ -85,6 +85,15 @@ def _jnd(tmp: Path) -> dict:
     for name, texture in (("a.npz", "standard-0.75"), ("b.npz", "standard-1.25")):
         _cli("texture", "make", texture, "--out", name, cwd=tmp)
     return {"jnd.fem": _cli("jnd", "a.npz", "b.npz", "--engine", "fem", cwd=tmp).strip()}
+
+
+def _fem(tmp: Path) -> dict:
+    """docs/how-to/fem.md: the FEM's V line for standard-1.0, seed 1, default fidelity (a minute)."""
+    tmp.mkdir()
+    _cli("texture", "make", "standard-1.0", "--seed", "1", "--out", "t.npz", cwd=tmp)
+    [line] = [x for x in _cli("simulate", "t.npz", "--fidelity", "default", cwd=tmp).splitlines()
+              if x.startswith("roughness V")]
+    return {"fem.line": line}
 
 
 def _object(tmp: Path, case: str) -> dict:
@@ -147,7 +156,7 @@ def _perception(tmp: Path) -> dict:
 def current(tmp: Path, slow: bool = False) -> dict:
     """Every key's current value; the keys in SLOW (minutes) only when slow."""
     out = _predict() | _python() | _object(tmp / "knob", "knob") | _perception(tmp / "perception")
-    return out | _object(tmp / "handle", "handle") | _jnd(tmp / "jnd") if slow else out
+    return out | _object(tmp / "handle", "handle") | _jnd(tmp / "jnd") | _fem(tmp / "fem") if slow else out
 
 
 def quoted(page: Path) -> list[tuple[str, str, str]]:
@@ -178,7 +187,7 @@ def test_marks_are_found_and_name_known_keys(tmp_path_factory):
     """Pages quote through marks; a misspelt key is an error, not a silently skipped number."""
     keys = {key for page in PAGES for key, _, _ in quoted(page)}
     assert {"predict.line", "python.repr", "knob.factor", "perception.R"} <= keys
-    assert all(k.split(".")[0] in {"predict", "python", "knob", "handle", "perception", "jnd"} for k in keys), keys
+    assert all(k.split(".")[0] in {"predict", "python", "knob", "handle", "perception", "jnd", "fem"} for k in keys), keys
 
 
 def test_quoted_numbers_are_current(tmp_path_factory):
@@ -198,15 +207,16 @@ def test_a_drifted_number_fails(tmp_path):
     """The check itself: a number off by one printed digit, or a changed word in a printed line, is stale."""
     page = tmp_path / "page.md"
     page.write_text("height × 0.928<!-- knob.factor --> and 28.0%<!-- f.share --> and `V = 0.0964 N`<!-- p.line -->\n"
-                    "\n<!-- block: q.line -->\n```\n$ cmd\nV = 0.0964 ± 0.0038 (surrogate, 1.5 ms)\nR 0.93\n```\n")
+                    "\n<!-- block: q.line -->\n```\n$ cmd\nV = 0.0964 ± 0.0038 (surrogate, 1.5 ms)\nR 0.93\n```\n"
+                    "\n<!-- block: r.line -->\n\n    out 2.5\n\nA paragraph 7.5 after it.\n")
     good = {"knob.factor": 0.92849, "f.share": 0.28049, "p.line": "V = 0.09644 N",
-            "q.line": "V = 0.0964 ± 0.0038 (surrogate, 20.5 ms)\nR 0.934"}
+            "q.line": "V = 0.0964 ± 0.0038 (surrogate, 20.5 ms)\nR 0.934", "r.line": "out 2.5"}
     assert stale(page, good, tmp_path) == []
     for drift in ({"knob.factor": 0.951}, {"knob.factor": 0.9286}, {"f.share": 0.2806}, {"p.line": "V = 0.0966 N"},
                   {"q.line": "V = 0.0964 ± 0.0038 (spectral, 20.5 ms)\nR 0.934"},
                   {"q.line": "V = 0.0965 ± 0.0038 (surrogate, 20.5 ms)\nR 0.934"},
                   {"q.line": "V = 0.0964 ± 0.0038 (surrogate, 20.5 ms)\nR 0.936"},
-                  {"q.line": "V = 0.0964 ± 0.0038 (surrogate, 20.5 ms)"}):
+                  {"q.line": "V = 0.0964 ± 0.0038 (surrogate, 20.5 ms)"}, {"r.line": "out 2.6"}):
         assert stale(page, good | drift, tmp_path) == [f"page.md: {k} quoted {t}, now {v}" for k, v in drift.items()
                                                        for t in [dict((q[0], q[1]) for q in quoted(page))[k]]]
 
