@@ -67,9 +67,12 @@ def _cli(*args: str, cwd: Path) -> str:
 
 def _predict() -> dict:
     line = _cli("predict", "examples/standard-1.0mm.png", "--pixel-mm", "0.05", "--height-mm", "1", cwd=ROOT)
+    from roughness.prediction import uncertainty_limit
+    from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
+
     v, spread, lam = re.search(r"V = (\S+) ± (\S+) .* lambda (\S+) mm", line).groups()
     return {"predict.line": line.strip(), "predict.V": float(v), "predict.spread": float(spread),
-            "predict.lambda": float(lam)}
+            "predict.lambda": float(lam), "predict.max_std": uncertainty_limit(SurrogateModel(DEFAULT_MODEL), None)}
 
 
 def _python() -> dict:
