@@ -3,8 +3,8 @@
 A quoted number is marked in the page by an HTML comment right after it, invisible in the built manual:
 ``height × 0.951<!-- knob.factor -->``; a quoted code span (a printed line) the same way after its closing
 backtick; a quoted code block by a comment line ``<!-- block: KEY -->`` before it, which checks the block's
-output (its lines but the ``$ command``). KEY names a value in ``current()``: small documented runs made here (seconds), or, for the
-perception example whose embedding and FEM fit take half an hour, the committed outputs of
+output (its lines but the ``$ command``). KEY names a value in ``current()``: small documented runs made here
+(seconds; the FEM examples and the handle, minutes, under ``-m slow``), or, for the perception example whose embedding and FEM fit take half an hour, the committed outputs of
 ``examples/perception/run.sh``, whose first step (the simulated subject) is re-run here and must give the
 committed answers, so a model change that would move them fails too.
 
@@ -17,7 +17,6 @@ text exactly and each number in them so; durations (``1.5 ms``) are not results 
 from __future__ import annotations
 
 import csv
-import functools
 import json
 import re
 import subprocess
@@ -155,7 +154,6 @@ def _perception(tmp: Path) -> dict:
     return out
 
 
-@functools.cache
 def current(tmp: Path, slow: bool = False) -> dict:
     """Every key's current value; the keys in SLOW (minutes) only when slow."""
     out = _predict() | _python() | _object(tmp / "knob", "knob") | _perception(tmp / "perception")
