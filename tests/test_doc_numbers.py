@@ -28,12 +28,12 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted([*(ROOT / "docs" / "tutorials").glob("*.md"), *(ROOT / "docs" / "how-to").glob("*.md")])
 PERCEPTION = ROOT / "examples" / "perception"
-SLOW = ("handle.", "jnd.", "fem.")  # prefixes of the keys made only under -m slow
+SLOW = ("handle.", "jnd.")  # prefixes of the keys made only under -m slow
 NOISE = 1e-5  # relative: float32 ensemble outputs and summation order differ at ~1e-7 between machines
 # FEM answers: CG stops at a relative residual of 1e-6 (simulate/linsolve.py CG_RTOL), and V, the variance of nearly
 # equal strains, carries it amplified: one or four BLAS threads gave V 0.1484 and 0.1483 (7e-4 apart)
 FEM_NOISE = 1e-3
-FEM = ("jnd.", "fem.")  # prefixes of the keys answered by the FEM
+FEM = ("jnd.",)  # prefixes of the keys answered by the FEM
 NUMBER = r"[−+-]?\d[\d,]*(?:\.\d+)?"
 MARKED = re.compile(rf"(`[^`\n]+`|{NUMBER})(%?)<!-- ([\w.:,-]+) -->")
 BLOCK = re.compile(r"<!-- block: ([\w.:,-]+) -->\n+(?:```[^\n]*\n(.*?)```|((?: {4}[^\n]*\n)+))", re.S)
@@ -91,15 +91,6 @@ def _jnd(tmp: Path) -> dict:
     for name, texture in (("a.npz", "standard-0.75"), ("b.npz", "standard-1.25")):
         _cli("texture", "make", texture, "--out", name, cwd=tmp)
     return {"jnd.fem": _cli("jnd", "a.npz", "b.npz", "--engine", "fem", cwd=tmp).strip()}
-
-
-def _fem(tmp: Path) -> dict:
-    """docs/how-to/fem.md: the FEM's V line for standard-1.0, seed 1, default fidelity (a minute)."""
-    tmp.mkdir()
-    _cli("texture", "make", "standard-1.0", "--seed", "1", "--out", "t.npz", cwd=tmp)
-    [line] = [x for x in _cli("simulate", "t.npz", "--fidelity", "default", cwd=tmp).splitlines()
-              if x.startswith("roughness V")]
-    return {"fem.line": line}
 
 
 def _object(tmp: Path, case: str) -> dict:
@@ -161,7 +152,7 @@ def _perception(tmp: Path) -> dict:
 def current(tmp: Path, slow: bool = False) -> dict:
     """Every key's current value; the keys in SLOW (minutes) only when slow."""
     out = _predict() | _python() | _object(tmp / "knob", "knob") | _perception(tmp / "perception")
-    return out | _object(tmp / "handle", "handle") | _jnd(tmp / "jnd") | _fem(tmp / "fem") if slow else out
+    return out | _object(tmp / "handle", "handle") | _jnd(tmp / "jnd") if slow else out
 
 
 def quoted(page: Path) -> list[tuple[str, str, str]]:
@@ -192,7 +183,7 @@ def test_marks_are_found_and_name_known_keys(tmp_path_factory):
     """Pages quote through marks; a misspelt key is an error, not a silently skipped number."""
     keys = {key for page in PAGES for key, _, _ in quoted(page)}
     assert {"predict.line", "python.repr", "knob.factor", "perception.R"} <= keys
-    assert all(k.split(".")[0] in {"predict", "python", "knob", "handle", "perception", "jnd", "fem"} for k in keys), keys
+    assert all(k.split(".")[0] in {"predict", "python", "knob", "handle", "perception", "jnd"} for k in keys), keys
 
 
 def test_quoted_numbers_are_current(tmp_path_factory):
