@@ -362,7 +362,7 @@ def test_a_missing_optional_dependency_names_its_extra(module, extra, argv, work
 def test_a_physics_answer_is_never_called_out_of_domain():
     """``in_domain`` is the surrogate's domain: where auto climbed to a physics engine, the line says why the
     surrogate did not answer and which engine did, not that the answer is OUT OF DOMAIN."""
-    from roughness.cli.predict import domain_words
+    from roughness.prediction import domain_words
 
     notes = ["feature size 0.1 mm below the training range"]
     for engine in ("spectral", "fem"):
@@ -371,3 +371,13 @@ def test_a_physics_answer_is_never_called_out_of_domain():
     assert domain_words(SimpleNamespace(in_domain=False, engine="surrogate", domain_notes=notes)) == \
         f"OUT OF DOMAIN: {notes[0]}"
     assert domain_words(SimpleNamespace(in_domain=True, engine="spectral", domain_notes=[])) == "in domain"
+
+
+def test_the_python_repr_says_whose_domain_too():
+    """The repr of a physics answer that auto climbed to names the surrogate's domain, as the command line does."""
+    from roughness.prediction import domain_words
+
+    physics = SimpleNamespace(in_domain=False, engine="spectral", domain_notes=["a note"])
+    assert domain_words(physics, notes=False) == "outside the surrogate's domain, so the spectral engine answered"
+    assert domain_words(SimpleNamespace(in_domain=False, engine="surrogate", domain_notes=["a note"]),
+                        notes=False) == "out of domain"

@@ -175,8 +175,7 @@ class Prediction:
             v += f" (curvature correction ± {self.curvature_error:.2g})"
         engine = self.engine if self.fidelity == self.engine else f"{self.engine} ({self.fidelity})"
         return short_repr(self, repr(self.source), v, engine,
-                          "in domain" if self.in_domain else "out of domain",
-                          self.placement.describe(), f"{len(self.domain_notes)} note(s)"
+                          domain_words(self, notes=False), self.placement.describe(), f"{len(self.domain_notes)} note(s)"
                           if self.domain_notes else "")
 
     def as_dict(self) -> dict:
@@ -186,6 +185,18 @@ class Prediction:
                 "engine": self.engine, "fidelity": self.fidelity, "in_domain": self.in_domain,
                 "seconds": self.seconds, **self.placement.as_dict(), "domain_notes": self.domain_notes,
                 "provenance": None if self.provenance is None else self.provenance.as_dict()}
+
+
+def domain_words(p: Prediction, notes: bool = True) -> str:
+    """Whose domain ``p.in_domain`` is, in words: the surrogate's. A surrogate answer outside it is OUT OF DOMAIN; a
+    physics engine's answer (``auto`` climbed, or asked for) is its own, so it only says why the surrogate did not
+    answer. ``notes``: with the reasons (the repr leaves them out and counts them)."""
+    if p.in_domain:
+        return "in domain"
+    why = f" ({'; '.join(p.domain_notes)})" if notes else ""
+    if p.engine == "surrogate":
+        return f"OUT OF DOMAIN: {'; '.join(p.domain_notes)}" if notes else "out of domain"
+    return f"outside the surrogate's domain{why}, so the {p.engine} engine answered"
 
 
 def predict(inputs: Inputs, engine: str = "auto", model: SurrogateModel | str | Path | None = None,

@@ -4,7 +4,6 @@ from __future__ import annotations
 import argparse
 
 from .common import add_reading_args, defaults, finish, json_text, load_input, readings, write_stdout
-from .predict import domain_words
 from .printer import add_printer_arg, printer_of
 
 
@@ -95,6 +94,8 @@ def _distance_line(distance, kinds: str) -> str:
 
 
 def _line(p) -> str:
+    from roughness.prediction import domain_words
+
     se = _uncertainty(p)
     v = f"V = {p.roughness:.4f}" + (f" ± {se:.4f}" if se is not None else "")
     return f"{p.source}: {v} ({p.engine}, {domain_words(p)}), {p.placement.describe()}"

@@ -51,7 +51,7 @@ def texture_print(texture, profile, surface_pixel_mm: float | None = None) -> Te
 
 def _v(p) -> str:
     """V of a prediction with how sure it is (ensemble spread when the model has one) and its domain."""
-    from .predict import domain_words
+    from roughness.prediction import domain_words
 
     sure = f" ± {p.roughness_std:.4f} (ensemble spread)" if p.roughness_std is not None else " (no error estimate)"
     return f"V = {p.roughness:.4f}{sure} ({p.engine}, {domain_words(p)})"

@@ -216,19 +216,9 @@ def _show_printed(args: argparse.Namespace, digital, printed, result, readings: 
     print("\n".join(lines), flush=True)
 
 
-def domain_words(p) -> str:
-    """Whose domain ``p.in_domain`` is, in words: the surrogate's. A surrogate answer outside it is OUT OF DOMAIN; a
-    physics engine's answer (``auto`` climbed, or asked for) is its own, so it only says why the surrogate did not
-    answer."""
-    notes = "; ".join(p.domain_notes)
-    if p.in_domain:
-        return "in domain"
-    if p.engine == "surrogate":
-        return f"OUT OF DOMAIN: {notes}"
-    return f"outside the surrogate's domain ({notes}), so the {p.engine} engine answered"
-
-
 def _prediction_line(p) -> str:
+    from roughness.prediction import domain_words
+
     where = p.placement
     jnd = None if where.jnd_from_nearest is None else round(where.jnd_from_nearest, 1) + 0.0  # no "-0.0"
     scale = (f"below the standard scale (V < floor {where.floor:.4f}, the scale's finest bumps): no equivalent "
