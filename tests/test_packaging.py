@@ -143,7 +143,7 @@ def test_an_editable_install_finds_every_module_in_the_checkout(tmp_path):
     out = subprocess.run([sys.executable, "-c", build, str(tmp_path / "dist")], cwd=source, check=True,
                          capture_output=True, text=True)
     wheel = tmp_path / "dist" / out.stdout.strip().splitlines()[-1]
-    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
     python = venv / "bin" / "python"
     subprocess.run([str(python), "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", "--ignore-installed",
                     str(wheel)], check=True, cwd=tmp_path)
