@@ -115,6 +115,10 @@ def test_a_palette_survives_the_printer():
     printer = Evaluator(fidelity="spectral", printer=PROFILES["fdm-0.4-0.2"])
     palette = family_palette(3, 2.0, evaluator=printer)
     assert palette.verified and palette.closest_jnd >= 2.0
+    assert not any("tolerance" in note for note in palette.notes)
+    told = family_palette(3, 2.0, evaluator=printer, tolerance_jnd=0.3)  # no tuning: a tolerance is said unused
+    assert [m.recipe for m in told.members] == [m.recipe for m in palette.members]
+    assert any("tolerance_jnd 0.3 is not used with a printer" in note for note in told.notes)
     heights = [m.recipe["height_factor"] for m in palette.members]
     assert len(set(heights)) == 3 and all(m.recipe["printer"] == "fdm-0.4-0.2" for m in palette.members)
     for m in palette.members:  # the distances are between prints: the verifier's V is the printed texture's

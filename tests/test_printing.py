@@ -193,9 +193,32 @@ def test_palette_judges_members_as_printed_and_records_both(tmp_path, capsys):
         assert diff["digital_roughness"] > 0 and diff["difference_jnd"] is not None
 
 
-def test_printer_with_map_is_refused_not_ignored(workdir, capsys):  # noqa: F811 (the fixture)
-    _expect_refusal(["predict", *BASE[("predict",)], "--map", "m.png", "--printer", "fdm-0.4-0.2"], workdir, capsys,
-                    ("--printer: --map maps the digital object",))
+def test_map_with_a_printer_maps_the_print(tmp_path, capsys, monkeypatch):
+    """--map with --printer (or the project's default printer) maps the printed plate: the map is the one of the
+    printed heightmap, says so, and differs from the digital map; --printer none maps the digital heightmap."""
+    from roughness.maps import predict_map
+
+    hm = standard_texture(1.0)
+    path = tmp_path / "s.npy"
+    np.save(path, hm.heights)
+    args = ["predict", str(path), "--pixel-mm", "0.05", "--engine", "spectral", "--tile", "--step-mm", "4",
+            "--json", "--quiet"]
+
+    def mapped(*extra: str) -> tuple[np.ndarray, dict]:
+        out = tmp_path / f"m{len(list(tmp_path.glob('m*.npy')))}.npy"
+        assert main([*args, "--map", str(out), *extra]) == 0
+        return np.load(out), json.loads(capsys.readouterr().out)
+
+    explicit, summary = mapped("--printer", "fdm-0.4-0.2")
+    assert summary["printer"]["name"] == "fdm-0.4-0.2" and "mapped as printed by" in summary["notes"][0]
+    expected = predict_map(printed(hm, PROFILES["fdm-0.4-0.2"], True).heightmap, "spectral", 4.0, True).map
+    np.testing.assert_allclose(explicit, expected.roughness, rtol=1e-9)
+    digital, summary = mapped("--printer", "none")
+    assert summary["printer"] is None and not np.allclose(digital, explicit, rtol=1e-3)
+    monkeypatch.setenv("ROUGHNESS_PRINTER", "fdm-0.4-0.2")  # the project's default printer is not ignored
+    default, summary = mapped()
+    assert summary["printer"]["name"] == "fdm-0.4-0.2"
+    np.testing.assert_allclose(default, explicit, rtol=1e-9)
 
 
 def test_a_recipe_with_printers_makes_the_printed_twins_of_its_unprinted_samples():

@@ -103,9 +103,6 @@ def run(args: argparse.Namespace) -> int:
 
         check_distinct({"--map": args.map}, {"HEIGHTMAP": args.inputs, "--model": args.model,
                                              "--printer": args.printer, "--scheduler-file": args.scheduler_file})
-        if args.printer:
-            raise InputError("--map maps the digital object; a map of the printed one is not supported yet "
-                             "(predict the printed texture without --map)", "printer")
         if args.curvature_mm is not None:
             raise InputError("--map slides the footprint over a flat object; it does not take --curvature-mm")
         check_map_path(args.map, args.overwrite)
@@ -116,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
         model = SurrogateModel(args.model or DEFAULT_MODEL, threads=args.threads)
         footprint_mm = model.footprint_mm
     if args.map:
-        return _predict_map(args, model)
+        return _predict_map(args, model, printer)
     loaded = {}  # input name -> what loading did to it, until its answer is shown
 
     def load_one(text: str, several: bool):
@@ -157,9 +154,12 @@ def run(args: argparse.Namespace) -> int:
     return 2 if reader.errors else 0
 
 
-def _predict_map(args: argparse.Namespace, model) -> int:
+def _predict_map(args: argparse.Namespace, model, printer) -> int:
+    """--map: V of every footprint position over the heightmap, or over its print when there is a printer
+    (--printer, else the project's default)."""
     from roughness.core.errors import InputError
     from roughness.maps import predict_map
+    from roughness.surface.printing import printed
     from roughness.surrogate.roughness_map import save_map
 
     if len(args.inputs) != 1 or os.path.isdir(args.inputs[0]):
@@ -168,6 +168,13 @@ def _predict_map(args: argparse.Namespace, model) -> int:
         raise InputError("--map needs thousands of footprints: use --engine spectral (one solve over the whole map, "
                          "or overlapping windows of a larger one), surrogate or auto")
     hm = load_input(args, args.inputs[0])
+    print_notes = []
+    if printer is not None:  # the map of the plate as printed: the print made once, then mapped as any heightmap
+        made_print = printed(hm, printer, args.tile)
+        hm = made_print.heightmap
+        print_notes = [f"mapped as printed by {printer.describe()} (the digital heightmap is not mapped; "
+                       "--printer none maps it)", *(f"print: {step}" for step in made_print.steps),
+                       *made_print.notes]
     start = last = time.perf_counter()
 
     def progress(done: int, total: int) -> None:
@@ -181,9 +188,10 @@ def _predict_map(args: argparse.Namespace, model) -> int:
     made = predict_map(hm, args.engine, args.step_mm, args.tile, model, args.batch_size, progress=progress,
                        workers=args.workers, scheduler=args.scheduler, scheduler_file=args.scheduler_file,
                        quiet=args.quiet, units_ok=True)  # units checked as the file was loaded (--units-ok)
-    result, notes, provenance = made.map, made.notes, made.provenance
+    result, notes, provenance = made.map, [*print_notes, *made.notes], made.provenance
     save_map(result, args.map, args.overwrite)
-    summary = {"input": args.inputs[0], "map": args.map, "engine": args.engine, **result.summary(), "notes": notes,
+    summary = {"input": args.inputs[0], "map": args.map, "engine": args.engine,
+               "printer": printer.as_dict() if printer is not None else None, **result.summary(), "notes": notes,
                "seconds": time.perf_counter() - start, "readings": readings(args), "provenance": provenance.as_dict()}
     print(json_text(summary) if args.json else
           f"{args.inputs[0]}: {summary['positions']} footprint positions, V {summary['roughness_min']:.4f} to "

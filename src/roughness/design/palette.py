@@ -129,7 +129,12 @@ def family_palette(k: int, min_jnd: float = 2.0, family: str = DEFAULT_FAMILY, b
     if by not in FACTOR_RANGE:
         raise InputError(f"unknown knob {by!r}; choose one of {', '.join(FACTOR_RANGE)}", parameter="by")
     if evaluator.printer is not None:
-        return printable_palette(k, min_jnd, family, by, evaluator, seed, progress)
+        palette = printable_palette(k, min_jnd, family, by, evaluator, seed, progress)
+        if tolerance_jnd == TOLERANCE_JND:
+            return palette
+        return replace(palette, notes=(*palette.notes, f"tolerance_jnd {tolerance_jnd:g} is not used with a "
+                                       "printer: no member is tuned to a target; each is one of the variants the "
+                                       f"printer can make, verified >= {min_jnd:g} JND from the others as printed"))
     lo, hi = FACTOR_RANGE[by]
     v, _ = evaluator.surrogate([scaled(base, by, f) for f in np.geomspace(lo, hi, GRID)])
     lam_lo, lam_hi = evaluator.lambda_of(float(v.min())), evaluator.lambda_of(float(v.max()))
