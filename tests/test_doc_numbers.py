@@ -33,7 +33,7 @@ NOISE = 1e-5  # relative: float32 ensemble outputs and summation order differ at
 # FEM answers: CG stops at a relative residual of 1e-6 (simulate/linsolve.py CG_RTOL), and V, the variance of nearly
 # equal strains, carries it amplified: one or four BLAS threads gave V 0.1484 and 0.1483 (7e-4 apart)
 FEM_NOISE = 1e-3
-FEM = ("jnd.",)  # prefixes of the keys answered by the FEM
+FEM = ("jnd.", "tune.")  # prefixes of the keys answered by the FEM
 NUMBER = r"[−+-]?\d[\d,]*(?:\.\d+)?"
 MARKED = re.compile(rf"(`[^`\n]+`|{NUMBER})(%?)<!-- ([\w.:,-]+) -->")
 BLOCK = re.compile(r"<!-- block: ([\w.:,-]+) -->\n+(?:```[^\n]*\n(.*?)```|((?: {4}[^\n]*\n)+))", re.S)
@@ -91,6 +91,80 @@ def _jnd(tmp: Path) -> dict:
     for name, texture in (("a.npz", "standard-0.75"), ("b.npz", "standard-1.25")):
         _cli("texture", "make", texture, "--out", name, cwd=tmp)
     return {"jnd.fem": _cli("jnd", "a.npz", "b.npz", "--engine", "fem", cwd=tmp).strip()}
+
+
+def _cli_error(*args: str, cwd: Path) -> str:
+    """A documented refusal: exit 2 and its one-line message."""
+    out = subprocess.run([sys.executable, "-m", "roughness.cli", *args], cwd=cwd, capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 2, out.stderr[-2000:]
+    return out.stderr.strip()
+
+
+def _tune(tmp: Path) -> dict:
+    """docs/how-to/tune.md: the three tune examples (the first verified by the fine FEM, about 20 s)."""
+    tmp.mkdir()
+    _cli("texture", "make", "standard-1.0", "--out", "standard.npz", cwd=tmp)
+    return {"tune.lambda": _cli("tune", "standard.npz", "--target-lambda", "0.8", "--out", "tuned.stl", "--quiet",
+                                cwd=tmp).strip(),
+            "tune.reach": _cli_error("tune", "standard.npz", "--target-lambda", "4", "--out", "t2.npz", "--quiet",
+                                     cwd=tmp),
+            "tune.jnd": _cli("tune", "standard.npz", "--jnd", "+1", "--verify", "coarse", "--out", "rougher.npz",
+                             "--quiet", cwd=tmp).strip()}
+
+
+def _committed_palettes() -> dict:
+    """Numbers the manual quotes from committed results: examples/design/palette-k5 (tune.md) and
+    studies/results/print_palettes.json (printing.md); that the latter is what its study makes now is
+    ``test_print_palettes_study_is_current``."""
+    k5 = json.loads((ROOT / "examples" / "design" / "palette-k5" / "palette.json").read_text())
+    out = {"tune.k5.closest": k5["closest_pair_jnd"]}
+    for i, m in enumerate(k5["members"], 1):
+        out |= {f"tune.k5.{i}.factor": m["recipe"]["factor"], f"tune.k5.{i}.V": m["fem_roughness"],
+                f"tune.k5.{i}.lambda": m["equivalent_lambda_mm"]}
+    palettes = json.loads((ROOT / "studies" / "results" / "print_palettes.json").read_text())
+    for name, palette in palettes.items():
+        key = "default" if name.startswith("default") else name.removeprefix("for ")
+        out |= {f"printing.palette.{key}.closest.{printer}": gap
+                for printer, gap in palette["closest_jnd_printed"].items() if gap is not None}
+        out[f"printing.palette.{key}.closest.digital"] = palette["closest_jnd_digital"]
+        for i, m in enumerate(palette["members"], 1):
+            out |= {f"printing.palette.{key}.{i}.{printer}.V": p["V"] for printer, p in m["printed"].items()}
+            out |= {f"printing.palette.{key}.{i}.{printer}.jnd": p["jnd"] for printer, p in m["printed"].items()
+                    if p["jnd"] is not None}
+    return out
+
+
+def _printing(tmp: Path) -> dict:
+    """docs/how-to/printing.md: predict --printer (spectral, seconds)."""
+    tmp.mkdir()
+    _cli("texture", "make", "standard-1.0", "--out", "standard.npy", cwd=tmp)
+    return {"printing.predict": _cli("predict", "standard.npy", "--pixel-mm", "0.05", "--engine", "spectral",
+                                     "--printer", "fdm-0.4-0.2", cwd=tmp).strip()}
+
+
+def _rods(tmp: Path) -> dict:
+    """docs/how-to/objects.md: object tune on a rod of radius 6 mm, and on one of 8 mm for fdm-0.4-0.2 (the
+    cases of tests/test_object_feel.py; spectral engine, half a minute)."""
+    import trimesh
+
+    tmp.mkdir()
+    out = {}
+    for radius, extra in ((6, ["--region", "cone:0,0,-1,100"]), (8, ["--printer", "fdm-0.4-0.2"])):
+        trimesh.creation.cylinder(radius=radius, height=30.0, sections=180).export(tmp / f"rod{radius}.stl")
+        run = subprocess.run([sys.executable, "-m", "roughness.cli", "object", "tune", f"rod{radius}.stl", "--texture",
+                              "standard-1.0", "--mapping", "cylinder", "--region", "cone:0,0,1,100", *extra,
+                              "--spacing-mm", "10", "--target-lambda", "1.0", "--out", "t.npz", "--overwrite",
+                              "--json"], cwd=tmp, capture_output=True, text=True, timeout=300)
+        assert run.returncode == 0, run.stderr[-2000:]
+        summary, key = json.loads(run.stdout), f"objects.rod{radius}"
+        out |= {f"{key}.factor": summary["flat"]["factor"], f"{key}.flat_lambda": summary["flat"]["target_lambda_mm"],
+                f"{key}.smoother_jnd": -summary["flat_jnd_from_target"], f"{key}.object_jnd": summary["on_object"]["jnd_error"]}
+        given = re.search(r"as given.*?\(([-+]\d\.\d+) JND from the target\)", run.stderr)
+        out[f"{key}.given_jnd"] = float(given[1])
+        if "printing" in summary:
+            out[f"{key}.digital_jnd"] = summary["printing"]["digital_on_object"]["jnd_error"]
+    return out
 
 
 def _object(tmp: Path, case: str) -> dict:
@@ -151,7 +225,8 @@ def _perception(tmp: Path) -> dict:
 
 def current(tmp: Path, slow: bool = False) -> dict:
     """Every key's current value; the keys in SLOW (minutes) only when slow."""
-    out = _predict() | _python() | _object(tmp / "knob", "knob") | _perception(tmp / "perception")
+    out = (_predict() | _python() | _object(tmp / "knob", "knob") | _perception(tmp / "perception") | _tune(tmp / "tune")
+           | _committed_palettes() | _printing(tmp / "printing") | _rods(tmp / "rods"))
     return out | _object(tmp / "handle", "handle") | _jnd(tmp / "jnd") if slow else out
 
 
@@ -183,7 +258,8 @@ def test_marks_are_found_and_name_known_keys(tmp_path_factory):
     """Pages quote through marks; a misspelt key is an error, not a silently skipped number."""
     keys = {key for page in PAGES for key, _, _ in quoted(page)}
     assert {"predict.line", "python.repr", "knob.factor", "perception.R"} <= keys
-    assert all(k.split(".")[0] in {"predict", "python", "knob", "handle", "perception", "jnd"} for k in keys), keys
+    assert all(k.split(".")[0] in {"predict", "python", "knob", "handle", "perception", "jnd", "tune", "printing",
+                                   "objects"} for k in keys), keys
 
 
 def test_quoted_numbers_are_current(tmp_path_factory):
@@ -197,6 +273,32 @@ def test_quoted_numbers_are_current(tmp_path_factory):
 def test_quoted_numbers_are_current_with_the_handle(tmp_path_factory):
     values = current(tmp_path_factory.mktemp("doc-numbers-slow"), slow=True)
     assert [w for page in PAGES for w in stale(page, values)] == []
+
+
+def _numbers_close(now, committed, path: str = "") -> list[str]:
+    """Where two JSON trees differ: numbers beyond NOISE (relative), anything else at all."""
+    if isinstance(now, dict) and isinstance(committed, dict):
+        if now.keys() != committed.keys():
+            return [f"{path}: keys {sorted(now)} != {sorted(committed)}"]
+        return [d for k in now for d in _numbers_close(now[k], committed[k], f"{path}.{k}")]
+    if isinstance(now, list) and isinstance(committed, list) and len(now) == len(committed):
+        return [d for i, (a, b) in enumerate(zip(now, committed)) for d in _numbers_close(a, b, f"{path}[{i}]")]
+    if isinstance(now, float) and isinstance(committed, (int, float)) and not isinstance(committed, bool):
+        return [] if abs(now - committed) <= NOISE * max(abs(committed), 1e-12) else [f"{path}: {now} != {committed}"]
+    return [] if now == committed else [f"{path}: {now!r} != {committed!r}"]
+
+
+def test_print_palettes_study_is_current():
+    """The committed studies/results/print_palettes.json (whose numbers printing.md quotes) is what the study
+    makes with the current code and model (spectral engine and surrogate; about 20 s)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("print_palettes", ROOT / "studies" / "print_palettes.py")
+    study = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(study)
+    now = json.loads(json.dumps(study.measure(study.palettes())))
+    committed = json.loads((ROOT / "studies" / "results" / "print_palettes.json").read_text())
+    assert _numbers_close(now, committed) == [], "run python studies/print_palettes.py and update printing.md"
 
 
 def test_a_drifted_number_fails(tmp_path):
