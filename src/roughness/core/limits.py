@@ -112,6 +112,12 @@ PIXEL_RTOL = 1e-5
 prints 6), so sizes within one unit of the 6th digit are one size: 0.0499999987 (0.05 mm as float32 metres) and
 0.0499999 are 0.05 mm. Decisions on the pixel grid (how many samples per patch pixel, whether a footprint fits)
 use it."""
+SQUARE_RTOL = 1e-3
+"""Relative difference below which a file's pixel sizes along x and y are one square pixel (their mean, with a note):
+instrument round-off (real optical scans state sizes differing by 0.008-0.06%). The mean is off by at most half of
+it along either axis, so lengths along one axis are stretched by at most 0.05%: an equivalent wavelength off by
+ln(1.0005) / ln(1.19) = 0.003 JND at most, and points at the edge of the 10 mm footprint moved by 0.0025 mm, a
+twentieth of the 0.05 mm pixel (tests/test_scans.py measures the effect on V with the spectral engine)."""
 HEIGHT_RTOL = 2.0**-23
 """Relative precision of stored heights: float32 (1.2e-7), the coarsest floats the formats read hold; differences
 below this times the largest |height| are round-off, not relief."""

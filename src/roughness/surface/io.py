@@ -2,8 +2,10 @@
 
 Integer images map grey value v to height v / full_scale * height_mm (full_scale 255 for 8-bit,
 65535 for 16-bit); .npy, .npz, .h5 and float TIFF files hold heights in mm. Image row i is y index i.
-Measured scans (.x3p, .sur, .plu, .datx, .gwy, .sdf, ...: ``scans.FORMATS``) are read through
-SurfaceTopography (the extra ``roughness[scans]``) with the units and per-axis pixel sizes they state.
+Measured scans (.x3p, .sur, .plu, .datx, .gwy, .sdf, ...: ``scans.FORMATS``), any file of another suffix
+(through SurfaceTopography's format detection) and TIFFs that carry instrument data (a Park Systems AFM TIFF)
+are read through SurfaceTopography (the extra ``roughness[scans]``) with the units and per-axis pixel sizes they
+state.
 
 Files this tool writes carry their units where the format allows, and the loader reads them back:
 the pixel size (and for PNG the full-scale height and the base height) in a PNG text chunk, a TIFF
@@ -13,7 +15,8 @@ one exception is the standard TIFF resolution tags (XResolution, YResolution, Re
 as the pixel size when the file states nothing else, which picture software fills with 72 or 96 per
 inch by habit: a given ``pixel_mm`` replaces them, with a note.
 Pixels that are not square (a scan with 10 x 12 um pixels, or different TIFF X and Y resolutions)
-are refused unless ``resample_square`` asks for bilinear resampling to the finer of the two sizes.
+are refused unless ``resample_square`` asks for bilinear resampling to the finer of the two sizes; sizes
+within SQUARE_RTOL (0.1%: instrument round-off) are one square pixel, their mean, with a note.
 Missing points (NaN) are refused by ``load_heightmap`` and ``read_heightmap``; ``read_heights`` keeps
 them, for the loading pipeline's clean-up (roughness.surface.loading, which every command uses).
 Every failure the user can cause is reported as an InputError naming the file and the problem.
@@ -36,7 +39,7 @@ from PIL import Image, PngImagePlugin
 from roughness.core.checks import positive
 from roughness.core.errors import InputError
 from roughness.core.files import atomic_write
-from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, Limit, check_size
+from roughness.core.limits import MAX_HEIGHTMAP_PIXELS, SQUARE_RTOL, Limit, check_size
 
 from . import scans
 from .heightmap import Heightmap
@@ -141,9 +144,6 @@ def read_heights(path: str | Path, pixel_mm: float | None = None, height_mm: flo
     """
     path = _existing_file(Path(path))
     suffix = path.suffix.lower()
-    if suffix not in SUFFIXES:
-        raise InputError(f"{path}: unsupported heightmap format {suffix or '(no suffix)'!r}; "
-                         f"supported: {', '.join(SUFFIXES)}")
     if dataset is not None and suffix not in (".h5", ".hdf5"):
         raise InputError(f"{path}: a dataset name applies only to .h5/.hdf5 files", parameter="dataset")
     pixel_mm = None if pixel_mm is None else positive("pixel_mm", pixel_mm)
@@ -155,11 +155,12 @@ def read_heights(path: str | Path, pixel_mm: float | None = None, height_mm: flo
     elif suffix == ".png":
         raw = _read_png(path)
     elif suffix in (".tif", ".tiff"):
-        raw = _read_tiff(path)
-    elif suffix in scans.FORMATS:
-        raw = _read_scan(path)
-    else:
+        instrument = scans.instrument_tiff(path)
+        raw = _read_scan(path, instrument) if instrument else _read_tiff(path)
+    elif suffix in (".h5", ".hdf5"):
         raw = _read_h5(path, dataset or DEFAULT_DATASET)
+    else:  # a named scan format, or any other file: SurfaceTopography's own detection
+        raw = _read_scan(path)
     own = height_for_others and raw.full_scale is None and height_mm is not None
     heights, reading = _apply_units(path, raw, pixel_mm, None if own else height_mm, resample_square)
     if own:
@@ -285,6 +286,13 @@ def _apply_units(path: Path, raw: _Raw, pixel_mm: float | None, height_mm: float
         if raw.base_mm is not None:
             values = values + _stated(path, "base_mm", raw.base_mm, positive_only=False)
     resampling = None
+    if not math.isclose(pixel_x, pixel_y, rel_tol=SAME_UNIT_RTOL) and math.isclose(pixel_x, pixel_y,
+                                                                                 rel_tol=SQUARE_RTOL):
+        mean = (pixel_x + pixel_y) / 2
+        notes.append(f"{path}: its pixels, {pixel_x:.6g} mm (x) by {pixel_y:.6g} mm (y), differ by "
+                     f"{100 * abs(pixel_x - pixel_y) / max(pixel_x, pixel_y):.2g}%, less than {100 * SQUARE_RTOL:g}% "
+                     f"(SQUARE_RTOL): read as square pixels of {mean:.6g} mm, their mean")
+        pixel_x = pixel_y = mean
     if not math.isclose(pixel_x, pixel_y, rel_tol=SAME_UNIT_RTOL):
         if not resample_square:
             source = "as the file states them" if pixel_from == "file" else f"from its {pixel_from}"
@@ -487,8 +495,8 @@ def _read_tiff(path: Path) -> _Raw:
                 **tags)
 
 
-def _read_scan(path: Path) -> _Raw:
-    scan = scans.read_scan(path)
+def _read_scan(path: Path, fmt: str | None = None) -> _Raw:
+    scan = scans.read_scan(path, fmt)
     return _Raw(scan.heights, scan.kind, None, scan.pixel_x_mm, None, None, scan.pixel_y_mm, "scan", scan.unit)
 
 

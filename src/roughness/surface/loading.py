@@ -11,8 +11,10 @@ The steps, in order, each recorded in ``Loaded``:
    levels (files that hold mm, scans among them, keep theirs, noted);
 3. non-square pixels resampled to square if asked (``resample_square``), else refused;
 4. clean-up (roughness.surface.cleanup: fill, despike, level), each step only when asked;
-5. unit check (roughness.surface.units), on the map the engines will see (holes filled, spikes
-   out, tilt off, so none of them sways the relief), before any engine work;
+5. size and unit check, on the map the engines will see (holes filled, spikes out, tilt off, so
+   none of them sways the relief), before any engine work: a scan, whose units its file states,
+   narrower than 1 mm is refused as too small to feel (roughness.surface.tiling.check_touchable),
+   not as a unit mistake; then the plausibility of the numbers as mm (roughness.surface.units);
 6. tiling check (roughness.surface.tiling) where the map will be tiled under a footprint.
 """
 from __future__ import annotations
@@ -23,7 +25,7 @@ from pathlib import Path
 from .cleanup import Cleaned, Cleanup, clean
 from .heightmap import Heightmap
 from .io import Reading, read_heights
-from .tiling import TileFit, check_tile
+from .tiling import TileFit, check_tile, check_touchable
 from .units import FileUnits, Plausibility, check_units
 
 
@@ -66,6 +68,8 @@ def load_surface(path: str | Path, units: FileUnits = FileUnits(), resample_squa
     heights, reading = read_heights(path, units.pixel_mm, units.height_mm, dataset, resample_square,
                                     height_for_others=several)
     hm, cleaned = clean(heights, reading.pixel_mm, spec, reading.path)
-    found = check_units(hm, reading.path, units_ok)
+    if reading.unit is not None:  # a scan states its units: a tiny one is tiny, not in metres
+        check_touchable(hm, reading.path)
+    found = check_units(hm, reading.path, units_ok, reading.unit)
     tile = None if tile_footprint_mm is None else check_tile(hm, reading.path, tile_footprint_mm)
     return hm, Loaded(reading, cleaned, found, tile)

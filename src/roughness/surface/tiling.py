@@ -22,11 +22,14 @@ import numpy as np
 
 from roughness.core.errors import InputError
 from roughness.core.limits import HEIGHT_RTOL
+from roughness.perceptual_scale import FLOOR_LAMBDA_MM
 
 from .heightmap import Heightmap
 
 MIN_PERIODS = 5.0  # below: worst error 0.9-2.6 JND; from 5 on at most 0.86 (studies/results/small_scans.md)
 MAX_SEAM = 2.5  # seamless tiles measure 0.45-1.33, cut patches 3.9-13.8
+FOOTPRINT_MM = 10.0  # the fingertip's skin footprint (SimConfig.width_mm), for messages
+MIN_SIDE_MM = MIN_PERIODS * FLOOR_LAMBDA_MM  # 1 mm: narrower, a scan is too small to feel even tiled (check_touchable)
 
 
 @dataclass(frozen=True)
@@ -73,6 +76,26 @@ def tile_fit(hm: Heightmap) -> TileFit:
         step = math.sqrt(float(np.mean(inside**2)))
         seams.append(math.sqrt(float(np.mean(wrap**2))) / step if step > resolution else 0.0)
     return TileFit(side, feature, side / feature if math.isfinite(feature) else math.inf, max(seams))
+
+
+def check_touchable(hm: Heightmap, source: str) -> None:
+    """InputError for a map whose shorter side is below MIN_SIDE_MM (1 mm): too small to feel, even tiled.
+
+    Tiled, a patch repeats every side, so its relief is either finer than the standard scale's floor wavelength
+    (FLOOR_LAMBDA_MM, 0.2 mm: below it the scale places no texture and V is within a few times the engines' noise
+    of zero) or holds fewer than MIN_PERIODS features of it, and such patches read up to 2.6 JND off the texture
+    they were cut from. For maps whose units the file states (a scan): for others a tiny size is more likely a
+    unit mistake, which roughness.surface.units names."""
+    width, height = hm.size_mm
+    if min(width, height) >= MIN_SIDE_MM:
+        return
+    raise InputError(
+        f"{source}: the scan covers {width:.3g} mm x {height:.3g} mm; a fingertip footprint is {FOOTPRINT_MM:g} mm: "
+        f"too small to feel, even tiled (a tiled patch narrower than {MIN_SIDE_MM:g} mm holds only relief finer than "
+        f"the {FLOOR_LAMBDA_MM:g} mm the standard scale can feel, or fewer than {MIN_PERIODS:g} features, whose "
+        "tiling misleads by up to 2.6 JND: studies/results/small_scans.md); its units are the file's. Scan an area "
+        f"of at least {FOOTPRINT_MM:g} mm x {FOOTPRINT_MM:g} mm (or at least {MIN_SIDE_MM:g} mm of a periodic "
+        "texture, and pass --tile)")
 
 
 def check_tile(hm: Heightmap, source: str, footprint_mm: float) -> TileFit | None:

@@ -76,10 +76,17 @@ def plausibility(hm: Heightmap) -> Plausibility:
     return Plausibility(float(np.ptp(hm.heights)), math.sqrt(float(np.mean(gx**2 + gy**2))), hm.pixel_mm)
 
 
-def check_units(hm: Heightmap, source: str, units_ok: bool = False) -> Plausibility:
-    """``hm``'s plausibility, or InputError (parameter ``units_ok``) naming the likely unit unless ``units_ok``."""
+def check_units(hm: Heightmap, source: str, units_ok: bool = False, stated_unit: str | None = None) -> Plausibility:
+    """``hm``'s plausibility, or InputError (parameter ``units_ok``) naming the likely unit unless ``units_ok``;
+    ``stated_unit``: the length unit the file states (a scan), so the numbers are the surface's, not a unit guess."""
     found = plausibility(hm)
     problems = found.problems()
+    if problems and not units_ok and stated_unit is not None:
+        raise InputError(
+            f"{source}: {'; '.join(what for what, _ in problems)}: implausible for a touchable texture in mm (the "
+            f"bounds lie 10 times beyond the product's textures; see roughness.surface.units). The file states its "
+            f"unit ({stated_unit}) and was converted to mm, so these are the surface's own numbers, not a unit "
+            f"mistake: pass {CONFIRM} to judge it anyway", parameter=CONFIRM)
     if problems and not units_ok:
         units = list(dict.fromkeys(unit for _, unit in problems))
         likely = "; ".join(u for u in units if not any(u != v and u.startswith(v) for v in units))  # one reading
