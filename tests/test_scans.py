@@ -425,3 +425,73 @@ def test_unusable_tiff_tags_need_the_pixel_size_or_yield_to_it(tmp_path):
     with pytest.raises(InputError, match="pixel_mm it states is not a positive finite number"):
         read_heightmap(path)
     assert read_heightmap(path, pixel_mm=0.05).heightmap.pixel_mm == 0.05
+
+
+# pixels square within SQUARE_RTOL, scans too small to feel, units the file states
+
+
+@pytest.mark.parametrize("stretch", [1.00008, 1.0006, 0.9994])
+def test_pixels_within_square_rtol_are_read_as_square_with_a_note(tmp_path, stretch):
+    path = tmp_path / "scan.x3p"
+    _topography("um", px=PX, py=PX * stretch).to_x3p(str(path))
+    reading = read_heightmap(path)
+    assert reading.resampling is None and reading.heightmap.shape == (NY, NX)
+    assert reading.heightmap.pixel_mm == pytest.approx(PX * (1 + stretch) / 2, rel=1e-9)
+    assert reading.pixel_file_mm == pytest.approx((PX, PX * stretch), rel=1e-9)
+    assert any("less than 0.1% (SQUARE_RTOL): read as square pixels" in note for note in reading.notes)
+
+
+def test_pixels_beyond_square_rtol_are_still_refused(tmp_path):
+    path = tmp_path / "scan.x3p"
+    _topography("um", px=PX, py=PX * 1.0012).to_x3p(str(path))
+    with pytest.raises(InputError, match="not square"):
+        load_heightmap(path)
+
+
+def test_a_pixel_off_by_half_square_rtol_moves_v_far_less_than_a_jnd():
+    """SQUARE_RTOL's claim, measured: the mean of two pixel sizes 0.1% apart is 0.05% off either; reading the
+    standard texture lambda = 1.0 mm with its pixel 0.05% too large moves V by 0.003 JND at most (spectral engine,
+    deterministic: the same heights on a stretched grid)."""
+    from roughness.core.limits import SQUARE_RTOL
+    from roughness.dataset.catalogue import make_texture
+    from roughness.perceptual_scale import jnd_distance, load_scale
+    from roughness.prediction import predict
+
+    hm = make_texture("standard-1.0")[0]
+    stretched = Heightmap(hm.heights, hm.pixel_mm * (1 + SQUARE_RTOL / 2))
+    truth, off = predict([hm, stretched], engine="spectral")
+    moved = abs(jnd_distance(load_scale("spectral"), off.roughness, truth.roughness).jnd)
+    assert moved < 0.01  # the bound of core/limits.py: ln(1.0005) / ln(1.19) = 0.003 JND, with room for contact
+
+
+def test_a_scan_states_its_units_so_implausible_numbers_are_the_surface_not_a_unit(workdir, capsys):  # noqa: F811
+    h = np.random.default_rng(3).random((240, 240)) * 1e-4  # 0.1 um of relief on a 12 mm scan: polished
+    _topography("um", h, 0.05, 0.05).to_x3p(str(workdir / "polished.x3p"))
+    _expect_refusal(["predict", "polished.x3p", "--engine", "spectral"], workdir, capsys,
+                    ("The file states its unit (m) and was converted to mm, so these are the surface's own numbers, "
+                     "not a unit mistake: pass --units-ok",))
+    from roughness.cli import main
+
+    assert main(["predict", "polished.x3p", "--engine", "spectral", "--units-ok"]) == 0
+    assert "looks like" not in capsys.readouterr().err
+
+
+def test_the_smallest_scan_to_feel_is_five_floor_wavelengths_of_the_footprint_engines():
+    from roughness.perceptual_scale import FLOOR_LAMBDA_MM
+    from roughness.simulate.config import SimConfig
+    from roughness.surface.tiling import FOOTPRINT_MM, MIN_PERIODS, MIN_SIDE_MM
+
+    assert FOOTPRINT_MM == SimConfig().width_mm and MIN_SIDE_MM == MIN_PERIODS * FLOOR_LAMBDA_MM == 1.0
+
+
+def test_a_scan_of_a_millimetre_or_more_is_not_too_small(workdir, capsys):  # noqa: F811
+    """A 1.2 mm seamless scan of a periodic texture (0.3 mm grating) tiles; a 0.9 mm one is too small to feel."""
+    from roughness.cli import main
+
+    for side_px, name in ((24, "cell.x3p"), (18, "small.x3p")):
+        x = np.arange(side_px) * 0.05
+        h = np.tile(0.05 * np.sin(2 * np.pi * x / 0.3), (side_px, 1))
+        _topography("um", h, 0.05, 0.05).to_x3p(str(workdir / name))
+    assert main(["predict", "cell.x3p", "--engine", "spectral", "--tile"]) == 0
+    _expect_refusal(["predict", "small.x3p", "--engine", "spectral", "--tile"], workdir, capsys,
+                    ("the scan covers 0.9 mm x 0.9 mm; a fingertip footprint is 10 mm: too small to feel",))
