@@ -367,10 +367,29 @@ def test_a_physics_answer_is_never_called_out_of_domain():
     notes = ["feature size 0.1 mm below the training range"]
     for engine in ("spectral", "fem"):
         words = domain_words(SimpleNamespace(in_domain=False, engine=engine, domain_notes=notes))
-        assert words == f"outside the surrogate's domain ({notes[0]}), so the {engine} engine answered"
+        assert words == f"outside the surrogate's domain ({notes[0]}); the {engine} engine answered"
     assert domain_words(SimpleNamespace(in_domain=False, engine="surrogate", domain_notes=notes)) == \
         f"OUT OF DOMAIN: {notes[0]}"
     assert domain_words(SimpleNamespace(in_domain=True, engine="spectral", domain_notes=[])) == "in domain"
+
+
+def test_auto_and_the_spectral_engine_give_one_answer_one_verdict():
+    """Issue 41: auto called a spectral answer outside the surrogate's domain that --engine spectral called "in
+    domain" (it never checked: True unchecked). Both now judge the surrogate's domain: a texture just above its
+    relief range (1.16 mm, 2 mm period) and one inside it get the same verdict, words and V from either."""
+    import numpy as np
+
+    from roughness.prediction import domain_words, predict
+    from roughness.surface.heightmap import Heightmap
+
+    y, x = np.mgrid[0:240, 0:240] * 0.05
+    tall = Heightmap(0.6 * np.sin(2 * np.pi * x / 2.0) * np.sin(2 * np.pi * y / 2.0), 0.05)
+    [auto], [spectral] = predict(tall, engine="auto"), predict(tall, engine="spectral")
+    assert auto.engine == spectral.engine == "spectral" and auto.roughness == spectral.roughness
+    assert not auto.in_domain and not spectral.in_domain and auto.domain_notes == spectral.domain_notes
+    assert domain_words(auto) == domain_words(spectral) and "relief_mm 1.16 outside" in domain_words(spectral)
+    [inside] = predict(Heightmap(0.1 * np.sin(2 * np.pi * x / 1.0), 0.05), engine="spectral")
+    assert inside.in_domain and domain_words(inside) == "in domain"
 
 
 def test_the_python_repr_says_whose_domain_too():
@@ -378,6 +397,6 @@ def test_the_python_repr_says_whose_domain_too():
     from roughness.prediction import domain_words
 
     physics = SimpleNamespace(in_domain=False, engine="spectral", domain_notes=["a note"])
-    assert domain_words(physics, notes=False) == "outside the surrogate's domain, so the spectral engine answered"
+    assert domain_words(physics, notes=False) == "outside the surrogate's domain; the spectral engine answered"
     assert domain_words(SimpleNamespace(in_domain=False, engine="surrogate", domain_notes=["a note"]),
                         notes=False) == "out of domain"

@@ -291,11 +291,14 @@ def test_holes_in_a_scan_reach_fill(workdir, capsys):  # noqa: F811
     assert record["format"].startswith("XML 3D surface profile") and record["pixel_from"] == "file"
 
 
-def test_formats_that_could_hold_code_or_have_no_units_are_not_routed_to_surfacetopography():
+def test_only_unambiguous_suffixes_name_a_reader_and_the_tools_own_stay_here():
+    """.npy, .npz, .h5 and .tif are read by roughness.surface.io (no pickle: allow_pickle=False); suffixes that several
+    readers claim (text, .mat, .csv, .xlsx, .zip, .dat) go to SurfaceTopography's detection; .nms names none."""
     from roughness.surface.scans import FORMATS
 
-    assert not {".npy", ".npz", ".mat", ".txt", ".asc", ".csv", ".xlsx", ".zip", ".h5", ".tif", ".nms"} & set(FORMATS)
-    assert {".x3p", ".sur", ".plu", ".datx", ".gwy", ".sdf"} <= set(FORMATS)
+    assert not {".npy", ".npz", ".mat", ".txt", ".asc", ".csv", ".xlsx", ".zip", ".dat", ".h5", ".tif",
+                ".nms"} & set(FORMATS)
+    assert {".x3p", ".sur", ".plu", ".datx", ".gwy", ".sdf", ".spm", ".ibw", ".opdx", ".zon", ".stp"} <= set(FORMATS)
 
 
 # TIFF resolution tags

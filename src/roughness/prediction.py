@@ -17,6 +17,7 @@ import numbers
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -188,15 +189,16 @@ class Prediction:
 
 
 def domain_words(p: Prediction, notes: bool = True) -> str:
-    """Whose domain ``p.in_domain`` is, in words: the surrogate's. A surrogate answer outside it is OUT OF DOMAIN; a
-    physics engine's answer (``auto`` climbed, or asked for) is its own, so it only says why the surrogate did not
-    answer. ``notes``: with the reasons (the repr leaves them out and counts them)."""
+    """Whose domain ``p.in_domain`` is, in words: the surrogate's, for every engine (``--engine spectral`` checks it
+    too). A surrogate answer outside it is OUT OF DOMAIN; a physics engine's answer (``auto`` climbed, or asked for)
+    is its own, so it only says that the surrogate's domain did not hold and which engine answered. ``notes``: with
+    the reasons (the repr leaves them out and counts them)."""
     if p.in_domain:
         return "in domain"
     why = f" ({'; '.join(p.domain_notes)})" if notes else ""
     if p.engine == "surrogate":
         return f"OUT OF DOMAIN: {'; '.join(p.domain_notes)}" if notes else "out of domain"
-    return f"outside the surrogate's domain{why}, so the {p.engine} engine answered"
+    return f"outside the surrogate's domain{why}; the {p.engine} engine answered"
 
 
 def predict(inputs: Inputs, engine: str = "auto", model: SurrogateModel | str | Path | None = None,
@@ -251,7 +253,7 @@ def predictions(named: Iterable[tuple[str, Heightmap]], engine: str = "auto",
     engine = choice("engine", engine, PREDICT_ENGINES)
     options = _options(options)
     if engine == "spectral":
-        return _predict_spectral(named, _spectral_engine(options), on_result)
+        return _predict_spectral(named, _spectral_engine(options), _domain_model(model), options, on_result)
     dispatch = _Dispatch.make(engine, model, options)
     results: list[Prediction] = []
     batch: list[tuple[str, Heightmap]] = []
@@ -469,16 +471,40 @@ def _spectral_engine(options: PredictOptions) -> SpectralEngine:
     return SpectralEngine.of(centre_mm=options.centre_mm, tile=options.tile)
 
 
-def _predict_spectral(named: Iterable[tuple[str, Heightmap]], spectral: SpectralEngine,
-                      on_result: Callable[[Prediction], None] | None) -> list[Prediction]:
-    """``predict`` with the spectral engine: no surrogate loaded."""
+def _predict_spectral(named: Iterable[tuple[str, Heightmap]], spectral: SpectralEngine, model: SurrogateModel,
+                      options: PredictOptions, on_result: Callable[[Prediction], None] | None) -> list[Prediction]:
+    """``predict`` with the spectral engine. ``in_domain`` is the surrogate's domain, as where ``auto`` climbs to this
+    engine, so one answer gets one verdict whichever way it was asked for (the surrogate's domain check only: a few
+    milliseconds per input; it used to be True unchecked, "in domain" where auto said the opposite)."""
     results = []
     for source, hm in named:
-        result = _spectral_prediction(source, spectral.simulate(hm), True, [], spectral.identity)
+        why = model.evaluate(np.stack([model.patch(hm, options.centre_mm, options.tile)])).reasons[0]
+        result = _spectral_prediction(source, spectral.simulate(hm), not why, list(why), spectral.identity)
         results.append(result)
         if on_result:
             on_result(result)
     return results
+
+
+def _domain_model(model: SurrogateModel | str | Path | None) -> SurrogateModel:
+    """The surrogate whose domain the spectral engine's answers are judged by: ``model``, else the shipped one
+    (loaded once per process and file)."""
+    from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
+
+    if isinstance(model, SurrogateModel):
+        return model
+    path = Path(model or DEFAULT_MODEL)
+    stat = path.stat() if path.is_file() else None
+    return _loaded_model(str(path), None if stat is None else (stat.st_mtime_ns, stat.st_size))
+
+
+@lru_cache(maxsize=4)
+def _loaded_model(path: str, version: tuple[int, int] | None) -> SurrogateModel:
+    """The surrogate at ``path``; ``version`` (its modification time and size) keys the cache, so a changed file is
+    loaded again."""
+    from roughness.surrogate.predictor import SurrogateModel
+
+    return SurrogateModel(path)
 
 
 def uncertainty_limit(model: SurrogateModel, max_std: float | None) -> float | None:

@@ -149,7 +149,8 @@ MAX_PALETTE = 100
 def add_heightmap_args(p: argparse.ArgumentParser) -> None:
     """The heightmap input and how to read it (one file)."""
     p.add_argument("heightmap", metavar="HEIGHTMAP", help="heightmap file: .npy (mm), 8/16-bit .png/.tif, .h5, "
-                   "or a measured scan (.x3p, .sur, .plu, .datx, .gwy, .sdf, ...: see docs/how-to/real-surfaces.md); "
+                   "or a measured scan in any format SurfaceTopography reads with units (.x3p, .sur, .plu, .datx, "
+                   ".gwy, .sdf, .spm, .ibw, a Park Systems .tiff, ...: see docs/how-to/real-surfaces.md); "
                    "FILE:pixel-mm=MM,height-mm=MM gives its units")
     add_reading_args(p)
     p.add_argument("--tile", action="store_true", help="repeat a small heightmap as a periodic texture")
@@ -168,7 +169,8 @@ def add_reading_args(p: argparse.ArgumentParser) -> None:
                         "inputs it applies to those that need it; FILE:height-mm=MM for one file)")
     p.add_argument("--resample-square", action="store_true",
                    help="resample non-square pixels (e.g. a scan's 10 x 12 um) bilinearly to square pixels of the "
-                        "finer size, reported and recorded in the JSON (default: refuse them)")
+                        "finer size, reported and recorded in the JSON (default: refuse them; sizes within 0.1%% are "
+                        "read as square, noted)")
     p.add_argument("--units-ok", action="store_true",
                    help="the heights and pixel size are mm even though their relief, slope or pixel size look like "
                         "metres or micrometres (default: refuse them)")

@@ -107,13 +107,13 @@ def run(args: argparse.Namespace) -> int:
             raise InputError("--map slides the footprint over a flat object; it does not take --curvature-mm")
         check_map_path(args.map, args.overwrite)
     printer = printer_of(args)
-    if args.engine == "spectral":
-        model, footprint_mm = None, defaults(SimConfig)["width_mm"]
+    if args.engine == "spectral":  # the surrogate only judges its domain (--model's, else the shipped one's)
+        model, footprint_mm = args.model, defaults(SimConfig)["width_mm"]
     else:
         model = SurrogateModel(args.model or DEFAULT_MODEL, threads=args.threads)
         footprint_mm = model.footprint_mm
     if args.map:
-        return _predict_map(args, model, printer)
+        return _predict_map(args, None if args.engine == "spectral" else model, printer)
     loaded = {}  # input name -> what loading did to it, until its answer is shown
 
     def load_one(text: str, several: bool):
