@@ -471,8 +471,8 @@ def test_a_scan_states_its_units_so_implausible_numbers_are_the_surface_not_a_un
     h = np.random.default_rng(3).random((240, 240)) * 1e-4  # 0.1 um of relief on a 12 mm scan: polished
     _topography("um", h, 0.05, 0.05).to_x3p(str(workdir / "polished.x3p"))
     _expect_refusal(["predict", "polished.x3p", "--engine", "spectral"], workdir, capsys,
-                    ("The file states its unit (m) and was converted to mm, so these are the surface's own numbers, "
-                     "not a unit mistake: pass --units-ok",))
+                    ("The file states its unit (m, converted to mm), so these are the surface's own numbers, not a "
+                     "unit mistake: pass --units-ok",))
     from roughness.cli import main
 
     assert main(["predict", "polished.x3p", "--engine", "spectral", "--units-ok"]) == 0

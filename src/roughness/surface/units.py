@@ -85,8 +85,8 @@ def check_units(hm: Heightmap, source: str, units_ok: bool = False, stated_unit:
         raise InputError(
             f"{source}: {'; '.join(what for what, _ in problems)}: implausible for a touchable texture in mm (the "
             f"bounds lie 10 times beyond the product's textures; see roughness.surface.units). The file states its "
-            f"unit ({stated_unit}) and was converted to mm, so these are the surface's own numbers, not a unit "
-            f"mistake: pass {CONFIRM} to judge it anyway", parameter=CONFIRM)
+            f"unit ({stated_unit}{'' if stated_unit == 'mm' else ', converted to mm'}), so these are the surface's own "
+            f"numbers, not a unit mistake: pass {CONFIRM} to judge it anyway", parameter=CONFIRM)
     if problems and not units_ok:
         units = list(dict.fromkeys(unit for _, unit in problems))
         likely = "; ".join(u for u in units if not any(u != v and u.startswith(v) for v in units))  # one reading
