@@ -23,7 +23,8 @@ from .printer import add_printer_arg, printer_of
 
 
 def add_parser(actions) -> None:
-    from roughness.objects.texturing import DEFAULT_BORDER_MM, DEFAULT_NORMAL_RADIUS_MM
+    from roughness.objects.sharp_edges import DEFAULT_SHARP_DEG
+    from roughness.objects.texturing import DEFAULT_BORDER_MM, DEFAULT_MIN_FACE_MM, DEFAULT_NORMAL_RADIUS_MM
 
     p = actions.add_parser("texture", help="put a texture on a mesh: remesh the textured faces to the texture's pixel, "
                                            "displace them, write a watertight STL or 3MF")
@@ -31,8 +32,20 @@ def add_parser(actions) -> None:
                                  "outside 2 mm to 1 m is refused unless --units-ok)")
     p.add_argument("--region", default="all", metavar="REGION",
                    help="faces to texture: all, cone:AX,AY,AZ,DEG (normal within DEG of the axis), "
-                        "box:X0,Y0,Z0,X1,Y1,Z1 (centre in the box, mm), colour:R,G,B[,TOL] (painted vertex or face "
-                        "colours, 0-255) (default: all)")
+                        "angle:AX,AY,AZ,MIN,MAX (normal MIN to MAX degrees from the direction: 0,0,1,45,135 the walls, "
+                        "0,0,1,0,170 all but the bottom), box:X0,Y0,Z0,X1,Y1,Z1 (centre in the box, mm), "
+                        "colour:R,G,B[,TOL] (painted vertex or face colours, 0-255), faces:FILE (a text file of face "
+                        "numbers from 0 and ranges A-B) (default: all)")
+    p.add_argument("--sharp-deg", type=Number(float, low=0, high=180, low_open=True), default=DEFAULT_SHARP_DEG, metavar="DEG",
+                   help="edges where the faces' normals turn by more than this are sharp: the texture ramps to 0 at "
+                        "them, as at the region's border (40: above the 30 degrees between the facets of a coarsely "
+                        "exported fillet, below a 45-degree chamfer; 180: no edge is sharp) "
+                        f"(default {DEFAULT_SHARP_DEG:g})")
+    p.add_argument("--min-face-mm", type=Number(float, low=0, high=MAX_LENGTH_MM), default=DEFAULT_MIN_FACE_MM,
+                   metavar="MM",
+                   help="faces between sharp edges narrower than this (twice the area over the perimeter) are left "
+                        "untextured: engraving, small holes (0: none) "
+                        f"(default {DEFAULT_MIN_FACE_MM:g})")
     p.add_argument("--edge-mm", type=LENGTH, metavar="MM",
                    help="longest edge of a textured triangle (default: with --printer, the larger of half the FDM "
                         "line width or the SLA pixel and sqrt(2) x the texture's pixel on the surface; without, "
@@ -53,7 +66,8 @@ def add_parser(actions) -> None:
     add_reading_args(p)
     add_quiet(p)
     add_overwrite(p)
-    finish(p, run, edge_mm="--edge-mm", region="--region", **MAPPING_FLAGS)
+    finish(p, run, edge_mm="--edge-mm", region="--region", sharp_deg="--sharp-deg", min_face_mm="--min-face-mm",
+           **MAPPING_FLAGS)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -97,7 +111,8 @@ def run(args: argparse.Namespace) -> int:
     stage = None if args.quiet else meter.stage
     result = texture_mesh(read.mesh, mapping, region, edge_mm, args.normal_radius_mm,
                           check_intersections=not args.no_intersection_check, progress=step_done,
-                          border_mm=args.border_mm, meter=stage)
+                          border_mm=args.border_mm, meter=stage, sharp_deg=args.sharp_deg,
+                          min_face_mm=args.min_face_mm)
     written = write_mesh(result.mesh, out, args.overwrite, progress=stage and stage(f"writing {out.name}"))
     meter.close()
     if preview is not None:

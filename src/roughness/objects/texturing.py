@@ -10,12 +10,18 @@ Steps, each reported in ``TexturedMesh.notes``:
    region's normals, not tilted towards the untextured faces beside it), optionally smoothed over
    ``normal_radius_mm``;
 3. the texture's heights at the vertices of textured faces (``mapping``), bumps outwards, ramped from 0 on the
-   region's border to full height over ``border_mm`` (a smoothstep of the distance to the nearest border vertex),
-   so the border stays where it was: the untextured faces beside it keep their shape, and the long thin faces the
-   refinement leaves there are not turned over;
-4. refused (InputError) if the texture is deeper than the surface's radius where it is concave: the offset
+   region's border and on sharp edges (``sharp_edges``: a CAD part's edges, where the faces' normals turn by more
+   than ``sharp_deg``) to full height (a smoothstep of the distance to the nearest vertex on them), so that they
+   stay where they were: the untextured faces beside a border keep their shape, the long thin faces the refinement
+   leaves there are not turned over, and the two faces of a sharp edge do not move into each other. The ramp is
+   ``border_mm`` wide at a border and at a convex sharp edge; at a concave sharp edge it is at least
+   ``concave_ramp_mm`` wide, so that the faces' displaced surfaces stay on their side of the plane bisecting the
+   edge. Before refining, faces between sharp edges narrower than ``min_face_mm`` (engraving, small holes:
+   ``sharp_edges.patches``) are taken out of the region and left as they are;
+4. refused (InputError) where the texture is deeper than the surface's radius where it is concave: the offset
    surface folds where the depth exceeds the radius at which the normals converge (estimated on every textured
-   edge from the normals at its ends: curvature = -(n_b - n_a).(b - a) / |b - a|^2);
+   edge from the normals at its ends: curvature = -(n_b - n_a).(b - a) / |b - a|^2, against the larger height at
+   its ends);
 5. displaced, then checked: no face turned over, a closed solid by an independent check (``roughness.surface.solid``:
    every edge shared by exactly two triangles, consistently wound, no zero-area triangle), no two faces crossing
    (``intersections``). Writing the mesh checks it again as the file holds it (``meshes.write_mesh``).
@@ -40,11 +46,22 @@ from .meshes import require_closed
 from .normals import face_normals, smoothed, vertex_normals
 from .regions import Region
 from .remesh import Refined, refine
+from .sharp_edges import DEFAULT_SHARP_DEG, patches, sharp_edges
 
 DEFAULT_NORMAL_RADIUS_MM = 0.0
+"""Normals are area-weighted vertex normals, not smoothed further, unless asked."""
 DEFAULT_BORDER_MM = 0.5
 """Heights ramp from 0 on a region's border to full height over this distance (mm)."""
-"""Normals are area-weighted vertex normals, not smoothed further, unless asked."""
+DEFAULT_MIN_FACE_MM = 2.0
+"""Faces between sharp edges narrower than this (mm; twice the area over the perimeter: a strip's width) are left
+untextured: the walls of an engraving or an embossing (up to about 1 mm deep) and of holes in thin parts. The ramps
+at their edges (``border_mm``, wider at concave edges) would leave them little or no texture at full height, and a
+fingertip (10 mm footprint) does not feel a texture on them apart from the faces around them."""
+SMOOTHSTEP_SLOPE = 9 / 8
+"""The largest s(t) / t of the smoothstep s(t) = t^2 (3 - 2 t) (at t = 3/4)."""
+CONCAVE_RAMP_MARGIN = 4 / 3
+"""Widening of the ramp at concave sharp edges beyond the exact bound (``concave_ramp_mm``), for the distance to
+the nearest vertex on the edge being up to half an edge more than the distance to the edge's line."""
 FLAT_CURVATURE = 1e-3
 """Curvatures (1/mm) below this (radii above 1 m) are taken as flat (rounding in the normals of a flat face)."""
 NEEDLE_ASPECT = 20.0
@@ -60,13 +77,16 @@ class TexturedMesh:
     """A textured mesh (``mesh``, a trimesh, mm) and what was done to make it. ``mean_height_mm`` is the
     area-weighted mean of the heights over the textured base faces, ``height_volume_mm3`` their integral: the
     volume the texture adds to first order (exact on flat faces; on a surface of radius R the offset adds a
-    further fraction of about height / R)."""
+    further fraction of about height / R). ``sharp_edges_in``: sharp edges of the input among the textured faces;
+    ``min_concave_radius_mm``: the smallest concave radius where the surface moves; ``fold_ratio``: the largest
+    height over the concave radius there (the surface folds at 1)."""
 
     mesh: Any  # trimesh.Trimesh
     triangles_in: int
     triangles_out: int
     textured_faces_in: int
     textured_area_mm2: float
+    sharp_edges_in: int
     edge_mm: float
     refinement_rounds: int
     normal_smoothing_rounds: int
@@ -74,6 +94,7 @@ class TexturedMesh:
     mean_height_mm: float
     height_volume_mm3: float
     min_concave_radius_mm: float
+    fold_ratio: float
     volume_in_mm3: float
     volume_out_mm3: float
     intersection_pairs_tested: int | None
@@ -94,28 +115,38 @@ class _Input:
 
     vertices: np.ndarray
     faces: np.ndarray
-    selected: np.ndarray  # bool per face: the region's
+    selected: np.ndarray  # bool per face: the region's, without its narrow faces
     edge_mm: float
     normal_radius_mm: float
     border_mm: float
+    sharp_deg: float
+    min_face_mm: float
+    sharp_edges: int  # of the input, among the selected faces
 
 
 @dataclass(frozen=True)
 class _Relief:
     """The displacement of the refined mesh: ``where`` (indices of the vertices of textured faces) move by
-    ``heights`` (mm, ramped at the border) along their normals; ``moving`` flags those vertices."""
+    ``heights`` (mm, ramped at borders and sharp edges) along their normals; ``moving`` flags those vertices."""
 
     moving: np.ndarray  # bool per vertex
     where: np.ndarray
     heights: np.ndarray
     depth_mm: float  # the largest height
 
+    def full_heights(self) -> np.ndarray:
+        """The heights (mm) at every vertex of the refined mesh (0 where nothing moves)."""
+        out = np.zeros(len(self.moving))
+        out[self.where] = self.heights
+        return out
+
 
 def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_mm: float | None = None,
                  normal_radius_mm: float = DEFAULT_NORMAL_RADIUS_MM, check_intersections: bool = True,
                  progress: Callable[[str], object] | None = None,
                  border_mm: float = DEFAULT_BORDER_MM,
-                 meter: Callable[[str], Callable[[float], object]] | None = None) -> TexturedMesh:
+                 meter: Callable[[str], Callable[[float], object]] | None = None,
+                 sharp_deg: float = DEFAULT_SHARP_DEG, min_face_mm: float = DEFAULT_MIN_FACE_MM) -> TexturedMesh:
     """``mesh`` (a closed trimesh, mm) with ``mapping``'s texture on the faces of ``region`` (module docstring).
 
     ``edge_mm``: longest edge of a textured face (default: sqrt(2) times the mapping's ``pixel_mm``, so that the
@@ -125,18 +156,20 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     ``progress``: called with a line as each step ends (its time in ``TexturedMesh.seconds``); ``border_mm``: the
     heights ramp from 0 on the region's border to full height over this distance (0: no ramp, the border moves);
     ``meter``: given a step's name ("refine", "self-intersection check"), the callback to which that step reports
-    the fraction of its work done (``progress.StageMeter.stage``).
+    the fraction of its work done (``progress.StageMeter.stage``); ``sharp_deg``: edges whose faces' normals turn by
+    more than this (degrees) are borders of the texture (180: none); ``min_face_mm``: faces between sharp edges
+    narrower than this (mm) are left untextured (0: none).
     """
     clock = _Clock(progress, meter)
-    given = _checked_input(mesh, mapping, region, edge_mm, normal_radius_mm, border_mm)
-    notes = _input_notes(given, mapping, region)
+    given, notes = _checked_input(mesh, mapping, region, edge_mm, normal_radius_mm, border_mm, sharp_deg, min_face_mm)
+    notes += _input_notes(given, mapping)
     volume_in = signed_volume(given.vertices, given.faces)
     refined = _refined(given, clock, notes)
     normals, rounds = _normals(refined, given, clock, notes)
-    relief = _relief(refined, mapping, normals, given.border_mm, clock, notes)
-    concave = min_concave_radius(refined.vertices, refined.faces[refined.textured], normals)
+    relief = _relief(refined, mapping, normals, given, clock, notes)
+    concave = tightest_concave(refined.vertices, refined.faces[refined.textured], normals, relief.full_heights())
     clock.step("concave radius")
-    _require_shallower(concave, relief.depth_mm, notes)
+    _require_shallower(concave, notes)
     displaced = refined.vertices.copy()
     displaced[relief.where] += relief.heights[:, None] * normals[relief.where]
     del normals
@@ -150,29 +183,51 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
 
     area, volume = _area_and_volume(refined, relief)
     return TexturedMesh(trimesh.Trimesh(displaced, refined.faces, process=False, validate=False), len(given.faces),
-                        len(refined.faces), int(given.selected.sum()), area, given.edge_mm, refined.rounds, rounds,
-                        relief.depth_mm, volume / area, volume, concave.radius_mm, volume_in,
-                        signed_volume(displaced, refined.faces), tested, notes, clock.seconds)
+                        len(refined.faces), int(given.selected.sum()), area, given.sharp_edges, given.edge_mm,
+                        refined.rounds, rounds, relief.depth_mm, volume / area, volume, concave.radius_mm,
+                        concave.ratio, volume_in, signed_volume(displaced, refined.faces), tested, notes,
+                        clock.seconds)
 
 
 def _checked_input(mesh, mapping: TextureMapping, region: Region, edge_mm: float | None, normal_radius_mm: float,
-                   border_mm: float) -> _Input:
-    """texture_mesh's input as arrays, checked (InputError naming the parameter at fault)."""
+                   border_mm: float, sharp_deg: float, min_face_mm: float) -> tuple[_Input, list[str]]:
+    """texture_mesh's input as arrays, checked (InputError naming the parameter at fault), the region without its
+    faces narrower than ``min_face_mm`` between sharp edges, and notes on the region."""
     require_closed(mesh, "the mesh")
     edge = length("edge_mm", math.sqrt(2) * mapping.pixel_mm if edge_mm is None else edge_mm)
     radius = length("normal_radius_mm", normal_radius_mm, zero=True)
     border = length("border_mm", border_mm, zero=True)
+    narrow = length("min_face_mm", min_face_mm, zero=True)
+    if isinstance(sharp_deg, bool) or not isinstance(sharp_deg, (int, float)) or not 0 < sharp_deg <= 180:
+        raise InputError(f"the sharp-edge angle must be a number of degrees above 0, at most 180 (none sharp), got "
+                         f"{sharp_deg!r}", parameter="sharp_deg")
     selected = np.asarray(region.faces(mesh), dtype=bool)
     if not selected.any():
         raise InputError(f"the region ({region.describe()}) selects no face of the mesh", parameter="region")
-    return _Input(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64), selected, edge,
-                  radius, border)
+    vertices, faces = np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces, dtype=np.int64)
+    notes = [f"textured region: {region.describe()}: {int(selected.sum()):,} of {len(faces):,} faces"]
+    found = patches(vertices, faces, selected, sharp_deg)
+    small = np.flatnonzero(found.width_mm < narrow)
+    if len(small) == len(found.area_mm2):
+        raise InputError(f"every face of the region between sharp edges (turning by more than {sharp_deg:g} degrees) is "
+                         f"narrower than {narrow:g} mm (widest {found.width_mm.max():.3g} mm): nothing is left to "
+                         "texture; a smaller --min-face-mm textures narrow faces, a larger --sharp-deg joins faces "
+                         "across their edges", parameter="min_face_mm")
+    if len(small):
+        selected &= ~np.isin(found.label, small)
+        notes.append(f"{len(small):,} of {len(found.area_mm2):,} faces between sharp edges are narrower than {narrow:g} "
+                     f"mm (twice the area over the perimeter; {found.area_mm2[small].sum():.1f} mm^2: engraving, small "
+                     "holes, chamfers) and left untextured (--min-face-mm)")
+    edges = sharp_edges(vertices, faces[selected], sharp_deg)
+    notes.append(f"{edges.count:,} sharp edges (faces turning by more than {sharp_deg:g} degrees, --sharp-deg) in the "
+                 f"region, {int(edges.concave.sum()):,} of them concave: the texture ramps to 0 at them"
+                 if edges.count else f"no sharp edge (faces turning by more than {sharp_deg:g} degrees) in the region")
+    return _Input(vertices, faces, selected, edge, radius, border, float(sharp_deg), narrow, edges.count), notes
 
 
-def _input_notes(given: _Input, mapping: TextureMapping, region: Region) -> list[str]:
-    """Notes on the input: the region, the mapping's own notes, and needle-shaped textured faces."""
-    notes = [f"textured region: {region.describe()}: {int(given.selected.sum()):,} of {len(given.faces):,} faces"]
-    notes += list(getattr(mapping, "notes", lambda: [])())
+def _input_notes(given: _Input, mapping: TextureMapping) -> list[str]:
+    """Notes on the input: the mapping's own notes, and needle-shaped textured faces."""
+    notes = list(getattr(mapping, "notes", lambda: [])())
     needles = needle_faces(given.vertices, given.faces[given.selected], given.edge_mm)
     if needles:
         notes.append(f"{needles:,} textured faces of the input are needle-shaped (longer than {NEEDLE_ASPECT:g} times "
@@ -204,36 +259,79 @@ def _normals(refined: Refined, given: _Input, clock: _Clock, notes: list[str]) -
     return normals, rounds
 
 
-def _relief(refined: Refined, mapping: TextureMapping, normals: np.ndarray, border_mm: float, clock: _Clock,
+def _relief(refined: Refined, mapping: TextureMapping, normals: np.ndarray, given: _Input, clock: _Clock,
             notes: list[str]) -> _Relief:
-    """The mapping's heights (mm) at the vertices of textured faces, ramped over ``border_mm`` (step 3); InputError
-    if the mapping gives other than one finite height per vertex."""
+    """The mapping's heights (mm) at the vertices of textured faces, ramped at borders and sharp edges (step 3);
+    InputError if the mapping gives other than one finite height per vertex."""
     moving = np.zeros(len(refined.vertices), dtype=bool)
     moving[refined.faces[refined.textured].ravel()] = True
     where = np.flatnonzero(moving)
     heights = np.asarray(mapping.heights(refined.vertices[where], normals[where]), dtype=float)
     if heights.shape != (len(where),) or not np.all(np.isfinite(heights)):
         raise InputError("the mapping gave heights that are not finite numbers (one per point)", parameter="mapping")
-    ramped = border_ramp(refined.vertices, refined.faces, refined.textured, where, border_mm)
-    if ramped is not None:
-        heights *= ramped
-        notes.append(f"heights ramp from 0 on the region's border to full over {border_mm:g} mm "
-                     f"({int(np.count_nonzero(ramped < 1)):,} vertices within it)")
+    heights *= _ramps(refined, where, float(heights.max()), given, notes)
     clock.step("heights", f"{len(where):,} vertices")
     return _Relief(moving, where, heights, float(heights.max()))
 
 
-def _require_shallower(concave: Concave, depth_mm: float, notes: list[str]) -> None:
-    """InputError if the texture is deeper than the surface's smallest concave radius (step 4; noted in ``notes``)."""
-    if concave.radius_mm < depth_mm:
+def _ramps(refined: Refined, where: np.ndarray, depth_mm: float, given: _Input, notes: list[str]) -> np.ndarray:
+    """Factors in [0, 1] for the heights at vertices ``where`` (step 3): the smallest of the ramps from the region's
+    border and convex sharp edges (over ``border_mm``) and from concave sharp edges (over ``concave_ramp_mm``, at
+    least ``border_mm``); noted in ``notes``."""
+    v, f, textured = refined.vertices, refined.faces, refined.textured
+    factor = np.ones(len(where))
+    in_region = np.zeros(len(v), dtype=bool)
+    in_region[f[textured].ravel()] = True
+    on_border = np.zeros(len(v), dtype=bool)
+    on_border[f[~textured].ravel()] = True
+    edges = sharp_edges(v, f[textured], given.sharp_deg)
+    concave = _concave_vertices(edges, len(v))
+    convex = edges.vertices(len(v)) & ~concave
+    turn = edges.sharpest_concave_deg()
+    concave_mm = max(given.border_mm, concave_ramp_mm(depth_mm, turn)) if turn is not None else 0.0
+    for anchors, width, what in ((on_border & in_region, given.border_mm, "the region's border"),
+                                 (convex, given.border_mm, "convex sharp edges"),
+                                 (concave, concave_mm, "concave sharp edges")):
+        ramped = ramp(v, anchors, where, width)
+        if ramped is not None:
+            factor = np.minimum(factor, ramped)
+            notes.append(f"heights ramp from 0 on {what} to full over {width:.3g} mm "
+                         f"({int(np.count_nonzero(ramped < 1)):,} vertices within it)"
+                         + (f": at least {concave_ramp_mm(depth_mm, turn):.3g} mm for a texture {depth_mm:.3g} mm "
+                            f"deep where the faces turn by up to {turn:.0f} degrees" if anchors is concave else ""))
+    return factor
+
+
+def _concave_vertices(edges, n_vertices: int) -> np.ndarray:
+    """Bool per vertex: on a concave sharp edge."""
+    out = np.zeros(n_vertices, dtype=bool)
+    out[edges.ends[edges.concave].ravel()] = True
+    return out
+
+
+def concave_ramp_mm(depth_mm: float, turn_deg: float) -> float:
+    """The ramp width (mm) at a concave sharp edge whose faces' normals turn by ``turn_deg`` for a texture
+    ``depth_mm`` deep. Each face moves along its own normal by h(x) at distance x from the edge; the two displaced
+    faces cannot meet while each stays on its side of the plane bisecting the edge, h(x) < x tan(a / 2), a = 180 -
+    turn the opening angle. With h = depth s(x / w) (a smoothstep) this holds for every x if w > depth (9/8) /
+    tan(a / 2); the width returned is CONCAVE_RAMP_MARGIN times that."""
+    opening = math.radians(180.0 - turn_deg) / 2
+    return CONCAVE_RAMP_MARGIN * SMOOTHSTEP_SLOPE * depth_mm / max(math.tan(opening), 1e-9)
+
+
+def _require_shallower(concave: Concave, notes: list[str]) -> None:
+    """InputError where the texture is deeper than the surface's concave radius (step 4; noted in ``notes``)."""
+    if concave.ratio >= 1:
         x, y, z = concave.where
-        raise InputError(f"the texture is {depth_mm:.3g} mm deep but the surface is concave with a radius of "
-                         f"{concave.radius_mm:.3g} mm near ({x:.2f}, {y:.2f}, {z:.2f}) mm: displaced along its normals "
-                         "it would fold into itself; use a shallower texture (--height-mm), smooth the normals over a "
-                         "larger radius (--normal-radius-mm), or leave that part out of the region", parameter="mapping")
+        raise InputError(f"the texture is {concave.depth_mm:.3g} mm deep near ({x:.2f}, {y:.2f}, {z:.2f}) mm, where the "
+                         f"surface is concave with a radius of {concave.at_radius_mm:.3g} mm: displaced along its "
+                         "normals it would fold into itself; use a shallower texture (--height-mm), make the crease "
+                         "there a sharp edge the texture ramps down at (a smaller --sharp-deg), smooth the normals over "
+                         "a larger radius (--normal-radius-mm), or leave that part out (--region)", parameter="mapping")
     if math.isfinite(concave.radius_mm):
-        notes.append(f"smallest concave radius of the textured surface {concave.radius_mm:.3g} mm, above the "
-                     f"texture's depth {depth_mm:.3g} mm")
+        notes.append(f"concave parts: the texture comes closest to folding where it is {concave.depth_mm:.3g} mm deep on "
+                     f"a radius of {concave.at_radius_mm:.3g} mm (depth / radius {concave.ratio:.2g}; it folds at 1); "
+                     f"smallest concave radius where the surface moves {concave.radius_mm:.3g} mm")
 
 
 def _check_displaced(refined: Refined, displaced: np.ndarray, clock: _Clock, notes: list[str]) -> None:
@@ -291,22 +389,16 @@ def needle_faces(vertices: np.ndarray, faces: np.ndarray, edge_mm: float) -> int
     return count
 
 
-def border_ramp(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, where: np.ndarray,
-                border_mm: float) -> np.ndarray | None:
-    """Factors in [0, 1] for the heights at vertices ``where``: 0 on the border of the textured faces (vertices
-    shared with untextured faces), a smoothstep of the distance to the nearest border vertex, 1 from ``border_mm``
-    on; None if the region has no border (the whole closed mesh) or ``border_mm`` is 0."""
-    if border_mm == 0 or textured.all():
+def ramp(vertices: np.ndarray, anchors: np.ndarray, where: np.ndarray, width_mm: float) -> np.ndarray | None:
+    """Factors in [0, 1] for the heights at vertices ``where``: 0 on the ``anchors`` (bool per vertex), a
+    smoothstep of the distance to the nearest anchor, 1 from ``width_mm`` on; None if there is no anchor or the
+    width is 0."""
+    if width_mm == 0 or not anchors.any():
         return None
     from scipy.spatial import cKDTree
 
-    on_border = np.zeros(len(vertices), dtype=bool)
-    on_border[faces[~textured].ravel()] = True
-    in_region = np.zeros(len(vertices), dtype=bool)
-    in_region[faces[textured].ravel()] = True
-    border = np.flatnonzero(on_border & in_region)
-    distance, _ = cKDTree(vertices[border]).query(vertices[where], distance_upper_bound=border_mm)
-    t = np.clip(distance / border_mm, 0.0, 1.0)  # inf (beyond border_mm) -> 1
+    distance, _ = cKDTree(vertices[anchors]).query(vertices[where], distance_upper_bound=width_mm)
+    t = np.clip(distance / width_mm, 0.0, 1.0)  # inf (beyond width_mm) -> 1
     return t * t * (3 - 2 * t)
 
 
@@ -334,27 +426,37 @@ class _Clock:
 
 @dataclass(frozen=True)
 class Concave:
-    """The smallest concave radius (mm) of a surface and where (inf, and the origin, if nowhere concave)."""
+    """Where a displaced surface comes closest to folding: ``ratio`` the largest height over concave radius on an
+    edge (it folds at 1), the height ``depth_mm`` and radius ``at_radius_mm`` there, ``where`` (mm); ``radius_mm``
+    the smallest concave radius on an edge with a moving end (inf, ratio 0, the origin, if nowhere concave)."""
 
     radius_mm: float
-    where: tuple[float, float, float]
+    ratio: float = 0.0
+    depth_mm: float = 0.0
+    at_radius_mm: float = math.inf
+    where: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
-def min_concave_radius(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray) -> Concave:
-    """The smallest radius (mm) at which the vertex ``normals`` of the faces' edges converge outwards (module
-    docstring, step 4)."""
-    best, where = math.inf, (0.0, 0.0, 0.0)
+def tightest_concave(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray, heights: np.ndarray) -> Concave:
+    """The ``Concave`` of the faces' edges, curvature from the vertex ``normals`` at their ends (module docstring,
+    step 4), against the larger of the ``heights`` (mm, per vertex) at their ends."""
+    radius, worst = math.inf, Concave(math.inf)
     for start in range(0, len(faces), CHUNK):
         fs = faces[start:start + CHUNK]
         a, b = fs.ravel(), np.roll(fs, -1, axis=1).ravel()
         d = vertices[b] - vertices[a]
         curvature = -np.einsum("ij,ij->i", normals[b] - normals[a], d) / np.einsum("ij,ij->i", d, d)
-        k = int(np.argmax(curvature))
-        if curvature[k] > FLAT_CURVATURE and 1 / curvature[k] < best:
-            best = float(1 / curvature[k])
+        depth = np.maximum(heights[a], heights[b])
+        concave = (curvature > FLAT_CURVATURE) & (depth > 0)
+        if not concave.any():
+            continue
+        radius = min(radius, float(1 / curvature[concave].max()))
+        ratio = np.where(concave, depth * curvature, 0.0)
+        k = int(np.argmax(ratio))
+        if ratio[k] > worst.ratio:
             x, y, z = (float(c) for c in (vertices[a[k]] + vertices[b[k]]) / 2)
-            where = (x, y, z)
-    return Concave(best, where)
+            worst = Concave(math.inf, float(ratio[k]), float(depth[k]), float(1 / curvature[k]), (x, y, z))
+    return Concave(radius, worst.ratio, worst.depth_mm, worst.at_radius_mm, worst.where)
 
 
 def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
