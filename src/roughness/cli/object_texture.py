@@ -151,7 +151,7 @@ def _plan(args: argparse.Namespace, mesh, region, mapping, printer):
 
     import numpy as np
 
-    from roughness.objects.print_plan import mesh_plan, printer_edge
+    from roughness.objects.print_plan import mesh_plan, printer_edge, require_within
 
     notes = []
     if args.edge_mm is not None:
@@ -163,8 +163,9 @@ def _plan(args: argparse.Namespace, mesh, region, mapping, printer):
     else:
         edge_mm = math.sqrt(2) * mapping.pixel_mm
     selected = np.asarray(region.faces(mesh), dtype=bool)
-    plan = mesh_plan(np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces), selected, edge_mm,
-                     not args.no_intersection_check)
+    vertices, faces = np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces)
+    plan = mesh_plan(vertices, faces, selected, edge_mm, not args.no_intersection_check)
+    require_within(plan, vertices, faces, selected, not args.no_intersection_check)
     notes.append(plan.line())
     if plan.warning():
         notes.append(plan.warning())

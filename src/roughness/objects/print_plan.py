@@ -17,7 +17,12 @@ sample.
 Cost (``mesh_plan``): triangles from ``remesh.predicted_triangles`` (measured on a sample of the faces), bytes from
 ``meshes.stl_bytes``, time from the rates measured in benchmarks/results/object_texture.md (a 60 mm ball refined
 to 13,107,200 triangles: refine to displace and closed checks 113.1 s, self-intersection check 93.5 s, binary STL
-6.9 s, on 2 cores shared with other jobs, so a quiet machine is faster).
+6.9 s, on 2 cores shared with other jobs, so a quiet machine is faster), memory from the peak measured on a CAD
+cube (``PEAK_BYTES_PER_TRIANGLE``).
+
+Budget (``require_within``): a plan above MAX_MESH_TRIANGLES is refused before anything is refined, with
+its cost and what fits: the edge at which the estimate falls within the limit (found by estimating again, since the
+count jumps with the number of halvings) and the area that fits at the asked edge (triangles grow with the area).
 """
 from __future__ import annotations
 
@@ -25,6 +30,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from roughness.core.errors import InputError
+from roughness.core.limits import MAX_MESH_TRIANGLES, Limit
 
 from .meshes import stl_bytes
 from .remesh import predicted_triangles
@@ -36,6 +44,14 @@ CHECK_SECONDS_PER_TRIANGLE = 93.5 / _BENCH_TRIANGLES
 """The self-intersection check (s per output triangle)."""
 WRITE_SECONDS_PER_TRIANGLE = 6.9 / _BENCH_TRIANGLES
 """Writing a binary STL (s per triangle)."""
+PEAK_BYTES_PER_TRIANGLE = 371
+"""Peak memory of ``object texture`` per output triangle (bytes): 4.56 GB (maximum resident set) texturing the
+40 mm octant cube of tests/test_mesh_solid.py whole with standard-1.0 at the default edge, 12,589,056 triangles
+(self-intersection check and STL included)."""
+BUDGET_MARGIN = 0.9
+"""The fitting edge and area are chosen for this fraction of the limit (the estimate is a sample's)."""
+FIT_STEP = 1.1
+"""Each try at a fitting edge is this much coarser than the last."""
 SLICER_TRIANGLES = 5_000_000
 """Above this a slicer struggles: a 250 MB binary STL. PrusaSlicer and Cura keep every triangle in memory several
 times over (mesh, slices, preview) and their load and slice times grow with it; meshes of a few million triangles
@@ -79,12 +95,17 @@ def printer_edge(profile, texture_pixel_mm: float) -> EdgeChoice:
 @dataclass(frozen=True)
 class MeshPlan:
     """What refining to ``edge_mm`` (mm) will make: about ``triangles`` (measured on a sample), an STL of ``stl_bytes``, in
-    about ``seconds`` (texturing, checks and writing, at the benchmark's rates)."""
+    about ``seconds`` (texturing, checks and writing, at the benchmark's rates) using about ``memory_bytes`` at the
+    peak; of the triangles, ``untextured_triangles`` are the faces left as they are, the rest refine
+    ``textured_area_mm2``."""
 
     edge_mm: float
     triangles: int
     stl_bytes: int
     seconds: float
+    memory_bytes: int
+    textured_area_mm2: float
+    untextured_triangles: int
 
     @property
     def too_large(self) -> bool:
@@ -108,8 +129,13 @@ class MeshPlan:
 
     def as_dict(self) -> dict:
         return {"edge_mm": self.edge_mm, "triangles": self.triangles, "stl_bytes": self.stl_bytes,
-                "seconds": self.seconds, "too_large_for_slicers": self.too_large,
-                "slicer_triangles": SLICER_TRIANGLES}
+                "seconds": self.seconds, "memory_bytes": self.memory_bytes,
+                "too_large_for_slicers": self.too_large, "slicer_triangles": SLICER_TRIANGLES}
+
+    def cost(self) -> str:
+        """Triangles, memory and time, in words."""
+        return (f"about {self.triangles:,} triangles, {_gb(self.memory_bytes)} GB of memory and "
+                f"{_duration(self.seconds)}")
 
 
 def mesh_plan(vertices: np.ndarray, faces: np.ndarray, selected: np.ndarray, edge_mm: float,
@@ -120,7 +146,47 @@ def mesh_plan(vertices: np.ndarray, faces: np.ndarray, selected: np.ndarray, edg
     rate = REFINE_SECONDS_PER_TRIANGLE + WRITE_SECONDS_PER_TRIANGLE
     if check_intersections:
         rate += CHECK_SECONDS_PER_TRIANGLE
-    return MeshPlan(edge_mm, triangles, stl_bytes(triangles), triangles * rate)
+    tri = vertices[faces[selected]]
+    area = float(0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum())
+    return MeshPlan(edge_mm, triangles, stl_bytes(triangles), triangles * rate, triangles * PEAK_BYTES_PER_TRIANGLE,
+                    area, int((~selected).sum()))
+
+
+def require_within(plan: MeshPlan, vertices: np.ndarray, faces: np.ndarray, selected: np.ndarray,
+                   check_intersections: bool = True, limit: Limit = MAX_MESH_TRIANGLES) -> None:
+    """InputError (naming --edge-mm) if ``plan`` (of the ``selected`` faces of the mesh) makes more than ``limit``
+    triangles: its cost, the coarsest edge whose estimate fits (tried from the edge that scaling by the square
+    root of the excess gives, FIT_STEP coarser each try), and the textured area that fits at the plan's edge."""
+    if plan.triangles <= limit:
+        return
+    room = BUDGET_MARGIN * limit - plan.untextured_triangles
+    if room <= 0:
+        raise InputError(f"the mesh's {plan.untextured_triangles:,} untextured faces alone come near the limit of "
+                         f"{limit:,} triangles ({limit.name})",
+                         parameter="mesh")
+    textured = plan.triangles - plan.untextured_triangles
+    edge = _up(plan.edge_mm * math.sqrt(textured / room))
+    for _ in range(40):
+        fit = mesh_plan(vertices, faces, selected, edge, check_intersections)
+        if fit.triangles <= BUDGET_MARGIN * limit:
+            break
+        edge = _up(edge * FIT_STEP)
+    area = plan.textured_area_mm2 * room / textured
+    raise InputError(f"edges of {plan.edge_mm:.4g} mm would make {plan.cost()}, above the limit of {limit:,} "
+                     f"triangles ({limit.name}); what fits: --edge-mm {edge:g} ({fit.cost()}), or at this "
+                     f"edge a --region of at most {area:,.0f} mm^2 of the {plan.textured_area_mm2:,.0f} mm^2 asked",
+                     parameter="edge_mm")
+
+
+def _up(value: float) -> float:
+    """``value`` rounded up to two significant digits."""
+    digits = 1 - math.floor(math.log10(value))
+    return float(f"{math.ceil(value * 10**digits) / 10**digits:.{max(digits, 0)}f}")
+
+
+def _gb(size: int) -> str:
+    """``size`` (bytes) in GB: one decimal under 10 GB, whole GB above."""
+    return f"{size / 1e9:.1f}" if size < 10e9 else f"{size / 1e9:,.0f}"
 
 
 def _duration(seconds: float) -> str:

@@ -25,13 +25,16 @@ CHUNK = 1_000_000
 
 @dataclass
 class Refined:
-    """A refined mesh: ``vertices`` (n, 3) mm, ``faces`` (m, 3), ``textured`` (m,) bool, and the ``rounds`` of
-    splitting it took."""
+    """A refined mesh: ``vertices`` (n, 3) mm, ``faces`` (m, 3), ``textured`` (m,) bool, the ``rounds`` of
+    splitting it took, and the pieces of the input's ``creases`` (edges followed through the splitting: ``creases``
+    (k, 2) vertex pairs, ``crease_of`` (k,) the index of the input edge each piece is part of)."""
 
     vertices: np.ndarray
     faces: np.ndarray
     textured: np.ndarray
     rounds: int
+    creases: np.ndarray
+    crease_of: np.ndarray
 
 
 SAMPLE_FACES = 48
@@ -98,10 +101,11 @@ def _alone(corners: np.ndarray, edge_mm: float) -> float:
 
 
 def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_mm: float,
-           progress: Callable[[float], object] | None = None) -> Refined:
+           progress: Callable[[float], object] | None = None, creases: np.ndarray | None = None) -> Refined:
     """Split edges of textured faces until none is longer than ``edge_mm`` (mm) (module docstring). ``progress``:
-    called after each round with the fraction done, the triangles so far over ``predicted_triangles`` (an estimate
-    an estimate, so it may end below 1; 1 when done)."""
+    called after each round with the fraction done, the triangles so far over ``predicted_triangles`` (an estimate,
+    so it may end below 1; 1 when done). ``creases``: (k, 2) vertex pairs, edges of the input whose pieces are
+    followed through the splitting (``Refined.creases``: the sharp edges of a CAD part)."""
     if not edge_mm > 0:
         raise InputError(f"edge length must be positive, got {edge_mm!r}", parameter="edge_mm")
     expected = predicted_triangles(vertices, faces, textured, edge_mm)
@@ -109,15 +113,18 @@ def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_m
     v = np.ascontiguousarray(vertices, dtype=float)
     f = np.ascontiguousarray(faces, dtype=np.int64)
     tex = np.asarray(textured, dtype=bool).copy()
+    pieces_of = np.empty((0, 2), dtype=np.int64) if creases is None else np.asarray(creases, dtype=np.int64)
+    crease_of = np.arange(len(pieces_of))
     rounds = 0
     while True:
         split = _edges_to_split(v, f, tex, edge_mm)
         if split.size == 0:
             if progress is not None:
                 progress(1.0)
-            return Refined(v, f, tex, rounds)
+            return Refined(v, f, tex, rounds, pieces_of, crease_of)
         rounds += 1
         n = len(v)
+        pieces_of, crease_of = _split_creases(pieces_of, crease_of, split, n)
         v = np.concatenate([v, 0.5 * (v[split // n] + v[split % n])])
         pieces = [_split(v, f[s:s + CHUNK], tex[s:s + CHUNK], split, n) for s in range(0, len(f), CHUNK)]
         del f, tex
@@ -127,6 +134,20 @@ def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_m
         check_size("triangles during refinement", len(f), MAX_MESH_TRIANGLES, "edge_mm")
         if progress is not None:
             progress(min(len(f) / max(expected, 1.0), 0.99))
+
+
+def _split_creases(pieces: np.ndarray, crease_of: np.ndarray, split: np.ndarray, n: int):
+    """The crease ``pieces`` ((k, 2) vertex pairs of a mesh of ``n`` vertices) and the crease each is part of
+    (``crease_of``), after the edges ``split`` (sorted keys) are split at new vertices n, n + 1, ... in their order."""
+    if len(pieces) == 0:
+        return pieces, crease_of
+    keys = np.minimum(pieces[:, 0], pieces[:, 1]) * n + np.maximum(pieces[:, 0], pieces[:, 1])
+    where = np.searchsorted(split, keys)
+    hit = split[np.minimum(where, len(split) - 1)] == keys
+    mid = n + where[hit]
+    a, b = pieces[hit, 0], pieces[hit, 1]
+    return (np.concatenate([pieces[~hit], np.stack([a, mid], 1), np.stack([mid, b], 1)]),
+            np.concatenate([crease_of[~hit], crease_of[hit], crease_of[hit]]))
 
 
 def _edge_keys(f: np.ndarray, n_vertices: int) -> np.ndarray:

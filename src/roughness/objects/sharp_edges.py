@@ -39,12 +39,6 @@ class SharpEdges:
     def count(self) -> int:
         return len(self.ends)
 
-    def vertices(self, n_vertices: int) -> np.ndarray:
-        """Bool per vertex: on a sharp edge."""
-        out = np.zeros(n_vertices, dtype=bool)
-        out[self.ends.ravel()] = True
-        return out
-
     def sharpest_concave_deg(self) -> float | None:
         """The largest turn (degrees) of a concave sharp edge, None if none is concave."""
         return float(self.turn_deg[self.concave].max()) if self.concave.any() else None

@@ -46,7 +46,7 @@ from .meshes import require_closed
 from .normals import face_normals, smoothed, vertex_normals
 from .regions import Region
 from .remesh import Refined, refine
-from .sharp_edges import DEFAULT_SHARP_DEG, patches, sharp_edges
+from .sharp_edges import DEFAULT_SHARP_DEG, SharpEdges, patches, sharp_edges
 
 DEFAULT_NORMAL_RADIUS_MM = 0.0
 """Normals are area-weighted vertex normals, not smoothed further, unless asked."""
@@ -121,7 +121,7 @@ class _Input:
     border_mm: float
     sharp_deg: float
     min_face_mm: float
-    sharp_edges: int  # of the input, among the selected faces
+    sharp: SharpEdges  # of the input, among the selected faces
 
 
 @dataclass(frozen=True)
@@ -183,7 +183,7 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
 
     area, volume = _area_and_volume(refined, relief)
     return TexturedMesh(trimesh.Trimesh(displaced, refined.faces, process=False, validate=False), len(given.faces),
-                        len(refined.faces), int(given.selected.sum()), area, given.sharp_edges, given.edge_mm,
+                        len(refined.faces), int(given.selected.sum()), area, given.sharp.count, given.edge_mm,
                         refined.rounds, rounds, relief.depth_mm, volume / area, volume, concave.radius_mm,
                         concave.ratio, volume_in, signed_volume(displaced, refined.faces), tested, notes,
                         clock.seconds)
@@ -222,7 +222,7 @@ def _checked_input(mesh, mapping: TextureMapping, region: Region, edge_mm: float
     notes.append(f"{edges.count:,} sharp edges (faces turning by more than {sharp_deg:g} degrees, --sharp-deg) in the "
                  f"region, {int(edges.concave.sum()):,} of them concave: the texture ramps to 0 at them"
                  if edges.count else f"no sharp edge (faces turning by more than {sharp_deg:g} degrees) in the region")
-    return _Input(vertices, faces, selected, edge, radius, border, float(sharp_deg), narrow, edges.count), notes
+    return _Input(vertices, faces, selected, edge, radius, border, float(sharp_deg), narrow, edges), notes
 
 
 def _input_notes(given: _Input, mapping: TextureMapping) -> list[str]:
@@ -239,7 +239,8 @@ def _input_notes(given: _Input, mapping: TextureMapping) -> list[str]:
 
 def _refined(given: _Input, clock: _Clock, notes: list[str]) -> Refined:
     """The textured faces refined to edges of at most ``edge_mm`` (step 1; noted in ``notes``)."""
-    refined = refine(given.vertices, given.faces, given.selected, given.edge_mm, clock.meter("refine"))
+    refined = refine(given.vertices, given.faces, given.selected, given.edge_mm, clock.meter("refine"),
+                     given.sharp.ends)
     clock.step("check input, refine", f"{len(refined.faces):,} triangles")
     notes.append(f"remeshed the textured faces to edges of at most {given.edge_mm:.4g} mm ({refined.rounds} rounds of "
                  f"edge splitting): {len(given.faces):,} -> {len(refined.faces):,} triangles; untextured faces kept "
@@ -284,10 +285,12 @@ def _ramps(refined: Refined, where: np.ndarray, depth_mm: float, given: _Input, 
     in_region[f[textured].ravel()] = True
     on_border = np.zeros(len(v), dtype=bool)
     on_border[f[~textured].ravel()] = True
-    edges = sharp_edges(v, f[textured], given.sharp_deg)
-    concave = _concave_vertices(edges, len(v))
-    convex = edges.vertices(len(v)) & ~concave
-    turn = edges.sharpest_concave_deg()
+    concave = np.zeros(len(v), dtype=bool)
+    concave[refined.creases[given.sharp.concave[refined.crease_of]].ravel()] = True
+    convex = np.zeros(len(v), dtype=bool)
+    convex[refined.creases.ravel()] = True
+    convex &= ~concave
+    turn = given.sharp.sharpest_concave_deg()
     concave_mm = max(given.border_mm, concave_ramp_mm(depth_mm, turn)) if turn is not None else 0.0
     for anchors, width, what in ((on_border & in_region, given.border_mm, "the region's border"),
                                  (convex, given.border_mm, "convex sharp edges"),
@@ -300,13 +303,6 @@ def _ramps(refined: Refined, where: np.ndarray, depth_mm: float, given: _Input, 
                          + (f": at least {concave_ramp_mm(depth_mm, turn):.3g} mm for a texture {depth_mm:.3g} mm "
                             f"deep where the faces turn by up to {turn:.0f} degrees" if anchors is concave else ""))
     return factor
-
-
-def _concave_vertices(edges, n_vertices: int) -> np.ndarray:
-    """Bool per vertex: on a concave sharp edge."""
-    out = np.zeros(n_vertices, dtype=bool)
-    out[edges.ends[edges.concave].ravel()] = True
-    return out
 
 
 def concave_ramp_mm(depth_mm: float, turn_deg: float) -> float:
