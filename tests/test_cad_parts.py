@@ -178,6 +178,14 @@ def test_a_deep_texture_on_a_notch_is_refused_without_sharp_edges_and_textured_w
     assert written.is_watertight and written.is_winding_consistent
 
 
+@pytest.mark.parametrize("name, value, message", [("sharp_deg", 0, "positive"), ("sharp_deg", 200, "at most 180"),
+                                                  ("sharp_deg", "40", "positive"), ("min_face_mm", -1.0, ">= 0")])
+def test_sharp_edge_settings_are_checked(name, value, message, texture):
+    with pytest.raises(InputError, match=message) as err:
+        texture_mesh(trimesh.creation.box((10, 10, 10)), Triplanar(texture), **{name: value})
+    assert err.value.parameter == name
+
+
 # --- choosing faces ------------------------------------------------------------------------------------------------
 
 def test_an_angle_range_chooses_walls_or_all_but_the_bottom():

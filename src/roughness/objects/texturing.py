@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from roughness.core.checks import length
+from roughness.core.checks import length, positive
 from roughness.core.errors import InputError
 from roughness.surface.stl import require_solid
 
@@ -198,9 +198,9 @@ def _checked_input(mesh, mapping: TextureMapping, region: Region, edge_mm: float
     radius = length("normal_radius_mm", normal_radius_mm, zero=True)
     border = length("border_mm", border_mm, zero=True)
     narrow = length("min_face_mm", min_face_mm, zero=True)
-    if isinstance(sharp_deg, bool) or not isinstance(sharp_deg, (int, float)) or not 0 < sharp_deg <= 180:
-        raise InputError(f"the sharp-edge angle must be a number of degrees above 0, at most 180 (none sharp), got "
-                         f"{sharp_deg!r}", parameter="sharp_deg")
+    if not 0 < positive("sharp_deg", sharp_deg) <= 180:
+        raise InputError(f"sharp_deg must be at most 180 degrees (no edge sharp), got {sharp_deg!r}",
+                         parameter="sharp_deg")
     selected = np.asarray(region.faces(mesh), dtype=bool)
     if not selected.any():
         raise InputError(f"the region ({region.describe()}) selects no face of the mesh", parameter="region")
