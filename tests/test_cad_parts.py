@@ -17,10 +17,11 @@ from roughness.core.errors import InputError
 from roughness.dataset.textures import named_texture
 from roughness.objects.intersections import self_intersections, triangles_cross
 from roughness.objects.mapping import Triplanar
+from roughness.objects.ramps import concave_ramp_mm
 from roughness.objects.regions import parse_region
 from roughness.objects.remesh import refine
 from roughness.objects.sharp_edges import patches, sharp_edges
-from roughness.objects.texturing import concave_ramp_mm, texture_mesh
+from roughness.objects.texturing import texture_mesh
 from roughness.surface.heightmap import Heightmap
 from roughness.surface.solid import check_solid
 from test_mesh_solid import octant_cube

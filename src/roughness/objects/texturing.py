@@ -15,7 +15,7 @@ Steps, each reported in ``TexturedMesh.notes``:
    stay where they were: the untextured faces beside a border keep their shape, the long thin faces the refinement
    leaves there are not turned over, and the two faces of a sharp edge do not move into each other. The ramp is
    ``border_mm`` wide at a border and at a convex sharp edge; at a concave sharp edge it is at least
-   ``concave_ramp_mm`` wide, so that the faces' displaced surfaces stay on their side of the plane bisecting the
+   ``ramps.concave_ramp_mm`` wide, so that the faces' displaced surfaces stay on their side of the plane bisecting the
    edge. Before refining, faces between sharp edges narrower than ``min_face_mm`` (engraving, small holes:
    ``sharp_edges.patches``) are taken out of the region and left as they are;
 4. refused (InputError) where the texture is deeper than the surface's radius where it is concave: the offset
@@ -44,6 +44,7 @@ from .intersections import folded_faces, self_intersections, triangles_cross
 from .mapping import TextureMapping
 from .meshes import require_closed
 from .normals import face_normals, smoothed, vertex_normals
+from .ramps import concave_ramp_mm, ramp
 from .regions import Region
 from .remesh import Refined, refine
 from .sharp_edges import DEFAULT_SHARP_DEG, SharpEdges, patches, sharp_edges
@@ -57,11 +58,6 @@ DEFAULT_MIN_FACE_MM = 2.0
 untextured: the walls of an engraving or an embossing (up to about 1 mm deep) and of holes in thin parts. The ramps
 at their edges (``border_mm``, wider at concave edges) would leave them little or no texture at full height, and a
 fingertip (10 mm footprint) does not feel a texture on them apart from the faces around them."""
-SMOOTHSTEP_SLOPE = 9 / 8
-"""The largest s(t) / t of the smoothstep s(t) = t^2 (3 - 2 t) (at t = 3/4)."""
-CONCAVE_RAMP_MARGIN = 4 / 3
-"""Widening of the ramp at concave sharp edges beyond the exact bound (``concave_ramp_mm``), for the distance to
-the nearest vertex on the edge being up to half an edge more than the distance to the edge's line."""
 FLAT_CURVATURE = 1e-3
 """Curvatures (1/mm) below this (radii above 1 m) are taken as flat (rounding in the normals of a flat face)."""
 NEEDLE_ASPECT = 20.0
@@ -119,8 +115,6 @@ class _Input:
     edge_mm: float
     normal_radius_mm: float
     border_mm: float
-    sharp_deg: float
-    min_face_mm: float
     sharp: SharpEdges  # of the input, among the selected faces
 
 
@@ -222,7 +216,7 @@ def _checked_input(mesh, mapping: TextureMapping, region: Region, edge_mm: float
     notes.append(f"{edges.count:,} sharp edges (faces turning by more than {sharp_deg:g} degrees, --sharp-deg) in the "
                  f"region, {int(edges.concave.sum()):,} of them concave: the texture ramps to 0 at them"
                  if edges.count else f"no sharp edge (faces turning by more than {sharp_deg:g} degrees) in the region")
-    return _Input(vertices, faces, selected, edge, radius, border, float(sharp_deg), narrow, edges), notes
+    return _Input(vertices, faces, selected, edge, radius, border, edges), notes
 
 
 def _input_notes(given: _Input, mapping: TextureMapping) -> list[str]:
@@ -305,16 +299,6 @@ def _ramps(refined: Refined, where: np.ndarray, depth_mm: float, given: _Input, 
     return factor
 
 
-def concave_ramp_mm(depth_mm: float, turn_deg: float) -> float:
-    """The ramp width (mm) at a concave sharp edge whose faces' normals turn by ``turn_deg`` for a texture
-    ``depth_mm`` deep. Each face moves along its own normal by h(x) at distance x from the edge; the two displaced
-    faces cannot meet while each stays on its side of the plane bisecting the edge, h(x) < x tan(a / 2), a = 180 -
-    turn the opening angle. With h = depth s(x / w) (a smoothstep) this holds for every x if w > depth (9/8) /
-    tan(a / 2); the width returned is CONCAVE_RAMP_MARGIN times that."""
-    opening = math.radians(180.0 - turn_deg) / 2
-    return CONCAVE_RAMP_MARGIN * SMOOTHSTEP_SLOPE * depth_mm / max(math.tan(opening), 1e-9)
-
-
 def _require_shallower(concave: Concave, notes: list[str]) -> None:
     """InputError where the texture is deeper than the surface's concave radius (step 4; noted in ``notes``)."""
     if concave.ratio >= 1:
@@ -383,19 +367,6 @@ def needle_faces(vertices: np.ndarray, faces: np.ndarray, edge_mm: float) -> int
                                                                                                             1e-300)
         count += int(np.count_nonzero((longest > NEEDLE_ASPECT * width) & (longest > edge_mm)))
     return count
-
-
-def ramp(vertices: np.ndarray, anchors: np.ndarray, where: np.ndarray, width_mm: float) -> np.ndarray | None:
-    """Factors in [0, 1] for the heights at vertices ``where``: 0 on the ``anchors`` (bool per vertex), a
-    smoothstep of the distance to the nearest anchor, 1 from ``width_mm`` on; None if there is no anchor or the
-    width is 0."""
-    if width_mm == 0 or not anchors.any():
-        return None
-    from scipy.spatial import cKDTree
-
-    distance, _ = cKDTree(vertices[anchors]).query(vertices[where], distance_upper_bound=width_mm)
-    t = np.clip(distance / width_mm, 0.0, 1.0)  # inf (beyond width_mm) -> 1
-    return t * t * (3 - 2 * t)
 
 
 class _Clock:
