@@ -83,14 +83,9 @@ def crossing_pairs(mesh) -> int:
     """Pairs of faces of ``mesh`` sharing no vertex whose interiors cross (module docstring)."""
     tri = np.asarray(mesh.triangles)
     faces = np.asarray(mesh.faces)
-    tree = mesh.triangles_tree
-    bounds = np.asarray(mesh.triangles.reshape(-1, 3, 3).min(axis=1)), np.asarray(mesh.triangles.max(axis=1))
-    pairs = []
-    for i in range(len(tri)):
-        hits = np.fromiter(tree.intersection((*bounds[0][i], *bounds[1][i])), dtype=np.int64)
-        hits = hits[hits > i]
-        pairs.append(np.stack([np.full(len(hits), i), hits], 1))
-    i, j = np.concatenate(pairs).T
+    hits, counts = mesh.triangles_tree.intersection_v(tri.min(axis=1), tri.max(axis=1))
+    i, j = np.repeat(np.arange(len(tri)), counts.astype(np.int64)), hits.astype(np.int64)
+    i, j = i[i < j], j[i < j]
     apart = ~(faces[i][:, :, None] == faces[j][:, None, :]).any(axis=(1, 2))
     i, j = i[apart], j[apart]
     crossed = np.zeros(len(i), dtype=bool)

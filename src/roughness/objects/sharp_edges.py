@@ -16,7 +16,6 @@ the walls and floors of engraved letters and of small holes are narrow patches.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,11 +26,10 @@ DEFAULT_SHARP_DEG = 40.0
 
 @dataclass(frozen=True)
 class SharpEdges:
-    """The sharp edges of a closed mesh: their ends (``ends``, (k, 2) vertex indices), their two faces (``faces``,
-    (k, 2)), the turn of the normals across each (``turn_deg``) and whether each is concave."""
+    """The sharp edges of a closed mesh: their ends (``ends``, (k, 2) vertex indices), the turn of the normals
+    across each (``turn_deg``) and whether each is concave."""
 
     ends: np.ndarray
-    faces: np.ndarray
     turn_deg: np.ndarray
     concave: np.ndarray
 
@@ -68,20 +66,32 @@ def _adjacency(faces: np.ndarray, n_vertices: int) -> _Adjacency:
                       np.stack([opposite[one], opposite[two]], 1))
 
 
+def _normals_and_areas(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals (m, 3) and areas (m,) (mm^2) of the faces."""
+    tri = vertices[faces]
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area = 0.5 * np.linalg.norm(cross, axis=1)
+    return cross / np.maximum(2 * area, 1e-300)[:, None], area
+
+
+def _turn_deg(normals: np.ndarray, adj: _Adjacency) -> np.ndarray:
+    """The turn (degrees) of the normals across each edge."""
+    cosine = np.einsum("ij,ij->i", normals[adj.faces[:, 0]], normals[adj.faces[:, 1]])
+    return np.degrees(np.arccos(np.clip(cosine, -1.0, 1.0)))
+
+
 def sharp_edges(vertices: np.ndarray, faces: np.ndarray, sharp_deg: float = DEFAULT_SHARP_DEG) -> SharpEdges:
     """The edges of the mesh (``vertices`` mm, ``faces``) shared by two faces whose normals turn by more than
     ``sharp_deg`` degrees (module docstring); ``sharp_deg`` 180 finds none. Edges of a single face (the border of a
     selection of a closed mesh's faces) are not counted."""
     faces = np.asarray(faces, dtype=np.int64)
     adj = _adjacency(faces, len(vertices))
-    tri = vertices[faces]
-    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
-    n1, n2 = normals[adj.faces[:, 0]], normals[adj.faces[:, 1]]
-    turn = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", n1, n2), -1.0, 1.0)))
+    normals, _ = _normals_and_areas(vertices, faces)
+    turn = _turn_deg(normals, adj)
     sharp = turn > sharp_deg
-    rise = np.einsum("ij,ij->i", n1[sharp], vertices[adj.opposite[sharp, 1]] - vertices[adj.ends[sharp, 0]])
-    return SharpEdges(adj.ends[sharp], adj.faces[sharp], turn[sharp], rise > 0)
+    rise = np.einsum("ij,ij->i", normals[adj.faces[sharp, 0]],
+                     vertices[adj.opposite[sharp, 1]] - vertices[adj.ends[sharp, 0]])
+    return SharpEdges(adj.ends[sharp], turn[sharp], rise > 0)
 
 
 @dataclass(frozen=True)
@@ -107,12 +117,8 @@ def patches(vertices: np.ndarray, faces: np.ndarray, selected: np.ndarray,
 
     faces = np.asarray(faces, dtype=np.int64)
     adj = _adjacency(faces, len(vertices))
-    tri = vertices[faces]
-    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    area = 0.5 * np.linalg.norm(cross, axis=1)
-    unit = cross / np.maximum(2 * area, 1e-300)[:, None]
-    cosine = np.einsum("ij,ij->i", unit[adj.faces[:, 0]], unit[adj.faces[:, 1]])
-    smooth = cosine >= math.cos(math.radians(sharp_deg))
+    normals, area = _normals_and_areas(vertices, faces)
+    smooth = _turn_deg(normals, adj) <= sharp_deg
     both = selected[adj.faces[:, 0]] & selected[adj.faces[:, 1]]
     joined = adj.faces[smooth & both]
     n = len(faces)
