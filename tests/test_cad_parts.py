@@ -179,6 +179,20 @@ def test_a_deep_texture_on_a_notch_is_refused_without_sharp_edges_and_textured_w
     assert written.is_watertight and written.is_winding_consistent
 
 
+def test_a_narrow_deep_slot_names_the_options_that_help(texture):
+    """A slot 1.5 mm wide and 3 mm deep: its long walls (2.2 mm wide faces) textured 1 mm deep would meet; the
+    refusal names --height-mm and --min-face-mm, and leaving the walls out textures the rest."""
+    slot = np.zeros((32, 20), dtype=bool)
+    slot[8:24, 9:12] = True
+    block = engraved_block(slot, depth_mm=3.0)
+    deep = Triplanar(Heightmap(texture.heights / RELIEF, PIXEL))  # 1 mm relief
+    with pytest.raises(InputError, match=r"crosses itself.*--height-mm.*--min-face-mm") as err:
+        texture_mesh(block, deep, edge_mm=EDGE)
+    assert err.value.parameter == "mapping"
+    result = texture_mesh(block, deep, edge_mm=EDGE, min_face_mm=2.5)
+    assert check_solid(result.mesh.vertices, result.mesh.faces).closed and crossing_pairs(result.mesh) == 0
+
+
 @pytest.mark.parametrize("name, value, message", [("sharp_deg", 0, "positive"), ("sharp_deg", 200, "at most 180"),
                                                   ("sharp_deg", "40", "positive"), ("min_face_mm", -1.0, ">= 0")])
 def test_sharp_edge_settings_are_checked(name, value, message, texture):

@@ -348,7 +348,8 @@ def _check_crossings(refined: Refined, displaced: np.ndarray, relief: _Relief, c
         x, y, z = displaced[f[crossing.pairs[0, 0]]].mean(axis=0)
         raise InputError(f"the textured mesh crosses itself: {crossing.count:,} pairs of faces intersect (first "
                          f"near ({x:.2f}, {y:.2f}, {z:.2f}) mm): the texture is too deep where parts of the object "
-                         "are close; use a shallower texture or leave that part out of the region",
+                         "are close (a narrow slot or gap); use a shallower texture (--height-mm), or leave that part out "
+                         "(--region, or a --min-face-mm above the width of the slot's faces)",
                          parameter="mapping")
     clock.step("self-intersection check", f"{crossing.tested:,} pairs")
     notes.append(f"checked: no two faces cross ({crossing.tested:,} pairs of faces with overlapping boxes tested "
