@@ -87,6 +87,21 @@ def test_sharp_edges_of_a_cube_with_an_octant_cut_away():
     assert sharp_edges(np.asarray(smooth.vertices), np.asarray(smooth.faces)).count == 0
 
 
+def test_refinement_follows_the_pieces_of_sharp_edges():
+    mesh = small_octant_cube()
+    v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    edges = sharp_edges(v, f)
+    refined = refine(v, f, np.ones(len(f), bool), EDGE, creases=edges.ends)
+    a, b = refined.vertices[refined.creases[:, 0]], refined.vertices[refined.creases[:, 1]]
+    p, q = v[edges.ends[refined.crease_of, 0]], v[edges.ends[refined.crease_of, 1]]
+    along = np.cross(q - p, a - p), np.cross(q - p, b - p)  # each piece on its edge's line
+    assert np.abs(along[0]).max() < 1e-9 and np.abs(along[1]).max() < 1e-9
+    pieces = np.linalg.norm(b - a, axis=1)
+    assert pieces.max() <= EDGE + 1e-12
+    whole = np.bincount(refined.crease_of, weights=pieces, minlength=edges.count)
+    assert np.allclose(whole, np.linalg.norm(v[edges.ends[:, 1]] - v[edges.ends[:, 0]], axis=1), rtol=1e-12)
+
+
 def test_faces_between_sharp_edges_and_their_widths():
     mesh = slotted_block()
     found = patches(np.asarray(mesh.vertices), np.asarray(mesh.faces), np.ones(len(mesh.faces), bool))

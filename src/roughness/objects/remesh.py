@@ -113,18 +113,18 @@ def refine(vertices: np.ndarray, faces: np.ndarray, textured: np.ndarray, edge_m
     v = np.ascontiguousarray(vertices, dtype=float)
     f = np.ascontiguousarray(faces, dtype=np.int64)
     tex = np.asarray(textured, dtype=bool).copy()
-    pieces_of = np.empty((0, 2), dtype=np.int64) if creases is None else np.asarray(creases, dtype=np.int64)
-    crease_of = np.arange(len(pieces_of))
+    crease_pieces = np.empty((0, 2), dtype=np.int64) if creases is None else np.asarray(creases, dtype=np.int64)
+    crease_of = np.arange(len(crease_pieces))
     rounds = 0
     while True:
         split = _edges_to_split(v, f, tex, edge_mm)
         if split.size == 0:
             if progress is not None:
                 progress(1.0)
-            return Refined(v, f, tex, rounds, pieces_of, crease_of)
+            return Refined(v, f, tex, rounds, crease_pieces, crease_of)
         rounds += 1
         n = len(v)
-        pieces_of, crease_of = _split_creases(pieces_of, crease_of, split, n)
+        crease_pieces, crease_of = _split_creases(crease_pieces, crease_of, split, n)
         v = np.concatenate([v, 0.5 * (v[split // n] + v[split % n])])
         pieces = [_split(v, f[s:s + CHUNK], tex[s:s + CHUNK], split, n) for s in range(0, len(f), CHUNK)]
         del f, tex
