@@ -28,12 +28,12 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted([*(ROOT / "docs" / "tutorials").glob("*.md"), *(ROOT / "docs" / "how-to").glob("*.md")])
 PERCEPTION = ROOT / "examples" / "perception"
-SLOW = ("handle.", "jnd.")  # prefixes of the keys made only under -m slow
+SLOW = ("handle.", "jnd.", "homogeneity.fem.")  # prefixes of the keys made only under -m slow
 NOISE = 1e-5  # relative: float32 ensemble outputs and summation order differ at ~1e-7 between machines
 # FEM answers: CG stops at a relative residual of 1e-6 (simulate/linsolve.py CG_RTOL), and V, the variance of nearly
 # equal strains, carries it amplified: one or four BLAS threads gave V 0.1484 and 0.1483 (7e-4 apart)
 FEM_NOISE = 1e-3
-FEM = ("jnd.", "tune.")  # prefixes of the keys answered by the FEM
+FEM = ("jnd.", "tune.", "homogeneity.fem.")  # prefixes of the keys answered by the FEM
 NUMBER = r"[−+-]?\d[\d,]*(?:\.\d+)?"
 MARKED = re.compile(rf"(`[^`\n]+`|{NUMBER})(%?)<!-- ([\w.:,-]+) -->")
 BLOCK = re.compile(r"<!-- block: ([\w.:,-]+) -->\n+(?:```[^\n]*\n(.*?)```|((?: {4}[^\n]*\n)+))", re.S)
@@ -167,6 +167,33 @@ def _rods(tmp: Path) -> dict:
     return out
 
 
+HOMOGENEITY = {"standard": ("s.npz", "--tile"), "grating": ("g.npz", "--tile"), "halves": ("halves.npy",),
+               "standard5": ("s.npz", "--window-mm", "5")}  # docs/how-to/homogeneity.md's rows: case -> arguments
+
+
+def _homogeneity(tmp: Path, slow: bool) -> dict:
+    """docs/how-to/homogeneity.md's table: the surrogate rows (seconds); with ``slow`` the FEM's (minutes)."""
+    import numpy as np
+
+    from roughness.dataset.textures import standard_texture
+
+    tmp.mkdir()
+    _cli("texture", "make", "standard-1.0", "--out", "s.npz", cwd=tmp)
+    _cli("texture", "make", "grating", "--out", "g.npz", cwd=tmp)
+    halves = [standard_texture(lam, seed=1, size_mm=30.0).heights for lam in (0.75, 1.25)]  # test_design_homogeneity
+    np.save(tmp / "halves.npy", np.hstack([halves[0][:, :300], halves[1][:, 300:]]))
+    runs = {case: [*args, "--pixel-mm", "0.05"] if case == "halves" else list(args)
+            for case, args in HOMOGENEITY.items()}
+    if slow:
+        runs |= {f"fem.{case}": [*HOMOGENEITY[case], "--engine", "fem", "--n", "10"] for case in ("standard", "grating")}
+    out = {}
+    for case, args in runs.items():
+        r = json.loads(_cli("homogeneity", *args, "--json", "--quiet", cwd=tmp))
+        out |= {f"homogeneity.{case}.relvar_e3": 1e3 * r["relative_variance"],
+                f"homogeneity.{case}.spread": r["spread_jnd"], f"homogeneity.{case}.range": r["range_jnd"]}
+    return out
+
+
 def _object(tmp: Path, case: str) -> dict:
     """The case of examples/textured_objects.py, run into tmp."""
     subprocess.run([sys.executable, str(ROOT / "examples" / "textured_objects.py"), "--out", str(tmp), "--case",
@@ -226,7 +253,8 @@ def _perception(tmp: Path) -> dict:
 def current(tmp: Path, slow: bool = False) -> dict:
     """Every key's current value; the keys in SLOW (minutes) only when slow."""
     out = (_predict() | _python() | _object(tmp / "knob", "knob") | _perception(tmp / "perception") | _tune(tmp / "tune")
-           | _committed_palettes() | _printing(tmp / "printing") | _rods(tmp / "rods"))
+           | _committed_palettes() | _printing(tmp / "printing") | _rods(tmp / "rods")
+           | _homogeneity(tmp / "homogeneity", slow))
     return out | _object(tmp / "handle", "handle") | _jnd(tmp / "jnd") if slow else out
 
 
@@ -259,7 +287,7 @@ def test_marks_are_found_and_name_known_keys(tmp_path_factory):
     keys = {key for page in PAGES for key, _, _ in quoted(page)}
     assert {"predict.line", "python.repr", "knob.factor", "perception.R"} <= keys
     assert all(k.split(".")[0] in {"predict", "python", "knob", "handle", "perception", "jnd", "tune", "printing",
-                                   "objects"} for k in keys), keys
+                                   "objects", "homogeneity"} for k in keys), keys
 
 
 def test_quoted_numbers_are_current(tmp_path_factory):
