@@ -131,7 +131,8 @@ def test_tactile_image_cli_on_a_jpeg_clusters_before_any_simulation(tmp_path, ca
 
 def test_more_colours_than_k_is_refused_before_the_palette(workdir, capsys):  # noqa: F811
     _jpeg(workdir)
-    _expect_refusal(["tactile-image", "shapes-q75.jpg", "--out", "plate", "--k", "2"], workdir, capsys,
+    _expect_refusal(["tactile-image", "shapes-q75.jpg", "--out", "plate", "--k", "2", "--background", "none"],
+                    workdir, capsys,
                     ("--k", "3 flat colours"))
 
 

@@ -79,7 +79,8 @@ def test_cli_tactile_image_from_a_palette(palette_dir, tmp_path, capsys):
     Image.fromarray(rgb).save(tmp_path / "picture.png")
     out = tmp_path / "plate"
     code = main(["tactile-image", str(tmp_path / "picture.png"), "--palette", str(pal), "--out", str(out),
-                 "--size-mm", "60", "--step-mm", "2", "--outline-mm", "1", "--json", "--quiet"])
+                 "--size-mm", "60", "--step-mm", "2", "--outline-mm", "1", "--background", "none", "--json",
+                 "--quiet"])  # every stripe textured (default: the background flat)
     summary = json.loads(capsys.readouterr().out)
     assert code == 0
     mesh = trimesh.load(out / "plate.stl")

@@ -153,7 +153,7 @@ def test_tactile_image_with_a_printer_maps_the_printed_plate(two_stripes, capsys
 
     out = two_stripes.parent / "plate"
     assert main(["tactile-image", str(two_stripes), "--out", str(out), "--verify", "spectral", "--step-mm", "4",
-                 "--printer", "fdm-0.4-0.2", "--json", "--quiet"]) == 0
+                 "--printer", "fdm-0.4-0.2", "--background", "none", "--json", "--quiet"]) == 0  # both textured
     summary = json.loads(capsys.readouterr().out)
     assert summary["printer"]["name"] == "fdm-0.4-0.2" and "print_forecast" not in summary
     members = json.loads((out / "palette" / "palette.json").read_text())["members"]

@@ -241,7 +241,8 @@ def test_a_one_colour_picture_says_what_it_is_and_what_to_give(tmp_path, capsys)
 
 def test_too_few_textures_name_the_option_given(tmp_path, capsys):
     Image.fromarray(_grey16([0, 20000, 40000])).save(tmp_path / "three.png")
-    code, err = _cli(["tactile-image", tmp_path / "three.png", "--out", tmp_path / "plate", "--k", "2"], capsys)
+    code, err = _cli(["tactile-image", tmp_path / "three.png", "--out", tmp_path / "plate", "--k", "2",
+                      "--background", "none"], capsys)  # every colour textured (default: the background flat)
     assert code == 2 and "--k: the picture has 3 flat colours" in err and "--palette" not in err
 
 

@@ -10,8 +10,10 @@ from .common import (
     HEIGHT,
     JND,
     LENGTH,
+    MAX_LENGTH_MM,
     MAX_PALETTE,
     PIXEL,
+    Number,
     add_model_tail,
     count,
     defaults,
@@ -28,6 +30,7 @@ MAX_DELTA_E = 300.0  # --colour-tolerance: beyond the largest CIELAB Delta E bet
 if TYPE_CHECKING:
     from roughness.design.colours import PictureColours
     from roughness.design.evaluation import Evaluator
+    from roughness.design.layout import Layout
     from roughness.design.palette import Palette
     from roughness.design.tactile_image import TactilePlate
     from roughness.surface.heightmap import Heightmap
@@ -35,6 +38,7 @@ if TYPE_CHECKING:
 
 def add_parser(sub) -> None:
     from roughness.design.colours import TOLERANCE
+    from roughness.design.lines import LINE_GAP_MM, LINE_HEIGHT_MM, LINE_WIDTH_MM, MAX_STROKE_MM
     from roughness.design.palette import family_palette
     from roughness.design.tactile_image import tactile_image
     from roughness.surface.stl import DEFAULT_BASE_MM
@@ -60,6 +64,26 @@ def add_parser(sub) -> None:
     p.add_argument("--min-jnd", type=JND, default=pal["min_jnd"],
                    help=f"new palette: smallest pairwise distance in JND (default {pal['min_jnd']:g})")
     p.add_argument("--family", default="standard-1.0", help="new palette: the texture to scale (default standard-1.0)")
+    lines = p.add_argument_group("lines, background and textures (tactile-graphics conventions)")
+    lines.add_argument("--line-width-mm", type=LENGTH, default=MAX_STROKE_MM,
+                       help="strokes narrower than this on the plate (outlines, arrows) are made as raised lines, not "
+                            f"regions (default {MAX_STROKE_MM:g})")
+    lines.add_argument("--line-colour", metavar="#RRGGBB", help="this colour is the lines' (instead of detecting them)")
+    lines.add_argument("--no-lines", action="store_true", help="no line detection: every colour is a region")
+    lines.add_argument("--line-bar-mm", type=LENGTH, default=LINE_WIDTH_MM,
+                       help=f"width of a raised line at its foot (default {LINE_WIDTH_MM:g}, within the 1.1-3 mm of "
+                            "the Round Table's 3D-printing guidelines)")
+    lines.add_argument("--line-height-mm", type=HEIGHT, default=LINE_HEIGHT_MM,
+                       help=f"height of a raised line (default {LINE_HEIGHT_MM:g}: a definite line, ibid.)")
+    lines.add_argument("--line-gap-mm", type=Number(float, low=0, high=MAX_LENGTH_MM), metavar="MM", default=LINE_GAP_MM,
+                       help=f"textures stop this far from a raised line's foot (default {LINE_GAP_MM:g})")
+    lines.add_argument("--background", default="auto", metavar="auto|none|#RRGGBB",
+                       help="the colour left flat: auto (the colour most on the picture's border), none (texture "
+                            "every region) or a colour (default auto)")
+    lines.add_argument("--assign", metavar="SPEC|@FILE",
+                       help="textures by colour: '#ff0000=1,#00ff00=3,#0000ff=flat' (palette members from 1, "
+                            "smoothest first) or @FILE with one COLOUR=N a line; default: the lightest textured colour "
+                            "gets the smoothest texture")
     p.add_argument("--outline-mm", type=LENGTH, help="width of smooth raised lines along region edges (default: none)")
     p.add_argument("--outline-height-mm", type=HEIGHT,
                    help="height of the raised lines in mm (default: 1.2 x the tallest texture)")
@@ -113,11 +137,13 @@ def run(args: argparse.Namespace) -> int:
     evaluator = Evaluator(args.model, args.verify, printer=printer)
     # the plate's size, checked before any palette is made
     plate_shape(found.labels.shape, args.size_mm, args.pixel_mm, args.step_mm, evaluator.footprint_mm)
-    textures = _textures(args, len(found.colours), evaluator)
+    layout = _layout(args, found)
+    textures = _textures(args, len(layout.textured), evaluator)
     log(args, "tactile-image: composing the plate and mapping its roughness (surrogate)"
         + ("; FEM strain image" if args.strain else ""))
     plate = tactile_image(found, textures.members, args.size_mm, args.pixel_mm, args.outline_mm,
-                          args.outline_height_mm, args.step_mm, args.strain, evaluator, _Progress(args))
+                          args.outline_height_mm, args.step_mm, args.strain, evaluator, _Progress(args),
+                          layout=layout)
     summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier,
                **({"print_forecast": textures.made.forecast} if textures.forecast else {}),
                "provenance": evaluator.provenance.as_dict(),
@@ -133,19 +159,40 @@ def run(args: argparse.Namespace) -> int:
 
 def _picture_colours(args: argparse.Namespace) -> PictureColours:
     """IMAGE's flat colours (within --colour-tolerance); InputError if --k textures cannot cover them."""
-    from roughness.core.errors import InputError
     from roughness.design.colours import cluster_colours
     from roughness.design.tactile_image import describe_picture, hex_colour, read_image
 
     rgb = read_image(args.image)
     found = cluster_colours(rgb, args.colour_tolerance, source=describe_picture(args.image))
     colours = found.colours
-    log(args, f"tactile-image: {args.image}: {rgb.shape[1]:,} x {rgb.shape[0]:,} pixels, {found.describe()}")
-    if args.k is not None and args.k < len(colours):
-        raise InputError(f"the picture has {len(colours)} flat colours ({', '.join(hex_colour(c) for c in colours)}; "
-                         f"colours within Delta E {found.tolerance:g} merged): a palette of {args.k} textures cannot "
-                         f"cover them (give at least {len(colours)}, or a larger --colour-tolerance)", "k")
+    log(args, f"tactile-image: {args.image}: {rgb.shape[1]:,} x {rgb.shape[0]:,} pixels, {found.describe()}: "
+        + ", ".join(hex_colour(c) for c in colours))
     return found
+
+
+def _layout(args: argparse.Namespace, found: PictureColours) -> Layout:
+    """Lines, flat background and assignments of the picture's colours (--line-*, --background, --assign);
+    InputError if --k textures cannot cover the colours to texture."""
+    from roughness.core.errors import InputError
+    from roughness.design.layout import assign_argument, plan_layout
+    from roughness.design.lines import LineStyle
+    from roughness.design.tactile_image import hex_colour
+
+    assign = assign_argument(args.assign) if args.assign else None
+    mm_per_px = args.size_mm / found.labels.shape[1]
+    layout = plan_layout(found, mm_per_px, None if args.no_lines else args.line_width_mm,
+                         None if args.no_lines else args.line_colour,
+                         None if args.background == "none" else args.background, assign,
+                         LineStyle(args.line_bar_mm, args.line_height_mm, args.line_gap_mm))
+    textured = [hex_colour(found.colours[i]) for i in layout.textured]
+    log(args, f"tactile-image: lines {', '.join(hex_colour(found.colours[i]) for i in layout.line_colours) or 'none'}; "
+        f"flat {', '.join(hex_colour(found.colours[i]) for i in layout.flat) or 'none'}; "
+        f"textured {', '.join(textured) or 'none'}")
+    if args.k is not None and args.k < len(textured):
+        raise InputError(f"the picture has {len(textured)} flat colours to texture ({', '.join(textured)}; colours "
+                         f"within Delta E {found.tolerance:g} merged): a palette of {args.k} textures cannot cover "
+                         f"them (give at least {len(textured)}, or a larger --colour-tolerance)", "k")
+    return layout
 
 
 def _textures(args: argparse.Namespace, colours: int, evaluator: Evaluator) -> _Textures:
@@ -160,7 +207,7 @@ def _textures(args: argparse.Namespace, colours: int, evaluator: Evaluator) -> _
             raise InputError(f"the picture has {colours} flat colours but the palette only {len(textures)} "
                              "textures", "palette")
         return _Textures(textures, None)
-    k = args.k or colours
+    k = args.k or max(2, colours)  # a palette has 2 members at least: one colour to texture takes the rougher
     log(args, f"tactile-image: making a palette of {k} textures {args.min_jnd:g} JND apart")
     palette = family_palette(k, args.min_jnd, args.family, "height", evaluator,
                              progress=lambda line: log(args, "  " + line))
@@ -211,9 +258,10 @@ def _text_lines(args: argparse.Namespace, out: Path, plate: TactilePlate, summar
              + (", strain.png)" if args.strain else ")"), f"colours: {plate.colours.describe()}"]
     printed = " as printed" if "printer" in summary else ""
     made = printed if not args.palette else " (as its palette.json says)"  # a --palette folder: its own values
+    lines += _line_lines(summary)
     for r in plate.regions:
         fem = (f"texture V{made} {r.fem_roughness:.4f} ({verifier})" if r.fem_roughness else
-               "texture V not verified")
+               "flat" if r.texture == "flat" else "texture V not verified")
         digital = (f" (digital {r.digital_plate_roughness:.4f})" if r.digital_plate_roughness is not None else "")
         on_plate = (f"on the plate{printed} V {r.plate_roughness:.4f}{digital}, lambda {r.plate_lambda_mm:.3f} mm "
                     f"over {r.footprints} footprints (surrogate: no uncertainty of its own)" if r.plate_roughness else
@@ -224,6 +272,19 @@ def _text_lines(args: argparse.Namespace, out: Path, plate: TactilePlate, summar
     if pairs:
         lines.append(f"closest regions on the plate's map: {min(pairs):.2f} JND apart (surrogate)")
     return lines + [f"note: {n}" for n in plate.notes]
+
+
+def _line_lines(summary: dict) -> list[str]:
+    """The lines found and how they are made, in words (none without line detection)."""
+    lines = summary.get("lines")
+    if not lines:
+        return []
+    if not lines["line_colours"]:
+        return [f"lines: none (no colour's strokes are mostly narrower than {lines['threshold_mm']:.2g} mm)"]
+    widths = ", ".join(f"{c} strokes {w:.2f} mm wide on average" for c, w in zip(lines["line_colours"],
+                                                                               lines["stroke_width_mm"]))
+    return [f"lines: {widths} (lines: narrower than {lines['threshold_mm']:.2g} mm) made as smooth raised lines "
+            f"{lines['width_mm']:g} mm wide, {lines['height_mm']:g} mm high, textures {lines['gap_mm']:g} mm clear"]
 
 
 def _forecast_lines(forecast: dict) -> list[str]:

@@ -19,11 +19,13 @@ from roughness.surface.arguments import heightmap_argument
 from roughness.surface.heightmap import Heightmap, pixel_size
 
 from . import homogeneity as _homogeneity
+from . import lines as _lines
 from . import palette as _palette
 from . import tactile_image as _tactile
 from . import tune as _tune
 from .colours import cluster_colours
 from .evaluation import VERIFIERS, Evaluator
+from .layout import plan_layout
 
 if TYPE_CHECKING:
     from roughness.surface.printing import PrintProfile
@@ -255,7 +257,11 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
                   size_mm: float = _tactile.WIDTH_MM, pixel_mm: float = _tactile.PIXEL_MM,
                   texture_pixel_mm: float | None = None, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = _tactile.STEP_MM, strain: bool = False,
-                  colour_tolerance: float = _tactile.TOLERANCE, verify: str | None = None,
+                  colour_tolerance: float = _tactile.TOLERANCE, lines: bool = True,
+                  line_width_mm: float = _lines.MAX_STROKE_MM, line_colour: str | None = None,
+                  line_bar_mm: float = _lines.LINE_WIDTH_MM, line_height_mm: float = _lines.LINE_HEIGHT_MM,
+                  line_gap_mm: float = _lines.LINE_GAP_MM, background: str | None = "auto",
+                  assign: Mapping[str, int | str] | None = None, verify: str | None = None,
                   model: str | Path | None = None, units_ok: bool = False,
                   printer: object = None) -> _tactile.TactilePlate:
     """A printable plate on which each flat colour of a picture is a texture that feels different.
@@ -281,6 +287,14 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         Also compute the FEM strain image (slow).
     colour_tolerance : float
         Colours within this CIE Delta E are one colour.
+    lines : bool
+        Detect thin strokes (narrower than ``line_width_mm`` on the plate, or of the colour ``line_colour``,
+        "#rrggbb") and make them smooth raised lines ``line_bar_mm`` wide and ``line_height_mm`` high, textures
+        ``line_gap_mm`` clear of them (mm; ``roughness.design.lines``).
+    background : "auto", "#rrggbb" or None
+        The colour left flat ("auto": the colour most on the picture's border; None: every region textured).
+    assign : mapping of "#rrggbb" to palette member number (from 1, smoothest first) or "flat", optional
+        Which colour gets which texture; default: the lightest textured colour the smoothest.
     verify, model, units_ok, printer
         As in ``roughness.tune`` (``units_ok``: of the texture arrays; with a printer, a new palette is made of
         textures that stay ``min_jnd`` apart as printed and the roughness map is of the printed plate).
@@ -305,13 +319,18 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
                              parameter="k")
     evaluator = evaluator_arg(model, verify, printer)
     _tactile.plate_shape(rgb.shape, size_mm, pixel_mm, step_mm, evaluator.footprint_mm)  # refused before any palette
+    lines = flag("lines", lines)
+    style = _lines.LineStyle(line_bar_mm, line_height_mm, line_gap_mm)
+    layout = plan_layout(found, positive("size_mm", size_mm) / rgb.shape[1],
+                         positive("line_width_mm", line_width_mm) if lines else None,
+                         line_colour if lines else None, background, assign, style)
     with _renamed(palette="textures", pixel_mm="texture_pixel_mm"):  # the command line's --palette, this pixel
         chosen = _plate_textures(textures, texture_pixel_mm, units_ok) if textures is not None else None
     if chosen is None:
-        made = _palette.family_palette(k or len(found.colours), min_jnd, family, "height", evaluator)
+        made = _palette.family_palette(k or max(2, len(layout.textured)), min_jnd, family, "height", evaluator)
         chosen = [(m.name, m.heightmap, m.fem.roughness) for m in made.members]
     return _tactile.tactile_image(found, chosen, size_mm, pixel_mm, outline_mm, outline_height_mm, step_mm, strain,
-                                  evaluator)
+                                  evaluator, layout=layout)
 
 
 @contextmanager

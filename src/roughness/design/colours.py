@@ -85,7 +85,8 @@ def cluster_colours(rgb: np.ndarray, tolerance: float = TOLERANCE, min_fraction:
     index = lookup[codes].reshape(rgb.shape[:2])
     del lookup, codes
     colour_lab = lab(colours)
-    flat_pixels = _flat_pixels(index, colour_lab, tolerance * FLAT_STEP)
+    common = counts[present] >= min_fraction * index.size  # colours drawn exactly over a share of the picture
+    flat_pixels = _flat_pixels(index, colour_lab, tolerance * FLAT_STEP, common)
     if min(index.shape) < 3 and not flat_pixels.any():  # one or two rows or columns: no pixel inside the picture
         flat_pixels[:] = True  # for the four-neighbour test to tell a region's inside from its edge, so all count
     weight = np.bincount(index[flat_pixels], minlength=len(present)).astype(float)
@@ -96,6 +97,8 @@ def cluster_colours(rgb: np.ndarray, tolerance: float = TOLERANCE, min_fraction:
         nearest = _nearest(colour_lab, centres)
         centres = np.array([np.average(colour_lab[nearest == i], axis=0, weights=weight[nearest == i])
                             if weight[nearest == i].sum() > 0 else centres[i] for i in range(len(centres))])
+    nearest = _nearest(colour_lab, centres)
+    centres = _merge_close(centres, colour_lab, weight, nearest, tolerance)
     nearest = _nearest(colour_lab, centres)
     if len(np.unique(nearest)) < len(centres):  # two centres refined onto one: one colour
         centres = centres[np.unique(nearest)]
@@ -116,13 +119,36 @@ def cluster_colours(rgb: np.ndarray, tolerance: float = TOLERANCE, min_fraction:
                           int(pixel_counts[~far & ~exact].sum()), int(pixel_counts[far].sum()))
 
 
-def _flat_pixels(index: np.ndarray, colour_lab: np.ndarray, tolerance: float) -> np.ndarray:
-    """Pixels whose four neighbours are within ``tolerance`` of them, in strips of rows (bounded memory)."""
+def _merge_close(centres: np.ndarray, colour_lab: np.ndarray, weight: np.ndarray, nearest: np.ndarray,
+                 tolerance: float) -> np.ndarray:
+    """Centres (Lab) with any two refined to within ``tolerance`` of each other merged (weighted by their flat
+    pixels): they are one colour by the tolerance's definition."""
+    sizes = [float(weight[nearest == i].sum()) for i in range(len(centres))]
+    centres = [c for c in centres]
+    while len(centres) > 1:
+        d = np.linalg.norm(np.array(centres)[:, None] - np.array(centres)[None], axis=-1)
+        d[np.diag_indices(len(centres))] = np.inf
+        a, b = np.unravel_index(np.argmin(d), d.shape)
+        if d[a, b] > tolerance:
+            break
+        total = sizes[a] + sizes[b]
+        merged = (centres[a] * sizes[a] + centres[b] * sizes[b]) / total if total > 0 else centres[a]
+        centres[a], sizes[a] = merged, total
+        del centres[b], sizes[b]
+    return np.array(centres)
+
+
+def _flat_pixels(index: np.ndarray, colour_lab: np.ndarray, tolerance: float, common: np.ndarray) -> np.ndarray:
+    """Pixels whose four neighbours are within ``tolerance`` of them, or whose colour is ``common`` (by colour
+    index) and whose two neighbours across or two neighbours down are exactly that colour (a thin line's pixels: no
+    pixel of a stroke 1 or 2 pixels wide has four like neighbours), in strips of rows (bounded memory)."""
     h, w = index.shape
     flat = np.ones((h, w), dtype=bool)
+    line = np.zeros((h, w), dtype=bool)
     rows = max(1, STRIP_PIXELS // w)
     for top in range(0, h, rows):
-        block = colour_lab[index[top:top + rows + 1]]  # one more row: the last row's lower neighbour
+        codes = index[top:top + rows + 1]  # one more row: the last row's lower neighbour
+        block = colour_lab[codes]
         across = np.linalg.norm(block[:, 1:] - block[:, :-1], axis=-1) > tolerance
         down = np.linalg.norm(block[1:] - block[:-1], axis=-1) > tolerance
         view = flat[top:top + len(block)]
@@ -130,7 +156,10 @@ def _flat_pixels(index: np.ndarray, colour_lab: np.ndarray, tolerance: float) ->
         view[:, :-1] &= ~across
         view[1:] &= ~down
         view[:-1] &= ~down
-    return flat
+        same = line[top:top + len(block)]
+        same[:, 1:-1] |= (codes[:, 1:-1] == codes[:, :-2]) & (codes[:, 1:-1] == codes[:, 2:])
+        same[1:-1] |= (codes[1:-1] == codes[:-2]) & (codes[1:-1] == codes[2:])
+    return flat | line & common[index]
 
 
 def _groups(colours: np.ndarray, colour_lab: np.ndarray, weight: np.ndarray, tolerance: float, min_pixels: float,

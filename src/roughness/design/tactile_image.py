@@ -37,6 +37,8 @@ from roughness.surface.heightmap import Heightmap, pixel_size
 
 from .colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
 from .evaluation import Evaluator
+from .layout import FLAT, Layout
+from .lines import fill_lines, line_relief
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -72,6 +74,7 @@ class TactilePlate:
     strain: np.ndarray | None = None  # fluctuation of lambda3 mosaic (FEM), on strain_axis_mm
     strain_extent_mm: tuple[float, float, float, float] | None = None
     notes: tuple[str, ...] = field(default=())
+    layout: Layout | None = None  # lines, background and assignments (None: every colour a textured region)
 
     def __repr__(self) -> str:
         regions = ", ".join(f"{hex_colour(r.colour)} {r.texture}" for r in self.regions)
@@ -95,7 +98,22 @@ class TactilePlate:
                              "footprints_inside": r.footprints} for r in self.regions],
                 "colour_clustering": self.colours.summary(),
                 "plate_distances_jnd": _rounded(self.distances_jnd("plate")),
-                "texture_distances_jnd": _rounded(self.distances_jnd("fem")), "notes": list(self.notes)}
+                "texture_distances_jnd": _rounded(self.distances_jnd("fem")), **self._layout_summary(),
+                "notes": list(self.notes)}
+
+    def _layout_summary(self) -> dict:
+        """Lines (their colours, threshold and measured widths, mm), their style and the flat background."""
+        if self.layout is None:
+            return {}
+        colours = self.colours.colours
+        mm_per_px = self.heightmap.size_mm[0] / self.colours.labels.shape[1]
+        lines = self.layout.lines
+        return {"background": None if self.layout.background is None else hex_colour(colours[self.layout.background]),
+                "flat_colours": [hex_colour(colours[i]) for i in self.layout.flat],
+                "lines": None if lines is None else {
+                    **lines.summary(mm_per_px), "line_colours": [hex_colour(colours[i]) for i in lines.colours],
+                    "width_mm": self.layout.style.width_mm, "height_mm": self.layout.style.height_mm,
+                    "gap_mm": self.layout.style.gap_mm}}
 
 
 def _rounded(a: np.ndarray) -> list:
@@ -217,21 +235,21 @@ def outline(labels: np.ndarray, pixel_mm: float, width_mm: float, height_mm: flo
     return np.where(d < width_mm / 2, height_mm * np.cos(math.pi * d / width_mm) ** 2, 0.0)
 
 
-def compose(labels: np.ndarray, textures: list[Heightmap], pixel_mm: float, outline_mm: float | None = None,
+def compose(labels: np.ndarray, textures: list[Heightmap | None], pixel_mm: float, outline_mm: float | None = None,
             outline_height_mm: float | None = None) -> Heightmap:
-    """The plate's relief: texture i (periodic, lowest point at 0) in region i, outlines on top."""
+    """The plate's relief: texture i (periodic, lowest point at 0) in region i (None: flat), outlines on top."""
     ny, nx = labels.shape
     x = (np.arange(nx) + 0.5) * pixel_mm
     y = (np.arange(ny) + 0.5) * pixel_mm
     relief = np.zeros(labels.shape)
     for i, texture in enumerate(textures):
         inside = labels == i
-        if inside.any():
+        if texture is not None and inside.any():
             h = texture.sample(x[None, :], y[:, None], periodic=True)
             relief[inside] = (h - texture.heights.min())[inside]
     if outline_mm:
-        height = outline_height_mm if outline_height_mm is not None else float(np.median([np.ptp(t.heights)
-                                                                                          for t in textures]))
+        height = outline_height_mm if outline_height_mm is not None else float(np.median(
+            [np.ptp(t.heights) for t in textures if t is not None] or [0.0]))
         relief = np.maximum(relief, outline(labels, pixel_mm, outline_mm, height))
     return Heightmap(relief, pixel_mm)
 
@@ -254,9 +272,12 @@ def footprint_labels(labels: np.ndarray, pixel_mm: float, xs: np.ndarray, ys: np
 def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str, Heightmap, float | None]],
                   width_mm: float = WIDTH_MM, pixel_mm: float = PIXEL_MM, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = STEP_MM, strain: bool = False,
-                  evaluator: Evaluator | None = None, progress=None, tolerance: float = TOLERANCE) -> TactilePlate:
+                  evaluator: Evaluator | None = None, progress=None, tolerance: float = TOLERANCE,
+                  layout: Layout | None = None) -> TactilePlate:
     """A plate from a picture (RGB pixels, or its colours already clustered) and textures ``(name, heightmap,
-    FEM V or None)`` ordered smoothest first (module docstring); ``tolerance``: Delta E, for RGB pixels.
+    FEM V or None)`` ordered smoothest first (module docstring); ``tolerance``: Delta E, for RGB pixels;
+    ``layout``: which colours are lines, flat or which texture (``roughness.design.layout``; default: every colour
+    a region, textured by the lightness rule).
 
     ``progress(stage, done, total)``: after each batch of the roughness map (stage "roughness map") and each
     FEM footprint of the strain image (stage "strain image").
@@ -266,17 +287,21 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     strain = flag("strain", strain)
     evaluator = evaluator or Evaluator()
     found = picture if isinstance(picture, PictureColours) else cluster_colours(picture, tolerance)
-    colours, picture_labels = found.colours, found.labels
-    if len(colours) > len(textures):
-        raise InputError(f"the picture has {len(colours)} flat colours but only {len(textures)} textures were given",
-                         parameter="textures")
-    notes = []
-    if len(textures) > len(colours):  # spread the regions over the palette: first, last and evenly between
-        pick = np.round(np.linspace(0, len(textures) - 1, len(colours))).astype(int)
-        textures = [textures[i] for i in pick]
-        notes.append(f"{len(colours)} colours: palette members {', '.join(str(i + 1) for i in pick)} used")
-    labels = plate_labels(picture_labels, width_mm, pixel_mm)
-    plate = compose(labels, [t for _, t, _ in textures], pixel_mm, outline_mm, outline_height_mm)
+    colours = found.colours
+    layout = layout or Layout(len(colours))
+    members, rule = layout.members(len(textures))
+    notes = [f"textures: {rule}"] if layout.flat or layout.assign or len(textures) > len(members) else []
+    region_colours = layout.regions
+    line_mask = layout.lines.mask if layout.lines else np.zeros(found.labels.shape, dtype=bool)
+    region_of = np.full(len(colours), -1)
+    region_of[region_colours] = np.arange(len(region_colours))
+    labels = plate_labels(region_of[fill_lines(found.labels, line_mask)], width_mm, pixel_mm)
+    chosen = [textures[members[i]] if i in members else None for i in region_colours]
+    plate = compose(labels, [t[1] if t else None for t in chosen], pixel_mm, outline_mm, outline_height_mm)
+    keep_out = None
+    if layout.lines:
+        lines_relief, keep_out = line_relief(plate_labels(line_mask, width_mm, pixel_mm), pixel_mm, layout.style)
+        plate = Heightmap(np.where(keep_out, lines_relief, plate.heights), pixel_mm)
     footprint = evaluator.footprint_mm
     if min(plate.size_mm) < footprint:
         raise InputError(f"the plate ({plate.size_mm[0]:.1f} x {plate.size_mm[1]:.1f} mm) is smaller than the "
@@ -291,9 +316,13 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
         notes.append(f"the roughness map is of the plate as printed by {evaluator.printer.describe()}; "
                      "plate.npz and plate.stl are the digital design")
     clear = labels if not outline_mm else np.where(outline(labels, pixel_mm, outline_mm, 1.0) > 0, -1, labels)
+    if keep_out is not None:
+        clear = np.where(keep_out, -1, clear)
     where = footprint_labels(clear, pixel_mm, rmap.x_mm, rmap.y_mm, footprint)
     regions = []
-    for i, (colour, (name, _, fem_v)) in enumerate(zip(colours, textures)):
+    for i, (c, texture) in enumerate(zip(region_colours, chosen)):
+        colour = colours[c]
+        name, fem_v = (texture[0], texture[2]) if texture else (FLAT, None)
         inside = rmap.roughness[where == i]
         v = float(np.median(inside)) if inside.size else None
         v_digital = float(np.median(digital_map.roughness[where == i])) if digital_map is not None and inside.size else None
@@ -306,7 +335,7 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     strain_progress = (lambda done, total: progress("strain image", done, total)) if progress else None
     strain_mosaic, extent = (strain_image(felt, evaluator, strain_progress) if strain else (None, None))
     return TactilePlate(plate, labels, tuple(regions), rmap.x_mm, rmap.y_mm, rmap.roughness, where, found,
-                        strain_mosaic, extent, tuple(notes))
+                        strain_mosaic, extent, tuple(notes), layout)
 
 
 def strain_image(plate: Heightmap, evaluator: Evaluator, progress=None
