@@ -127,3 +127,30 @@ def test_cli_outlined_drawing(tmp_path, monkeypatch, capsys):
     assert main(["tactile-image", str(tmp_path / "drawing.png"), "--out", str(tmp_path / "again"),
                  "--assign", "#00ff00=1", "--quiet"]) == 2
     assert "not one of the picture's flat colours" in capsys.readouterr().err
+
+
+def test_a_region_too_small_is_reported_with_its_size_and_what_helps():
+    """A 4 mm dot beside a 20 mm square (textured), on a flat background: the dot is listed, the square not."""
+    from roughness.design.readability import MIN_TEXTURE_WIDTH_MM, small_areas
+
+    labels = np.zeros((300, 400), dtype=int)  # 0.1 mm pixels: 40 x 30 mm
+    labels[50:250, 50:250] = 1
+    yy, xx = np.mgrid[:300, :400]
+    labels[(yy - 150) ** 2 + (xx - 320) ** 2 <= 20 ** 2] = 1  # a disc 4 mm across, same colour
+    small, specks = small_areas(labels, np.zeros(labels.shape, dtype=bool), 0.1, {1: "#1e286e"})
+    assert specks == 0 and len(small) == 1
+    dot = small[0]
+    assert dot.width_mm == pytest.approx(4.0, abs=0.2) and dot.area_mm2 == pytest.approx(np.pi * 4, rel=0.05)
+    assert dot.centre_mm == pytest.approx((32.05, 15.05), abs=0.2)
+    assert dot.plate_width_mm == pytest.approx(40 * MIN_TEXTURE_WIDTH_MM / dot.width_mm, abs=1)
+    assert "4.0 mm across" in dot.describe() and "--assign #1e286e=flat" in dot.describe()
+
+
+def test_pages_fit_the_picture_and_the_scale_bar_is_round():
+    from roughness.design.pages import page_width, scale_bar_mm
+
+    assert page_width("A4", (160, 240)) == pytest.approx(min(297 - 20, (210 - 20) * 1.5))  # landscape
+    assert page_width("letter", (300, 100)) == pytest.approx(min(215.9 - 20, (279.4 - 20) / 3))  # portrait
+    with pytest.raises(InputError, match="unknown page"):
+        page_width("b5", (10, 10))
+    assert [scale_bar_mm(w) for w in (48, 60, 120, 277)] == [5, 10, 20, 50]

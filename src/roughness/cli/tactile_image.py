@@ -39,6 +39,7 @@ if TYPE_CHECKING:
 def add_parser(sub) -> None:
     from roughness.design.colours import TOLERANCE
     from roughness.design.lines import LINE_GAP_MM, LINE_HEIGHT_MM, LINE_WIDTH_MM, MAX_STROKE_MM
+    from roughness.design.pages import MARGIN_MM, PAGES_MM
     from roughness.design.palette import family_palette
     from roughness.design.tactile_image import tactile_image
     from roughness.surface.stl import DEFAULT_BASE_MM
@@ -50,8 +51,13 @@ def add_parser(sub) -> None:
     p.add_argument("--out", required=True, metavar="DIR",
                    help="new folder: plate.npz (mm), plate.stl, plate.json, clustered.png (the picture in its "
                         "flat colours), relief.png, roughness_map.png/.npy, strain.png (with --strain)")
-    p.add_argument("--size-mm", type=LENGTH, default=given["width_mm"],
-                   help=f"plate width in mm; the height follows the picture (default {given['width_mm']:g})")
+    size = p.add_mutually_exclusive_group()
+    size.add_argument("--size-mm", type=LENGTH, default=given["width_mm"],
+                      help=f"plate width in mm; the height follows the picture (default {given['width_mm']:g})")
+    size.add_argument("--page", choices=sorted(PAGES_MM), type=str.lower,
+                      help=f"fit the plate on this sheet less {MARGIN_MM:g} mm margins (A4, A3, Letter, Tabloid: "
+                           "swell-paper sizes; braille: the 11 x 11.5 inch embosser page); --pixel-mm 0.2 keeps an "
+                           "A4 plate within the pixel limit")
     p.add_argument("--pixel-mm", type=PIXEL, default=given["pixel_mm"],
                    help=f"plate pixel size in mm (default {given['pixel_mm']:g})")
     source = p.add_mutually_exclusive_group()
@@ -134,6 +140,11 @@ def run(args: argparse.Namespace) -> int:
     out = check_output_folder(args.out, args.overwrite, "out")
     printer = printer_of(args)
     found = _picture_colours(args)
+    if args.page:
+        from roughness.design.pages import page_width
+
+        args.size_mm = page_width(args.page, found.labels.shape)
+        log(args, f"tactile-image: a plate {args.size_mm:.1f} mm wide fits the {args.page} page")
     evaluator = Evaluator(args.model, args.verify, printer=printer)
     # the plate's size, checked before any palette is made
     plate_shape(found.labels.shape, args.size_mm, args.pixel_mm, args.step_mm, evaluator.footprint_mm)
@@ -260,13 +271,16 @@ def _text_lines(args: argparse.Namespace, out: Path, plate: TactilePlate, summar
     made = printed if not args.palette else " (as its palette.json says)"  # a --palette folder: its own values
     lines += _line_lines(summary)
     for r in plate.regions:
+        flat = "flat (background)" if r.texture == "flat" and hex_colour(r.colour) == summary.get("background") \
+            else "flat"
         fem = (f"texture V{made} {r.fem_roughness:.4f} ({verifier})" if r.fem_roughness else
-               "flat" if r.texture == "flat" else "texture V not verified")
+               flat if r.texture == "flat" else "texture V not verified")
         digital = (f" (digital {r.digital_plate_roughness:.4f})" if r.digital_plate_roughness is not None else "")
         on_plate = (f"on the plate{printed} V {r.plate_roughness:.4f}{digital}, lambda {r.plate_lambda_mm:.3f} mm "
                     f"over {r.footprints} footprints (surrogate: no uncertainty of its own)" if r.plate_roughness else
                     "no footprint fits inside the region")
-        lines.append(f"{hex_colour(r.colour)} -> {r.texture}: {fem}; {on_plate}")
+        lines.append(f"{hex_colour(r.colour)} -> {fem}; {on_plate}" if r.texture == "flat" else
+                     f"{hex_colour(r.colour)} -> {r.texture}: {fem}; {on_plate}")
     d = plate.distances_jnd("plate")
     pairs = [abs(d[i, j]) for i in range(len(d)) for j in range(i + 1, len(d)) if not np.isnan(d[i, j])]
     if pairs:
@@ -280,10 +294,10 @@ def _line_lines(summary: dict) -> list[str]:
     if not lines:
         return []
     if not lines["line_colours"]:
-        return [f"lines: none (no colour's strokes are mostly narrower than {lines['threshold_mm']:.2g} mm)"]
+        return [f"lines: none (no colour's strokes are mostly narrower than {lines['threshold_mm']:.3g} mm)"]
     widths = ", ".join(f"{c} strokes {w:.2f} mm wide on average" for c, w in zip(lines["line_colours"],
                                                                                lines["stroke_width_mm"]))
-    return [f"lines: {widths} (lines: narrower than {lines['threshold_mm']:.2g} mm) made as smooth raised lines "
+    return [f"lines: {widths} (lines: narrower than {lines['threshold_mm']:.3g} mm) made as smooth raised lines "
             f"{lines['width_mm']:g} mm wide, {lines['height_mm']:g} mm high, textures {lines['gap_mm']:g} mm clear"]
 
 

@@ -254,7 +254,7 @@ def _folder(parameter: str, value: str | Path) -> Path:
 
 def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Sequence[HeightmapLike] | None = None, *,
                   k: int | None = None, min_jnd: float = 2.0, family: str = _palette.DEFAULT_FAMILY,
-                  size_mm: float = _tactile.WIDTH_MM, pixel_mm: float = _tactile.PIXEL_MM,
+                  size_mm: float = _tactile.WIDTH_MM, page: str | None = None, pixel_mm: float = _tactile.PIXEL_MM,
                   texture_pixel_mm: float | None = None, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = _tactile.STEP_MM, strain: bool = False,
                   colour_tolerance: float = _tactile.TOLERANCE, lines: bool = True,
@@ -275,6 +275,9 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         (default: as many as colours) variants of ``family``, ``min_jnd`` apart.
     size_mm : float
         Plate width (mm).
+    page : str, optional
+        Instead of ``size_mm``: fit the plate on this sheet (``roughness.design.pages.PAGES_MM``: a4, a3, letter,
+        tabloid, braille) less its margins.
     pixel_mm : float
         Plate pixel (mm).
     texture_pixel_mm : float, optional
@@ -317,6 +320,10 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         if textures is not None:
             raise InputError("k is the size of a palette made for the picture; give k or textures, not both",
                              parameter="k")
+    if page is not None:
+        from .pages import page_width
+
+        size_mm = page_width(page, rgb.shape)
     evaluator = evaluator_arg(model, verify, printer)
     _tactile.plate_shape(rgb.shape, size_mm, pixel_mm, step_mm, evaluator.footprint_mm)  # refused before any palette
     lines = flag("lines", lines)

@@ -5,6 +5,8 @@ stroke survives the opening only where the disk fits inside it, i.e. where it is
 removed pieces smaller than half the threshold squared are a thick shape's corners, not strokes. A colour is a
 line colour when at least ``LINE_SHARE`` of its pixels are thin (or when the user names it); all its pixels are
 then drawn as lines and the regions are the areas the lines enclose (each line pixel joins the nearest region).
+The default threshold is the narrowest area a finger reads a texture in (``readability.MIN_TEXTURE_WIDTH_MM``):
+a narrower stroke could not carry one anyway.
 
 On the plate a line is a smooth raised bar along the strokes' centre line (their skeleton): a half cosine of
 ``width_mm`` at its foot and ``height_mm`` tall, textures kept ``gap_mm`` clear of its foot. Default dimensions
@@ -22,10 +24,12 @@ from scipy import ndimage
 from roughness.core.checks import length, positive
 from roughness.core.errors import InputError
 
+from .readability import MIN_TEXTURE_WIDTH_MM
+
 LINE_HEIGHT_MM = 1.0  # a definite line (Round Table 3D-printing guidelines, 1.5: min 0.5 faint, 1 definite)
 LINE_WIDTH_MM = 1.5  # within the guidelines' 1.1 to 3 mm
 LINE_GAP_MM = 1.0  # textures stop this far from a line's foot (our choice: a line stays a line to the finger)
-MAX_STROKE_MM = 3.0  # strokes narrower than this on the plate are lines (default threshold)
+MAX_STROKE_MM = MIN_TEXTURE_WIDTH_MM  # strokes narrower than this on the plate are lines: too narrow for a texture
 LINE_SHARE = 0.5  # a colour whose pixels are at least this share thin is a line colour
 
 

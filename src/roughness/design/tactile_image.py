@@ -39,6 +39,8 @@ from .colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
 from .evaluation import Evaluator
 from .layout import FLAT, Layout
 from .lines import fill_lines, line_relief
+from .pages import scale_bar_mm
+from .readability import SmallArea, small_areas
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -75,6 +77,8 @@ class TactilePlate:
     strain_extent_mm: tuple[float, float, float, float] | None = None
     notes: tuple[str, ...] = field(default=())
     layout: Layout | None = None  # lines, background and assignments (None: every colour a textured region)
+    small_areas: tuple[SmallArea, ...] = ()  # textured areas too narrow to read a texture in
+    small_specks: int = 0  # and specks under readability.MIN_AREA_MM2 not listed
 
     def __repr__(self) -> str:
         regions = ", ".join(f"{hex_colour(r.colour)} {r.texture}" for r in self.regions)
@@ -99,6 +103,7 @@ class TactilePlate:
                 "colour_clustering": self.colours.summary(),
                 "plate_distances_jnd": _rounded(self.distances_jnd("plate")),
                 "texture_distances_jnd": _rounded(self.distances_jnd("fem")), **self._layout_summary(),
+                "small_areas": [a.as_dict() for a in self.small_areas], "small_specks": self.small_specks,
                 "notes": list(self.notes)}
 
     def _layout_summary(self) -> dict:
@@ -332,10 +337,13 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
         regions.append(Region(tuple(int(c) for c in colour), name, int((labels == i).sum()), fem_v,
                               evaluator.lambda_of(fem_v) if fem_v else None, v,
                               evaluator.lambda_of(v) if v else None, int(inside.size), v_digital))
+    textured = {i: hex_colour(colours[c]) for i, (c, t) in enumerate(zip(region_colours, chosen)) if t}
+    small, specks = small_areas(labels, clear < 0, pixel_mm, textured)
+    notes += [a.describe() for a in small]
     strain_progress = (lambda done, total: progress("strain image", done, total)) if progress else None
     strain_mosaic, extent = (strain_image(felt, evaluator, strain_progress) if strain else (None, None))
     return TactilePlate(plate, labels, tuple(regions), rmap.x_mm, rmap.y_mm, rmap.roughness, where, found,
-                        strain_mosaic, extent, tuple(notes), layout)
+                        strain_mosaic, extent, tuple(notes), layout, tuple(small), specks)
 
 
 def strain_image(plate: Heightmap, evaluator: Evaluator, progress=None
@@ -365,7 +373,7 @@ def strain_image(plate: Heightmap, evaluator: Evaluator, progress=None
 
 
 def figures(plate: TactilePlate) -> dict[str, Figure]:
-    """The plate's figures by file name: relief.png (relief with region outlines), roughness_map.png and, if
+    """The plate's figures by file name: relief.png (relief with a scale bar), roughness_map.png and, if
     computed, strain.png (no pyplot: the backend is left as it was)."""
     width, height = plate.heightmap.size_mm
     extent = (0, width, height, 0)
@@ -379,6 +387,9 @@ def figures(plate: TactilePlate) -> dict[str, Figure]:
     ax.set(xlabel="x (mm)", ylabel="y (mm)", title="plate relief: " + ", ".join(
         f"{hex_colour(r.colour)}: {r.texture}" for r in plate.regions))
     ax.title.set_fontsize(8)
+    bar = scale_bar_mm(width)
+    ax.plot([0.04 * width, 0.04 * width + bar], [0.95 * height] * 2, color="tab:orange", linewidth=3)
+    ax.text(0.04 * width + bar / 2, 0.93 * height, f"{bar:g} mm", color="tab:orange", ha="center", va="bottom")
     out["relief.png"] = fig
 
     x, y = plate.map_x_mm, plate.map_y_mm
