@@ -154,3 +154,36 @@ def test_pages_fit_the_picture_and_the_scale_bar_is_round():
     with pytest.raises(InputError, match="unknown page"):
         page_width("b5", (10, 10))
     assert [scale_bar_mm(w) for w in (48, 60, 120, 277)] == [5, 10, 20, 50]
+
+
+GREENS = [(0x1b, 0x5e, 0x20), (0x2e, 0x7d, 0x32), (0x43, 0xa0, 0x47), (0x66, 0xbb, 0x6a)]  # 12 to 15 Delta E apart
+
+
+def logo() -> np.ndarray:
+    """A logo of four flat greens on white, each pair of neighbours in shade 12 to 15 Delta E apart (< 20, the
+    default tolerance, at which they used to collapse into two)."""
+    rgb = np.full((80, 120, 3), 255, dtype=np.uint8)
+    rgb[10:40, 10:55], rgb[10:40, 65:110], rgb[45:70, 10:55], rgb[45:70, 65:110] = GREENS
+    return rgb
+
+
+def test_a_logos_four_flat_colours_survive_the_default_tolerance():
+    found = cluster_colours(logo())
+    assert sorted(map(tuple, found.colours.tolist())) == sorted(GREENS + [WHITE])
+    assert (found.clustered() == logo()).all()  # every pixel keeps its colour
+
+
+def test_a_logo_at_k_4_gets_four_textures(tmp_path, monkeypatch, capsys):
+    from roughness.cli import main
+
+    monkeypatch.delenv("ROUGHNESS_PRINTER", raising=False)
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    Image.fromarray(logo()).save(tmp_path / "logo.png")
+    assert main(["tactile-image", str(tmp_path / "logo.png"), "--out", str(tmp_path / "plate"), "--k", "4",
+                 "--size-mm", "120", "--pixel-mm", "0.2", "--verify", "spectral", "--step-mm", "4", "--json"]) == 0
+    captured = capsys.readouterr()
+    summary = json.loads(captured.out)
+    textures = {r["colour"]: r["texture"] for r in summary["regions"]}
+    assert textures == {"#ffffff": "flat", "#66bb6a": "texture-1", "#43a047": "texture-2", "#2e7d32": "texture-3",
+                        "#1b5e20": "texture-4"}
+    assert "#66bb6a, #43a047, #2e7d32, #1b5e20" in captured.err  # the colours found are shown

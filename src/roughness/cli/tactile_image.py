@@ -203,6 +203,9 @@ def _layout(args: argparse.Namespace, found: PictureColours) -> Layout:
         raise InputError(f"the picture has {len(textured)} flat colours to texture ({', '.join(textured)}; colours "
                          f"within Delta E {found.tolerance:g} merged): a palette of {args.k} textures cannot cover "
                          f"them (give at least {len(textured)}, or a larger --colour-tolerance)", "k")
+    if args.k is not None and args.k > len(textured):
+        log(args, f"tactile-image: --k {args.k} is more than the {len(textured)} colours to texture found; if the "
+                  "picture has more flat colours, lower --colour-tolerance (clustered.png shows what was found)")
     return layout
 
 

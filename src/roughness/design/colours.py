@@ -10,6 +10,12 @@ every ungrouped colour within the tolerance of it, until all are grouped. Groups
 on the flat pixels), and every pixel, edges included, joins the nearest centre. Pixels farther than the
 tolerance from their centre are *reassigned* (anti-aliased edges, compression ringing); pixels within it whose
 colour differs from their centre's are *merged* (noise).
+
+A picture drawn with flat fills (at least CLEAN_SHARE of its pixels have four neighbours of exactly their colour)
+keeps its exact flat colours however close (a logo's shades): each colour with ``min_fraction`` of such pixels, at
+least DISTINCT_DELTA_E from every larger one, leads a group first and is never merged with another such colour.
+Centres refined to within the tolerance of each other are otherwise merged. A thin stroke's pixels (a colour drawn
+exactly over ``min_fraction`` of the picture, its two neighbours across or down exactly its colour) count as flat.
 """
 from __future__ import annotations
 
@@ -26,6 +32,8 @@ MAX_GROUPS = 256  # more groups than this: not a flat-colour picture (a photogra
 REFINE_STEPS = 5
 FLAT_STEP = 0.5  # a flat pixel's neighbours are within this fraction of the tolerance of it
 BLEND_FRACTION = 0.025  # groups smaller than this share of the flat pixels may be blends of two larger ones
+CLEAN_SHARE = 0.5  # a picture this share of whose pixels have four exactly like neighbours is drawn with flat fills
+DISTINCT_DELTA_E = 5.0  # exact flat colours of a clean picture this far apart are distinct (about 2 JND of the eye)
 STRIP_PIXELS = 1 << 20  # pixels per strip when looking for flat pixels (bounds the working memory)
 
 
@@ -90,7 +98,8 @@ def cluster_colours(rgb: np.ndarray, tolerance: float = TOLERANCE, min_fraction:
     if min(index.shape) < 3 and not flat_pixels.any():  # one or two rows or columns: no pixel inside the picture
         flat_pixels[:] = True  # for the four-neighbour test to tell a region's inside from its edge, so all count
     weight = np.bincount(index[flat_pixels], minlength=len(present)).astype(float)
-    centres = _groups(colours, colour_lab, weight, tolerance, min_fraction * index.size, source)
+    seeds = _exact_colours(index, colour_lab, min_fraction * index.size)
+    centres, seeded = _groups(colours, colour_lab, weight, tolerance, min_fraction * index.size, source, seeds)
     if len(centres) < 2:
         _too_few(colours, counts[present], centres, weight.sum() / index.size, tolerance, min_fraction, source)
     for _ in range(REFINE_STEPS):  # k-means on the flat pixels, from the groups' leaders
@@ -98,7 +107,7 @@ def cluster_colours(rgb: np.ndarray, tolerance: float = TOLERANCE, min_fraction:
         centres = np.array([np.average(colour_lab[nearest == i], axis=0, weights=weight[nearest == i])
                             if weight[nearest == i].sum() > 0 else centres[i] for i in range(len(centres))])
     nearest = _nearest(colour_lab, centres)
-    centres = _merge_close(centres, colour_lab, weight, nearest, tolerance)
+    centres = _merge_close(centres, seeded, colour_lab, weight, nearest, tolerance)
     nearest = _nearest(colour_lab, centres)
     if len(np.unique(nearest)) < len(centres):  # two centres refined onto one: one colour
         centres = centres[np.unique(nearest)]
@@ -119,22 +128,45 @@ def cluster_colours(rgb: np.ndarray, tolerance: float = TOLERANCE, min_fraction:
                           int(pixel_counts[~far & ~exact].sum()), int(pixel_counts[far].sum()))
 
 
-def _merge_close(centres: np.ndarray, colour_lab: np.ndarray, weight: np.ndarray, nearest: np.ndarray,
-                 tolerance: float) -> np.ndarray:
+def _exact_colours(index: np.ndarray, colour_lab: np.ndarray, min_pixels: float) -> np.ndarray:
+    """Indices of a clean picture's exact flat colours, most pixels first: in a picture at least CLEAN_SHARE of
+    whose pixels have four neighbours of exactly their colour (drawn with flat fills, not compressed), the colours
+    with at least ``min_pixels`` such pixels, each at least DISTINCT_DELTA_E from every one before it (none in
+    any other picture)."""
+    same = np.zeros(index.shape, dtype=bool)
+    same[1:-1, 1:-1] = ((index[1:-1, 1:-1] == index[:-2, 1:-1]) & (index[1:-1, 1:-1] == index[2:, 1:-1])
+                        & (index[1:-1, 1:-1] == index[1:-1, :-2]) & (index[1:-1, 1:-1] == index[1:-1, 2:]))
+    if same.mean() < CLEAN_SHARE:
+        return np.array([], dtype=int)
+    counts = np.bincount(index[same], minlength=len(colour_lab))
+    kept: list[int] = []
+    for i in np.argsort(-counts, kind="stable"):
+        if counts[i] < min_pixels:
+            break
+        if all(np.linalg.norm(colour_lab[i] - colour_lab[k]) >= DISTINCT_DELTA_E for k in kept):
+            kept.append(int(i))
+    return np.array(kept, dtype=int)
+
+
+def _merge_close(centres: np.ndarray, seeded: np.ndarray, colour_lab: np.ndarray, weight: np.ndarray,
+                 nearest: np.ndarray, tolerance: float) -> np.ndarray:
     """Centres (Lab) with any two refined to within ``tolerance`` of each other merged (weighted by their flat
-    pixels): they are one colour by the tolerance's definition."""
+    pixels): they are one colour by the tolerance's definition, unless both are exact flat colours (``seeded``)."""
     sizes = [float(weight[nearest == i].sum()) for i in range(len(centres))]
+    seeded = list(seeded)
     centres = [c for c in centres]
     while len(centres) > 1:
         d = np.linalg.norm(np.array(centres)[:, None] - np.array(centres)[None], axis=-1)
         d[np.diag_indices(len(centres))] = np.inf
+        both = np.array(seeded)[:, None] & np.array(seeded)[None]
+        d[both] = np.inf
         a, b = np.unravel_index(np.argmin(d), d.shape)
         if d[a, b] > tolerance:
             break
         total = sizes[a] + sizes[b]
         merged = (centres[a] * sizes[a] + centres[b] * sizes[b]) / total if total > 0 else centres[a]
-        centres[a], sizes[a] = merged, total
-        del centres[b], sizes[b]
+        centres[a], sizes[a], seeded[a] = merged, total, seeded[a] or seeded[b]
+        del centres[b], sizes[b], seeded[b]
     return np.array(centres)
 
 
@@ -163,12 +195,25 @@ def _flat_pixels(index: np.ndarray, colour_lab: np.ndarray, tolerance: float, co
 
 
 def _groups(colours: np.ndarray, colour_lab: np.ndarray, weight: np.ndarray, tolerance: float, min_pixels: float,
-            source: str) -> np.ndarray:
+            source: str, seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Leaders (Lab) of the groups of flat colours covering at least ``min_pixels`` flat pixels, less blends:
     a group smaller than BLEND_FRACTION of the flat pixels whose leader is within the tolerance of a mix of
-    two larger groups' leaders (an edge band, wide where a picture was enlarged smoothly)."""
+    two larger groups' leaders (an edge band, wide where a picture was enlarged smoothly); and which were
+    ``seeds`` (exact flat colours: they lead the first groups, each of the colours within the tolerance nearest
+    to it)."""
     ungrouped = weight > 0
     leaders, sizes, leads = [], [], []
+    if len(seeds):
+        d = np.linalg.norm(colour_lab[:, None] - colour_lab[seeds][None], axis=-1)
+        nearest_seed = np.argmin(d, axis=1)
+        for k, lead in enumerate(seeds):
+            near = ungrouped & (nearest_seed == k) & (d[:, k] <= tolerance)
+            near[lead] = True
+            leaders.append(colour_lab[lead])
+            leads.append(int(lead))
+            sizes.append(weight[near].sum())
+        ungrouped &= ~((d <= tolerance).any(axis=1))
+        ungrouped[seeds] = False
     while ungrouped.any():
         if len(leaders) == MAX_GROUPS:
             raise InputError(f"{source} is not a picture of flat colours: more than {MAX_GROUPS} groups of colours "
@@ -188,7 +233,7 @@ def _groups(colours: np.ndarray, colour_lab: np.ndarray, weight: np.ndarray, tol
         if sizes[i] >= BLEND_FRACTION * total or not _is_blend(colours[leads[i]], [colours[leads[k]] for k in kept],
                                                                 colour_lab[leads[i]], tolerance):
             kept.append(i)
-    return np.array([leaders[i] for i in kept]).reshape(-1, 3)
+    return np.array([leaders[i] for i in kept]).reshape(-1, 3), np.array([i < len(seeds) for i in kept], dtype=bool)
 
 
 def _is_blend(colour: np.ndarray, others: list[np.ndarray], colour_lab: np.ndarray, tolerance: float) -> bool:
