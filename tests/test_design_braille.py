@@ -55,3 +55,24 @@ def test_characters_outside_grade_1_and_a_missing_liblouis_are_refused_clearly()
             cells_of("cat", "en-ueb-g2.ctb")
     else:
         assert cells_of("cat", "en-ueb-g1.ctb") == grade1("cat")
+
+
+def test_the_key_strip_places_samples_and_labels_and_wraps():
+    from roughness.dataset.textures import standard_texture
+    from roughness.design.key import KEY_GAP_MM, SWATCH_MM, key_entries, key_strip
+
+    textures = [None, standard_texture(1.0, seed=1), standard_texture(1.625, seed=1)]
+    entries = key_entries([1, 2], {2: "sea"}, None)
+    assert [(r, label) for r, label, _ in entries] == [(1, "a"), (2, "sea")]
+    style = BrailleStyle()
+    relief, labels, placed = key_strip(entries, textures, 120.0, 50.0, 0.1, 0, style)
+    assert relief.shape[0] * 0.1 == pytest.approx(SWATCH_MM + 2 * KEY_GAP_MM, abs=0.1)  # one row
+    first, second = placed
+    assert first.swatch_mm == pytest.approx((5, 55, 20, 70)) and second.swatch_mm[1] == pytest.approx(55)
+    assert (labels[60:190, 60:190] == 1).all() and (labels[60:190, 60:190] != 0).all()  # the sample
+    label = relief[50:100, 230:240]  # the 'a' beside the first sample: one dot, 0.7 mm high
+    assert label.max() == pytest.approx(0.7, abs=0.01)
+    narrow = key_strip(entries, textures, 45.0, 50.0, 0.1, 0, style)[2]  # one entry per row
+    assert narrow[1].swatch_mm[1] == pytest.approx(55 + SWATCH_MM + KEY_GAP_MM)
+    with pytest.raises(InputError, match="does not fit across"):
+        key_strip(key_entries([1], {1: "a long label"}, None), textures, 45.0, 0.0, 0.1, 0, style)

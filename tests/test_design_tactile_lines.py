@@ -119,10 +119,13 @@ def test_cli_outlined_drawing(tmp_path, monkeypatch, capsys):
     out = tmp_path / "plate"
     assert main(["tactile-image", str(tmp_path / "drawing.png"), "--out", str(out), "--size-mm", "120",
                  "--pixel-mm", "0.2", "--verify", "spectral", "--step-mm", "4", "--assign", f"@{tmp_path / 'map.txt'}",
-                 "--json", "--quiet"]) == 0
+                 "--key", "--key-labels", "#dc781e=Sun", "--json", "--quiet"]) == 0
     summary = json.loads(capsys.readouterr().out)
     textures = {r["colour"]: r["texture"] for r in summary["regions"]}
     assert textures == {"#ffffff": "flat", "#dc781e": "texture-2", "#1e286e": "texture-1"}
+    assert [(e["label"], e["braille"], e["texture"]) for e in summary["key"]] == [
+        ("Sun", "\u2820\u280e\u2825\u281d", "texture-2"), ("b", "\u2803", "texture-1")]  # capital, s, u, n; b
+    assert summary["height_mm"] == pytest.approx(80 + 5 + 15 + 5, abs=0.2)  # the picture, then the key strip
     assert summary["lines"]["line_colours"] == ["#000000"] and "textures: as assigned" in summary["notes"]
     assert main(["tactile-image", str(tmp_path / "drawing.png"), "--out", str(tmp_path / "again"),
                  "--assign", "#00ff00=1", "--quiet"]) == 2

@@ -90,6 +90,14 @@ def add_parser(sub) -> None:
                        help="textures by colour: '#ff0000=1,#00ff00=3,#0000ff=flat' (palette members from 1, "
                             "smoothest first) or @FILE with one COLOUR=N a line; default: the lightest textured colour "
                             "gets the smoothest texture")
+    key = p.add_argument_group("key (legend) with braille labels")
+    key.add_argument("--key", action="store_true",
+                     help="add a key strip under the picture: a 15 mm sample of each texture beside its braille label")
+    key.add_argument("--key-labels", metavar="SPEC",
+                     help="the labels by colour: '#dc781e=sun,#1e286e=sea' (default: a, b, c, ... lightest first)")
+    key.add_argument("--braille-table", metavar="TABLE",
+                     help="a liblouis table for the labels (e.g. en-ueb-g2.ctb: contracted; needs liblouis); "
+                          "default: uncontracted English, built in")
     p.add_argument("--outline-mm", type=LENGTH, help="width of smooth raised lines along region edges (default: none)")
     p.add_argument("--outline-height-mm", type=HEIGHT,
                    help="height of the raised lines in mm (default: 1.2 x the tallest texture)")
@@ -149,12 +157,17 @@ def run(args: argparse.Namespace) -> int:
     # the plate's size, checked before any palette is made
     plate_shape(found.labels.shape, args.size_mm, args.pixel_mm, args.step_mm, evaluator.footprint_mm)
     layout = _layout(args, found)
+    key = None
+    if args.key or args.key_labels or args.braille_table:
+        from roughness.design.key import key_spec
+
+        key = key_spec(found, args.key_labels, args.braille_table)
     textures = _textures(args, len(layout.textured), evaluator)
     log(args, "tactile-image: composing the plate and mapping its roughness (surrogate)"
         + ("; FEM strain image" if args.strain else ""))
     plate = tactile_image(found, textures.members, args.size_mm, args.pixel_mm, args.outline_mm,
                           args.outline_height_mm, args.step_mm, args.strain, evaluator, _Progress(args),
-                          layout=layout)
+                          layout=layout, key=key)
     summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier,
                **({"print_forecast": textures.made.forecast} if textures.forecast else {}),
                "provenance": evaluator.provenance.as_dict(),
@@ -288,6 +301,8 @@ def _text_lines(args: argparse.Namespace, out: Path, plate: TactilePlate, summar
     pairs = [abs(d[i, j]) for i in range(len(d)) for j in range(i + 1, len(d)) if not np.isnan(d[i, j])]
     if pairs:
         lines.append(f"closest regions on the plate's map: {min(pairs):.2f} JND apart (surrogate)")
+    lines += [f"key {e['label']} ({e['braille']}): {e['colour']} -> {e['texture']}, sample at x {e['swatch_mm'][0]:.0f}-"
+              f"{e['swatch_mm'][2]:.0f}, y {e['swatch_mm'][1]:.0f}-{e['swatch_mm'][3]:.0f} mm" for e in summary["key"]]
     return lines + [f"note: {n}" for n in plate.notes]
 
 

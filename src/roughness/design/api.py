@@ -261,7 +261,9 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
                   line_width_mm: float = _lines.MAX_STROKE_MM, line_colour: str | None = None,
                   line_bar_mm: float = _lines.LINE_WIDTH_MM, line_height_mm: float = _lines.LINE_HEIGHT_MM,
                   line_gap_mm: float = _lines.LINE_GAP_MM, background: str | None = "auto",
-                  assign: Mapping[str, int | str] | None = None, verify: str | None = None,
+                  assign: Mapping[str, int | str] | None = None, key: bool = False,
+                  key_labels: Mapping[str, str] | None = None, braille_table: str | None = None,
+                  verify: str | None = None,
                   model: str | Path | None = None, units_ok: bool = False,
                   printer: object = None) -> _tactile.TactilePlate:
     """A printable plate on which each flat colour of a picture is a texture that feels different.
@@ -298,6 +300,9 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         The colour left flat ("auto": the colour most on the picture's border; None: every region textured).
     assign : mapping of "#rrggbb" to palette member number (from 1, smoothest first) or "flat", optional
         Which colour gets which texture; default: the lightest textured colour the smoothest.
+    key, key_labels, braille_table : bool, mapping of "#rrggbb" to text, str, optional
+        A key strip under the picture: each texture's sample beside its braille label (default labels a, b, c, ...;
+        grade 1 English built in, or a liblouis ``braille_table``; ``roughness.design.key``).
     verify, model, units_ok, printer
         As in ``roughness.tune`` (``units_ok``: of the texture arrays; with a printer, a new palette is made of
         textures that stay ``min_jnd`` apart as printed and the roughness map is of the printed plate).
@@ -331,13 +336,18 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
     layout = plan_layout(found, positive("size_mm", size_mm) / rgb.shape[1],
                          positive("line_width_mm", line_width_mm) if lines else None,
                          line_colour if lines else None, background, assign, style)
+    spec = None
+    if flag("key", key) or key_labels is not None or braille_table is not None:
+        from .key import key_spec
+
+        spec = key_spec(found, key_labels, braille_table)
     with _renamed(palette="textures", pixel_mm="texture_pixel_mm"):  # the command line's --palette, this pixel
         chosen = _plate_textures(textures, texture_pixel_mm, units_ok) if textures is not None else None
     if chosen is None:
         made = _palette.family_palette(k or max(2, len(layout.textured)), min_jnd, family, "height", evaluator)
         chosen = [(m.name, m.heightmap, m.fem.roughness) for m in made.members]
     return _tactile.tactile_image(found, chosen, size_mm, pixel_mm, outline_mm, outline_height_mm, step_mm, strain,
-                                  evaluator, layout=layout)
+                                  evaluator, layout=layout, key=spec)
 
 
 @contextmanager

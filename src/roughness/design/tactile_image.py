@@ -37,6 +37,7 @@ from roughness.surface.heightmap import Heightmap, pixel_size
 
 from .colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
 from .evaluation import Evaluator
+from .key import KeyEntry, KeySpec, key_entries, key_strip
 from .layout import FLAT, Layout
 from .lines import fill_lines, line_relief
 from .pages import scale_bar_mm
@@ -79,6 +80,7 @@ class TactilePlate:
     layout: Layout | None = None  # lines, background and assignments (None: every colour a textured region)
     small_areas: tuple[SmallArea, ...] = ()  # textured areas too narrow to read a texture in
     small_specks: int = 0  # and specks under readability.MIN_AREA_MM2 not listed
+    key: tuple[KeyEntry, ...] = ()  # the key strip's entries (none: no key)
 
     def __repr__(self) -> str:
         regions = ", ".join(f"{hex_colour(r.colour)} {r.texture}" for r in self.regions)
@@ -104,6 +106,9 @@ class TactilePlate:
                 "plate_distances_jnd": _rounded(self.distances_jnd("plate")),
                 "texture_distances_jnd": _rounded(self.distances_jnd("fem")), **self._layout_summary(),
                 "small_areas": [a.as_dict() for a in self.small_areas], "small_specks": self.small_specks,
+                "key": [{"label": e.label, "braille": e.braille(), "colour": hex_colour(self.regions[e.region].colour),
+                         "texture": self.regions[e.region].texture, "swatch_mm": [round(v, 2) for v in e.swatch_mm]}
+                        for e in self.key],
                 "notes": list(self.notes)}
 
     def _layout_summary(self) -> dict:
@@ -278,11 +283,11 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
                   width_mm: float = WIDTH_MM, pixel_mm: float = PIXEL_MM, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = STEP_MM, strain: bool = False,
                   evaluator: Evaluator | None = None, progress=None, tolerance: float = TOLERANCE,
-                  layout: Layout | None = None) -> TactilePlate:
+                  layout: Layout | None = None, key: KeySpec | None = None) -> TactilePlate:
     """A plate from a picture (RGB pixels, or its colours already clustered) and textures ``(name, heightmap,
     FEM V or None)`` ordered smoothest first (module docstring); ``tolerance``: Delta E, for RGB pixels;
     ``layout``: which colours are lines, flat or which texture (``roughness.design.layout``; default: every colour
-    a region, textured by the lightness rule).
+    a region, textured by the lightness rule); ``key``: add a key strip under the picture (``roughness.design.key``).
 
     ``progress(stage, done, total)``: after each batch of the roughness map (stage "roughness map") and each
     FEM footprint of the strain image (stage "strain image").
@@ -307,6 +312,18 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     if layout.lines:
         lines_relief, keep_out = line_relief(plate_labels(line_mask, width_mm, pixel_mm), pixel_mm, layout.style)
         plate = Heightmap(np.where(keep_out, lines_relief, plate.heights), pixel_mm)
+    entries: list[KeyEntry] = []
+    if key is not None:
+        by_region = {i: key.labels[c] for i, c in enumerate(region_colours) if c in key.labels}
+        listed = key_entries([i for i, t in enumerate(chosen) if t], by_region, key.table)
+        background = -1 if layout.background is None else int(region_of[layout.background])
+        strip, strip_labels, entries = key_strip(listed, [t[1] if t else None for t in chosen], plate.size_mm[0],
+                                                 plate.size_mm[1], pixel_mm, background, key.style)
+        check_size("pixels of the plate with its key", plate.heights.size + strip.size, MAX_PLATE_PIXELS, "size_mm")
+        plate = Heightmap(np.vstack([plate.heights, strip]), pixel_mm)
+        labels = np.vstack([labels, strip_labels])
+        if keep_out is not None:
+            keep_out = np.vstack([keep_out, np.zeros(strip.shape, dtype=bool)])
     footprint = evaluator.footprint_mm
     if min(plate.size_mm) < footprint:
         raise InputError(f"the plate ({plate.size_mm[0]:.1f} x {plate.size_mm[1]:.1f} mm) is smaller than the "
@@ -343,7 +360,7 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     strain_progress = (lambda done, total: progress("strain image", done, total)) if progress else None
     strain_mosaic, extent = (strain_image(felt, evaluator, strain_progress) if strain else (None, None))
     return TactilePlate(plate, labels, tuple(regions), rmap.x_mm, rmap.y_mm, rmap.roughness, where, found,
-                        strain_mosaic, extent, tuple(notes), layout, tuple(small), specks)
+                        strain_mosaic, extent, tuple(notes), layout, tuple(small), specks, tuple(entries))
 
 
 def strain_image(plate: Heightmap, evaluator: Evaluator, progress=None
@@ -388,8 +405,8 @@ def figures(plate: TactilePlate) -> dict[str, Figure]:
         f"{hex_colour(r.colour)}: {r.texture}" for r in plate.regions))
     ax.title.set_fontsize(8)
     bar = scale_bar_mm(width)
-    ax.plot([0.04 * width, 0.04 * width + bar], [0.95 * height] * 2, color="tab:orange", linewidth=3)
-    ax.text(0.04 * width + bar / 2, 0.93 * height, f"{bar:g} mm", color="tab:orange", ha="center", va="bottom")
+    ax.plot([width - bar, width], [-0.02 * height] * 2, color="tab:orange", linewidth=3, clip_on=False)
+    ax.text(width - bar / 2, -0.03 * height, f"{bar:g} mm", color="tab:orange", ha="center", va="bottom")
     out["relief.png"] = fig
 
     x, y = plate.map_x_mm, plate.map_y_mm
