@@ -168,7 +168,11 @@ def run(args: argparse.Namespace) -> int:
     plate = tactile_image(found, textures.members, args.size_mm, args.pixel_mm, args.outline_mm,
                           args.outline_height_mm, args.step_mm, args.strain, evaluator, _Progress(args),
                           layout=layout, key=key)
-    summary = {"image": args.image, "out": str(out), **plate.summary(), "verifier": evaluator.verifier,
+    from roughness.design.guidelines import check_plate
+
+    checks = check_plate(plate, args.min_jnd)
+    summary = {"image": args.image, "out": str(out), **plate.summary(),
+               "guidelines": [c.as_dict() for c in checks], "verifier": evaluator.verifier,
                **({"print_forecast": textures.made.forecast} if textures.forecast else {}),
                "provenance": evaluator.provenance.as_dict(),
                **({"printer": printer.as_dict()} if printer else {})}
@@ -303,6 +307,8 @@ def _text_lines(args: argparse.Namespace, out: Path, plate: TactilePlate, summar
         lines.append(f"closest regions on the plate's map: {min(pairs):.2f} JND apart (surrogate)")
     lines += [f"key {e['label']} ({e['braille']}): {e['colour']} -> {e['texture']}, sample at x {e['swatch_mm'][0]:.0f}-"
               f"{e['swatch_mm'][2]:.0f}, y {e['swatch_mm'][1]:.0f}-{e['swatch_mm'][3]:.0f} mm" for e in summary["key"]]
+    lines += [f"guideline {c['rule']}: {'PASS' if c['passed'] else 'FAIL'}, {c['value']}"
+              + (f" ({c['where']})" if c["where"] else "") for c in summary["guidelines"]]
     return lines + [f"note: {n}" for n in plate.notes]
 
 

@@ -22,7 +22,7 @@ from .braille import BrailleStyle, braille_relief, cells_of
 from .colours import PictureColours
 
 SWATCH_MM = 15.0
-LABEL_GAP_MM = 3.0
+LABEL_GAP_MM = 3.5  # at least the 1/8 inch (3.2 mm) between elements (guidelines.MIN_SPACING_MM)
 KEY_GAP_MM = 5.0
 DEFAULT_LABELS = "abcdefghijklmnopqrstuvwxyz"
 
