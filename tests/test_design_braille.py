@@ -59,7 +59,7 @@ def test_characters_outside_grade_1_and_a_missing_liblouis_are_refused_clearly()
 
 def test_the_key_strip_places_samples_and_labels_and_wraps():
     from roughness.dataset.textures import standard_texture
-    from roughness.design.key import KEY_GAP_MM, SWATCH_MM, key_entries, key_strip
+    from roughness.design.key import KEY_GAP_MM, LABEL_GAP_MM, SWATCH_MM, key_entries, key_strip
 
     textures = [None, standard_texture(1.0, seed=1), standard_texture(1.625, seed=1)]
     entries = key_entries([1, 2], {2: "sea"}, None)
@@ -70,8 +70,9 @@ def test_the_key_strip_places_samples_and_labels_and_wraps():
     first, second = placed
     assert first.swatch_mm == pytest.approx((5, 55, 20, 70)) and second.swatch_mm[1] == pytest.approx(55)
     assert (labels[60:190, 60:190] == 1).all() and (labels[60:190, 60:190] != 0).all()  # the sample
-    label = relief[50:100, 230:240]  # the 'a' beside the first sample: one dot, 0.7 mm high
-    assert label.max() == pytest.approx(0.7, abs=0.01)
+    left = round((5 + SWATCH_MM + LABEL_GAP_MM) / 0.1)  # the 'a' beside the first sample: one dot, 0.7 mm high
+    assert relief[50:100, left:left + 16].max() == pytest.approx(0.7, abs=0.01)
+    assert relief[50:100, left + 16:left + 40].max() == 0  # and nothing else (dot 1 only)
     narrow = key_strip(entries, textures, 45.0, 50.0, 0.1, 0, style)[2]  # one entry per row
     assert narrow[1].swatch_mm[1] == pytest.approx(55 + SWATCH_MM + KEY_GAP_MM)
     with pytest.raises(InputError, match="does not fit across"):

@@ -55,7 +55,7 @@ def check_plate(plate, min_jnd: float = 2.0) -> list[Check]:
     """The guideline checks of a ``TactilePlate`` (module docstring); ``min_jnd``: the neighbours' least distance."""
     checks = [_texture_count(plate), _region_size(plate), _contrast(plate, min_jnd)]
     layout = plate.layout
-    if layout is not None and layout.lines is not None and layout.lines.colours:
+    if layout is not None and plate.line_mask is not None and layout.lines.colours:
         checks += _lines(plate)
     if plate.key:
         checks.append(Check(f"braille label >= {MIN_SPACING_MM:g} mm from its sample", LABEL_GAP_MM >= MIN_SPACING_MM,
@@ -102,7 +102,6 @@ def _contrast(plate, min_jnd: float) -> Check:
 
 def _lines(plate) -> list[Check]:
     from .lines import line_relief
-    from .tactile_image import plate_labels
 
     style = plate.layout.style
     checks = [Check(f"line width {MIN_LINE_WIDTH_MM:g}-{MAX_LINE_WIDTH_MM:g} mm",
@@ -110,8 +109,7 @@ def _lines(plate) -> list[Check]:
               Check(f"line height >= {MIN_LINE_HEIGHT_MM:g} mm", style.height_mm >= MIN_LINE_HEIGHT_MM,
                     f"{style.height_mm:g} mm")]
     pixel = plate.heightmap.pixel_mm
-    strokes = plate_labels(plate.layout.lines.mask, plate.labels.shape[1] * pixel, pixel)
-    bars = line_relief(strokes, pixel, style)[0] > 0
+    bars = line_relief(plate.line_mask, pixel, style)[0] > 0
     pieces, n = ndimage.label(bars, structure=np.ones((3, 3)))
     closest, where = np.inf, ""
     for k in range(1, n):

@@ -36,6 +36,7 @@ from roughness.perceptual_scale import jnd
 from roughness.surface.heightmap import Heightmap, pixel_size
 
 from .colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
+from .edges import smooth_labels, smooth_mask
 from .evaluation import Evaluator
 from .key import KeyEntry, KeySpec, key_entries, key_strip
 from .layout import FLAT, Layout
@@ -81,6 +82,7 @@ class TactilePlate:
     small_areas: tuple[SmallArea, ...] = ()  # textured areas too narrow to read a texture in
     small_specks: int = 0  # and specks under readability.MIN_AREA_MM2 not listed
     key: tuple[KeyEntry, ...] = ()  # the key strip's entries (none: no key)
+    line_mask: np.ndarray | None = None  # the strokes drawn as lines, on the picture's part of the plate
 
     def __repr__(self) -> str:
         regions = ", ".join(f"{hex_colour(r.colour)} {r.texture}" for r in self.regions)
@@ -283,11 +285,14 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
                   width_mm: float = WIDTH_MM, pixel_mm: float = PIXEL_MM, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = STEP_MM, strain: bool = False,
                   evaluator: Evaluator | None = None, progress=None, tolerance: float = TOLERANCE,
-                  layout: Layout | None = None, key: KeySpec | None = None) -> TactilePlate:
+                  layout: Layout | None = None, key: KeySpec | None = None, smooth_edges: bool = False
+                  ) -> TactilePlate:
     """A plate from a picture (RGB pixels, or its colours already clustered) and textures ``(name, heightmap,
     FEM V or None)`` ordered smoothest first (module docstring); ``tolerance``: Delta E, for RGB pixels;
     ``layout``: which colours are lines, flat or which texture (``roughness.design.layout``; default: every colour
-    a region, textured by the lightness rule); ``key``: add a key strip under the picture (``roughness.design.key``).
+    a region, textured by the lightness rule); ``key``: add a key strip under the picture (``roughness.design.key``);
+    ``smooth_edges``: region boundaries follow the shapes, not the picture's pixels (``roughness.design.edges``;
+    default: nearest neighbour).
 
     ``progress(stage, done, total)``: after each batch of the roughness map (stage "roughness map") and each
     FEM footprint of the strain image (stage "strain image").
@@ -305,12 +310,17 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     line_mask = layout.lines.mask if layout.lines else np.zeros(found.labels.shape, dtype=bool)
     region_of = np.full(len(colours), -1)
     region_of[region_colours] = np.arange(len(region_colours))
-    labels = plate_labels(region_of[fill_lines(found.labels, line_mask)], width_mm, pixel_mm)
+    region_labels = region_of[fill_lines(found.labels, line_mask)]
+    if smooth_edges:
+        shape = plate_shape(found.labels.shape, width_mm, pixel_mm)
+        labels, plate_lines = smooth_labels(region_labels, shape), smooth_mask(line_mask, shape)
+    else:
+        labels, plate_lines = plate_labels(region_labels, width_mm, pixel_mm), plate_labels(line_mask, width_mm, pixel_mm)
     chosen = [textures[members[i]] if i in members else None for i in region_colours]
     plate = compose(labels, [t[1] if t else None for t in chosen], pixel_mm, outline_mm, outline_height_mm)
     keep_out = None
     if layout.lines:
-        lines_relief, keep_out = line_relief(plate_labels(line_mask, width_mm, pixel_mm), pixel_mm, layout.style)
+        lines_relief, keep_out = line_relief(plate_lines, pixel_mm, layout.style)
         plate = Heightmap(np.where(keep_out, lines_relief, plate.heights), pixel_mm)
     entries: list[KeyEntry] = []
     if key is not None:
@@ -360,7 +370,8 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     strain_progress = (lambda done, total: progress("strain image", done, total)) if progress else None
     strain_mosaic, extent = (strain_image(felt, evaluator, strain_progress) if strain else (None, None))
     return TactilePlate(plate, labels, tuple(regions), rmap.x_mm, rmap.y_mm, rmap.roughness, where, found,
-                        strain_mosaic, extent, tuple(notes), layout, tuple(small), specks, tuple(entries))
+                        strain_mosaic, extent, tuple(notes), layout, tuple(small), specks, tuple(entries),
+                        plate_lines if layout.lines else None)
 
 
 def strain_image(plate: Heightmap, evaluator: Evaluator, progress=None
