@@ -298,8 +298,10 @@ def _text_lines(args: argparse.Namespace, out: Path, plate: TactilePlate, summar
         fem = (f"texture V{made} {r.fem_roughness:.4f} ({verifier})" if r.fem_roughness else
                flat if r.texture == "flat" else "texture V not verified")
         digital = (f" (digital {r.digital_plate_roughness:.4f})" if r.digital_plate_roughness is not None else "")
-        on_plate = (f"on the plate{printed} V {r.plate_roughness:.4f}{digital}, lambda {r.plate_lambda_mm:.3f} mm "
-                    f"over {r.footprints} footprints (surrogate: no uncertainty of its own)" if r.plate_roughness else
+        wavelength = ("" if r.texture == "flat" or r.plate_lambda_mm is None  # flat: below the scale
+                      else f", lambda {r.plate_lambda_mm:.3f} mm")
+        on_plate = (f"on the plate{printed} V {r.plate_roughness:.4f}{digital}{wavelength} over {r.footprints} "
+                    "footprints (surrogate: no uncertainty of its own)" if r.plate_roughness is not None else
                     "no footprint fits inside the region")
         lines.append(f"{hex_colour(r.colour)} -> {fem}; {on_plate}" if r.texture == "flat" else
                      f"{hex_colour(r.colour)} -> {r.texture}: {fem}; {on_plate}")
