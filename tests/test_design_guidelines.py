@@ -58,3 +58,23 @@ def test_an_outlined_drawing_passes_and_a_small_area_fails():
     assert not size.passed and "#1e286e at (32, 37) mm" in size.where
     assert checks["separate lines"].passed  # the two outlines' bars are 10 mm apart
     assert checks["neighbours >="].passed, checks["neighbours >="]
+
+
+def test_the_bundled_outlined_drawing_passes_every_guideline():
+    """examples/design/outlined.png (three shapes, 4 px black outlines, on white) with smooth edges and a key:
+    lines found, background flat, every rule passes (standard textures 2.7 JND apart on the scale)."""
+    from pathlib import Path
+
+    from roughness.design.key import KeySpec
+    from roughness.design.lines import MAX_STROKE_MM
+    from roughness.design.tactile_image import read_image
+
+    found = cluster_colours(read_image(Path(__file__).resolve().parents[1] / "examples" / "design" / "outlined.png"))
+    layout = plan_layout(found, 0.5, MAX_STROKE_MM)
+    textures = [(f"standard-{lam}", standard_texture(lam, seed=1), None) for lam in (0.625, 1.0, 1.625)]
+    plate = tactile_image(found, textures, width_mm=120.0, pixel_mm=0.2, step_mm=2.0, evaluator=EVALUATOR,
+                          layout=layout, key=KeySpec(), smooth_edges=True)
+    assert [tuple(found.colours[i]) for i in layout.line_colours] == [(0, 0, 0)]
+    assert [e.label for e in plate.key] == ["a", "b", "c"]
+    checks = check_plate(plate)
+    assert len(checks) == 7 and all(c.passed for c in checks), [c.describe() for c in checks if not c.passed]

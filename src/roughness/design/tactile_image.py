@@ -2,13 +2,16 @@
 
 Colours: the picture's flat colours are found with a colour tolerance (``roughness.design.colours``:
 CIELAB, JPEG noise merged, anti-aliased edge pixels joining the nearest), each covering at least
-0.5% of its pixels; they are its regions. Colours are matched to
-palette members by lightness: the lightest colour gets the smoothest texture, the darkest the
-roughest. The picture is scaled to ``width_mm`` (nearest neighbour) on ``pixel_mm`` pixels; each
-region carries its texture read periodically, every texture standing on the plate's floor (z = 0 at
-its lowest point). Outlines (optional) are smooth raised lines along the region boundaries, as in
-the paper's lion: a raised cosine of width ``outline_mm`` and height ``outline_height_mm``
-(default: the median relief of the textures).
+0.5% of its pixels. A ``Layout`` (``roughness.design.layout``) says what each becomes: a raised line
+(``roughness.design.lines``), a flat region (the background) or a textured region, matched to palette members as
+assigned or by lightness (the lightest colour gets the smoothest texture, the darkest the roughest); without one,
+every colour is a textured region. The picture is scaled to ``width_mm`` on ``pixel_mm`` pixels (nearest neighbour,
+or with smooth edges: ``roughness.design.edges``); each region carries its texture read periodically, every
+texture standing on the plate's floor (z = 0 at its lowest point). Outlines (optional) are smooth raised lines
+along the region boundaries, as in the paper's lion: a raised cosine of width ``outline_mm`` and height
+``outline_height_mm`` (default: the median relief of the textures). A key strip (optional,
+``roughness.design.key``) goes under the picture; textured areas too narrow to read are listed
+(``roughness.design.readability``).
 
 The plate's roughness map is the surrogate's V at footprint positions ``step_mm`` apart; the
 regions' values are read at positions whose whole footprint lies in one region, clear of outlines. The strain image
