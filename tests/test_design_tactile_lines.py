@@ -190,3 +190,19 @@ def test_a_logo_at_k_4_gets_four_textures(tmp_path, monkeypatch, capsys):
     assert textures == {"#ffffff": "flat", "#66bb6a": "texture-1", "#43a047": "texture-2", "#2e7d32": "texture-3",
                         "#1b5e20": "texture-4"}
     assert "#66bb6a, #43a047, #2e7d32, #1b5e20" in captured.err  # the colours found are shown
+
+
+def test_a_jpeg_of_an_outlined_drawing_has_the_same_lines_and_regions(tmp_path):
+    """JPEG noise (quality 75) on 4 px outlines: the black is still one flat colour, found as the lines, and the
+    regions are the PNG's."""
+    from roughness.design.tactile_image import read_image
+
+    Image.fromarray(outlined(4)).save(tmp_path / "drawing.jpg", quality=75)
+    found = cluster_colours(read_image(tmp_path / "drawing.jpg"))
+    layout = plan_layout(found, 0.5, 6.35)
+    assert len(found.colours) == 4 and len(layout.line_colours) == 1
+    assert int(found.colours[layout.line_colours[0]].max()) < 30  # the outlines' colour: black within JPEG noise
+    png = plan_layout(cluster_colours(outlined(4)), 0.5, 6.35)
+    agree = (layout.lines.mask == png.lines.mask).mean()
+    assert agree > 0.98, agree
+    assert min(found.colours[layout.background]) >= 245  # the white background, left flat
