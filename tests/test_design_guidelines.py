@@ -58,6 +58,11 @@ def test_an_outlined_drawing_passes_and_a_small_area_fails():
     assert not size.passed and "#1e286e at (32, 37) mm" in size.where
     assert checks["separate lines"].passed  # the two outlines' bars are 10 mm apart
     assert checks["neighbours >="].passed, checks["neighbours >="]
+    merged = tactile_image(found, textures, width_mm=120.0, pixel_mm=0.2, step_mm=2.0, evaluator=EVALUATOR,
+                           layout=plan_layout(found, 0.5, 3.0), merge_small=True)
+    assert checks_of(merged)["textured areas"].passed and "1 textured area(s)" in " ".join(merged.notes)
+    orange = [r.colour for r in merged.regions].index((220, 120, 30))
+    assert merged.labels[round(37 / 0.2), round(32 / 0.2)] == orange  # the dot joined the rectangle around it
 
 
 def test_the_bundled_outlined_drawing_passes_every_guideline():

@@ -98,6 +98,8 @@ def add_parser(sub) -> None:
     key.add_argument("--braille-table", metavar="TABLE",
                      help="a liblouis table for the labels (e.g. en-ueb-g2.ctb: contracted; needs liblouis); "
                           "default: uncontracted English, built in")
+    p.add_argument("--merge-small", action="store_true",
+                   help="textured areas narrower than 6.35 mm join the region nearest them (default: listed only)")
     p.add_argument("--sharp-edges", action="store_true",
                    help="enlarge the picture pixel by pixel (default: region edges follow the shapes, smoothed)")
     p.add_argument("--outline-mm", type=LENGTH, help="width of smooth raised lines along region edges (default: none)")
@@ -169,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
         + ("; FEM strain image" if args.strain else ""))
     plate = tactile_image(found, textures.members, args.size_mm, args.pixel_mm, args.outline_mm,
                           args.outline_height_mm, args.step_mm, args.strain, evaluator, _Progress(args),
-                          layout=layout, key=key, smooth_edges=not args.sharp_edges)
+                          layout=layout, key=key, smooth_edges=not args.sharp_edges, merge_small=args.merge_small)
     from roughness.design.guidelines import check_plate
 
     checks = check_plate(plate, args.min_jnd)

@@ -263,7 +263,7 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
                   line_gap_mm: float = _lines.LINE_GAP_MM, background: str | None = "auto",
                   assign: Mapping[str, int | str] | None = None, key: bool = False,
                   key_labels: Mapping[str, str] | None = None, braille_table: str | None = None,
-                  smooth_edges: bool = True,
+                  smooth_edges: bool = True, merge_small: bool = False,
                   verify: str | None = None,
                   model: str | Path | None = None, units_ok: bool = False,
                   printer: object = None) -> _tactile.TactilePlate:
@@ -304,6 +304,8 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
     smooth_edges : bool
         Region edges follow the shapes, not the picture's pixels (``roughness.design.edges``); False: nearest
         neighbour.
+    merge_small : bool
+        Textured areas narrower than 6.35 mm join the region nearest them (default: listed in the notes only).
     key, key_labels, braille_table : bool, mapping of "#rrggbb" to text, str, optional
         A key strip under the picture: each texture's sample beside its braille label (default labels a, b, c, ...;
         grade 1 English built in, or a liblouis ``braille_table``; ``roughness.design.key``).
@@ -351,7 +353,8 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         made = _palette.family_palette(k or max(2, len(layout.textured)), min_jnd, family, "height", evaluator)
         chosen = [(m.name, m.heightmap, m.fem.roughness) for m in made.members]
     return _tactile.tactile_image(found, chosen, size_mm, pixel_mm, outline_mm, outline_height_mm, step_mm, strain,
-                                  evaluator, layout=layout, key=spec, smooth_edges=flag("smooth_edges", smooth_edges))
+                                  evaluator, layout=layout, key=spec, smooth_edges=flag("smooth_edges", smooth_edges),
+                                  merge_small=flag("merge_small", merge_small))
 
 
 @contextmanager

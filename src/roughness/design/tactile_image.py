@@ -45,7 +45,7 @@ from .key import KeyEntry, KeySpec, key_entries, key_strip
 from .layout import FLAT, Layout
 from .lines import fill_lines, line_relief
 from .pages import scale_bar_mm
-from .readability import SmallArea, small_areas
+from .readability import MIN_TEXTURE_WIDTH_MM, SmallArea, merge_small_areas, small_areas
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -288,14 +288,15 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
                   width_mm: float = WIDTH_MM, pixel_mm: float = PIXEL_MM, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = STEP_MM, strain: bool = False,
                   evaluator: Evaluator | None = None, progress=None, tolerance: float = TOLERANCE,
-                  layout: Layout | None = None, key: KeySpec | None = None, smooth_edges: bool = False
-                  ) -> TactilePlate:
+                  layout: Layout | None = None, key: KeySpec | None = None, smooth_edges: bool = False,
+                  merge_small: bool = False) -> TactilePlate:
     """A plate from a picture (RGB pixels, or its colours already clustered) and textures ``(name, heightmap,
     FEM V or None)`` ordered smoothest first (module docstring); ``tolerance``: Delta E, for RGB pixels;
     ``layout``: which colours are lines, flat or which texture (``roughness.design.layout``; default: every colour
     a region, textured by the lightness rule); ``key``: add a key strip under the picture (``roughness.design.key``);
     ``smooth_edges``: region boundaries follow the shapes, not the picture's pixels (``roughness.design.edges``;
-    default: nearest neighbour).
+    default: nearest neighbour); ``merge_small``: textured areas too narrow to read join the region nearest them
+    (``readability.merge_small_areas``; default: listed only).
 
     ``progress(stage, done, total)``: after each batch of the roughness map (stage "roughness map") and each
     FEM footprint of the strain image (stage "strain image").
@@ -320,10 +321,17 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     else:
         labels, plate_lines = plate_labels(region_labels, width_mm, pixel_mm), plate_labels(line_mask, width_mm, pixel_mm)
     chosen = [textures[members[i]] if i in members else None for i in region_colours]
-    plate = compose(labels, [t[1] if t else None for t in chosen], pixel_mm, outline_mm, outline_height_mm)
     keep_out = None
     if layout.lines:
         lines_relief, keep_out = line_relief(plate_lines, pixel_mm, layout.style)
+    if merge_small:
+        labels, merged = merge_small_areas(labels, np.zeros(labels.shape, dtype=bool) if keep_out is None else keep_out,
+                                           pixel_mm, [i for i, t in enumerate(chosen) if t])
+        if merged:
+            notes.append(f"{merged} textured area(s) narrower than {MIN_TEXTURE_WIDTH_MM:g} mm merged into the region "
+                         "nearest to them")
+    plate = compose(labels, [t[1] if t else None for t in chosen], pixel_mm, outline_mm, outline_height_mm)
+    if keep_out is not None:
         plate = Heightmap(np.where(keep_out, lines_relief, plate.heights), pixel_mm)
     entries: list[KeyEntry] = []
     if key is not None:
