@@ -57,10 +57,11 @@ class Lines:
     thin_share: tuple[float, ...]  # per colour: share of its pixels in thin strokes
     stroke_px: tuple[float | None, ...]  # per line colour: mean stroke width
 
-    def summary(self, mm_per_px: float) -> dict:
-        return {"line_colours": list(self.colours), "threshold_mm": self.threshold_px * mm_per_px,
+    def summary(self, mm_per_px: float, names: list[str]) -> dict:
+        """What was found, the colours by ``names`` (their #rrggbb), widths in mm on the plate."""
+        return {"line_colours": [names[i] for i in self.colours], "threshold_mm": self.threshold_px * mm_per_px,
                 "line_pixels": int(self.mask.sum()),
-                "thin_share": [round(s, 3) for s in self.thin_share],
+                "thin_share": {name: round(s, 3) for name, s in zip(names, self.thin_share)},
                 "stroke_width_mm": [None if s is None else round(s * mm_per_px, 3) for s in self.stroke_px]}
 
 

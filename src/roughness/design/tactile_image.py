@@ -126,8 +126,7 @@ class TactilePlate:
         return {"background": None if self.layout.background is None else hex_colour(colours[self.layout.background]),
                 "flat_colours": [hex_colour(colours[i]) for i in self.layout.flat],
                 "lines": None if lines is None else {
-                    **lines.summary(mm_per_px), "line_colours": [hex_colour(colours[i]) for i in lines.colours],
-                    "width_mm": self.layout.style.width_mm, "height_mm": self.layout.style.height_mm,
+                    **lines.summary(mm_per_px, [hex_colour(c) for c in colours]), "width_mm": self.layout.style.width_mm, "height_mm": self.layout.style.height_mm,
                     "gap_mm": self.layout.style.gap_mm}}
 
 
