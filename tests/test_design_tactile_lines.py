@@ -206,3 +206,18 @@ def test_a_jpeg_of_an_outlined_drawing_has_the_same_lines_and_regions(tmp_path):
     agree = (layout.lines.mask == png.lines.mask).mean()
     assert agree > 0.98, agree
     assert min(found.colours[layout.background]) >= 245  # the white background, left flat
+
+
+def test_a_line_drawing_on_white_needs_no_palette(tmp_path, monkeypatch, capsys):
+    from roughness.cli import main
+
+    monkeypatch.delenv("ROUGHNESS_PRINTER", raising=False)
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    image = Image.new("RGB", (120, 80), WHITE)
+    ImageDraw.Draw(image).ellipse((20, 10, 100, 70), outline=BLACK, width=3)
+    image.save(tmp_path / "ring.png")
+    out = tmp_path / "plate"
+    assert main(["tactile-image", str(tmp_path / "ring.png"), "--out", str(out), "--json", "--quiet"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert [r["texture"] for r in summary["regions"]] == ["flat"] and summary["lines"]["line_colours"] == ["#000000"]
+    assert not (out / "palette").exists() and summary["relief_mm"] == pytest.approx(1.0, abs=0.01)  # the line alone

@@ -166,7 +166,8 @@ def run(args: argparse.Namespace) -> int:
         from roughness.design.key import key_spec
 
         key = key_spec(found, args.key_labels, args.braille_table)
-    textures = _textures(args, len(layout.textured), evaluator)
+    # a picture of lines on a flat background needs no palette
+    textures = _textures(args, len(layout.textured), evaluator) if layout.textured else _Textures([], None)
     log(args, "tactile-image: composing the plate and mapping its roughness (surrogate)"
         + ("; FEM strain image" if args.strain else ""))
     plate = tactile_image(found, textures.members, args.size_mm, args.pixel_mm, args.outline_mm,

@@ -349,6 +349,8 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         spec = key_spec(found, key_labels, braille_table)
     with _renamed(palette="textures", pixel_mm="texture_pixel_mm"):  # the command line's --palette, this pixel
         chosen = _plate_textures(textures, texture_pixel_mm, units_ok) if textures is not None else None
+    if chosen is None and not layout.textured:  # lines on a flat background: no palette
+        chosen = []
     if chosen is None:
         made = _palette.family_palette(k or max(2, len(layout.textured)), min_jnd, family, "height", evaluator)
         chosen = [(m.name, m.heightmap, m.fem.roughness) for m in made.members]
