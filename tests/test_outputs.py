@@ -60,8 +60,11 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
 # String options that are not files: names, lists of names, addresses; --cache is a folder of FEM
 # results that a run reads and adds to (never replaces); card's RUN is a folder it reads two files from and
 # --plots one it writes two into (they may be one folder): their files are checked by test_card_outputs_*.
+# tactile-image's --background, --line-colour and --key-labels are colours (and text), --braille-table a liblouis
+# table name, --assign a colour mapping (or @FILE, read only, as text).
 NOT_PATHS = {"NAME", "--param", "--scheduler", "--holdout-family", "--engines", "--reference", "--roughest",
-             "--family", "--cache", "--axis", "--region", "RUN", "--plots"}
+             "--family", "--cache", "--axis", "--region", "RUN", "--plots", "--background", "--line-colour",
+             "--key-labels", "--braille-table", "--assign"}
 INPUT_VALUE = {"--recipe": "recipe.json", "--labels": "labels.jsonl.gz", "--extra-data": "data.h5",
                "--model": "model.onnx", "--like": "map.npy", "--from": "maps", "--palette": "maps",
                "--stimuli": "stimuli.csv", "--printer": "printer.json", "--scheduler-file": "scheduler.json",
@@ -349,7 +352,7 @@ def test_palette_from_a_folder_with_one_stem_twice_keeps_both_textures(workdir, 
     rgb[:, :20], rgb[:, 20:] = (250, 250, 250), (20, 20, 90)
     Image.fromarray(rgb).save(workdir / "two.png")
     code, err = _run(["tactile-image", "two.png", "--palette", "pal", "--out", "plate", "--size-mm", "40",
-                      "--step-mm", "2", "--json", "--quiet"], capsys)
+                      "--step-mm", "2", "--background", "none", "--json", "--quiet"], capsys)  # both textured
     assert code == 0, err
     regions = json.loads((workdir / "plate" / "plate.json").read_text())["regions"]
     assert [r["texture"] for r in regions] == ["tex.npy", "tex.npz"]
