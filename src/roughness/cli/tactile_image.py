@@ -54,7 +54,7 @@ def add_parser(sub) -> None:
     size = p.add_mutually_exclusive_group()
     size.add_argument("--size-mm", type=LENGTH, default=given["width_mm"],
                       help=f"plate width in mm; the height follows the picture (default {given['width_mm']:g})")
-    size.add_argument("--page", choices=sorted(PAGES_MM), type=str.lower,
+    size.add_argument("--page", choices=sorted(PAGES_MM),
                       help=f"fit the plate on this sheet less {MARGIN_MM:g} mm margins (A4, A3, Letter, Tabloid: "
                            "swell-paper sizes; braille: the 11 x 11.5 inch embosser page); --pixel-mm 0.2 keeps an "
                            "A4 plate within the pixel limit")
