@@ -36,6 +36,7 @@ from roughness.surface.heightmap import Heightmap
 
 from .curvature import FOOTPRINT_RADIUS_MM, SurfaceSamples, principal_curvatures
 from .footprint import FOOTPRINT_MM, MAX_OFF_FRACTION, Placement, on_surface, unrolled
+from .relief import MISSING_REASON, MeshRelief, base_samples
 
 ENGINES = ("spectral", "surrogate")
 CURVED = ("correction", "fem")
@@ -219,12 +220,12 @@ def reference_of(name_or_map: str | Heightmap | Reference, engine: str, scale, m
     return Reference(name, p.roughness, scale.floored_lambda(p.roughness))
 
 
-def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacing_mm: float = DEFAULT_SPACING_MM,
+def feel_map(mesh, mapping=None, regions: dict[str, np.ndarray] | None = None, spacing_mm: float = DEFAULT_SPACING_MM,
              engine: str = "spectral", curved: str = "correction", reference: str | Heightmap | Reference | None = None,
              samples: SurfaceSamples | None = None,
              progress: Callable[[int, int], None] | None = None) -> FeelMap:
     """The roughness map of ``mesh`` (trimesh.Trimesh, mm; the untextured base) under ``mapping`` (a
-    ``TextureMapping``) over ``regions`` (name -> bool per face; default: all of it), points about
+    ``TextureMapping``; None: ``mesh`` as it is, its own relief over its smoothed base, ``relief``) over ``regions`` (name -> bool per face; default: all of it), points about
     ``spacing_mm`` apart (module docstring). ``progress(done, total)`` is told after each batch of footprints."""
     start = time.perf_counter()
     spacing_mm = positive("spacing_mm", spacing_mm)
@@ -237,7 +238,8 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
     textured = np.logical_or.reduce(list(regions.values()))
     check_size(f"evaluation points {spacing_mm:g} mm apart over {mesh.area_faces[textured].sum():.4g} mm^2",
                mesh.area_faces[textured].sum() / spacing_mm**2, MAX_MAP_POSITIONS, "spacing_mm")
-    samples = samples or SurfaceSamples.of(mesh)
+    relief = MeshRelief.of(mesh) if mapping is None else None
+    samples = samples or (base_samples(mesh) if relief else SurfaceSamples.of(mesh))
     chosen = evaluation_points(samples, textured, spacing_mm)
     names = tuple(regions)
     in_region = np.stack([regions[name][samples.faces[chosen]] for name in names])
@@ -255,7 +257,13 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
     judged = [i for i in range(n) if method[i] != "refused"]
     for begin in range(0, len(judged), BATCH_POINTS):  # unrolled footprints held a batch at a time
         batch = judged[begin:begin + BATCH_POINTS]
-        maps = {i: unrolled(mapping, places[i]) for i in batch}
+        if relief:
+            maps = _relief_maps(relief, samples, places, batch, textured, curved, decided, curv)
+            for i in batch:
+                method[i], reasons[i] = decided[i].method, decided[i].reason
+        else:
+            maps = {i: unrolled(mapping, places[i]) for i in batch}
+        batch = list(maps)
         for i, notes in _judge_flat(maps, engine, model, flat, flat_error).items():  # e.g. the surrogate out of domain
             reasons[i] = "; ".join([*([reasons[i]] if reasons[i] else []), *notes])
         for i in batch:
@@ -269,11 +277,31 @@ def feel_map(mesh, mapping, regions: dict[str, np.ndarray] | None = None, spacin
             roughness[i] = flat[i] * d.factor
             uncertainty[i] = math.hypot(d.factor * flat_error[i], flat[i] * d.error)
         if progress:
-            progress(begin + len(batch), len(judged))
+            progress(min(begin + BATCH_POINTS, len(judged)), len(judged))
     areas = tuple(float(mesh.area_faces[mask].sum()) for mask in regions.values())
     return FeelMap(curv.points, curv.normals, curv.k1, curv.k2, roughness, uncertainty, flat, tuple(method),
                    tuple(reasons), in_region, names, areas, engine, curved, spacing_mm,
                    scale, ref, time.perf_counter() - start)
+
+
+def _relief_maps(relief: MeshRelief, samples: SurfaceSamples, places: list[Placement], batch: list[int],
+                 textured: np.ndarray, curved: str, decided: list[_Decision], curv) -> dict[int, Heightmap]:
+    """The mesh's relief under the footprints of ``batch``; each point's curvature (``curv``) and verdict
+    (``decided``) taken again with the base's quadric fitted to the relief; a footprint with too much of it over no
+    surface is refused instead."""
+    maps = {}
+    for i in batch:
+        found = relief.unrolled(places[i])
+        if found.missing > MAX_OFF_FRACTION:
+            decided[i] = _Decision("refused", MISSING_REASON)
+            continue
+        curv.k1[i], curv.k2[i] = found.k1, found.k2
+        place = places[i]
+        decided[i] = _decide(samples, Placement(place.centre, place.normal, found.k1, found.k2, place.d1, place.d2),
+                             textured, curved)
+        if decided[i].method != "refused":
+            maps[i] = Heightmap(found.heights, found.pixel_mm)
+    return maps
 
 
 def _checked_regions(regions: dict[str, np.ndarray] | None, faces: int) -> dict[str, np.ndarray]:
@@ -353,6 +381,8 @@ def _judge_flat(maps: dict[int, Heightmap], engine: str, model, flat: np.ndarray
 
     keys = list(maps)
     notes: dict[int, list[str]] = {}
+    if not keys:
+        return notes
     # footprints of the object's texture, checked (units included) as it was read: the engines only
     for i, p in zip(keys, predictions([(str(i), maps[i]) for i in keys], engine=engine, model=model)):
         flat[i] = p.roughness

@@ -54,7 +54,15 @@ def first_hits(mesh, origin: object, normal: object, n: int, pixel_mm: float, re
     r = np.asarray(mesh.vertices, dtype=float) - o
     s, t, w = r @ e1, r @ e2, r @ a
     del r
-    faces = np.asarray(mesh.faces)
+    return highest_surface(s, t, w, np.asarray(mesh.faces), n, pixel, reach)
+
+
+def highest_surface(s: np.ndarray, t: np.ndarray, w: np.ndarray, faces: np.ndarray, n: int, pixel_mm: float,
+                    reach_mm: float) -> np.ndarray:
+    """(n, n) heights ``w`` (mm), linear over each face of ``faces`` (indices into the per-vertex ``s``, ``t``, ``w``),
+    of the highest surface at or below ``reach_mm`` over each point of an n x n grid of ``pixel_mm`` centred on
+    s = t = 0 (pixel (i, j) at s = (j + 0.5 - n/2) pixel, t = (i + 0.5 - n/2) pixel); -inf where none is."""
+    pixel, reach = pixel_mm, reach_mm
     half = n * pixel / 2
     best = np.full(n * n, -np.inf)
     for chunk in range(0, len(faces), CHUNK_FACES):

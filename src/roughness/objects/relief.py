@@ -1,0 +1,160 @@
+"""The relief of a mesh as it is (textured elsewhere: Blender, a texturing tool, a slicer's bake) against its own base.
+
+Base surface: the mesh smoothed by a Gaussian of width ``BASE_SIGMA_MM`` (1 mm; at least twice the surface samples'
+spacing), over the mesh's surface samples (``curvature.SurfaceSamples``) within three widths, in two passes: the
+samples' face normals are averaged (pass 1), then the positions and normals of the samples whose pass-1 normals face
+the same side (not the far side of a thin wall; pass 2). A relief of wavelength lambda keeps exp(-2 pi^2 sigma^2 /
+lambda^2) of its amplitude in the base: under 1% for lambda <= 2 mm (the standard textures' bumps span 0.625-2.5 mm),
+so the base's normals and curvature are the shape's; the base lies at the relief's mean height (a constant offset,
+which no engine feels). The base's curvature at the footprint's scale is then fitted by ``curvature`` as on any mesh.
+
+Heightfield: at a footprint placed on the base (``footprint.Placement``), every vertex of the mesh near it is
+expressed in the footprint's coordinates: (u, v), the arc lengths of its foot point on the base surface that
+``footprint.surface_grid`` walks, and h, its offset from that foot point along the base's normal; the mesh's faces are
+then rasterised in (u, v) at ``ENGINE_PIXEL_MM`` (the engines' 0.05 mm pixel), keeping the highest surface over each
+pixel (what a fingertip meets), within ``REACH_MM`` of the base.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughness.curvature_correction import FOOTPRINT_MM
+
+from .curvature import SAMPLE_SPACING_MM, SurfaceSamples
+from .footprint import MAX_OFF_FRACTION, Placement, footprint_axis, surface_grid
+from .sampling import highest_surface
+
+BASE_SIGMA_MM = 1.0
+"""Width of the Gaussian that smooths the mesh into its base (mm; module docstring)."""
+ENGINE_PIXEL_MM = 0.05
+"""The heightfield's pixel: the engines' (``dataset.grid.PIXEL_MM``)."""
+REACH_MM = 3.0
+"""Surfaces farther than this from the base (mm, either side) are not the relief under the footprint (e.g. the far
+wall of a thin part)."""
+FOOT_ITERATIONS = 5
+"""Newton steps finding a vertex's foot point on the base (each shrinks the error by about |h k|, under 0.1)."""
+
+
+def base_sigma(spacing_mm: float) -> float:
+    """The base's Gaussian width (mm) for surface samples ``spacing_mm`` apart: BASE_SIGMA_MM, or twice the spacing
+    if larger (at least about 50 samples within it)."""
+    return max(BASE_SIGMA_MM, 2 * spacing_mm)
+
+
+def base_samples(mesh, spacing_mm: float = SAMPLE_SPACING_MM, sigma_mm: float | None = None,
+                 chunk: int = 20_000) -> SurfaceSamples:
+    """Surface samples of ``mesh`` (a trimesh, mm) moved onto its base surface: positions and normals smoothed by a
+    Gaussian of ``sigma_mm`` (default ``base_sigma``) in two passes (module docstring). ``faces`` stay the mesh's, so
+    regions select samples as on the mesh."""
+    from scipy.sparse import csr_matrix
+    from scipy.spatial import cKDTree
+
+    raw = SurfaceSamples.of(mesh, spacing_mm)
+    sigma = sigma_mm if sigma_mm is not None else base_sigma(spacing_mm)
+    rows, cols = [], []
+    for begin in range(0, len(raw.points), chunk):
+        near = raw.tree.query_ball_point(raw.points[begin:begin + chunk], 3 * sigma)
+        rows.append(np.repeat(np.arange(begin, begin + len(near)), [len(n) for n in near]))
+        cols.append(np.concatenate([np.asarray(n, dtype=np.int64) for n in near]))
+    i, j = np.concatenate(rows), np.concatenate(cols)
+    weight = np.exp(-np.sum((raw.points[i] - raw.points[j]) ** 2, axis=1) / (2 * sigma**2))
+    n = len(raw.points)
+    first = _unit(csr_matrix((weight, (i, j)), shape=(n, n)) @ raw.normals)
+    same = np.einsum("ij,ij->i", first[i], first[j]) > 0
+    smooth = csr_matrix((weight[same], (i[same], j[same])), shape=(n, n))
+    total = np.asarray(smooth.sum(axis=1)).ravel()
+    points = (smooth @ raw.points) / total[:, None]
+    return SurfaceSamples(points, _unit(smooth @ raw.normals), raw.faces, cKDTree(points), raw.spacing_mm)
+
+
+def _unit(vectors: np.ndarray) -> np.ndarray:
+    return vectors / np.maximum(np.linalg.norm(vectors, axis=1, keepdims=True), 1e-300)
+
+
+@dataclass(frozen=True)
+class MeshRelief:
+    """The relief of ``mesh`` (a trimesh, mm) over its base: ``unrolled`` gives it under a footprint (module
+    docstring). ``centres``: a KD-tree of the mesh's face centroids."""
+
+    mesh: object
+    centres: object
+    pixel_mm: float = ENGINE_PIXEL_MM
+
+    @classmethod
+    def of(cls, mesh, pixel_mm: float = ENGINE_PIXEL_MM) -> MeshRelief:
+        from scipy.spatial import cKDTree
+
+        return cls(mesh, cKDTree(np.asarray(mesh.triangles_center)), pixel_mm)
+
+    def unrolled(self, place: Placement, side_mm: float = FOOTPRINT_MM) -> Footprint:
+        """The relief under the footprint at ``place`` (``Footprint``; x along d1, y along d2, as
+        ``footprint.unrolled``)."""
+        axis = footprint_axis(self.pixel_mm, side_mm)
+        n = len(axis)
+        half = n * self.pixel_mm / 2
+        faces = np.asarray(self.mesh.faces)[self.centres.query_ball_point(place.centre, math.sqrt(2) * half + REACH_MM)]
+        if len(faces) == 0:
+            return Footprint(np.zeros((n, n)), self.pixel_mm, 1.0, place.k1, place.k2)
+        used, local = np.unique(faces, return_inverse=True)
+        u, v, h = foot_points(place, np.asarray(self.mesh.vertices)[used])
+        local = local.reshape(faces.shape)
+        local = local[h[local].min(axis=1) >= -REACH_MM]
+        heights = highest_surface(u, v, h, local, n, self.pixel_mm, REACH_MM)
+        missing = ~np.isfinite(heights)
+        if missing.all():
+            return Footprint(np.zeros((n, n)), self.pixel_mm, 1.0, place.k1, place.k2)
+        heights[missing] = heights[~missing].min()
+        relief, k1, k2 = without_quadric(heights, axis, place.k1, place.k2)
+        return Footprint(relief, self.pixel_mm, float(missing.mean()), k1, k2)
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """The relief under one footprint: ``heights`` (mm, over the base's quadric), the fraction of its pixels over
+    which no surface lies (filled with the lowest height met), and the base's principal curvatures there (1/mm,
+    convex positive: the placement's, with the quadric fitted to the relief added)."""
+
+    heights: np.ndarray
+    pixel_mm: float
+    missing: float
+    k1: float
+    k2: float
+
+
+def without_quadric(heights: np.ndarray, axis: np.ndarray, k1: float, k2: float) -> tuple[np.ndarray, float, float]:
+    """``heights`` (n, n; mm over the base walked with curvatures ``k1`` along x, ``k2`` along y) less their
+    least-squares quadric a + b x + c y + d x^2 + e x y + f y^2 (x, y: ``axis``, mm), and the principal curvatures
+    of the base with that quadric added: the eigenvalues of diag(k1, k2) - [[2d, e], [e, 2f]] (the walked base
+    drops by k s^2 / 2 along the normal)."""
+    x, y = np.meshgrid(axis, axis)
+    x, y = x.ravel(), y.ravel()
+    design = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=1)
+    coef, *_ = np.linalg.lstsq(design, heights.ravel(), rcond=None)
+    shape = np.array([[k1 - 2 * coef[3], -coef[4]], [-coef[4], k2 - 2 * coef[5]]])
+    low, high = np.linalg.eigvalsh(shape)
+    return (heights.ravel() - design @ coef).reshape(heights.shape), float(high), float(low)
+
+
+def foot_points(place: Placement, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For ``points`` (m, 3; mm) near the base surface at ``place``: the arc lengths (u along d1, v along d2; mm) of
+    their foot points on it, as ``footprint.surface_grid`` walks them, and their offsets h (mm) along its normal there.
+    Newton steps on u, v until the offset is normal to the surface."""
+    r = points - place.centre
+    u, v = r @ place.d1, r @ place.d2
+    step = 1e-4  # mm: finite differences of the walk
+    for _ in range(FOOT_ITERATIONS):
+        p, _ = surface_grid(place, u, v)
+        tu = (surface_grid(place, u + step, v)[0] - p) / step
+        tv = (surface_grid(place, u, v + step)[0] - p) / step
+        off = points - p
+        u = u + np.einsum("ij,ij->i", off, tu) / np.einsum("ij,ij->i", tu, tu)
+        v = v + np.einsum("ij,ij->i", off, tv) / np.einsum("ij,ij->i", tv, tv)
+    p, normal = surface_grid(place, u, v)
+    return u, v, np.einsum("ij,ij->i", points - p, normal)
+
+
+MISSING_REASON = (f"more than {100 * MAX_OFF_FRACTION:g}% of the footprint meets no surface of the mesh within "
+                  f"{REACH_MM:g} mm of its base (a hole, or an edge)")
