@@ -1,5 +1,6 @@
-"""`roughness object feel MESH --texture FILE|NAME`: how each part of the textured object feels (a roughness map
-over its surface, curvature included), per region, with a picture."""
+"""`roughness object feel MESH [--texture FILE|NAME]`: how each part of the textured object feels (a roughness map
+over its surface, curvature included), per region, with a picture. Without --texture the mesh is judged as it is
+(textured elsewhere): its own relief over its smoothed base (roughness.objects.relief)."""
 from __future__ import annotations
 
 import argparse
@@ -27,16 +28,18 @@ if TYPE_CHECKING:
     from roughness.surface.heightmap import Heightmap
 
 
-def add_object_args(p: argparse.ArgumentParser) -> None:
+def add_object_args(p: argparse.ArgumentParser, texture_help: str | None = None) -> None:
     """The textured object: the mesh, the texture, its mapping (as object texture's) and the regions (shared by feel
-    and tune)."""
-    add_mesh_and_texture_args(p, "the untextured object: STL, OBJ, PLY or 3MF (mm unless the file states units; a largest "
-                                 "extent outside 2 mm to 1 m is refused unless --units-ok)")
+    and tune; ``texture_help``: --texture is optional, as ``add_mesh_and_texture_args``)."""
+    add_mesh_and_texture_args(p, "the object, untextured (or, without --texture, textured as it is): STL, OBJ, OFF, "
+                                 "PLY, 3MF, GLB or glTF (mm unless the file states units; glTF is metres; a largest "
+                                 "extent outside 2 mm to 1 m is refused unless --units-ok)", texture_help)
     p.add_argument("--region", action="append", metavar="SPEC",
                    help="faces to texture, repeatable (each a row of the table): all, cone:AX,AY,AZ,DEG (normals within "
                         "DEG of the axis), box:X0,Y0,Z0,X1,Y1,Z1 (mm), colour:R,G,B[,TOL] (painted) (default: all)")
     p.add_argument("--spacing-mm", type=LENGTH, metavar="MM",
-                   help="distance between evaluation points (default: 5, half the 10 mm footprint)")
+                   help="distance between evaluation points (default: 5, half the 10 mm footprint; object feel widens "
+                        "it on a large part to fit its budget of footprints, and says so)")
     p.add_argument("--engine", choices=("spectral", "surrogate"), default="spectral",
                    help="the flat engine judging the texture under each footprint (default: spectral)")
     add_reading_args(p)
@@ -47,8 +50,8 @@ class ObjectInputs:
     """What the object commands read: the mesh, the texture, the regions (name -> face mask) and notes."""
 
     mesh: trimesh.Trimesh
-    texture: Heightmap
-    texture_name: str
+    texture: Heightmap | None  # None: the mesh's own relief is judged
+    texture_name: str | None
     regions: dict
     notes: list[str] = field(default_factory=list)
 
@@ -66,10 +69,16 @@ def read_object(args: argparse.Namespace) -> ObjectInputs:
 
     check_mapping_args(args)
     read = read_mesh(args.mesh, units_ok=args.units_ok)
-    texture, texture_notes = read_texture(args)
+    texture, texture_notes = read_texture(args) if args.texture is not None else (None, [])
     regions = {}
-    for text in args.region or ["all"]:
-        mask = parse_region(text).faces(read.mesh)
+    parsed = [(text, parse_region(text)) for text in args.region or ["all"]]
+    by_normal = read.mesh
+    if texture is None and any(region.kind == "cone" for _, region in parsed):  # by the base's normals, not the relief's
+        from roughness.objects.relief import BaseFaces
+
+        by_normal = BaseFaces.of(read.mesh)
+    for text, region in parsed:
+        mask = region.faces(by_normal if region.kind == "cone" else read.mesh)
         if not mask.any():
             from roughness.core.errors import InputError
 
@@ -84,12 +93,18 @@ def mapping_of(args: argparse.Namespace, texture, inputs: ObjectInputs):
     return mapping_for(args, texture, inputs.mesh, inputs.textured)
 
 
-def add_parser(sub) -> None:
-    from roughness.objects.feel import DEFAULT_SPACING_MM
+RELIEF_FLAGS = ("--mapping", "--axis", "--radius-mm", "--blend-deg", "--uv-mm", "--seed", "--pixel-mm", "--height-mm",
+                "--printer")
+"""Options that apply to a texture given by --texture only."""
 
+
+def add_parser(sub) -> None:
     p = sub.add_parser("feel", help="how each part of a textured object feels: a roughness map over its surface "
-                                    "(curvature included), per-region table and picture")
-    add_object_args(p)
+                                    "(curvature included), per-region table and picture; without --texture, the "
+                                    "mesh as it is (textured elsewhere)")
+    add_object_args(p, "without it, the mesh is judged as it is (textured elsewhere: Blender, a texturing tool, a "
+                       "slicer's bake): its own relief over its surface smoothed at 1 mm, the base's curvature "
+                       "included")
     p.add_argument("--curved", choices=("correction", "fem"), default="correction",
                    help="where curvature matters: the curvature study's measured correction, or the curved FEM "
                         "(seconds per point; cylinders and spheres only) (default: correction)")
@@ -103,7 +118,6 @@ def add_parser(sub) -> None:
                        "digital object's table beside it")
     add_quiet(p)
     add_overwrite(p)
-    p.set_defaults(spacing_default=DEFAULT_SPACING_MM)
     finish(p, run, regions="--region", spacing_mm="--spacing-mm", curved="--curved", **MAPPING_FLAGS)
 
 
@@ -119,9 +133,11 @@ def run(args: argparse.Namespace) -> int:
     if args.picture:
         check_distinct({"--picture": args.picture}, {"MESH": args.mesh, "--texture": args.texture, "--printer": args.printer})
         check_output(args.picture, args.overwrite, "picture")
+    if args.texture is None:
+        _check_relief_args(args)
     printer = printer_of(args)
     inputs = read_object(args)
-    mapping = mapping_of(args, inputs.texture, inputs)
+    mapping = None if inputs.texture is None else mapping_of(args, inputs.texture, inputs)
     notes = inputs.notes + list(getattr(mapping, "notes", lambda: [])())
     show_notes(args, notes)
     printing = _printed(args, inputs, mapping, printer) if printer is not None else None
@@ -131,14 +147,16 @@ def run(args: argparse.Namespace) -> int:
 
     if printing is not None:
         mapping = mapping_of(args, printing.result.heightmap, inputs)
-    feel = feel_map(inputs.mesh, mapping, inputs.regions, args.spacing_mm or args.spacing_default, args.engine,
-                    args.curved, args.reference, progress=progress)
+    feel = feel_map(inputs.mesh, mapping, inputs.regions, args.spacing_mm, args.engine, args.curved, args.reference,
+                    progress=progress)
+    show_notes(args, list(feel.notes))
     if args.picture:
         by = args.colour_by or ("jnd" if args.reference else "roughness")
         save_figure(feel_figure(inputs.mesh, feel, inputs.textured, by, Path(args.mesh).name), args.picture, 120,
                     args.overwrite)
     if args.json:
-        print(json_text({"mesh": args.mesh, "texture": inputs.texture_name, "mapping": args.mapping, "notes": notes,
+        print(json_text({"mesh": args.mesh, "texture": inputs.texture_name,
+                         "mapping": args.mapping if mapping is not None else None, "notes": [*notes, *feel.notes],
                          "picture": args.picture, "readings": readings(args), **feel.as_dict(),
                          "printing": None if printing is None else printing.as_dict(feel)}))
     else:
@@ -179,9 +197,23 @@ def _printed(args: argparse.Namespace, inputs: ObjectInputs, mapping, printer) -
 
     result = printed_tile(inputs.texture, printer, mapping.pixel_mm)
     log(args, f"feel: the digital object first, then as printed by {printer.name}")
-    digital = feel_map(inputs.mesh, mapping, inputs.regions, args.spacing_mm or args.spacing_default, args.engine,
-                       args.curved, args.reference)
+    digital = feel_map(inputs.mesh, mapping, inputs.regions, args.spacing_mm, args.engine, args.curved,
+                       args.reference)
     return PrintedFeel(result, digital)
+
+
+def _check_relief_args(args: argparse.Namespace) -> None:
+    """InputError for an option of a --texture given without one (the mesh's own relief is judged)."""
+    from roughness.core.errors import InputError
+    from roughness.objects.mapping import DEFAULT_BLEND_DEG
+
+    defaults = {"mapping": "triplanar", "seed": 0, "blend_deg": DEFAULT_BLEND_DEG}
+    for flag in RELIEF_FLAGS:
+        name = flag[2:].replace("-", "_")
+        value = getattr(args, name, None)
+        if value is not None and value != defaults.get(name):
+            raise InputError(f"{flag} applies to a texture given by --texture; without --texture the mesh's own "
+                             "relief is judged", parameter="texture")
 
 
 def _median(row) -> str:

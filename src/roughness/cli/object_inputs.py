@@ -11,15 +11,17 @@ MAPPING_FLAGS = {"mesh": "MESH", "texture": "--texture", "mapping": "--mapping",
                  "origin": "--axis", "radius_mm": "--radius-mm", "blend_deg": "--blend-deg", "uv_mm": "--uv-mm"}
 
 
-def add_mesh_and_texture_args(p: argparse.ArgumentParser, mesh_help: str) -> None:
-    """MESH, --texture, --seed and the mapping's options (--mapping, --axis, --radius-mm, --blend-deg, --uv-mm)."""
+def add_mesh_and_texture_args(p: argparse.ArgumentParser, mesh_help: str, texture_help: str | None = None) -> None:
+    """MESH, --texture, --seed and the mapping's options (--mapping, --axis, --radius-mm, --blend-deg, --uv-mm).
+    ``texture_help``: --texture is optional, and this says what leaving it out does."""
     from roughness.objects.layout import MAPPINGS
     from roughness.objects.mapping import BLEND_RANGE_DEG, DEFAULT_BLEND_DEG
 
     p.add_argument("mesh", metavar="MESH", help=mesh_help)
-    p.add_argument("--texture", required=True, metavar="FILE|NAME",
+    p.add_argument("--texture", required=texture_help is None, metavar="FILE|NAME",
                    help="heightmap file (as for predict) or a named texture (standard-<lambda>, flattop-<d>: see "
-                        "roughness texture list); it is tiled periodically, its lowest point on the surface")
+                        "roughness texture list); it is tiled periodically, its lowest point on the surface"
+                        + (f"; {texture_help}" if texture_help else ""))
     p.add_argument("--seed", type=SEED, default=0, help="seed of a named texture (default 0)")
     p.add_argument("--mapping", choices=MAPPINGS, default="triplanar",
                    help="how the texture lies on the surface: triplanar projection (any shape), cylinder or sphere "

@@ -84,7 +84,7 @@ class _LastMapping:
 
 def run(args: argparse.Namespace) -> int:
     """Check the options, tune the texture on the object, write it (and the textured mesh), report."""
-    from roughness.objects.feel import DEFAULT_SPACING_MM
+    from roughness.objects.feel_budget import DEFAULT_SPACING_MM
     from roughness.objects.tuning import tune_on_object
     from roughness.surface.io import save_heightmap
 
@@ -125,7 +125,8 @@ def _digital_on_object(args: argparse.Namespace, inputs: ObjectInputs, mapping, 
     the median uncertainty (V) of its judged footprints."""
     import numpy as np
 
-    from roughness.objects.feel import DEFAULT_SPACING_MM, feel_map
+    from roughness.objects.feel import feel_map
+    from roughness.objects.feel_budget import DEFAULT_SPACING_MM
     from roughness.objects.tuning import object_result
 
     log(args, "the tuned texture on the object as designed (digital), for comparison")

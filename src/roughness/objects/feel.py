@@ -35,12 +35,12 @@ from roughness.perceptual_scale import jnd, load_scale
 from roughness.surface.heightmap import Heightmap
 
 from .curvature import FOOTPRINT_RADIUS_MM, SurfaceSamples, principal_curvatures
+from .feel_budget import feel_budget
 from .footprint import FOOTPRINT_MM, MAX_OFF_FRACTION, Placement, on_surface, unrolled
 from .relief import MISSING_REASON, MeshRelief, base_samples
 
 ENGINES = ("spectral", "surrogate")
 CURVED = ("correction", "fem")
-DEFAULT_SPACING_MM = 5.0  # half a footprint: neighbouring footprints overlap by half
 BATCH_POINTS = 64  # footprints unrolled and judged at once (64 maps of 200 x 200 pixels: 20 MB)
 NEGLIGIBLE = 0.01  # |correction - 1| + its error below this (1% of V, a twentieth of a JND): the flat V stands
 CURVED_FEM_AXIS_RATIO = 0.1  # curved FEM: |k2| below this fraction of |k1| is a cylinder, |k1 - k2| a sphere
@@ -102,6 +102,7 @@ class FeelMap:
     scale: object = field(repr=False)  # the engine's StandardScale
     reference: Reference | None = None
     seconds: float = 0.0
+    notes: tuple[str, ...] = ()  # e.g. spacings widened to fit the budget (``feel_budget``)
 
     def __repr__(self) -> str:
         ok = ~np.isnan(self.roughness)
@@ -167,7 +168,7 @@ class FeelMap:
         """JSON-ready: the table, the refusals and every point."""
         jnd = self.jnd
         return {"engine": self.engine, "curved": self.curved, "spacing_mm": self.spacing_mm,
-                "seconds": self.seconds,
+                "seconds": self.seconds, "budget_notes": list(self.notes),
                 "reference": None if self.reference is None else self.reference.__dict__,
                 "regions": [row.as_dict() for row in self.table()],
                 "refusals": [{"reason": why, "points": n} for why, n in self.refusals().items()],
@@ -220,15 +221,18 @@ def reference_of(name_or_map: str | Heightmap | Reference, engine: str, scale, m
     return Reference(name, p.roughness, scale.floored_lambda(p.roughness))
 
 
-def feel_map(mesh, mapping=None, regions: dict[str, np.ndarray] | None = None, spacing_mm: float = DEFAULT_SPACING_MM,
+def feel_map(mesh, mapping=None, regions: dict[str, np.ndarray] | None = None, spacing_mm: float | None = None,
              engine: str = "spectral", curved: str = "correction", reference: str | Heightmap | Reference | None = None,
              samples: SurfaceSamples | None = None,
              progress: Callable[[int, int], None] | None = None) -> FeelMap:
     """The roughness map of ``mesh`` (trimesh.Trimesh, mm; the untextured base) under ``mapping`` (a
-    ``TextureMapping``; None: ``mesh`` as it is, its own relief over its smoothed base, ``relief``) over ``regions`` (name -> bool per face; default: all of it), points about
-    ``spacing_mm`` apart (module docstring). ``progress(done, total)`` is told after each batch of footprints."""
+    ``TextureMapping``; None: ``mesh`` as it is, its own relief over its smoothed base, ``relief``) over ``regions``
+    (name -> bool per face; default: all of it), points about ``spacing_mm`` apart (default: 5 mm, wider for a
+    large part: ``feel_budget``; module docstring). ``progress(done, total)`` is told after each batch of
+    footprints."""
     start = time.perf_counter()
-    spacing_mm = positive("spacing_mm", spacing_mm)
+    if spacing_mm is not None:
+        spacing_mm = positive("spacing_mm", spacing_mm)
     if engine not in ENGINES:
         raise InputError(f"unknown engine {engine!r}; choose one of {', '.join(ENGINES)}", parameter="engine")
     if curved not in CURVED:
@@ -236,10 +240,13 @@ def feel_map(mesh, mapping=None, regions: dict[str, np.ndarray] | None = None, s
                          parameter="curved")
     regions = _checked_regions(regions, len(mesh.faces))
     textured = np.logical_or.reduce(list(regions.values()))
+    budget = feel_budget(float(mesh.area), float(mesh.area_faces[textured].sum()), spacing_mm, mapping is None)
+    spacing_mm = budget.point_spacing_mm
     check_size(f"evaluation points {spacing_mm:g} mm apart over {mesh.area_faces[textured].sum():.4g} mm^2",
                mesh.area_faces[textured].sum() / spacing_mm**2, MAX_MAP_POSITIONS, "spacing_mm")
     relief = MeshRelief.of(mesh) if mapping is None else None
-    samples = samples or (base_samples(mesh) if relief else SurfaceSamples.of(mesh))
+    samples = samples or (base_samples(mesh, budget.sample_spacing_mm) if relief
+                          else SurfaceSamples.of(mesh, budget.sample_spacing_mm))
     chosen = evaluation_points(samples, textured, spacing_mm)
     names = tuple(regions)
     in_region = np.stack([regions[name][samples.faces[chosen]] for name in names])
@@ -281,7 +288,7 @@ def feel_map(mesh, mapping=None, regions: dict[str, np.ndarray] | None = None, s
     areas = tuple(float(mesh.area_faces[mask].sum()) for mask in regions.values())
     return FeelMap(curv.points, curv.normals, curv.k1, curv.k2, roughness, uncertainty, flat, tuple(method),
                    tuple(reasons), in_region, names, areas, engine, curved, spacing_mm,
-                   scale, ref, time.perf_counter() - start)
+                   scale, ref, time.perf_counter() - start, budget.notes)
 
 
 def _relief_maps(relief: MeshRelief, samples: SurfaceSamples, places: list[Placement], batch: list[int],

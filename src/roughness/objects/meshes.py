@@ -1,4 +1,8 @@
-"""Meshes in and out: read STL, OBJ, PLY and 3MF through trimesh (mm), check them, write STL (streamed) and 3MF.
+"""Meshes in and out: read STL, OBJ, OFF, PLY, 3MF, GLB and glTF through trimesh (mm), check them, write STL (streamed)
+and 3MF.
+
+Units: a 3MF states its unit; glTF (and GLB) are metres by their specification (trimesh reads them so); STL, OBJ,
+OFF and PLY carry none and are read as mm, with a note saying so.
 
 Sizes are checked before anything is allocated: the file's bytes (MAX_MESH_FILE_BYTES; a 3MF's unpacked members too),
 a binary STL's declared triangle count and every mesh's triangles (MAX_MESH_TRIANGLES). trimesh parses the files as
@@ -25,7 +29,7 @@ from roughness.surface.solid import SolidCheck
 from roughness.surface.stl import require_solid, write_stl
 from roughness.surface.units import CONFIRM
 
-READ_SUFFIXES = (".stl", ".obj", ".ply", ".3mf")
+READ_SUFFIXES = (".stl", ".obj", ".off", ".ply", ".3mf", ".glb", ".gltf")
 WRITE_SUFFIXES = (".stl", ".3mf")
 UNIT_MM = {"mm": 1.0, "millimeter": 1.0, "millimeters": 1.0, "millimetre": 1.0, "cm": 10.0, "centimeter": 10.0,
            "m": 1000.0, "meter": 1000.0, "meters": 1000.0, "in": 25.4, "inch": 25.4, "inches": 25.4,
@@ -46,7 +50,7 @@ class ReadMesh:
 
 
 def read_mesh(path: str | Path, watertight: bool = True, parameter: str = "mesh", units_ok: bool = False) -> ReadMesh:
-    """The triangle mesh in ``path`` (STL, OBJ, PLY, 3MF; several bodies are joined), in mm, with its duplicate
+    """The triangle mesh in ``path`` (READ_SUFFIXES; several bodies or a glTF scene's meshes are joined), in mm, with its duplicate
     vertices merged and degenerate faces dropped (noted). InputError for a file that is missing, too large, not a
     mesh, damaged (a binary STL whose triangle count is not its size's, an OBJ face with index 0, vertices that are
     not finite numbers), empty, without triangles, or (``watertight``) open or inconsistently wound; a mesh wound

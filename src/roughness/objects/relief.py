@@ -70,6 +70,24 @@ def base_samples(mesh, spacing_mm: float = SAMPLE_SPACING_MM, sigma_mm: float | 
     return SurfaceSamples(points, _unit(smooth @ raw.normals), raw.faces, cKDTree(points), raw.spacing_mm)
 
 
+@dataclass(frozen=True)
+class BaseFaces:
+    """A mesh's faces with its base's normals (``face_normals``: the nearest base sample's, per face), for selecting
+    faces by the direction they face (``regions.Region``: a cone) on a textured mesh, whose own face normals follow
+    the relief."""
+
+    faces: np.ndarray
+    face_normals: np.ndarray
+    triangles_center: np.ndarray
+
+    @classmethod
+    def of(cls, mesh, samples: SurfaceSamples | None = None) -> BaseFaces:
+        """``mesh``'s faces with the normals of its base (``samples``: default ``base_samples(mesh)``)."""
+        samples = samples or base_samples(mesh)
+        centres = np.asarray(mesh.triangles_center)
+        return cls(np.asarray(mesh.faces), samples.normals[samples.tree.query(centres)[1]], centres)
+
+
 def _unit(vectors: np.ndarray) -> np.ndarray:
     return vectors / np.maximum(np.linalg.norm(vectors, axis=1, keepdims=True), 1e-300)
 
