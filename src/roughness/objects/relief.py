@@ -34,8 +34,10 @@ ENGINE_PIXEL_MM = 0.05
 REACH_MM = 3.0
 """Surfaces farther than this from the base (mm, either side) are not the relief under the footprint (e.g. the far
 wall of a thin part)."""
-FOOT_ITERATIONS = 5
-"""Newton steps finding a vertex's foot point on the base (each shrinks the error by about |h k|, under 0.1)."""
+FOOT_ITERATIONS = 3
+"""Newton steps finding a vertex's foot point on the base (each shrinks the error by about |h k|, under 0.2)."""
+MAX_SLOPE = math.tan(math.radians(0.5))
+"""A relief whose least-squares plane slopes more than this from the base is measured again on that plane."""
 
 
 def base_sigma(spacing_mm: float) -> float:
@@ -109,13 +111,30 @@ class MeshRelief:
 
     def unrolled(self, place: Placement, side_mm: float = FOOTPRINT_MM) -> Footprint:
         """The relief under the footprint at ``place`` (``Footprint``; x along d1, y along d2, as
-        ``footprint.unrolled``)."""
+        ``footprint.unrolled``). Where the relief's least-squares plane slopes by more than ``MAX_SLOPE`` from the
+        base (the base's normal is an average of random samples: a few degrees off), the footprint is placed again
+        on that plane, once, so that the offsets are measured along the normal of the surface the skin rests on."""
         axis = footprint_axis(self.pixel_mm, side_mm)
+        heights, missing = self._heights(place, axis)
+        if missing < 1:
+            slope = quadric_fit(heights, axis)[1:3]
+            if math.hypot(*slope) > MAX_SLOPE:
+                place = levelled(place, *slope)
+                heights, missing = self._heights(place, axis)
+        if missing == 1:
+            return Footprint(heights, self.pixel_mm, 1.0, place.k1, place.k2)
+        relief, k1, k2 = without_quadric(heights, axis, place.k1, place.k2)
+        return Footprint(relief, self.pixel_mm, missing, k1, k2)
+
+    def _heights(self, place: Placement, axis: np.ndarray) -> tuple[np.ndarray, float]:
+        """The mesh's highest surface over the footprint's pixels (``axis``: their centres along d1 and d2, mm),
+        as offsets (mm) from the base walked at ``place``, and the fraction of pixels over no surface (filled with
+        the lowest offset met; all zero if none is)."""
         n = len(axis)
         half = n * self.pixel_mm / 2
         faces = np.asarray(self.mesh.faces)[self.centres.query_ball_point(place.centre, math.sqrt(2) * half + REACH_MM)]
         if len(faces) == 0:
-            return Footprint(np.zeros((n, n)), self.pixel_mm, 1.0, place.k1, place.k2)
+            return np.zeros((n, n)), 1.0
         used, local = np.unique(faces, return_inverse=True)
         u, v, h = foot_points(place, np.asarray(self.mesh.vertices)[used])
         local = local.reshape(faces.shape)
@@ -123,10 +142,19 @@ class MeshRelief:
         heights = highest_surface(u, v, h, local, n, self.pixel_mm, REACH_MM)
         missing = ~np.isfinite(heights)
         if missing.all():
-            return Footprint(np.zeros((n, n)), self.pixel_mm, 1.0, place.k1, place.k2)
+            return np.zeros((n, n)), 1.0
         heights[missing] = heights[~missing].min()
-        relief, k1, k2 = without_quadric(heights, axis, place.k1, place.k2)
-        return Footprint(relief, self.pixel_mm, float(missing.mean()), k1, k2)
+        return heights, float(missing.mean())
+
+
+def levelled(place: Placement, slope_x: float, slope_y: float) -> Placement:
+    """``place`` turned onto the plane h = slope_x x + slope_y y over it (x along d1, y along d2): the same centre
+    and curvatures, the plane's normal, d1 along the plane's x."""
+    normal = place.normal - slope_x * place.d1 - slope_y * place.d2
+    normal /= np.linalg.norm(normal)
+    d1 = place.d1 + slope_x * place.normal  # normal to the plane's normal
+    d1 /= np.linalg.norm(d1)
+    return Placement(place.centre, normal, place.k1, place.k2, d1, np.cross(normal, d1))
 
 
 @dataclass(frozen=True)
@@ -142,18 +170,26 @@ class Footprint:
     k2: float
 
 
-def without_quadric(heights: np.ndarray, axis: np.ndarray, k1: float, k2: float) -> tuple[np.ndarray, float, float]:
-    """``heights`` (n, n; mm over the base walked with curvatures ``k1`` along x, ``k2`` along y) less their
-    least-squares quadric a + b x + c y + d x^2 + e x y + f y^2 (x, y: ``axis``, mm), and the principal curvatures
-    of the base with that quadric added: the eigenvalues of diag(k1, k2) - [[2d, e], [e, 2f]] (the walked base
-    drops by k s^2 / 2 along the normal)."""
+def quadric_fit(heights: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Coefficients (a, b, c, d, e, f) of the least-squares quadric a + b x + c y + d x^2 + e x y + f y^2 of
+    ``heights`` (n, n; mm) over the grid of ``axis`` (pixel centres, mm; x along columns)."""
+    return np.linalg.lstsq(_quadric_terms(axis), heights.ravel(), rcond=None)[0]
+
+
+def _quadric_terms(axis: np.ndarray) -> np.ndarray:
     x, y = np.meshgrid(axis, axis)
     x, y = x.ravel(), y.ravel()
-    design = np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=1)
-    coef, *_ = np.linalg.lstsq(design, heights.ravel(), rcond=None)
+    return np.stack([np.ones_like(x), x, y, x * x, x * y, y * y], axis=1)
+
+
+def without_quadric(heights: np.ndarray, axis: np.ndarray, k1: float, k2: float) -> tuple[np.ndarray, float, float]:
+    """``heights`` (n, n; mm over the base walked with curvatures ``k1`` along x, ``k2`` along y) less their
+    least-squares quadric (``quadric_fit``), and the principal curvatures of the base with that quadric added: the
+    eigenvalues of diag(k1, k2) - [[2d, e], [e, 2f]] (the walked base drops by k s^2 / 2 along the normal)."""
+    coef = quadric_fit(heights, axis)
     shape = np.array([[k1 - 2 * coef[3], -coef[4]], [-coef[4], k2 - 2 * coef[5]]])
     low, high = np.linalg.eigvalsh(shape)
-    return (heights.ravel() - design @ coef).reshape(heights.shape), float(high), float(low)
+    return (heights.ravel() - _quadric_terms(axis) @ coef).reshape(heights.shape), float(high), float(low)
 
 
 def foot_points(place: Placement, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
