@@ -7,7 +7,8 @@ Two spacings are chosen from the areas (mm^2) alone, before anything is sampled:
   widened until the whole mesh holds at most ``MAX_SAMPLES`` of them (a 300 mm square plate: 0.85 mm). The curvature
   fit then still has about 100 samples within the footprint's 5 mm radius (it needs ``MIN_NEIGHBOURS``);
 - the evaluation points: ``DEFAULT_SPACING_MM`` (5 mm, half a footprint) unless given, widened until the mapped area
-  holds at most ``MAX_POINTS`` footprints (a texture mapped onto the mesh, judged in tens of milliseconds each) or
+  holds at most ``MAX_POINTS`` footprints (area / spacing^2: the points placed, one per cube of that side, can be a
+  few % more) (a texture mapped onto the mesh, judged in tens of milliseconds each) or
   ``MAX_RELIEF_POINTS`` (a mesh's own relief, rasterised from its triangles in about half a second each). A spacing
   given explicitly is kept (up to MAX_MAP_POSITIONS: ``feel_map`` checks it).
 
@@ -46,14 +47,15 @@ def feel_budget(mesh_area_mm2: float, mapped_area_mm2: float, spacing_mm: float 
     samples = max(SAMPLE_SPACING_MM, _rounded_up(math.sqrt(mesh_area_mm2 / MAX_SAMPLES)))
     if samples > SAMPLE_SPACING_MM:
         notes.append(f"surface samples {samples:g} mm apart (not {SAMPLE_SPACING_MM:g}): the mesh's "
-                     f"{mesh_area_mm2:,.0f} mm^2 would take more than the budget of {MAX_SAMPLES:,}")
+                     f"{mesh_area_mm2:,.0f} mm^2 would take more than the budget of {MAX_SAMPLES:,} samples at "
+                     f"{SAMPLE_SPACING_MM:g} mm")
     if spacing_mm is not None:
         return FeelBudget(samples, spacing_mm, tuple(notes))
     most = MAX_RELIEF_POINTS if relief else MAX_POINTS
     points = max(DEFAULT_SPACING_MM, _rounded_up(math.sqrt(mapped_area_mm2 / most)))
     if points > DEFAULT_SPACING_MM:
         notes.append(f"evaluation points {points:g} mm apart (not {DEFAULT_SPACING_MM:g}): the mapped "
-                     f"{mapped_area_mm2:,.0f} mm^2 would take more than the budget of {most:,} footprints"
+                     f"{mapped_area_mm2:,.0f} mm^2 would take more than the budget of {most:,} footprints (area / spacing^2)"
                      f"{' of the mesh' + chr(39) + 's own relief' if relief else ''}; --spacing-mm sets it")
     return FeelBudget(samples, points, tuple(notes))
 
