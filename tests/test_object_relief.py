@@ -3,6 +3,7 @@ meshes read from OBJ, OFF and glTF; large parts mapped within a budget."""
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -13,11 +14,12 @@ from roughness.core.errors import InputError  # noqa: E402
 from roughness.dataset.textures import standard_texture  # noqa: E402
 from roughness.objects.feel import feel_map  # noqa: E402
 from roughness.objects.feel_budget import MAX_POINTS, MAX_SAMPLES, feel_budget  # noqa: E402
+from roughness.objects.footprint import Placement  # noqa: E402
 from roughness.objects.layout import make_mapping  # noqa: E402
 from roughness.objects.mapping import Triplanar  # noqa: E402
 from roughness.objects.meshes import read_mesh  # noqa: E402
 from roughness.objects.regions import Region  # noqa: E402
-from roughness.objects.relief import BASE_SIGMA_MM, base_samples, without_quadric  # noqa: E402
+from roughness.objects.relief import BASE_SIGMA_MM, MeshRelief, base_samples, levelled, without_quadric  # noqa: E402
 from roughness.objects.texturing import texture_mesh  # noqa: E402
 from roughness.perceptual_scale import jnd  # noqa: E402
 
@@ -108,6 +110,26 @@ def test_the_quadric_removed_from_a_footprint_is_added_to_the_bases_curvature():
     relief, k1, k2 = without_quadric(heights, axis, 0.05, 0.0)
     assert k1 == pytest.approx(0.1, abs=1e-3) and k2 == pytest.approx(0.02, abs=1e-3)
     assert np.abs(relief - bumps).max() < 0.01  # the bumps stay (whole periods: what leaks is their edge)
+
+
+def test_a_footprint_is_levelled_onto_the_plane_of_its_relief():
+    place = Placement(np.array([1.0, 2, 3]), np.array([0, 0, 1.0]), 0.0, 0.0, np.array([1.0, 0, 0]),
+                      np.array([0, 1.0, 0]))
+    turned = levelled(place, 0.1, -0.05)
+    x, y = np.meshgrid(np.linspace(-5, 5, 5), np.linspace(-5, 5, 5))
+    on_plane = np.stack([x.ravel(), y.ravel(), 0.1 * x.ravel() - 0.05 * y.ravel()], axis=1)  # h = 0.1 x - 0.05 y
+    assert np.abs(on_plane @ turned.normal).max() < 1e-12
+    frame = np.stack([turned.d1, turned.d2, turned.normal])
+    assert np.allclose(frame @ frame.T, np.eye(3)) and np.linalg.det(frame) == pytest.approx(1)  # turned, not mirrored
+    # a plate tilted 4 degrees under a level footprint: measured again on its plane, its relief is exactly flat
+    plate = trimesh.creation.box([40, 40, 4])
+    plate.apply_transform(trimesh.transformations.rotation_matrix(math.radians(4), [1, 0, 0]))
+    top = plate.vertices[plate.vertices[:, 2].argmax()]
+    start = Placement(np.array([0, 0, top[2] - 0.3]), np.array([0, 0, 1.0]), 0.0, 0.0, np.array([1.0, 0, 0]),
+                      np.array([0, 1.0, 0]))
+    found = MeshRelief.of(plate).unrolled(start)
+    assert found.missing == 0 and np.abs(found.heights).max() < 1e-6
+    assert abs(found.k1) < 1e-6 and abs(found.k2) < 1e-6
 
 
 # Mesh formats

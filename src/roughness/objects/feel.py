@@ -37,7 +37,7 @@ from roughness.surface.heightmap import Heightmap
 from .curvature import FOOTPRINT_RADIUS_MM, SurfaceSamples, principal_curvatures
 from .feel_budget import feel_budget
 from .footprint import FOOTPRINT_MM, MAX_OFF_FRACTION, Placement, on_surface, unrolled
-from .relief import MISSING_REASON, MeshRelief, base_samples
+from .relief import MISSING_REASON, RELIEF_NOTE, MeshRelief, base_samples
 
 ENGINES = ("spectral", "surrogate")
 CURVED = ("correction", "fem")
@@ -102,7 +102,7 @@ class FeelMap:
     scale: object = field(repr=False)  # the engine's StandardScale
     reference: Reference | None = None
     seconds: float = 0.0
-    notes: tuple[str, ...] = ()  # e.g. spacings widened to fit the budget (``feel_budget``)
+    notes: tuple[str, ...] = ()  # what the map chose: spacings widened to the budget, a mesh's own relief judged
 
     def __repr__(self) -> str:
         ok = ~np.isnan(self.roughness)
@@ -168,7 +168,7 @@ class FeelMap:
         """JSON-ready: the table, the refusals and every point."""
         jnd = self.jnd
         return {"engine": self.engine, "curved": self.curved, "spacing_mm": self.spacing_mm,
-                "seconds": self.seconds, "budget_notes": list(self.notes),
+                "seconds": self.seconds, "map_notes": list(self.notes),
                 "reference": None if self.reference is None else self.reference.__dict__,
                 "regions": [row.as_dict() for row in self.table()],
                 "refusals": [{"reason": why, "points": n} for why, n in self.refusals().items()],
@@ -288,7 +288,7 @@ def feel_map(mesh, mapping=None, regions: dict[str, np.ndarray] | None = None, s
     areas = tuple(float(mesh.area_faces[mask].sum()) for mask in regions.values())
     return FeelMap(curv.points, curv.normals, curv.k1, curv.k2, roughness, uncertainty, flat, tuple(method),
                    tuple(reasons), in_region, names, areas, engine, curved, spacing_mm,
-                   scale, ref, time.perf_counter() - start, budget.notes)
+                   scale, ref, time.perf_counter() - start, budget.notes + ((RELIEF_NOTE,) if relief else ()))
 
 
 def _relief_maps(relief: MeshRelief, samples: SurfaceSamples, places: list[Placement], batch: list[int],

@@ -212,3 +212,7 @@ def foot_points(place: Placement, points: np.ndarray) -> tuple[np.ndarray, np.nd
 
 MISSING_REASON = (f"more than {100 * MAX_OFF_FRACTION:g}% of the footprint meets no surface of the mesh within "
                   f"{REACH_MM:g} mm of its base (a hole, or an edge)")
+RELIEF_NOTE = (f"the mesh judged as it is: its own relief over its base (the mesh smoothed by a Gaussian of "
+               f"{BASE_SIGMA_MM:g} mm, at least twice the samples' spacing, each footprint's least-squares quadric "
+               "added), sampled at the engines' pixel; on a plate and a cylinder textured by object texture it feels "
+               "within 0.08 JND of its texture (tests/test_object_relief.py)")
