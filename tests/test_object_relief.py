@@ -76,12 +76,15 @@ def test_a_mesh_textured_by_object_texture_feels_as_its_texture_within_a_quarter
 
 
 def test_a_smooth_untextured_mesh_feels_flat_not_refused():
-    box = trimesh.creation.box([30, 30, 6])
-    feel = feel_map(box, None, {"top": box.face_normals[:, 2] > 0.9}, spacing_mm=6.0)
-    judged = [i for i, m in enumerate(feel.method) if m != "refused"]
-    assert len(judged) >= 4
-    assert np.all(feel.roughness[judged] < feel.scale.floor)  # below the standard scale: smoother than any texture
-    assert feel.table()[0].below_scale_fraction == 1.0
+    """A box of 12 triangles (a CAD export's: faces spanning the part) and a 20 mm handle of 180 facets."""
+    box = trimesh.creation.box([60, 60, 6])
+    handle = trimesh.creation.cylinder(radius=10.0, height=60.0, sections=180)
+    for mesh, faces in ((box, box.face_normals[:, 2] > 0.9), (handle, np.abs(handle.face_normals[:, 2]) < 0.1)):
+        feel = feel_map(mesh, None, {"part": faces}, spacing_mm=10.0)
+        judged = [i for i, m in enumerate(feel.method) if m != "refused"]
+        assert len(judged) >= 9, feel.refusals()
+        assert np.all(feel.roughness[judged] < feel.scale.floor)  # below the standard scale: smoother than any texture
+        assert feel.table()[0].below_scale_fraction == 1.0
 
 
 def test_the_base_is_the_shape_smoothed_at_one_mm_the_relief_is_gone_from_it():

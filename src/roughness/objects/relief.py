@@ -97,17 +97,27 @@ def _unit(vectors: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True)
 class MeshRelief:
     """The relief of ``mesh`` (a trimesh, mm) over its base: ``unrolled`` gives it under a footprint (module
-    docstring). ``centres``: a KD-tree of the mesh's face centroids."""
+    docstring). ``centres``: a KD-tree of the mesh's face centroids; ``reach_mm``: each face's farthest corner
+    from its centroid (a CAD export's faces can span the whole part)."""
 
     mesh: object
     centres: object
+    reach_mm: np.ndarray
     pixel_mm: float = ENGINE_PIXEL_MM
 
     @classmethod
     def of(cls, mesh, pixel_mm: float = ENGINE_PIXEL_MM) -> MeshRelief:
         from scipy.spatial import cKDTree
 
-        return cls(mesh, cKDTree(np.asarray(mesh.triangles_center)), pixel_mm)
+        centres = np.asarray(mesh.triangles_center)
+        reach = np.linalg.norm(np.asarray(mesh.triangles) - centres[:, None, :], axis=2).max(axis=1)
+        return cls(mesh, cKDTree(centres), reach, pixel_mm)
+
+    def faces_near(self, point: np.ndarray, radius_mm: float) -> np.ndarray:
+        """Indices of the faces with a point within about ``radius_mm`` of ``point`` (their bounding spheres)."""
+        found = np.asarray(self.centres.query_ball_point(point, radius_mm + float(self.reach_mm.max())), dtype=int)
+        distance = np.linalg.norm(self.centres.data[found] - point, axis=1)
+        return found[distance <= radius_mm + self.reach_mm[found]]
 
     def unrolled(self, place: Placement, side_mm: float = FOOTPRINT_MM) -> Footprint:
         """The relief under the footprint at ``place`` (``Footprint``; x along d1, y along d2, as
@@ -132,7 +142,7 @@ class MeshRelief:
         the lowest offset met; all zero if none is)."""
         n = len(axis)
         half = n * self.pixel_mm / 2
-        faces = np.asarray(self.mesh.faces)[self.centres.query_ball_point(place.centre, math.sqrt(2) * half + REACH_MM)]
+        faces = np.asarray(self.mesh.faces)[self.faces_near(place.centre, math.sqrt(2) * half + REACH_MM)]
         if len(faces) == 0:
             return np.zeros((n, n)), 1.0
         used, local = np.unique(faces, return_inverse=True)
