@@ -60,7 +60,7 @@ def test_a_mesh_textured_by_object_texture_feels_as_its_texture_within_a_quarter
     judged = [i for i, m in enumerate(relief.method) if m != "refused"]
     assert len(judged) >= 6 and all(mapped.method[i] != "refused" for i in judged)
     worst = max(abs(_jnd(relief.scale, relief.roughness[i], mapped.roughness[i])) for i in judged)
-    assert worst <= SAME_FEEL_JND, worst  # measured: plate 0.06, cylinder 0.07
+    assert worst <= SAME_FEEL_JND, worst  # measured: plate 0.03, cylinder 0.04
     # and the whole region against the untextured part judged with the texture, as object feel --texture does
     plain = feel_map(base, mapping, {"textured": region.faces(base)}, spacing_mm=spacing_mm)
     [r], [p] = relief.table(), plain.table()
@@ -71,7 +71,7 @@ def test_a_mesh_textured_by_object_texture_feels_as_its_texture_within_a_quarter
     if shape is _cylinder:  # the base's curvature is the cylinder's (the relief's mean height 0.2-0.5 mm above it)
         assert np.allclose(relief.k1[judged], 1 / 10.3, rtol=0.1) and np.allclose(relief.k2[judged], 0, atol=0.01)
         assert all(relief.method[i] == "corrected" for i in judged)
-    else:  # flat: the base's curvature radii above 100 mm (measured: above 180 mm, the texture's own quadric)
+    else:  # flat: the base's curvature radii above 100 mm (measured: above 120 mm, the texture's own quadric)
         assert np.all(np.abs(relief.k1[judged]) < 0.01) and np.all(np.abs(relief.k2[judged]) < 0.01)
 
 
@@ -98,8 +98,8 @@ def test_the_base_is_the_shape_smoothed_at_one_mm_the_relief_is_gone_from_it():
     faces = np.degrees(np.arccos(np.clip(textured.face_normals[textured.triangles_center[:, 2] > 2.05, 2], -1, 1)))
     print(f"tilt of the base: median {np.median(tilt):.2f}, 99% {np.percentile(tilt, 99):.2f} degrees; of the "
           f"textured faces: median {np.median(faces):.1f}")
-    # the samples are random: their mean normal carries Monte Carlo noise, which each footprint's quadric removes
-    assert np.median(tilt) < 8.0 and np.median(faces) > 5 * np.median(tilt)  # measured: 5.1 and 49 degrees
+    # what is left is the relief's own content at wavelengths of millimetres: each footprint is levelled on it
+    assert np.median(tilt) < 3.0 and np.median(faces) > 10 * np.median(tilt)  # measured: 1.3 and 49 degrees
     heights = samples.points[top, 2] - 2.0
     assert abs(np.median(heights) - TEXTURE.heights.mean()) < 0.1
 
