@@ -9,7 +9,7 @@ Two spacings are chosen from the areas (mm^2) alone, before anything is sampled:
 - the evaluation points: ``DEFAULT_SPACING_MM`` (5 mm, half a footprint) unless given, widened until the mapped area
   holds at most ``MAX_POINTS`` footprints (area / spacing^2: the points placed, one per cube of that side, can be a
   few % more) (a texture mapped onto the mesh, judged in tens of milliseconds each) or
-  ``MAX_RELIEF_POINTS`` (a mesh's own relief, rasterised from its triangles in about half a second each). A spacing
+  ``MAX_RELIEF_POINTS`` (a mesh's own relief, rasterised from its triangles: a second or two each). A spacing
   given explicitly is kept (up to MAX_MAP_POSITIONS: ``feel_map`` checks it).
 
 Every widening is said in a note.
@@ -27,7 +27,7 @@ MAX_SAMPLES = 250_000
 MAX_POINTS = 2_000
 """Footprints of a mapped texture judged (about a minute with the spectral engine)."""
 MAX_RELIEF_POINTS = 200
-"""Footprints of a mesh's own relief judged (about two minutes)."""
+"""Footprints of a mesh's own relief judged (a 30 mm knob textured to 3 million triangles: 4 minutes)."""
 
 
 @dataclass(frozen=True)
