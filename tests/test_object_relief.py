@@ -19,7 +19,14 @@ from roughness.objects.layout import make_mapping  # noqa: E402
 from roughness.objects.mapping import Triplanar  # noqa: E402
 from roughness.objects.meshes import read_mesh  # noqa: E402
 from roughness.objects.regions import Region  # noqa: E402
-from roughness.objects.relief import BASE_SIGMA_MM, MeshRelief, base_samples, levelled, without_quadric  # noqa: E402
+from roughness.objects.relief import (  # noqa: E402
+    BASE_SIGMA_MM,
+    MeshRelief,
+    base_samples,
+    levelled,
+    surface_cells,
+    without_quadric,
+)
 from roughness.objects.texturing import texture_mesh  # noqa: E402
 from roughness.perceptual_scale import jnd  # noqa: E402
 
@@ -102,6 +109,18 @@ def test_the_base_is_the_shape_smoothed_at_one_mm_the_relief_is_gone_from_it():
     assert np.median(tilt) < 3.0 and np.median(faces) > 10 * np.median(tilt)  # measured: 1.3 and 49 degrees
     heights = samples.points[top, 2] - 2.0
     assert abs(np.median(heights) - TEXTURE.heights.mean()) < 0.1
+
+
+def test_surface_cells_hold_the_meshs_exact_area_and_normals_and_refuse_a_split_beyond_the_limit():
+    box = trimesh.creation.box([60, 30, 6])  # 12 faces, split to 0.4 mm edges first
+    cells = surface_cells(box, 0.4)
+    assert cells.areas.sum() == pytest.approx(box.area) and len(cells.areas) > box.area / 0.4**2 / 2
+    top = cells.points[:, 2] > 3 - 1e-9  # cubes of the top face only (not those holding a side too)
+    assert np.allclose(cells.normal_sums[top] / cells.areas[top, None], [0, 0, 1])
+    assert np.allclose(cells.normal_sums.sum(axis=0), 0, atol=1e-9)  # a closed surface
+    assert set(cells.faces[top]) <= set(np.flatnonzero(box.face_normals[:, 2] > 0.9))
+    with pytest.raises(InputError, match="split to 0.01 mm"):  # 12 x 4^13 faces: refused before splitting
+        surface_cells(box, 0.01)
 
 
 def test_the_quadric_removed_from_a_footprint_is_added_to_the_bases_curvature():

@@ -54,6 +54,7 @@ class ObjectInputs:
     texture_name: str | None
     regions: dict
     notes: list[str] = field(default_factory=list)
+    base: object = None  # without a texture: the base's samples, if a cone region needed them (SurfaceSamples)
 
     @property
     def textured(self):
@@ -72,11 +73,14 @@ def read_object(args: argparse.Namespace) -> ObjectInputs:
     texture, texture_notes = read_texture(args) if args.texture is not None else (None, [])
     regions = {}
     parsed = [(text, parse_region(text)) for text in args.region or ["all"]]
-    by_normal = read.mesh
+    by_normal, base = read.mesh, None
     if texture is None and any(region.kind == "cone" for _, region in parsed):  # by the base's normals, not the relief's
-        from roughness.objects.relief import BaseFaces
+        from roughness.objects.feel_budget import feel_budget
+        from roughness.objects.relief import BaseFaces, base_samples
 
-        by_normal = BaseFaces.of(read.mesh)
+        spacing = feel_budget(float(read.mesh.area), float(read.mesh.area), relief=True).sample_spacing_mm
+        base = base_samples(read.mesh, spacing)
+        by_normal = BaseFaces.of(read.mesh, base)
     for text, region in parsed:
         mask = region.faces(by_normal if region.kind == "cone" else read.mesh)
         if not mask.any():
@@ -84,7 +88,7 @@ def read_object(args: argparse.Namespace) -> ObjectInputs:
 
             raise InputError(f"region {text!r} selects no face of the mesh", parameter="region")
         regions[text] = mask
-    return ObjectInputs(read.mesh, texture, args.texture, regions, [*read.notes, *texture_notes])
+    return ObjectInputs(read.mesh, texture, args.texture, regions, [*read.notes, *texture_notes], base)
 
 
 def mapping_of(args: argparse.Namespace, texture, inputs: ObjectInputs):
@@ -148,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
     if printing is not None:
         mapping = mapping_of(args, printing.result.heightmap, inputs)
     feel = feel_map(inputs.mesh, mapping, inputs.regions, args.spacing_mm, args.engine, args.curved, args.reference,
-                    progress=progress)
+                    inputs.base, progress)
     show_notes(args, list(feel.notes))
     if args.picture:
         by = args.colour_by or ("jnd" if args.reference else "roughness")

@@ -13,6 +13,9 @@ surface's principal curvatures at the footprint's scale (``curvature``) decide w
   stands alone. ``curved="fem"`` runs the curved FEM instead of the correction where curvature is not
   negligible (cylinders and spheres only; seconds per point).
 
+Without a mapping (``mapping=None``) the mesh is judged as it is, textured elsewhere: its own relief over its
+smoothed base stands for the unrolled texture, and the base's curvature for the footprint's (``relief``).
+
 Each V carries its uncertainty: the engine's (spectral: Monte Carlo standard error; surrogate: ensemble
 spread) and the correction's error, in quadrature. V is placed on the engine's standard scale (equivalent
 wavelength) and, given a reference texture, counted in JNDs from it.

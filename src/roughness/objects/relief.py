@@ -43,8 +43,8 @@ MAX_SLOPE = math.tan(math.radians(0.5))
 
 
 def base_sigma(spacing_mm: float) -> float:
-    """The base's Gaussian width (mm) for surface samples ``spacing_mm`` apart: BASE_SIGMA_MM, or twice the spacing
-    if larger (at least about 50 samples within it)."""
+    """The base's Gaussian width (mm) for cubes of side ``spacing_mm`` (``surface_cells``): BASE_SIGMA_MM, or twice
+    the side if larger (at least about 50 cubes of a surface within it)."""
     return max(BASE_SIGMA_MM, 2 * spacing_mm)
 
 
@@ -93,8 +93,13 @@ def surface_cells(mesh, side_mm: float) -> SurfaceCells:
     exact areas and normals, not random samples."""
     import trimesh
 
-    vertices, faces, index = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, side_mm, return_index=True)
-    check_size(f"faces of the mesh split to {side_mm:g} mm", len(faces), MAX_MESH_TRIANGLES, "mesh")
+    triangles = np.asarray(mesh.triangles)
+    longest = np.linalg.norm(triangles - np.roll(triangles, 1, axis=1), axis=2).max(axis=1)
+    rounds = np.ceil(np.log2(np.maximum(longest / side_mm, 1.0)))  # each splits a face in 4
+    check_size(f"faces of the mesh split to {side_mm:g} mm edges", float((4.0**rounds).sum()), MAX_MESH_TRIANGLES,
+               "mesh")
+    vertices, faces, index = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, side_mm,
+                                                              max_iter=int(rounds.max()) + 2, return_index=True)
     corners = vertices[faces]
     cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     areas = np.linalg.norm(cross, axis=1) / 2
