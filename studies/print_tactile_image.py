@@ -14,6 +14,7 @@ Writes results/print_tactile_image.json and .md.
 """
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import os
@@ -47,6 +48,7 @@ def jnd_apart(evaluator, v_lo: float, v_hi: float) -> float:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()
     import roughness
     from roughness.design.evaluation import Evaluator
     from roughness.surface.printing import PROFILES
@@ -60,15 +62,20 @@ def main() -> None:
                 "lateral_factor": m.recipe["lateral_factor"], "spectral_V_printed": m.fem.roughness,
                 "spectral_V_stderr": m.fem.roughness_stderr, "spectral_lambda_mm": m.fem.equivalent_lambda_mm}
                for m in palette.members]
-    t = time.perf_counter()
-    plate = roughness.tactile_image(str(PICTURE), [m.heightmap for m in palette.members], size_mm=60.0,
-                                    texture_pixel_mm=palette.members[0].heightmap.pixel_mm, printer=PRINTER)
-    plate_seconds = time.perf_counter() - t
-    regions = [{"colour": list(r.colour), "texture": r.texture, "plate_V_printed": r.plate_roughness,
-                "plate_V_digital": r.digital_plate_roughness, "plate_lambda_mm": r.plate_lambda_mm,
-                "footprints": r.footprints} for r in plate.regions]
-    lams = sorted(r["plate_lambda_mm"] for r in regions if r["plate_lambda_mm"])
-    plate_closest = min(math.log(b / a) / LOG_JND for a, b in zip(lams, lams[1:]))
+    plates = {}
+    for pixel in (None, 0.1):  # the default (with a printer: the textures' pixel), and the digital default's 0.1 mm
+        t = time.perf_counter()
+        plate = roughness.tactile_image(str(PICTURE), [m.heightmap for m in palette.members], size_mm=60.0,
+                                        texture_pixel_mm=palette.members[0].heightmap.pixel_mm, printer=PRINTER,
+                                        background=None, pixel_mm=pixel)
+        regions = [{"colour": list(r.colour), "texture": r.texture, "plate_V_printed": r.plate_roughness,
+                    "plate_V_digital": r.digital_plate_roughness, "plate_lambda_mm": r.plate_lambda_mm,
+                    "footprints": r.footprints} for r in plate.regions]
+        lams = sorted(r["plate_lambda_mm"] for r in regions if r["plate_lambda_mm"])
+        plates[pixel] = {"pixel_mm": plate.heightmap.pixel_mm, "regions": regions, "notes": list(plate.notes),
+                         "closest_jnd": min(math.log(b / a) / LOG_JND for a, b in zip(lams, lams[1:])),
+                         "seconds": time.perf_counter() - t}
+    regions, plate_closest, plate_seconds = plates[None]["regions"], plates[None]["closest_jnd"], plates[None]["seconds"]
     gaps = [math.log(b.fem.equivalent_lambda_mm / a.fem.equivalent_lambda_mm) / LOG_JND
             for a, b in zip(palette.members, palette.members[1:])]
     i = gaps.index(min(gaps))
@@ -82,7 +89,9 @@ def main() -> None:
     lo, hi = solved
     record = {"picture": str(PICTURE.relative_to(ROOT)), "printer": PRINTER, "palette": members,
               "palette_closest_jnd_spectral": palette.closest_jnd, "palette_seconds": palette_seconds,
-              "regions": regions, "plate_closest_jnd_surrogate": plate_closest, "plate_seconds": plate_seconds,
+              "plate_pixel_mm": plates[None]["pixel_mm"], "regions": regions,
+              "plate_closest_jnd_surrogate": plate_closest, "plate_seconds": plate_seconds,
+              "plate_at_0.1mm": plates[0.1],
               "fem": {"verifier": fem.verifier, "pair": solved, "jnd": jnd_apart(fem, lo["V"], hi["V"]),
                       "jnd_2sigma": [jnd_apart(fem, lo["V"] + 2 * lo["V_stderr"], hi["V"] - 2 * hi["V_stderr"]),
                                      jnd_apart(fem, lo["V"] - 2 * lo["V_stderr"], hi["V"] + 2 * hi["V_stderr"])]}}
@@ -98,8 +107,10 @@ def main() -> None:
              "| region colour | texture | plate V as printed (digital) | lambda mm | footprints |", "|---|---|---|---|---|",
              *(f"| #{''.join(f'{c:02x}' for c in r['colour'])} | {r['texture']} | {r['plate_V_printed']:.4f} "
                f"({r['plate_V_digital']:.4f}) | {r['plate_lambda_mm']:.3f} | {r['footprints']} |" for r in regions), "",
-             f"The plate as printed (surrogate map, medians over footprints wholly inside a region): closest regions "
-             f"{plate_closest:.2f} JND apart; {plate_seconds:.0f} s.", "",
+             f"The plate as printed at {plates[None]['pixel_mm']:g} mm pixels (the default with a printer: the "
+             f"textures' pixel; surrogate map, medians over footprints wholly inside a region): closest regions "
+             f"{plate_closest:.2f} JND apart; {plate_seconds:.0f} s. At 0.1 mm pixels (the default without a printer, "
+             f"and before): {plates[0.1]['closest_jnd']:.2f} JND.", "",
              f"FEM ({f['verifier']}) on the palette's closest pair as printed: {lo['name']} V {lo['V']:.4f} ± "
              f"{lo['V_stderr']:.4f}, {hi['name']} V {hi['V']:.4f} ± {hi['V_stderr']:.4f}: {f['jnd']:.2f} JND apart "
              f"(±2σ: {f['jnd_2sigma'][0]:.2f}..{f['jnd_2sigma'][1]:.2f})."]

@@ -161,3 +161,21 @@ def test_tactile_image_with_a_printer_maps_the_printed_plate(two_stripes, capsys
     for region, member in zip(summary["regions"], members):  # the plate's printed regions feel as the palette's
         assert region["digital_plate_roughness"] is not None
         assert abs(np.log(region["plate_roughness"] / member["fem_roughness"])) < 0.5
+
+
+def test_with_a_printer_the_plate_is_composed_at_the_textures_pixel():
+    """A palette verified as printed tiles at 0.05 mm prints alike only on a plate at that pixel
+    (studies/results/print_tactile_image.md: 1.81 JND on a 0.1 mm plate, 2.02 at 0.05 mm): with a printer the
+    plate takes the textures' pixel, said in a note; without one, or with --pixel-mm, the pixel is as asked; a
+    plate too large at the finer pixel stays at 0.1 mm and says what that costs."""
+    from roughness.design.tactile_image import PIXEL_MM, plate_pixel
+    from roughness.surface.printing import PROFILES
+
+    fdm, tile = PROFILES["fdm-0.4-0.2"], standard_texture(1.0)
+    pixel, note = plate_pixel(None, (40, 60, 3), 60.0, [tile], fdm)
+    assert pixel == tile.pixel_mm and "textures' 0.05 mm pixels" in note
+    assert plate_pixel(None, (40, 60, 3), 60.0, [tile], None) == (PIXEL_MM, None)
+    assert plate_pixel(0.2, (40, 60, 3), 60.0, [tile], fdm) == (0.2, None)
+    assert plate_pixel(None, (40, 60, 3), 60.0, [], fdm) == (PIXEL_MM, None)  # lines only: no texture to keep
+    pixel, note = plate_pixel(None, (400, 400, 3), 150.0, [tile], fdm)  # 9 M pixels at 0.05 mm, 2.25 M at 0.1
+    assert pixel == PIXEL_MM and "too many" in note

@@ -78,7 +78,8 @@ def test_a_mesh_that_states_its_units_is_sized_in_them(tmp_path):
 def test_object_commands_confirm_a_mesh_size_with_units_ok(tmp_path, monkeypatch, capsys):
     trimesh.creation.box((1.2, 1.2, 1.2)).export(tmp_path / "inches.stl")
     monkeypatch.chdir(tmp_path)
-    argv = ["object", "texture", "inches.stl", "--texture", "standard-1.0", "--out", "t.stl", "--edge-mm", "0.5"]
+    argv = ["object", "texture", "inches.stl", "--texture", "standard-1.0", "--out", "t.stl", "--edge-mm", "0.5",
+            "--min-face-mm", "0.1"]  # a 1.2 mm cube's faces are narrower than the default 2 mm left untextured
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "largest extent is 1.2 mm" in err and "--units-ok" in err and not os.path.exists("t.stl")

@@ -58,8 +58,10 @@ def add_parser(sub) -> None:
                       help=f"fit the plate on this sheet less {MARGIN_MM:g} mm margins (A4, A3, Letter, Tabloid: "
                            "swell-paper sizes; braille: the 11 x 11.5 inch embosser page); --pixel-mm 0.2 keeps an "
                            "A4 plate within the pixel limit")
-    p.add_argument("--pixel-mm", type=PIXEL, default=given["pixel_mm"],
-                   help=f"plate pixel size in mm (default {given['pixel_mm']:g})")
+    p.add_argument("--pixel-mm", type=PIXEL,
+                   help=f"plate pixel size in mm (default {given['pixel_mm']:g}; with a printer, the textures' own "
+                        "pixel where finer, 0.05 for the built-in textures, so that the plate prints as its palette "
+                        "was verified)")
     source = p.add_mutually_exclusive_group()
     source.add_argument("--palette", metavar="DIR", help="textures from a `roughness palette` folder")
     source.add_argument("--k", type=count(MAX_PALETTE),
@@ -145,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
     """Cluster the picture's colours, find a texture for each, compose and map the plate, write it, report."""
     from roughness.core.files import check_distinct, check_output_folder
     from roughness.design.evaluation import Evaluator
-    from roughness.design.tactile_image import plate_shape, tactile_image
+    from roughness.design.tactile_image import PIXEL_MM, plate_pixel, plate_shape, tactile_image
 
     check_distinct({"--out": args.out}, {"IMAGE": args.image, "--palette": args.palette, "--model": args.model,
                                          "--printer": args.printer})
@@ -159,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
         log(args, f"tactile-image: a plate {args.size_mm:.1f} mm wide fits the {args.page} page")
     evaluator = Evaluator(args.model, args.verify, printer=printer)
     # the plate's size, checked before any palette is made
-    plate_shape(found.labels.shape, args.size_mm, args.pixel_mm, args.step_mm, evaluator.footprint_mm)
+    plate_shape(found.labels.shape, args.size_mm, args.pixel_mm or PIXEL_MM, args.step_mm, evaluator.footprint_mm)
     layout = _layout(args, found)
     key = None
     if args.key or args.key_labels or args.braille_table:
@@ -170,9 +172,15 @@ def run(args: argparse.Namespace) -> int:
     textures = _textures(args, len(layout.textured), evaluator) if layout.textured else _Textures([], None)
     log(args, "tactile-image: composing the plate and mapping its roughness (surrogate)"
         + ("; FEM strain image" if args.strain else ""))
-    plate = tactile_image(found, textures.members, args.size_mm, args.pixel_mm, args.outline_mm,
+    pixel_mm, pixel_note = plate_pixel(args.pixel_mm, found.labels.shape, args.size_mm,
+                                       [hm for _, hm, _ in textures.members], evaluator.printer)
+    plate = tactile_image(found, textures.members, args.size_mm, pixel_mm, args.outline_mm,
                           args.outline_height_mm, args.step_mm, args.strain, evaluator, _Progress(args),
                           layout=layout, key=key, smooth_edges=not args.sharp_edges, merge_small=args.merge_small)
+    if pixel_note:
+        from dataclasses import replace
+
+        plate = replace(plate, notes=(pixel_note, *plate.notes))
     from roughness.design.guidelines import check_plate
 
     checks = check_plate(plate, args.min_jnd)

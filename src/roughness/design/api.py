@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -254,7 +255,7 @@ def _folder(parameter: str, value: str | Path) -> Path:
 
 def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Sequence[HeightmapLike] | None = None, *,
                   k: int | None = None, min_jnd: float = 2.0, family: str = _palette.DEFAULT_FAMILY,
-                  size_mm: float = _tactile.WIDTH_MM, page: str | None = None, pixel_mm: float = _tactile.PIXEL_MM,
+                  size_mm: float = _tactile.WIDTH_MM, page: str | None = None, pixel_mm: float | None = None,
                   texture_pixel_mm: float | None = None, outline_mm: float | None = None,
                   outline_height_mm: float | None = None, step_mm: float = _tactile.STEP_MM, strain: bool = False,
                   colour_tolerance: float = _tactile.TOLERANCE, lines: bool = True,
@@ -281,8 +282,9 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
     page : str, optional
         Instead of ``size_mm``: fit the plate on this sheet (``roughness.design.pages.PAGES_MM``: a4, a3, letter,
         tabloid, braille) less its margins.
-    pixel_mm : float
-        Plate pixel (mm).
+    pixel_mm : float, optional
+        Plate pixel (mm); default 0.1, or with a printer the textures' own pixel where finer (so that the plate
+        prints as its palette was verified; ``plate_pixel`` in ``roughness.design.tactile_image``).
     texture_pixel_mm : float, optional
         Pixel size (mm) of texture arrays.
     outline_mm, outline_height_mm : float, optional
@@ -336,7 +338,8 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
 
         size_mm = page_width(page, rgb.shape)
     evaluator = evaluator_arg(model, verify, printer)
-    _tactile.plate_shape(rgb.shape, size_mm, pixel_mm, step_mm, evaluator.footprint_mm)  # refused before any palette
+    _tactile.plate_shape(rgb.shape, size_mm, _tactile.PIXEL_MM if pixel_mm is None else pixel_mm, step_mm,
+                         evaluator.footprint_mm)  # refused before any palette
     lines = flag("lines", lines)
     style = _lines.LineStyle(line_bar_mm, line_height_mm, line_gap_mm)
     layout = plan_layout(found, positive("size_mm", size_mm) / rgb.shape[1],
@@ -354,9 +357,13 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
     if chosen is None:
         made = _palette.family_palette(k or max(2, len(layout.textured)), min_jnd, family, "height", evaluator)
         chosen = [(m.name, m.heightmap, m.fem.roughness) for m in made.members]
-    return _tactile.tactile_image(found, chosen, size_mm, pixel_mm, outline_mm, outline_height_mm, step_mm, strain,
-                                  evaluator, layout=layout, key=spec, smooth_edges=flag("smooth_edges", smooth_edges),
-                                  merge_small=flag("merge_small", merge_small))
+    plate_pixel_mm, note = _tactile.plate_pixel(pixel_mm, rgb.shape, size_mm, [hm for _, hm, _ in chosen],
+                                                evaluator.printer)
+    plate = _tactile.tactile_image(found, chosen, size_mm, plate_pixel_mm, outline_mm, outline_height_mm, step_mm,
+                                   strain, evaluator, layout=layout, key=spec,
+                                   smooth_edges=flag("smooth_edges", smooth_edges),
+                                   merge_small=flag("merge_small", merge_small))
+    return plate if note is None else replace(plate, notes=(note, *plate.notes))
 
 
 @contextmanager

@@ -23,6 +23,7 @@ seams would show the footprints' different indentations rather than the texture)
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -208,6 +209,28 @@ def plate_labels(labels: np.ndarray, width_mm: float, pixel_mm: float) -> np.nda
     rows = np.minimum(((np.arange(ny) + 0.5) * h / ny).astype(int), h - 1)
     cols = np.minimum(((np.arange(nx) + 0.5) * w / nx).astype(int), w - 1)
     return labels[np.ix_(rows, cols)]
+
+
+def plate_pixel(pixel_mm: float | None, picture_shape: tuple[int, ...], width_mm: float,
+                textures: Sequence[Heightmap], printer: object = None) -> tuple[float, str | None]:
+    """The plate's pixel (mm), and a note when it is not the default: ``pixel_mm`` if given; with a printer, the
+    textures' finest pixel where it is finer than PIXEL_MM and the plate stays within MAX_PLATE_PIXELS, since a
+    palette verified as printed at its own pixel prints alike only at that pixel (the bead erodes bumps resampled
+    coarser more: a four-colour fdm-0.4-0.2 palette 2.04 JND apart as printed tiles came 1.81 apart on a 0.1 mm plate
+    and 2.02 at 0.05 mm, studies/results/print_tactile_image.md); else PIXEL_MM."""
+    if pixel_mm is not None:
+        return pixel_size(pixel_mm), None
+    finest = min((t.pixel_mm for t in textures), default=PIXEL_MM)
+    if printer is None or finest >= PIXEL_MM:
+        return PIXEL_MM, None
+    try:
+        plate_shape(picture_shape, width_mm, finest)
+    except InputError:
+        return PIXEL_MM, (f"the plate is composed at {PIXEL_MM:g} mm pixels: at the textures' {finest:g} mm it would "
+                          "hold too many; the printer's model then erodes the textures more than their verification "
+                          "as printed tiles said (see the regions' V on the plate)")
+    return finest, (f"the plate is composed at the textures' {finest:g} mm pixels (not {PIXEL_MM:g}), so that the "
+                    "printer's model prints them as they were verified; --pixel-mm sets it")
 
 
 def plate_shape(picture_shape: tuple[int, ...], width_mm: float, pixel_mm: float, step_mm: float | None = None,
