@@ -1,0 +1,184 @@
+"""Fuzzy skin as the slicers print it: a vertical wall seen by a finger, as a heightmap (mm).
+
+The slicers' rule (PrusaSlicer 2.9.4, src/libslic3r/Feature/FuzzySkin/FuzzySkin.cpp, ``fuzzy_polyline``, commit
+69c8e569410e; OrcaSlicer, same file, ``fuzzy_polyline`` / ``fuzzy_extrusion_line``, commit 0051ba1662e1; both
+after Cura): the outer perimeter of each layer is replaced by new points, the first a uniform random distance in
+[0, 3/8 ``fuzzy_skin_point_distance``) along it, each next one 3/4 to 5/4 of the point distance further
+(uniform); each point is moved perpendicular to the perimeter by the noise (``fuzzy_noise``) times
+``fuzzy_skin_thickness``, and the points are joined by straight extrusions. OrcaSlicer's ``fuzzy_skin_mode``:
+displacement moves the points; extrusion widens the line by the noise instead (its outer face moves by half of
+it); combined widens it and moves its centre by half the widening (the outer face moves by all of it). The
+slicers start every layer afresh with new random numbers (Classic differs at every slice); here ``seed`` makes a
+wall repeatable.
+
+The wall is a periodic tile: x along the wall (one closed perimeter of ``tile_mm``, as a loop is fuzzed: the
+seam's gap is whatever the rule leaves), y up the wall in whole layers, height out of the wall. The printed
+surface is the bead swept along each layer's path: its cross-section a stadium ``line_width_mm`` wide (into the
+wall) and one layer tall (semicircular faces of radius half a layer; nophead 2014, as in ``printing``), so at a
+height u from the layer's middle the outer face is the path offset by (w - h) / 2 + sqrt((h/2)^2 - u^2): the
+upper envelope of disks of that radius on the path (a bead cannot follow a zigzag finer than its width). Heights
+are measured from the crest of the plain wall (its layers' middles are at 0, the seams between layers at -h/2).
+The line width shapes the surface along the wall, the layer height across it; the nozzle bounds neither.
+Not modelled: Orca's ripple noise, ``fuzzy_skin_first_layer``, seams and blobs, the melt's sag between layers.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from roughness.core.checks import in_range
+from roughness.core.errors import InputError
+
+from .fuzzy_noise import NOISE_TYPES, noise
+from .heightmap import Heightmap
+from .printing import FdmProfile
+
+MODES = ("displacement", "extrusion", "combined")  # OrcaSlicer's fuzzy_skin_mode
+MIN_SPACING = 0.75  # the slicers' hard-coded point spacing: 3/4 to 5/4 of fuzzy_skin_point_distance
+SPACING_RANGE = 0.5
+SUPERSAMPLE = 4  # path samples per map pixel along the wall, for the bead's envelope
+MIN_EXTRUSION_WIDTH = 0.01  # mm: OrcaSlicer's least line width in extrusion mode
+MAX_WALL_POINTS = 5_000_000  # fuzzy points x layers of one tile
+
+
+@dataclass(frozen=True)
+class FuzzySkin:
+    """The slicers' fuzzy skin settings (lengths in mm), named as OrcaSlicer names them."""
+
+    fuzzy_skin_thickness: float = 0.3
+    fuzzy_skin_point_distance: float = 0.8
+    fuzzy_skin_noise_type: str = "classic"
+    fuzzy_skin_scale: float = 1.0  # feature size of the coherent noises
+    fuzzy_skin_octaves: int = 4
+    fuzzy_skin_persistence: float = 0.5
+    fuzzy_skin_mode: str = "displacement"
+
+    def __post_init__(self) -> None:
+        in_range("fuzzy_skin_thickness", self.fuzzy_skin_thickness, 0.0, 5.0)
+        in_range("fuzzy_skin_point_distance", self.fuzzy_skin_point_distance, 0.01, 50.0)
+        in_range("fuzzy_skin_scale", self.fuzzy_skin_scale, 0.1, 500.0)
+        in_range("fuzzy_skin_persistence", self.fuzzy_skin_persistence, 0.01, 1.0)
+        if isinstance(self.fuzzy_skin_octaves, bool) or not isinstance(self.fuzzy_skin_octaves, int | np.integer) \
+                or not 1 <= self.fuzzy_skin_octaves <= 10:
+            raise InputError(f"fuzzy_skin_octaves must be a whole number from 1 to 10, got {self.fuzzy_skin_octaves!r}",
+                             parameter="fuzzy_skin_octaves")
+        for name, allowed in (("fuzzy_skin_noise_type", NOISE_TYPES), ("fuzzy_skin_mode", MODES)):
+            if getattr(self, name) not in allowed:
+                raise InputError(f"{name} must be one of {', '.join(allowed)}, got {getattr(self, name)!r}",
+                                 parameter=name)
+
+    def describe(self) -> str:
+        text = (f"fuzzy skin {self.fuzzy_skin_noise_type}, thickness {self.fuzzy_skin_thickness:g} mm, point distance "
+                f"{self.fuzzy_skin_point_distance:g} mm")
+        if self.fuzzy_skin_noise_type != "classic":
+            text += f", feature size {self.fuzzy_skin_scale:g} mm"
+            if self.fuzzy_skin_noise_type != "voronoi":
+                text += f", {self.fuzzy_skin_octaves} octaves"
+            if self.fuzzy_skin_noise_type in ("perlin", "billow"):
+                text += f", persistence {self.fuzzy_skin_persistence:g}"
+        return text + ("" if self.fuzzy_skin_mode == "displacement" else f", {self.fuzzy_skin_mode} mode")
+
+
+@dataclass(frozen=True)
+class FuzzyLayer:
+    """One layer's fuzzy points along the wall: positions (mm from the tile's start) and outer-face offsets (mm)."""
+
+    x_mm: np.ndarray
+    offset_mm: np.ndarray
+
+
+@dataclass(frozen=True)
+class FuzzyWall:
+    """A printed fuzzy-skin wall: the heightmap tile, its layers' points, and what made it."""
+
+    heightmap: Heightmap
+    layers: tuple[FuzzyLayer, ...]
+    skin: FuzzySkin
+    profile: FdmProfile
+    seed: int
+
+
+def fuzzy_points(skin: FuzzySkin, length_mm: float, slice_z_mm: float, line_width_mm: float, seed: int,
+                 rng: np.random.Generator) -> FuzzyLayer:
+    """One layer's perimeter of ``length_mm`` (a closed loop along x, at height ``slice_z_mm``) fuzzed by the
+    slicers' rule; Classic and the spacing draw from ``rng``."""
+    d = skin.fuzzy_skin_point_distance
+    start = rng.uniform() * MIN_SPACING * d / 2
+    count = int(math.ceil(length_mm / (MIN_SPACING * d))) + 1
+    x = start + np.concatenate(([0.0], np.cumsum(MIN_SPACING * d + rng.uniform(size=count) * SPACING_RANGE * d)))
+    x = x[x < length_mm]
+    r = skin.fuzzy_skin_thickness * noise(skin.fuzzy_skin_noise_type, x, np.zeros_like(x), np.full_like(x, slice_z_mm),
+                                          skin.fuzzy_skin_scale, skin.fuzzy_skin_octaves,
+                                          skin.fuzzy_skin_persistence, seed, rng)
+    return FuzzyLayer(x, _outer_offset(r, skin.fuzzy_skin_mode, line_width_mm))
+
+
+def _outer_offset(r: np.ndarray, mode: str, width_mm: float) -> np.ndarray:
+    """How far the line's outer face moves (mm) for noise ``r`` (mm) in OrcaSlicer's ``fuzzy_skin_mode``:
+    displacement moves the line by r; extrusion makes it max(w + r + 0.01, 0.01) mm wide about its centre (the
+    face moves by half the change); combined also moves the centre out by half the change (the face moves by
+    all of it)."""
+    if mode == "displacement":
+        return r
+    change = np.maximum(width_mm + r + MIN_EXTRUSION_WIDTH, MIN_EXTRUSION_WIDTH) - width_mm
+    return change / 2 if mode == "extrusion" else change
+
+
+def fuzzy_wall(skin: FuzzySkin, profile: FdmProfile, tile_mm: float = 12.0, pixel_mm: float = 0.05,
+               seed: int = 0) -> FuzzyWall:
+    """The printed wall of ``skin`` on ``profile`` (its layer height and line width) as a periodic tile about
+    ``tile_mm`` square (x: exactly ``tile_mm``; y: the whole layers nearest it) on ``pixel_mm`` pixels."""
+    if not isinstance(profile, FdmProfile):
+        raise InputError(f"fuzzy skin is a setting of FDM slicers; printer {profile.name} is {profile.kind}",
+                         parameter="printer")
+    tile_mm = in_range("tile_mm", tile_mm, 1.0, 200.0)
+    pixel_mm = in_range("pixel_mm", pixel_mm, 0.001, 1.0)
+    h, w = profile.layer_mm, profile.line_width_mm
+    nx = int(round(tile_mm / pixel_mm))
+    layers = max(1, int(round(tile_mm / h)))
+    rows_per_layer = h / pixel_mm
+    if abs(rows_per_layer - round(rows_per_layer)) > 1e-6 or round(rows_per_layer) < 2:
+        raise InputError(f"the {h:g} mm layer must be a whole number (at least 2) of {pixel_mm:g} mm pixels for the "
+                         "wall's period to be whole layers", parameter="pixel_mm")
+    if abs(nx * pixel_mm - tile_mm) > 1e-6 * tile_mm:
+        raise InputError(f"tile_mm ({tile_mm:g}) must be a whole number of {pixel_mm:g} mm pixels",
+                         parameter="tile_mm")
+    points = layers * (tile_mm / (MIN_SPACING * skin.fuzzy_skin_point_distance) + 2)
+    if points > MAX_WALL_POINTS:
+        raise InputError(f"{points:,.0f} fuzzy points in a {tile_mm:g} mm tile (above {MAX_WALL_POINTS:,}): use a "
+                         "larger fuzzy_skin_point_distance or a smaller tile", parameter="fuzzy_skin_point_distance")
+    rng = np.random.default_rng(seed)
+    per_layer = int(round(rows_per_layer))
+    fine = (np.arange(nx * SUPERSAMPLE) + 0.5) * pixel_mm / SUPERSAMPLE
+    u = (np.arange(per_layer) + 0.5) * pixel_mm - h / 2  # row centres from the layer's middle
+    radius = (w - h) / 2 + np.sqrt(np.maximum((h / 2) ** 2 - u**2, 0.0))
+    out, made = np.empty((layers * per_layer, nx)), []
+    for k in range(layers):
+        layer = fuzzy_points(skin, tile_mm, (k + 0.5) * h, w, seed, rng)
+        made.append(layer)
+        path = _path(layer, fine, tile_mm)
+        for row, rad in enumerate(radius):
+            out[k * per_layer + row] = _envelope(path, rad, pixel_mm / SUPERSAMPLE)[SUPERSAMPLE // 2::SUPERSAMPLE]
+    return FuzzyWall(Heightmap(out - w / 2, pixel_mm), tuple(made), skin, profile, seed)
+
+
+def _path(layer: FuzzyLayer, x: np.ndarray, length_mm: float) -> np.ndarray:
+    """The outer face's offset along the closed loop at ``x``: straight lines between the points (the last joined
+    to the first across the tile's end)."""
+    if len(layer.x_mm) == 0:
+        return np.zeros_like(x)
+    xp = np.concatenate((layer.x_mm[-1:] - length_mm, layer.x_mm, layer.x_mm[:1] + length_mm))
+    fp = np.concatenate((layer.offset_mm[-1:], layer.offset_mm, layer.offset_mm[:1]))
+    return np.interp(x, xp, fp)
+
+
+def _envelope(path: np.ndarray, radius_mm: float, step_mm: float) -> np.ndarray:
+    """The upper envelope of disks of ``radius_mm`` centred on the periodic ``path`` (samples ``step_mm`` apart),
+    measured from the path's level: a grey dilation with a semicircular structuring element."""
+    from scipy import ndimage
+
+    reach = int(radius_mm / step_mm)
+    k = np.arange(-reach, reach + 1) * step_mm
+    return ndimage.grey_dilation(path, structure=np.sqrt(np.maximum(radius_mm**2 - k**2, 0.0)), mode="wrap")
