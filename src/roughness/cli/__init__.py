@@ -13,7 +13,7 @@ DESCRIPTION = ("Predict how rough a surface texture feels to a fingertip (the FE
 COMMANDS = {"simulate": "simulate", "texture": "texture", "dataset": "dataset", "train": "train",
             "predict": "predict", "compare": "compare", "jnd": "jnd", "perception": "perception", "tune": "tune",
             "palette": "palette", "tactile-image": "tactile_image", "homogeneity": "homogeneity",
-            "object": "object", "ensemble": "ensemble", "card": "card", "model-version": "model_version"}
+            "object": "object", "fuzzy-skin": "fuzzy_skin", "ensemble": "ensemble", "card": "card", "model-version": "model_version"}
 
 
 class _VersionAction(argparse.Action):

@@ -1,0 +1,132 @@
+"""`roughness fuzzy-skin`: how a slicer's fuzzy skin will feel on a printed wall (roughness.fuzzy_feel)."""
+from __future__ import annotations
+
+import argparse
+
+from .common import LENGTH, PIXEL, SEED, add_overwrite, add_quiet, defaults, finish, json_text, write_stdout
+
+
+def _lengths(text: str) -> tuple[float, ...]:
+    """``0.1,0.3,0.5`` (mm) as positive numbers."""
+    try:
+        values = tuple(LENGTH(part) for part in text.split(","))
+    except (argparse.ArgumentTypeError, ValueError) as err:
+        raise argparse.ArgumentTypeError(f"a comma-separated list of lengths in mm expected: {err}") from None
+    return values
+
+
+def add_parser(sub) -> None:
+    from roughness.prediction import PREDICT_ENGINES
+    from roughness.surface.fuzzy_noise import NOISE_TYPES
+    from roughness.surface.fuzzy_skin import MODES, FuzzySkin, fuzzy_wall
+
+    skin, wall = defaults(FuzzySkin), defaults(fuzzy_wall)
+    p = sub.add_parser("fuzzy-skin", help="how a slicer's fuzzy skin will feel on a printed wall")
+    p.add_argument("--config", metavar="FILE",
+                   help="read the fuzzy skin and layer/nozzle settings from a PrusaSlicer .ini or OrcaSlicer .json "
+                        "export (options given on the command line override its fuzzy skin settings)")
+    p.add_argument("--fuzzy-skin-thickness", type=float, metavar="MM",
+                   help=f"largest offset of a point, both ways, mm (default {skin['fuzzy_skin_thickness']:g})")
+    p.add_argument("--fuzzy-skin-point-distance", type=float, metavar="MM",
+                   help="mean distance of the fuzzy points along the wall, mm; PrusaSlicer's fuzzy_skin_point_dist "
+                        f"(default {skin['fuzzy_skin_point_distance']:g})")
+    p.add_argument("--fuzzy-skin-noise-type", choices=NOISE_TYPES,
+                   help=f"OrcaSlicer's noise (default {skin['fuzzy_skin_noise_type']})")
+    p.add_argument("--fuzzy-skin-scale", type=float, metavar="MM",
+                   help=f"feature size of the coherent noises, mm (default {skin['fuzzy_skin_scale']:g})")
+    p.add_argument("--fuzzy-skin-octaves", type=int, metavar="N",
+                   help=f"octaves of perlin, billow, ridgedmulti (default {skin['fuzzy_skin_octaves']})")
+    p.add_argument("--fuzzy-skin-persistence", type=float, metavar="P",
+                   help=f"persistence of perlin and billow (default {skin['fuzzy_skin_persistence']:g})")
+    p.add_argument("--fuzzy-skin-mode", choices=MODES,
+                   help=f"OrcaSlicer's fuzzy_skin_mode (default {skin['fuzzy_skin_mode']})")
+    p.add_argument("--printer", metavar="NAME|FILE", default=None,
+                   help="FDM printer profile (layer height, line width) or a JSON profile file (default: the "
+                        "--config's, else fdm-0.4-0.2)")
+    p.add_argument("--engine", choices=PREDICT_ENGINES, default="auto",
+                   help="surrogate, spectral, fem, or auto (the surrogate, climbing where it is unsure) (default auto)")
+    p.add_argument("--seed", type=SEED, default=wall["seed"],
+                   help=f"seed of the slicer's random numbers (the slicers draw new ones at every slice) "
+                        f"(default {wall['seed']})")
+    p.add_argument("--tile-mm", type=LENGTH, default=wall["tile_mm"],
+                   help=f"side of the periodic wall tile, mm (default {wall['tile_mm']:g})")
+    p.add_argument("--pixel-mm", type=PIXEL, default=wall["pixel_mm"],
+                   help=f"pixel size, mm; the layer height must be a whole number of them (default {wall['pixel_mm']:g})")
+    p.add_argument("--sweep-thickness", type=_lengths, metavar="MM,MM,...",
+                   help="a table over these thicknesses (with --sweep-point-distance, or the one point distance)")
+    p.add_argument("--sweep-point-distance", type=_lengths, metavar="MM,MM,...",
+                   help="a table over these point distances (with --sweep-thickness, or the one thickness)")
+    p.add_argument("--out", metavar="FILE", help="write the printed wall's heightmap (.npz, .npy, .h5, .png, .tif)")
+    p.add_argument("--json", action="store_true", help="print the results as JSON")
+    add_quiet(p)
+    add_overwrite(p)
+    finish(p, run)
+
+
+def _settings(args: argparse.Namespace):
+    """The fuzzy skin, printer and notes of --config, the options and --printer."""
+    from dataclasses import fields, replace
+
+    from roughness.surface.fuzzy_skin import FuzzySkin
+    from roughness.surface.printing import printer_profile
+    from roughness.surface.slicer_config import read_slicer_config
+
+    skin, profile, notes = FuzzySkin(), printer_profile("fdm-0.4-0.2"), ()
+    if args.config:
+        read = read_slicer_config(args.config)
+        skin, profile, notes = read.skin, read.profile, read.notes
+    given = {f.name: getattr(args, f.name) for f in fields(FuzzySkin) if getattr(args, f.name) is not None}
+    skin = replace(skin, **given)
+    if args.printer:
+        profile = printer_profile(args.printer)
+    return skin, profile, notes
+
+
+def _line(feel) -> str:
+    from .predict import _prediction_line
+
+    return _prediction_line(feel.prediction)
+
+
+def run(args: argparse.Namespace) -> int:
+    from roughness.core.files import check_output
+    from roughness.fuzzy_feel import fuzzy_skin_feel, fuzzy_skin_sweep
+    from roughness.objects.progress import StageMeter
+    from roughness.surface.io import save_heightmap
+
+    skin, profile, notes = _settings(args)
+    out = check_output(args.out, args.overwrite, "out") if args.out else None
+    sweep = args.sweep_thickness or args.sweep_point_distance
+    if sweep and out is not None:
+        from roughness.core.errors import InputError
+
+        raise InputError("--out writes one wall: leave out --sweep-thickness/--sweep-point-distance", "out")
+    header = [f"printer {profile.describe()}; the wall judged flat, as a periodic {args.tile_mm:g} mm tile "
+              f"(seed {args.seed}: one draw of the slicer's random numbers)", *(f"note: {n}" for n in notes)]
+    if not sweep:
+        feel = fuzzy_skin_feel(skin, profile, args.engine, args.seed, args.tile_mm, args.pixel_mm)
+        if out is not None:
+            save_heightmap(feel.wall.heightmap, out, overwrite=args.overwrite)
+            header.append(f"wrote {out}: the printed wall, x along it, y up it, heights out of it (mm)")
+        write_stdout(json_text(feel.as_dict(), indent=1) if args.json else "\n".join([*header, _line(feel)]))
+        return 0
+    thicknesses = args.sweep_thickness or (skin.fuzzy_skin_thickness,)
+    distances = args.sweep_point_distance or (skin.fuzzy_skin_point_distance,)
+    total = len(thicknesses) * len(distances)
+    meter = None if args.quiet else StageMeter()
+    report = None if meter is None else meter.stage(f"{total} fuzzy skin settings")
+    done = []
+
+    def step(feel) -> None:
+        done.append(feel)
+        if report is not None:
+            report(len(done) / total)
+
+    feels = fuzzy_skin_sweep(skin, thicknesses, distances, profile, args.engine, args.seed, on_result=step)
+    if meter is not None:
+        meter.close()
+    if args.json:
+        write_stdout(json_text([f.as_dict() for f in feels], indent=1))
+    else:
+        write_stdout("\n".join([*header, *(_line(f) for f in feels)]))
+    return 0
