@@ -1,0 +1,194 @@
+"""Fuzzy skin walls against the slicers' rules (roughness.surface.fuzzy_skin), their settings from slicer configs,
+and their feel (roughness.fuzzy_feel, ``roughness fuzzy-skin``)."""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from roughness.cli import main
+from roughness.core.errors import InputError
+from roughness.fuzzy_feel import fuzzy_skin_feel
+from roughness.surface.fuzzy_noise import Lattice
+from roughness.surface.fuzzy_skin import FuzzySkin, fuzzy_points, fuzzy_wall
+from roughness.surface.printing import PROFILES
+from roughness.surface.slicer_config import read_slicer_config
+
+FDM = PROFILES["fdm-0.4-0.2"]
+LONG_MM = 2000.0  # a long perimeter: thousands of points for the statistics
+
+
+def points(skin: FuzzySkin, seed: int = 0, z: float = 0.1):
+    return fuzzy_points(skin, LONG_MM, z, FDM.line_width_mm, seed, np.random.default_rng(seed))
+
+
+def test_point_spacing_follows_the_slicers_rule():
+    d = 0.8
+    layer = points(FuzzySkin(0.3, d))
+    gaps = np.diff(layer.x_mm)
+    assert gaps.min() >= 0.75 * d and gaps.max() <= 1.25 * d
+    # uniform on [3/4, 5/4] d: mean d, standard deviation d / (2 sqrt 12); the mean within 5 standard errors
+    assert abs(gaps.mean() - d) < 5 * d / (2 * math.sqrt(12)) / math.sqrt(len(gaps))
+    starts = [points(FuzzySkin(0.3, d), seed).x_mm[0] for seed in range(50)]
+    assert min(starts) >= 0 and max(starts) < 3 / 8 * d
+
+
+def test_classic_offsets_are_uniform_within_the_thickness():
+    t = 0.3
+    r = points(FuzzySkin(t, 0.4)).offset_mm
+    n = len(r)
+    assert np.abs(r).max() <= t
+    counts, _ = np.histogram(r, bins=4, range=(-t, t))
+    assert np.all(np.abs(counts - n / 4) < 5 * math.sqrt(n * 0.25 * 0.75))  # binomial, 5 sigma
+
+
+def test_coherent_noise_bounds_and_character():
+    t = 0.3
+    ridged = points(FuzzySkin(t, 0.4, "ridgedmulti", octaves := 4)).offset_mm
+    assert ridged.min() >= -t and ridged.max() <= t * (1.25 * sum(2.0**-k for k in range(octaves)) - 1)
+    billow = points(FuzzySkin(t, 0.4, "billow", 1.0, 4, 0.5)).offset_mm
+    assert billow.min() >= t * (0.5 - sum(0.5**k for k in range(4)))  # each octave's 2|n| - 1 >= -1
+    voronoi = points(FuzzySkin(t, 0.4, "voronoi", 5.0)).offset_mm
+    assert np.abs(voronoi).max() <= t
+    # a cell's value is held over the cell: far fewer values than points where cells are many points long
+    assert len(np.unique(voronoi)) < len(voronoi) / 4
+    lattice = Lattice(7)
+    grid = np.arange(-5, 6, dtype=float)
+    assert np.all(lattice.gradient(grid, grid[::-1], grid * 2) == 0)  # gradient noise vanishes on the lattice
+    perlin = points(FuzzySkin(t, 0.4, "perlin", 1.0, 4, 0.5)).offset_mm
+    assert np.abs(perlin).max() <= t * sum(0.5**k for k in range(4)) * 1.1
+    assert abs(np.mean(perlin)) < 0.1 * t and np.std(perlin) > 0.1 * t
+
+
+def _layer_rows(wall):
+    per = round(wall.profile.layer_mm / wall.heightmap.pixel_mm)
+    return wall.heightmap.heights.reshape(-1, per, wall.heightmap.shape[1]), per
+
+
+def test_thickness_zero_is_the_plain_printed_wall():
+    wall = fuzzy_wall(FuzzySkin(0.0, 0.8), FDM)
+    layers, per = _layer_rows(wall)
+    h = FDM.layer_mm
+    u = (np.arange(per) + 0.5) * wall.heightmap.pixel_mm - h / 2
+    bead = np.sqrt((h / 2) ** 2 - u**2) - h / 2  # the bead's semicircular face, crest at 0
+    assert np.allclose(layers, bead[None, :, None], atol=1e-12)
+
+
+def test_layers_each_have_their_own_displacement():
+    wall = fuzzy_wall(FuzzySkin(0.3, 0.8), FDM)
+    layers, per = _layer_rows(wall)
+    middle = layers[:, per // 2]
+    within = np.corrcoef(layers[:, 0].ravel(), middle.ravel())[0, 1]  # rows of one layer: one path
+    across = np.corrcoef(middle[:-1].ravel(), middle[1:].ravel())[0, 1]  # neighbouring layers: new numbers
+    assert within > 0.9 and abs(across) < 0.1
+    perlin = fuzzy_wall(FuzzySkin(0.3, 0.8, "perlin", 2.0), FDM)
+    coherent, _ = _layer_rows(perlin)
+    mid = coherent[:, per // 2]
+    assert np.corrcoef(mid[:-1].ravel(), mid[1:].ravel())[0, 1] > 0.5  # Orca's noise is a function of z too
+
+
+def test_modes_move_the_outer_face_as_orca_does():
+    kwargs = dict(fuzzy_skin_thickness=0.3, fuzzy_skin_point_distance=0.8)
+    moved = points(FuzzySkin(**kwargs)).offset_mm
+    extruded = points(FuzzySkin(**kwargs, fuzzy_skin_mode="extrusion")).offset_mm
+    combined = points(FuzzySkin(**kwargs, fuzzy_skin_mode="combined")).offset_mm
+    assert np.allclose(extruded, (moved + 0.01) / 2) and np.allclose(combined, moved + 0.01)
+
+
+def test_thick_skin_beyond_the_nozzle():
+    t = 0.8  # twice the 0.4 mm nozzle
+    wall = fuzzy_wall(FuzzySkin(t, 0.8), FDM)
+    heights = wall.heightmap.heights
+    assert heights.max() <= t + 1e-12 and heights.min() >= -t - FDM.layer_mm / 2
+    thick = fuzzy_skin_feel(FuzzySkin(t, 0.8), FDM, "spectral").prediction
+    usual = fuzzy_skin_feel(FuzzySkin(0.3, 0.8), FDM, "spectral").prediction
+    assert thick.roughness > 2 * usual.roughness
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_points_closer_than_the_bead_feel_smoother(seed):
+    """At a point distance below the 0.45 mm line the bead cannot follow the zigzag: V falls (spectral engine)."""
+    fine = fuzzy_skin_feel(FuzzySkin(0.3, 0.2), FDM, "spectral", seed).prediction
+    usual = fuzzy_skin_feel(FuzzySkin(0.3, 0.8), FDM, "spectral", seed).prediction
+    margin = 5 * math.hypot(fine.roughness_stderr, usual.roughness_stderr)
+    assert fine.roughness < usual.roughness - margin
+    assert fine.placement.equivalent_lambda_mm < usual.placement.equivalent_lambda_mm
+
+
+def test_bad_settings_are_refused():
+    for bad in (dict(fuzzy_skin_thickness=-0.1), dict(fuzzy_skin_point_distance=0.0),
+                dict(fuzzy_skin_noise_type="ripple"), dict(fuzzy_skin_octaves=2.5), dict(fuzzy_skin_mode="x")):
+        with pytest.raises(InputError):
+            FuzzySkin(**bad)
+    with pytest.raises(InputError, match="FDM"):
+        fuzzy_wall(FuzzySkin(), PROFILES["msla-35um"])
+    with pytest.raises(InputError, match="whole number"):
+        fuzzy_wall(FuzzySkin(), FDM, pixel_mm=0.03)
+
+
+PRUSA_INI = """# generated by PrusaSlicer 2.9.4
+fuzzy_skin = external
+fuzzy_skin_point_dist = 0.6
+fuzzy_skin_thickness = 0.25
+layer_height = 0.15
+nozzle_diameter = 0.6,0.4
+external_perimeter_extrusion_width = 450%
+"""
+ORCA = {"fuzzy_skin": "external", "fuzzy_skin_thickness": "0.35", "fuzzy_skin_point_distance": "0.5",
+        "fuzzy_skin_noise_type": "billow", "fuzzy_skin_scale": "2", "fuzzy_skin_octaves": "3",
+        "fuzzy_skin_persistence": "0.4", "fuzzy_skin_mode": "combined", "layer_height": "0.2",
+        "nozzle_diameter": ["0.4"], "outer_wall_line_width": "110%", "print_settings_id": "ignored"}
+
+
+def test_prusaslicer_ini(tmp_path):
+    path = tmp_path / "p.ini"
+    path.write_text(PRUSA_INI)
+    read = read_slicer_config(path)
+    assert (read.skin.fuzzy_skin_thickness, read.skin.fuzzy_skin_point_distance) == (0.25, 0.6)
+    assert (read.profile.nozzle_mm, read.profile.layer_mm) == (0.6, 0.15)
+    assert read.profile.line_width_mm == pytest.approx(4.5 * 0.15)  # PrusaSlicer: % of the layer height
+    path.write_text(PRUSA_INI.replace("external_perimeter_extrusion_width = 450%", "extrusion_width = 0"))
+    assert read_slicer_config(path).profile.line_width_mm == pytest.approx(1.125 * 0.6)
+
+
+def test_orcaslicer_json(tmp_path):
+    path = tmp_path / "o.json"
+    path.write_text(json.dumps(ORCA))
+    read = read_slicer_config(path)
+    assert read.skin == FuzzySkin(0.35, 0.5, "billow", 2.0, 3, 0.4, "combined")
+    assert read.profile.line_width_mm == pytest.approx(0.44) and read.notes == ()  # Orca: % of the nozzle
+    path.write_text(json.dumps({**ORCA, "fuzzy_skin": "none"}))
+    assert "off" in read_slicer_config(path).notes[0]
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"layer_height": None}, "layer_height is missing"), ({"fuzzy_skin_thickness": "thick"}, "must be a number"),
+    ({"fuzzy_skin_noise_type": "ripple"}, "fuzzy_skin_noise_type must be one of"),
+    ({"fuzzy_skin_octaves": "2.5"}, "whole number"), ({"layer_height": "0.6"}, "layer_mm"),
+    ({"fuzzy_skin_thickness": "nan"}, "must be a number")])
+def test_bad_configs_are_refused(tmp_path, change, message):
+    values = {k: v for k, v in {**ORCA, **change}.items() if v is not None}
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(values))
+    with pytest.raises(InputError, match=message):
+        read_slicer_config(path)
+
+
+def test_command(tmp_path, capsys):
+    config = tmp_path / "p.ini"
+    config.write_text(PRUSA_INI.replace("0.15", "0.2").replace("450%", "0.45"))
+    out = tmp_path / "wall.npz"
+    args = ["fuzzy-skin", "--config", str(config), "--engine", "spectral", "--out", str(out), "--json"]
+    assert main(args) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["fuzzy_skin"]["fuzzy_skin_thickness"] == 0.25 and result["printer"]["layer_mm"] == 0.2
+    assert result["equivalent_lambda_mm"] > 0 and result["roughness_stderr"] > 0 and out.is_file()
+    assert main(args) == 2 and "--overwrite" in capsys.readouterr().err  # nothing overwritten unasked
+    assert main(["fuzzy-skin", "--engine", "spectral", "--quiet", "--sweep-thickness", "0.1,0.4"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.startswith("fuzzy skin classic, thickness 0.1") for line in lines[1:]] == [True, False]
+    assert "JND" in lines[1] and "lambda" in lines[2]
+    assert main(["fuzzy-skin", "--config", str(tmp_path / "none.ini")]) == 2
+    assert "does not exist" in capsys.readouterr().err
