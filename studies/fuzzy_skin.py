@@ -38,7 +38,8 @@ def judged(skin) -> dict:
     """V over the seeds, its uncertainty and its place on the spectral standard scale."""
     from roughness.fuzzy_feel import fuzzy_skin_feel
 
-    feels = [fuzzy_skin_feel(skin, PRINTER, "spectral", seed).prediction for seed in SEEDS]
+    feel = fuzzy_skin_feel(skin, PRINTER, "spectral", SEEDS[0], draws=len(SEEDS))
+    feels = feel.predictions
     v = np.array([p.roughness for p in feels])
     return {"v_seeds": v.tolist(), "v": float(v.mean()), "v_seed_std": float(v.std(ddof=1)),
             "v_mc_stderr": max(p.roughness_stderr for p in feels)}

@@ -102,16 +102,17 @@ def test_thick_skin_beyond_the_nozzle():
     wall = fuzzy_wall(FuzzySkin(t, 0.8), FDM)
     heights = wall.heightmap.heights
     assert heights.max() <= t + 1e-12 and heights.min() >= -t - FDM.layer_mm / 2
-    thick = fuzzy_skin_feel(FuzzySkin(t, 0.8), FDM, "spectral").prediction
-    usual = fuzzy_skin_feel(FuzzySkin(0.3, 0.8), FDM, "spectral").prediction
-    assert thick.roughness > 2 * usual.roughness
+    thick = fuzzy_skin_feel(FuzzySkin(t, 0.8), FDM, "spectral")
+    usual = fuzzy_skin_feel(FuzzySkin(0.3, 0.8), FDM, "spectral")
+    # rougher beyond the draw-to-draw spread (3 draws each: 3 combined standard deviations)
+    assert thick.roughness - usual.roughness > 3 * math.hypot(thick.draw_std, usual.draw_std)
 
 
 @pytest.mark.parametrize("seed", [0, 1])
 def test_points_closer_than_the_bead_feel_smoother(seed):
     """At a point distance below the 0.45 mm line the bead cannot follow the zigzag: V falls (spectral engine)."""
-    fine = fuzzy_skin_feel(FuzzySkin(0.3, 0.2), FDM, "spectral", seed).prediction
-    usual = fuzzy_skin_feel(FuzzySkin(0.3, 0.8), FDM, "spectral", seed).prediction
+    fine = fuzzy_skin_feel(FuzzySkin(0.3, 0.2), FDM, "spectral", seed, draws=1).predictions[0]
+    usual = fuzzy_skin_feel(FuzzySkin(0.3, 0.8), FDM, "spectral", seed, draws=1).predictions[0]
     margin = 5 * math.hypot(fine.roughness_stderr, usual.roughness_stderr)
     assert fine.roughness < usual.roughness - margin
     assert fine.placement.equivalent_lambda_mm < usual.placement.equivalent_lambda_mm

@@ -1,14 +1,17 @@
 """How a slicer's fuzzy skin will feel: the printed wall (``roughness.surface.fuzzy_skin``) judged by ``predict``.
 
-The wall is judged flat (a finger on a wall) as one period of a periodic texture (``tile``). V's uncertainty is
-the engine's own (ensemble spread, Monte Carlo error), with the equivalent wavelength and JND on the engine's
-standard scale (``Prediction.placement``). One wall is one draw of the slicer's random numbers.
+The wall is judged flat (a finger on a wall) as one period of a periodic texture (``tile``). The slicers draw new
+random numbers at every slice, so one wall is one draw: a setting is judged on ``draws`` walls (seeds ``seed``,
+``seed`` + 1, ...) and its V is their mean, sure to the larger of the spread over draws (standard deviation) and
+the engine's own error (ensemble spread, Monte Carlo error), placed on the engine's standard scale.
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
 
+from roughness.perceptual_scale import Placement, load_scale
 from roughness.prediction import Prediction, PredictOptions, predict
 from roughness.surface.fuzzy_skin import FuzzySkin, FuzzyWall, fuzzy_wall
 from roughness.surface.printing import FdmProfile, PrintProfile, printer_profile
@@ -16,29 +19,78 @@ from roughness.surface.printing import FdmProfile, PrintProfile, printer_profile
 
 @dataclass(frozen=True)
 class FuzzyFeel:
-    """The predicted feel of one fuzzy-skin setting on one printer."""
+    """The predicted feel of one fuzzy-skin setting on one printer, over several draws of the slicer's noise."""
 
-    wall: FuzzyWall
-    prediction: Prediction
+    skin: FuzzySkin
+    profile: FdmProfile
+    walls: tuple[FuzzyWall, ...]
+    predictions: tuple[Prediction, ...]  # one per wall
+
+    @property
+    def roughness(self) -> float:
+        """Mean V over the draws."""
+        return sum(p.roughness for p in self.predictions) / len(self.predictions)
+
+    @property
+    def draw_std(self) -> float | None:
+        """Standard deviation of V over the draws (None for one draw): how much one print differs from the next."""
+        n = len(self.predictions)
+        if n < 2:
+            return None
+        mean = self.roughness
+        return math.sqrt(sum((p.roughness - mean) ** 2 for p in self.predictions) / (n - 1))
+
+    @property
+    def engine_error(self) -> float | None:
+        """The largest error the engine gave a draw (Monte Carlo error or ensemble spread; None if it gave none)."""
+        errors = [e for p in self.predictions for e in (p.roughness_stderr, p.roughness_std) if e is not None]
+        return max(errors) if errors else None
+
+    @property
+    def engines(self) -> tuple[str, ...]:
+        """The engine (and fidelity) that answered each draw, once each."""
+        return tuple(dict.fromkeys(_scale_name(p) for p in self.predictions))
+
+    @property
+    def placement(self) -> Placement | None:
+        """The mean V on the standard scale of the engine that answered (None if draws were answered by different
+        engines, whose scales differ)."""
+        engines = self.engines
+        return load_scale(engines[0]).place(self.roughness) if len(engines) == 1 else None
 
     def as_dict(self) -> dict:
-        return {"fuzzy_skin": asdict(self.wall.skin), "printer": self.wall.profile.as_dict(),
-                "seed": self.wall.seed, "tile_mm": self.wall.heightmap.size_mm[0], **self.prediction.as_dict()}
+        placement = self.placement
+        return {"fuzzy_skin": asdict(self.skin), "printer": self.profile.as_dict(),
+                "seeds": [w.seed for w in self.walls], "tile_mm": self.walls[0].heightmap.size_mm[0],
+                "roughness": self.roughness, "roughness_draw_std": self.draw_std, "engine_error": self.engine_error,
+                "scales": list(self.engines), **({} if placement is None else placement.as_dict()),
+                "draws": [p.as_dict() for p in self.predictions]}
+
+
+def _scale_name(p: Prediction) -> str:
+    """The standard scale a prediction was placed on: the spectral engine's, or the FEM fidelity's."""
+    if p.engine == "spectral":
+        return "spectral"
+    return "fine" if p.fidelity == "converged" else p.fidelity
 
 
 def fuzzy_skin_feel(skin: FuzzySkin, printer: PrintProfile | str = "fdm-0.4-0.2", engine: str = "auto",
-                    seed: int = 0, tile_mm: float = 12.0, pixel_mm: float = 0.05) -> FuzzyFeel:
-    """The feel of ``skin`` printed by ``printer`` (a profile or its name): V, its uncertainty and its place on
-    the standard scale, from ``engine`` (auto, surrogate, spectral, fem)."""
+                    seed: int = 0, draws: int = 3, tile_mm: float = 12.0, pixel_mm: float = 0.05) -> FuzzyFeel:
+    """The feel of ``skin`` printed by ``printer`` (a profile or its name) on ``draws`` walls (seeds ``seed``...):
+    V, its uncertainty and its place on the standard scale, from ``engine`` (auto, surrogate, spectral, fem)."""
+    from roughness.core.checks import integer
+
     profile = printer_profile(printer) if isinstance(printer, str) else printer
-    wall = fuzzy_wall(skin, profile, tile_mm, pixel_mm, seed)
-    name = skin.describe()
-    (prediction,) = predict({name: wall.heightmap}, engine=engine, options=PredictOptions(tile=True))
-    return FuzzyFeel(wall, prediction)
+    draws = integer("draws", draws, 1)
+    walls = tuple(fuzzy_wall(skin, profile, tile_mm, pixel_mm, seed + k) for k in range(draws))
+    named = {f"{skin.describe()} (seed {w.seed})": w.heightmap for w in walls}
+    predictions = predict(named, engine=engine, options=PredictOptions(tile=True))
+    return FuzzyFeel(skin, walls[0].profile, walls, tuple(predictions))
 
 
 def fuzzy_skin_sweep(skin: FuzzySkin, thicknesses_mm: Sequence[float], point_distances_mm: Sequence[float],
-                     printer: FdmProfile | str = "fdm-0.4-0.2", engine: str = "auto", seed: int = 0,
+                     printer: FdmProfile | str = "fdm-0.4-0.2", engine: str = "auto", seed: int = 0, draws: int = 3,
+                     tile_mm: float = 12.0, pixel_mm: float = 0.05,
                      on_result: Callable[[FuzzyFeel], None] | None = None) -> list[FuzzyFeel]:
     """``fuzzy_skin_feel`` of ``skin`` over thickness x point distance (mm), thickness outermost; ``on_result``
     is called with each as it is ready."""
@@ -46,7 +98,7 @@ def fuzzy_skin_sweep(skin: FuzzySkin, thicknesses_mm: Sequence[float], point_dis
     for thickness in thicknesses_mm:
         for distance in point_distances_mm:
             feel = fuzzy_skin_feel(replace(skin, fuzzy_skin_thickness=thickness, fuzzy_skin_point_distance=distance),
-                                   printer, engine, seed)
+                                   printer, engine, seed, draws, tile_mm, pixel_mm)
             feels.append(feel)
             if on_result is not None:
                 on_result(feel)

@@ -3,7 +3,9 @@ from __future__ import annotations
 
 import argparse
 
-from .common import LENGTH, PIXEL, SEED, add_overwrite, add_quiet, defaults, finish, json_text, write_stdout
+from .common import LENGTH, PIXEL, SEED, add_overwrite, add_quiet, count, defaults, finish, json_text, write_stdout
+
+MAX_DRAWS = 100
 
 
 def _lengths(text: str) -> tuple[float, ...]:
@@ -16,11 +18,12 @@ def _lengths(text: str) -> tuple[float, ...]:
 
 
 def add_parser(sub) -> None:
+    from roughness.fuzzy_feel import fuzzy_skin_feel
     from roughness.prediction import PREDICT_ENGINES
     from roughness.surface.fuzzy_noise import NOISE_TYPES
     from roughness.surface.fuzzy_skin import MODES, FuzzySkin, fuzzy_wall
 
-    skin, wall = defaults(FuzzySkin), defaults(fuzzy_wall)
+    skin, wall, feel = defaults(FuzzySkin), defaults(fuzzy_wall), defaults(fuzzy_skin_feel)
     p = sub.add_parser("fuzzy-skin", help="how a slicer's fuzzy skin will feel on a printed wall")
     p.add_argument("--config", metavar="FILE",
                    help="read the fuzzy skin and layer/nozzle settings from a PrusaSlicer .ini or OrcaSlicer .json "
@@ -48,6 +51,9 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=SEED, default=wall["seed"],
                    help=f"seed of the slicer's random numbers (the slicers draw new ones at every slice) "
                         f"(default {wall['seed']})")
+    p.add_argument("--draws", type=count(MAX_DRAWS), default=feel["draws"],
+                   help="walls judged per setting, each with its own random numbers (seeds --seed, --seed + 1, "
+                        f"...): V is their mean, sure to their spread (default {feel['draws']})")
     p.add_argument("--tile-mm", type=LENGTH, default=wall["tile_mm"],
                    help=f"side of the periodic wall tile, mm (default {wall['tile_mm']:g})")
     p.add_argument("--pixel-mm", type=PIXEL, default=wall["pixel_mm"],
@@ -83,9 +89,23 @@ def _settings(args: argparse.Namespace):
 
 
 def _line(feel) -> str:
-    from .predict import _prediction_line
-
-    return _prediction_line(feel.prediction)
+    """A setting's V with its uncertainty and its place on the standard scale."""
+    spread = feel.draw_std
+    sure = [f"{spread:.4f} over {len(feel.predictions)} draws"] if spread is not None else []
+    if feel.engine_error is not None:
+        sure.append(f"{feel.engine_error:.4f} engine")
+    where = feel.placement
+    if where is None:
+        scale = f"answered by different engines ({', '.join(feel.engines)}): not placed on one standard scale"
+    elif where.below_scale:
+        scale = f"below the standard scale (V < floor {where.floor:.4f}): no equivalent lambda"
+    else:
+        extrapolated = "" if where.on_scale else " (extrapolated off the scale)"
+        scale = (f"~ lambda {where.equivalent_lambda_mm:.3f} mm{extrapolated}, {where.jnd_from_nearest + 0.0:+.1f} JND "
+                 f"from {where.nearest_standard}")
+    notes = sorted({n for p in feel.predictions for n in p.domain_notes})
+    return (f"{feel.skin.describe()}: V = {feel.roughness:.4f} ± {' ± '.join(sure) or 'unknown'} "
+            f"({', '.join(sorted({p.engine for p in feel.predictions}))}; {', '.join(feel.engines)} scale), {scale}" + "".join(f"\n  note: {n}" for n in notes))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -102,12 +122,12 @@ def run(args: argparse.Namespace) -> int:
 
         raise InputError("--out writes one wall: leave out --sweep-thickness/--sweep-point-distance", "out")
     header = [f"printer {profile.describe()}; the wall judged flat, as a periodic {args.tile_mm:g} mm tile "
-              f"(seed {args.seed}: one draw of the slicer's random numbers)", *(f"note: {n}" for n in notes)]
+              f"(seeds from {args.seed}: draws of the slicer's random numbers)", *(f"note: {n}" for n in notes)]
     if not sweep:
-        feel = fuzzy_skin_feel(skin, profile, args.engine, args.seed, args.tile_mm, args.pixel_mm)
+        feel = fuzzy_skin_feel(skin, profile, args.engine, args.seed, args.draws, args.tile_mm, args.pixel_mm)
         if out is not None:
-            save_heightmap(feel.wall.heightmap, out, overwrite=args.overwrite)
-            header.append(f"wrote {out}: the printed wall, x along it, y up it, heights out of it (mm)")
+            save_heightmap(feel.walls[0].heightmap, out, overwrite=args.overwrite)
+            header.append(f"wrote {out}: the printed wall of seed {args.seed}, x along it, y up it, heights out of it (mm)")
         write_stdout(json_text(feel.as_dict(), indent=1) if args.json else "\n".join([*header, _line(feel)]))
         return 0
     thicknesses = args.sweep_thickness or (skin.fuzzy_skin_thickness,)
@@ -122,7 +142,8 @@ def run(args: argparse.Namespace) -> int:
         if report is not None:
             report(len(done) / total)
 
-    feels = fuzzy_skin_sweep(skin, thicknesses, distances, profile, args.engine, args.seed, on_result=step)
+    feels = fuzzy_skin_sweep(skin, thicknesses, distances, profile, args.engine, args.seed, args.draws,
+                             args.tile_mm, args.pixel_mm, on_result=step)
     if meter is not None:
         meter.close()
     if args.json:
