@@ -30,6 +30,7 @@ import numpy as np
 
 from roughness.core.checks import in_range
 from roughness.core.errors import InputError
+from roughness.core.limits import MAX_FILTER_TAPS, MAX_HEIGHTMAP_PIXELS, check_size
 
 from .fuzzy_noise import NOISE_TYPES, noise
 from .heightmap import Heightmap
@@ -149,8 +150,13 @@ def fuzzy_wall(skin: FuzzySkin, profile: FdmProfile, tile_mm: float = 12.0, pixe
     if points > MAX_WALL_POINTS:
         raise InputError(f"{points:,.0f} fuzzy points in a {tile_mm:g} mm tile (above {MAX_WALL_POINTS:,}): use a "
                          "larger fuzzy_skin_point_distance or a smaller tile", parameter="fuzzy_skin_point_distance")
-    rng = np.random.default_rng(seed)
     per_layer = int(round(rows_per_layer))
+    check_size(f"a {tile_mm:g} mm wall tile of {pixel_mm:g} mm pixels", float(layers * per_layer * nx),
+               MAX_HEIGHTMAP_PIXELS, "pixel_mm")
+    taps = 2 * int(w / 2 / (pixel_mm / SUPERSAMPLE)) + 1  # the widest bead envelope's kernel
+    check_size("bead envelope filter taps", float(layers * per_layer * nx * SUPERSAMPLE) * taps, MAX_FILTER_TAPS,
+               "pixel_mm")
+    rng = np.random.default_rng(seed)
     fine = (np.arange(nx * SUPERSAMPLE) + 0.5) * pixel_mm / SUPERSAMPLE
     u = (np.arange(per_layer) + 0.5) * pixel_mm - h / 2  # row centres from the layer's middle
     radius = (w - h) / 2 + np.sqrt(np.maximum((h / 2) ** 2 - u**2, 0.0))
