@@ -165,6 +165,9 @@ def test_orcaslicer_json(tmp_path):
     assert read.profile.line_width_mm == pytest.approx(0.44) and read.notes == ()  # Orca: % of the nozzle
     path.write_text(json.dumps({**ORCA, "fuzzy_skin": "none"}))
     assert "off" in read_slicer_config(path).notes[0]
+    path.write_text(json.dumps({**ORCA, "wall_generator": "classic"}))  # the mode is Arachne's only
+    classic = read_slicer_config(path)
+    assert classic.skin.fuzzy_skin_mode == "displacement" and "Arachne" in classic.notes[0]
 
 
 @pytest.mark.parametrize("change, message", [

@@ -7,7 +7,8 @@ after Cura): the outer perimeter of each layer is replaced by new points, the fi
 (uniform); each point is moved perpendicular to the perimeter by the noise (``fuzzy_noise``) times
 ``fuzzy_skin_thickness``, and the points are joined by straight extrusions. OrcaSlicer's ``fuzzy_skin_mode``:
 displacement moves the points; extrusion widens the line by the noise instead (its outer face moves by half of
-it); combined widens it and moves its centre by half the widening (the outer face moves by all of it). The
+it); combined widens it and moves its centre by half the widening (the outer face moves by all of it). OrcaSlicer
+applies the mode to Arachne walls only (``fuzzy_extrusion_line``); its classic wall generator always displaces. The
 slicers start every layer afresh with new random numbers (Classic differs at every slice); here ``seed`` makes a
 wall repeatable.
 

@@ -5,14 +5,15 @@ PrusaSlicer ``.ini`` (``key = value`` lines): ``fuzzy_skin_thickness``, ``fuzzy_
 percentage is of the layer height; 0: ``extrusion_width``, else 1.125 x nozzle). OrcaSlicer ``.json`` (an object of
 strings): ``fuzzy_skin_thickness``, ``fuzzy_skin_point_distance``, the noise keys (``fuzzy_skin_noise_type``,
 ``fuzzy_skin_scale``, ``fuzzy_skin_octaves``, ``fuzzy_skin_persistence``, ``fuzzy_skin_mode``; OrcaSlicer's defaults
-where absent), ``layer_height``, ``nozzle_diameter`` and ``outer_wall_line_width`` (a percentage is of the nozzle).
+where absent), ``layer_height``, ``nozzle_diameter``, ``outer_wall_line_width`` (a percentage is of the nozzle) and
+``wall_generator`` (its classic generator ignores ``fuzzy_skin_mode``: judged as displacement, with a note).
 Only these keys are read; a missing or bad one is an InputError naming it and the file.
 """
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from roughness.core.errors import InputError
@@ -140,4 +141,9 @@ def _orca(values: dict, path: Path) -> SlicerSettings:
                  fuzzy_skin_persistence=_number(values, "fuzzy_skin_persistence", path)
                  if "fuzzy_skin_persistence" in values else default.fuzzy_skin_persistence,
                  fuzzy_skin_mode=str(values.get("fuzzy_skin_mode", default.fuzzy_skin_mode)))
-    return SlicerSettings(skin, _profile(path, nozzle, layer, width, "OrcaSlicer"), _off_note(values))
+    notes = _off_note(values)
+    if skin.fuzzy_skin_mode != "displacement" and values.get("wall_generator") == "classic":
+        notes += (f"fuzzy_skin_mode {skin.fuzzy_skin_mode} applies to Arachne walls only; with wall_generator = classic "
+                  "OrcaSlicer displaces the points (judged so)",)
+        skin = replace(skin, fuzzy_skin_mode="displacement")
+    return SlicerSettings(skin, _profile(path, nozzle, layer, width, "OrcaSlicer"), notes)
