@@ -77,6 +77,22 @@ def test_thickness_zero_is_the_plain_printed_wall():
     assert np.allclose(layers, bead[None, :, None], atol=1e-12)
 
 
+def test_the_bead_is_swept_along_each_layers_path():
+    """Each row is the envelope of disks on the path (straight lines between the points, across the tile's end):
+    never below the path lifted by the row's disk, never above its highest point lifted so."""
+    wall = fuzzy_wall(FuzzySkin(0.3, 0.3), FDM)
+    layers, per = _layer_rows(wall)
+    h, w, pixel = FDM.layer_mm, FDM.line_width_mm, wall.heightmap.pixel_mm
+    x = (np.arange(wall.heightmap.shape[1]) + 0.5) * pixel
+    u = (np.arange(per) + 0.5) * pixel - h / 2
+    lift = (w - h) / 2 + np.sqrt((h / 2) ** 2 - u**2) - w / 2
+    for layer, rows in zip(wall.layers, layers):
+        xp = np.concatenate((layer.x_mm - 12.0, layer.x_mm, layer.x_mm + 12.0))
+        path = np.interp(x, xp, np.tile(layer.offset_mm, 3))
+        assert np.all(rows >= path[None, :] + lift[:, None] - 1e-12)
+        assert np.all(rows <= layer.offset_mm.max() + lift[:, None] + 1e-12)
+
+
 def test_layers_each_have_their_own_displacement():
     wall = fuzzy_wall(FuzzySkin(0.3, 0.8), FDM)
     layers, per = _layer_rows(wall)

@@ -158,7 +158,7 @@ def fuzzy_wall(skin: FuzzySkin, profile: FdmProfile, tile_mm: float = 12.0, pixe
     check_size("bead envelope filter taps", float(layers * per_layer * nx * SUPERSAMPLE) * taps, MAX_FILTER_TAPS,
                "pixel_mm")
     rng = np.random.default_rng(seed)
-    fine = (np.arange(nx * SUPERSAMPLE) + 0.5) * pixel_mm / SUPERSAMPLE
+    fine = (np.arange(nx * SUPERSAMPLE) + SUPERSAMPLE / 2) * pixel_mm / SUPERSAMPLE  # every SUPERSAMPLE-th: a pixel centre
     u = (np.arange(per_layer) + 0.5) * pixel_mm - h / 2  # row centres from the layer's middle
     radius = (w - h) / 2 + np.sqrt(np.maximum((h / 2) ** 2 - u**2, 0.0))
     out, made = np.empty((layers * per_layer, nx)), []
@@ -167,7 +167,7 @@ def fuzzy_wall(skin: FuzzySkin, profile: FdmProfile, tile_mm: float = 12.0, pixe
         made.append(layer)
         path = _path(layer, fine, tile_mm)
         for row, rad in enumerate(radius):
-            out[k * per_layer + row] = _envelope(path, rad, pixel_mm / SUPERSAMPLE)[SUPERSAMPLE // 2::SUPERSAMPLE]
+            out[k * per_layer + row] = _envelope(path, rad, pixel_mm / SUPERSAMPLE)[::SUPERSAMPLE]
     return FuzzyWall(Heightmap(out - w / 2, pixel_mm), tuple(made), skin, profile, seed)
 
 
