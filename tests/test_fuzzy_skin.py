@@ -207,6 +207,8 @@ def test_command(tmp_path, capsys):
     assert main(args) == 0
     result = json.loads(capsys.readouterr().out)
     assert result["fuzzy_skin"]["fuzzy_skin_thickness"] == 0.25 and result["printer"]["layer_mm"] == 0.2
+    low, high = result["equivalent_lambda_range_mm"]
+    assert low < result["equivalent_lambda_mm"] < high
     assert result["equivalent_lambda_mm"] > 0 and result["roughness_draw_std"] > 0 and result["engine_error"] > 0 and out.is_file()
     assert main(args) == 2 and "--overwrite" in capsys.readouterr().err  # nothing overwritten unasked
     assert main(["fuzzy-skin", "--engine", "spectral", "--quiet", "--sweep-thickness", "0.1,0.4"]) == 0

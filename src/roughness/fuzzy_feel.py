@@ -58,11 +58,28 @@ class FuzzyFeel:
         engines = self.engines
         return load_scale(engines[0]).place(self.roughness) if len(engines) == 1 else None
 
+    @property
+    def uncertainty(self) -> float | None:
+        """How sure V is: the larger of the spread over draws and the engine's error (None if neither is known)."""
+        known = [e for e in (self.draw_std, self.engine_error) if e is not None]
+        return max(known) if known else None
+
+    @property
+    def lambda_range_mm(self) -> tuple[float, float] | None:
+        """Equivalent wavelengths (mm) of V -/+ its ``uncertainty`` on the standard scale (the lower end at the
+        scale's floor if V - uncertainty is below it); None if V is not placed or its uncertainty unknown."""
+        placement, sure = self.placement, self.uncertainty
+        if placement is None or placement.below_scale or sure is None:
+            return None
+        scale = load_scale(self.engines[0])
+        return scale.floored_lambda(max(self.roughness - sure, 0.0)), scale.equivalent_lambda(self.roughness + sure)[0]
+
     def as_dict(self) -> dict:
         placement = self.placement
         return {"fuzzy_skin": asdict(self.skin), "printer": self.profile.as_dict(),
                 "seeds": [w.seed for w in self.walls], "tile_mm": self.walls[0].heightmap.size_mm[0],
                 "roughness": self.roughness, "roughness_draw_std": self.draw_std, "engine_error": self.engine_error,
+                "equivalent_lambda_range_mm": self.lambda_range_mm,
                 "scales": list(self.engines), **({} if placement is None else placement.as_dict()),
                 "draws": [p.as_dict() for p in self.predictions]}
 

@@ -101,8 +101,9 @@ def _line(feel) -> str:
         scale = f"below the standard scale (V < floor {where.floor:.4f}): no equivalent lambda"
     else:
         extrapolated = "" if where.on_scale else " (extrapolated off the scale)"
-        scale = (f"~ lambda {where.equivalent_lambda_mm:.3f} mm{extrapolated}, {where.jnd_from_nearest + 0.0:+.1f} JND "
-                 f"from {where.nearest_standard}")
+        low, high = feel.lambda_range_mm or (where.equivalent_lambda_mm, where.equivalent_lambda_mm)
+        scale = (f"~ lambda {where.equivalent_lambda_mm:.3f} mm ({low:.3f}-{high:.3f}){extrapolated}, "
+                 f"{where.jnd_from_nearest + 0.0:+.1f} JND from {where.nearest_standard}")
     notes = sorted({n for p in feel.predictions for n in p.domain_notes})
     return (f"{feel.skin.describe()}: V = {feel.roughness:.4f} ± {' ± '.join(sure) or 'unknown'} "
             f"({', '.join(sorted({p.engine for p in feel.predictions}))}; {', '.join(feel.engines)} scale), {scale}" + "".join(f"\n  note: {n}" for n in notes))
