@@ -211,9 +211,13 @@ def test_command(tmp_path, capsys):
     assert low < result["equivalent_lambda_mm"] < high
     assert result["equivalent_lambda_mm"] > 0 and result["roughness_draw_std"] > 0 and result["engine_error"] > 0 and out.is_file()
     assert main(args) == 2 and "--overwrite" in capsys.readouterr().err  # nothing overwritten unasked
-    assert main(["fuzzy-skin", "--engine", "spectral", "--quiet", "--sweep-thickness", "0.1,0.4"]) == 0
+    plot = tmp_path / "sweep.png"
+    assert main(["fuzzy-skin", "--engine", "spectral", "--quiet", "--sweep-thickness", "0.1,0.4", "--plot",
+                 str(plot)]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert [line.startswith("fuzzy skin classic, thickness 0.1") for line in lines[1:]] == [True, False]
-    assert "JND" in lines[1] and "lambda" in lines[2]
+    assert [line.startswith("fuzzy skin classic, thickness 0.1") for line in lines[2:]] == [True, False]
+    assert "JND" in lines[2] and "lambda" in lines[3] and plot.stat().st_size > 0
+    assert main(["fuzzy-skin", "--plot", str(tmp_path / "one.png")]) == 2  # a plot needs a sweep
+    assert "--plot" in capsys.readouterr().err
     assert main(["fuzzy-skin", "--config", str(tmp_path / "none.ini")]) == 2
     assert "does not exist" in capsys.readouterr().err

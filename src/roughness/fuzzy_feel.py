@@ -10,11 +10,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from roughness.perceptual_scale import Placement, load_scale
 from roughness.prediction import Prediction, PredictOptions, predict
 from roughness.surface.fuzzy_skin import FuzzySkin, FuzzyWall, fuzzy_wall
 from roughness.surface.printing import FdmProfile, PrintProfile, printer_profile
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 
 @dataclass(frozen=True)
@@ -120,3 +126,28 @@ def fuzzy_skin_sweep(skin: FuzzySkin, thicknesses_mm: Sequence[float], point_dis
             if on_result is not None:
                 on_result(feel)
     return feels
+
+
+def plot_sweep(feels: Sequence[FuzzyFeel], out: Path | None = None, ax: Axes | None = None) -> Figure:
+    """V against point distance, one line per thickness, with V's uncertainty as error bars and the line width
+    marked; on ``ax`` if given (its figure is returned), else on a new figure (saved to ``out`` if given)."""
+    from roughness.core.figures import new_figure, save_figure
+
+    own = ax is None
+    fig = new_figure(figsize=(7, 4.5)) if own else ax.figure
+    ax = fig.subplots() if own else ax
+    for thickness in dict.fromkeys(f.skin.fuzzy_skin_thickness for f in feels):
+        row = [f for f in feels if f.skin.fuzzy_skin_thickness == thickness]
+        ax.errorbar([f.skin.fuzzy_skin_point_distance for f in row], [f.roughness for f in row],
+                    yerr=[f.uncertainty or 0.0 for f in row], marker="o", ms=3, capsize=2, label=f"{thickness:g} mm")
+    width = feels[0].profile.line_width_mm
+    ax.axvline(width, color="grey", ls=":", lw=1)
+    ax.annotate("line width", (width, 1), xycoords=("data", "axes fraction"), xytext=(3, -3),
+                textcoords="offset points", color="grey", fontsize=8, va="top")
+    engines = ", ".join(dict.fromkeys(e for f in feels for e in f.engines))
+    ax.set(xlabel="fuzzy_skin_point_distance (mm)", ylabel=f"V ({engines} scale)",
+           title=f"{feels[0].skin.fuzzy_skin_noise_type} fuzzy skin, {feels[0].profile.name}")
+    ax.legend(title="thickness", fontsize=8)
+    if own:
+        fig.tight_layout()
+    return save_figure(fig, out, 120)

@@ -62,6 +62,8 @@ def add_parser(sub) -> None:
                    help="a table over these thicknesses (with --sweep-point-distance, or the one point distance)")
     p.add_argument("--sweep-point-distance", type=_lengths, metavar="MM,MM,...",
                    help="a table over these point distances (with --sweep-thickness, or the one thickness)")
+    p.add_argument("--plot", metavar="FILE",
+                   help="with a sweep: V against point distance, a line per thickness (.png, .pdf, .svg)")
     p.add_argument("--out", metavar="FILE", help="write the printed wall's heightmap (.npz, .npy, .h5, .png, .tif)")
     p.add_argument("--json", action="store_true", help="print the results as JSON")
     add_quiet(p)
@@ -118,6 +120,12 @@ def run(args: argparse.Namespace) -> int:
     skin, profile, notes = _settings(args)
     out = check_output(args.out, args.overwrite, "out") if args.out else None
     sweep = args.sweep_thickness or args.sweep_point_distance
+    plot = check_output(args.plot, args.overwrite, "plot") if args.plot else None
+    if plot is not None and (not sweep or plot.suffix.lower() not in (".png", ".pdf", ".svg")):
+        from roughness.core.errors import InputError
+
+        raise InputError("--plot draws a sweep (--sweep-thickness/--sweep-point-distance) to a .png, .pdf or .svg",
+                         "plot")
     if sweep and out is not None:
         from roughness.core.errors import InputError
 
@@ -147,6 +155,11 @@ def run(args: argparse.Namespace) -> int:
                              args.tile_mm, args.pixel_mm, on_result=step)
     if meter is not None:
         meter.close()
+    if plot is not None:
+        from roughness.fuzzy_feel import plot_sweep
+
+        plot_sweep(feels, plot)
+        header.append(f"wrote {plot}")
     if args.json:
         write_stdout(json_text([f.as_dict() for f in feels], indent=1))
     else:
