@@ -51,6 +51,7 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("ensemble",): ["checkpoint.pt", "checkpoint.pt", "--out", "new.onnx"],
     ("card",): ["run", "model.onnx", "--card", "new.md", "--plots", "."],
     ("model-version",): ["model.onnx", "--version", "2"],
+    ("fuzzy-skin",): ["--engine", "surrogate", "--draws", "1"],
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
@@ -78,6 +79,7 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("ensemble",): [(0, ".pt", [])],
     ("card",): [(1, ".onnx", [])],
     ("model-version",): [(0, ".onnx", [])],
+    ("fuzzy-skin",): [("--config", ".ini", []), ("--config", ".json", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
@@ -97,10 +99,11 @@ FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {
     ("object", "texture"): ["--out", "--preview"],
     ("ensemble",): ["--out", "--int8"],
     ("card",): ["--card"],
+    ("fuzzy-skin",): ["--out", "--plot"],
 }
 OUTPUT_SUFFIX = {"--save-strain": ".png", "--save-vtu": ".vtu", "--map": ".npy", "--preview": ".png",
                  "--picture": ".png", "--mesh-out": ".stl", "--int8": ".onnx"}
-OUTPUT_SUFFIX_OF = {("homogeneity",): {"--map": ".png"}}
+OUTPUT_SUFFIX_OF = {("homogeneity",): {"--map": ".png"}, ("fuzzy-skin",): {"--out": ".npz", "--plot": ".png"}}
 
 
 def _subcommands(parser: argparse.ArgumentParser, path: tuple[str, ...] = ()):

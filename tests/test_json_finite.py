@@ -204,6 +204,13 @@ def _check_object_feel(objects):
     assert row["jnd_is_bound"] and row["jnd_median"] < 0
 
 
+def _check_fuzzy_plain(objects):
+    """Fuzzy skin of thickness 0: the plain wall, below the scale, with no wavelength range."""
+    [o] = objects
+    _below([o])
+    assert o["equivalent_lambda_range_mm"] is None and o["roughness"] < 1e-3
+
+
 # path -> [(arguments, expected exit code, check of the parsed stdout objects)]; exit 2: a clear refusal.
 # The 1 um relief needs --units-ok: without it, it is refused as implausible for mm (tests/test_cleanup.py)
 CASES = {
@@ -228,6 +235,8 @@ CASES = {
                            "--reference", "standard-1.0", "--json", "--quiet"], 0, _check_object_feel)],
     ("object", "tune"): [(["box.stl", "--texture", "flat.npy", *MAP, "--target-lambda", "1.0", "--out", "t.npz",
                            "--json", "--quiet"], 2, None)],
+    ("fuzzy-skin",): [(["--fuzzy-skin-thickness", "0", "--engine", "surrogate", "--json", "--quiet"], 0,
+                       _check_fuzzy_plain)],
 }
 
 

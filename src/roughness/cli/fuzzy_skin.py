@@ -3,43 +3,49 @@ from __future__ import annotations
 
 import argparse
 
-from .common import LENGTH, PIXEL, SEED, add_overwrite, add_quiet, count, defaults, finish, json_text, write_stdout
+from .common import (
+    LENGTH,
+    PIXEL,
+    SEED,
+    Number,
+    add_overwrite,
+    add_quiet,
+    count,
+    defaults,
+    finish,
+    json_text,
+    write_stdout,
+)
+from .perception_common import number_list
 
 MAX_DRAWS = 100
-
-
-def _lengths(text: str) -> tuple[float, ...]:
-    """``0.1,0.3,0.5`` (mm) as positive numbers."""
-    try:
-        values = tuple(LENGTH(part) for part in text.split(","))
-    except (argparse.ArgumentTypeError, ValueError) as err:
-        raise argparse.ArgumentTypeError(f"a comma-separated list of lengths in mm expected: {err}") from None
-    return values
 
 
 def add_parser(sub) -> None:
     from roughness.fuzzy_feel import fuzzy_skin_feel
     from roughness.prediction import PREDICT_ENGINES
     from roughness.surface.fuzzy_noise import NOISE_TYPES
-    from roughness.surface.fuzzy_skin import MODES, FuzzySkin, fuzzy_wall
+    from roughness.surface.fuzzy_skin import MODES, RANGES, FuzzySkin, fuzzy_wall
 
     skin, wall, feel = defaults(FuzzySkin), defaults(fuzzy_wall), defaults(fuzzy_skin_feel)
+    domain = {name: Number(float, low=low, high=high) for name, (low, high) in RANGES.items()}
+    lengths = number_list(LENGTH, "lengths in mm")
     p = sub.add_parser("fuzzy-skin", help="how a slicer's fuzzy skin will feel on a printed wall")
     p.add_argument("--config", metavar="FILE",
                    help="read the fuzzy skin and layer/nozzle settings from a PrusaSlicer .ini or OrcaSlicer .json "
                         "export (options given on the command line override its fuzzy skin settings)")
-    p.add_argument("--fuzzy-skin-thickness", type=float, metavar="MM",
+    p.add_argument("--fuzzy-skin-thickness", type=domain["fuzzy_skin_thickness"], metavar="MM",
                    help=f"largest offset of a point, both ways, mm (default {skin['fuzzy_skin_thickness']:g})")
-    p.add_argument("--fuzzy-skin-point-distance", type=float, metavar="MM",
+    p.add_argument("--fuzzy-skin-point-distance", type=domain["fuzzy_skin_point_distance"], metavar="MM",
                    help="mean distance of the fuzzy points along the wall, mm; PrusaSlicer's fuzzy_skin_point_dist "
                         f"(default {skin['fuzzy_skin_point_distance']:g})")
     p.add_argument("--fuzzy-skin-noise-type", choices=NOISE_TYPES,
                    help=f"OrcaSlicer's noise (default {skin['fuzzy_skin_noise_type']})")
-    p.add_argument("--fuzzy-skin-scale", type=float, metavar="MM",
+    p.add_argument("--fuzzy-skin-scale", type=domain["fuzzy_skin_scale"], metavar="MM",
                    help=f"feature size of the coherent noises, mm (default {skin['fuzzy_skin_scale']:g})")
-    p.add_argument("--fuzzy-skin-octaves", type=int, metavar="N",
+    p.add_argument("--fuzzy-skin-octaves", type=count(*RANGES["fuzzy_skin_octaves"][::-1]), metavar="N",
                    help=f"octaves of perlin, billow, ridgedmulti (default {skin['fuzzy_skin_octaves']})")
-    p.add_argument("--fuzzy-skin-persistence", type=float, metavar="P",
+    p.add_argument("--fuzzy-skin-persistence", type=domain["fuzzy_skin_persistence"], metavar="P",
                    help=f"persistence of perlin and billow (default {skin['fuzzy_skin_persistence']:g})")
     p.add_argument("--fuzzy-skin-mode", choices=MODES,
                    help=f"OrcaSlicer's fuzzy_skin_mode (default {skin['fuzzy_skin_mode']})")
@@ -58,14 +64,14 @@ def add_parser(sub) -> None:
                    help=f"side of the periodic wall tile, mm (default {wall['tile_mm']:g})")
     p.add_argument("--pixel-mm", type=PIXEL, default=wall["pixel_mm"],
                    help=f"pixel size, mm; the layer height must be a whole number of them (default {wall['pixel_mm']:g})")
-    p.add_argument("--sweep-thickness", type=_lengths, metavar="MM,MM,...",
+    p.add_argument("--sweep-thickness", type=lengths, metavar="MM,MM,...",
                    help="a table over these thicknesses (with --sweep-point-distance, or the one point distance)")
-    p.add_argument("--sweep-point-distance", type=_lengths, metavar="MM,MM,...",
+    p.add_argument("--sweep-point-distance", type=lengths, metavar="MM,MM,...",
                    help="a table over these point distances (with --sweep-thickness, or the one thickness)")
     p.add_argument("--plot", metavar="FILE",
                    help="with a sweep: V against point distance, a line per thickness (.png, .pdf, .svg)")
     p.add_argument("--out", metavar="FILE", help="write the printed wall's heightmap (.npz, .npy, .h5, .png, .tif)")
-    p.add_argument("--json", action="store_true", help="print the results as JSON")
+    p.add_argument("--json", action="store_true", help="print the results as JSON, one line per setting")
     add_quiet(p)
     add_overwrite(p)
     finish(p, run)
@@ -137,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
         if out is not None:
             save_heightmap(feel.walls[0].heightmap, out, overwrite=args.overwrite)
             header.append(f"wrote {out}: the printed wall of seed {args.seed}, x along it, y up it, heights out of it (mm)")
-        write_stdout(json_text(feel.as_dict(), indent=1) if args.json else "\n".join([*header, _line(feel)]))
+        write_stdout(json_text(feel.as_dict()) if args.json else "\n".join([*header, _line(feel)]))
         return 0
     thicknesses = args.sweep_thickness or (skin.fuzzy_skin_thickness,)
     distances = args.sweep_point_distance or (skin.fuzzy_skin_point_distance,)
@@ -161,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
         plot_sweep(feels, plot)
         header.append(f"wrote {plot}")
     if args.json:
-        write_stdout(json_text([f.as_dict() for f in feels], indent=1))
+        write_stdout("\n".join(json_text(f.as_dict()) for f in feels))
     else:
         write_stdout("\n".join([*header, *(_line(f) for f in feels)]))
     return 0

@@ -43,6 +43,10 @@ SPACING_RANGE = 0.5
 SUPERSAMPLE = 4  # path samples per map pixel along the wall, for the bead's envelope
 MIN_EXTRUSION_WIDTH = 0.01  # mm: OrcaSlicer's least line width in extrusion mode
 MAX_WALL_POINTS = 5_000_000  # fuzzy points x layers of one tile
+# the settings' domains (mm where lengths): OrcaSlicer's for the noise; thickness and point distance up to what a
+# hand can feel on a wall (OrcaSlicer allows thickness 0-1 mm and any point distance)
+RANGES = {"fuzzy_skin_thickness": (0.0, 5.0), "fuzzy_skin_point_distance": (0.01, 50.0),
+          "fuzzy_skin_scale": (0.1, 500.0), "fuzzy_skin_octaves": (1, 10), "fuzzy_skin_persistence": (0.01, 1.0)}
 
 
 @dataclass(frozen=True)
@@ -58,14 +62,13 @@ class FuzzySkin:
     fuzzy_skin_mode: str = "displacement"
 
     def __post_init__(self) -> None:
-        in_range("fuzzy_skin_thickness", self.fuzzy_skin_thickness, 0.0, 5.0)
-        in_range("fuzzy_skin_point_distance", self.fuzzy_skin_point_distance, 0.01, 50.0)
-        in_range("fuzzy_skin_scale", self.fuzzy_skin_scale, 0.1, 500.0)
-        in_range("fuzzy_skin_persistence", self.fuzzy_skin_persistence, 0.01, 1.0)
+        for name in ("fuzzy_skin_thickness", "fuzzy_skin_point_distance", "fuzzy_skin_scale", "fuzzy_skin_persistence"):
+            object.__setattr__(self, name, in_range(name, getattr(self, name), *RANGES[name]))
+        low, high = RANGES["fuzzy_skin_octaves"]
         if isinstance(self.fuzzy_skin_octaves, bool) or not isinstance(self.fuzzy_skin_octaves, int | np.integer) \
-                or not 1 <= self.fuzzy_skin_octaves <= 10:
-            raise InputError(f"fuzzy_skin_octaves must be a whole number from 1 to 10, got {self.fuzzy_skin_octaves!r}",
-                             parameter="fuzzy_skin_octaves")
+                or not low <= self.fuzzy_skin_octaves <= high:
+            raise InputError(f"fuzzy_skin_octaves must be a whole number from {low} to {high}, got "
+                             f"{self.fuzzy_skin_octaves!r}", parameter="fuzzy_skin_octaves")
         for name, allowed in (("fuzzy_skin_noise_type", NOISE_TYPES), ("fuzzy_skin_mode", MODES)):
             if getattr(self, name) not in allowed:
                 raise InputError(f"{name} must be one of {', '.join(allowed)}, got {getattr(self, name)!r}",

@@ -37,8 +37,10 @@ class SlicerSettings:
 def read_slicer_config(path: str | Path) -> SlicerSettings:
     """The fuzzy skin and printer of a PrusaSlicer .ini or OrcaSlicer .json config."""
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise InputError(f"slicer config {path} does not exist", parameter="config")
+    if not path.is_file():
+        raise InputError(f"slicer config {path} is not a file", parameter="config")
     if path.stat().st_size > MAX_CONFIG_BYTES:
         raise InputError(f"slicer config {path}: {path.stat().st_size:,} bytes, above {MAX_CONFIG_BYTES:,}",
                          parameter="config")
