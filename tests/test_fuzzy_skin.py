@@ -13,7 +13,7 @@ from roughness.core.errors import InputError
 from roughness.fuzzy_feel import fuzzy_skin_feel
 from roughness.surface.fuzzy_noise import Lattice
 from roughness.surface.fuzzy_skin import FuzzySkin, fuzzy_points, fuzzy_wall
-from roughness.surface.printing import PROFILES
+from roughness.surface.printing import PROFILES, FdmProfile
 from roughness.surface.slicer_config import read_slicer_config
 
 FDM = PROFILES["fdm-0.4-0.2"]
@@ -93,6 +93,17 @@ def test_the_bead_is_swept_along_each_layers_path():
         assert np.all(rows <= layer.offset_mm.max() + lift[:, None] + 1e-12)
 
 
+def test_layers_that_do_not_divide_the_pixels():
+    """0.12 mm layers on 0.05 mm pixels: the tile is whole layers (5 span 12 pixels), each row on its layer's bead."""
+    profile = FdmProfile("fdm-0.4-0.12", 0.4, 0.12, 0.45, 0.049)
+    wall = fuzzy_wall(FuzzySkin(0.0, 0.8), profile)
+    ny, nx = wall.heightmap.shape
+    assert nx == 240 and ny % 12 == 0 and ny * 0.05 >= 12.0 and len(wall.layers) == ny // 12 * 5
+    y = (np.arange(ny) + 0.5) * 0.05
+    u = y - (np.floor(y / 0.12) + 0.5) * 0.12
+    assert np.allclose(wall.heightmap.heights, (np.sqrt(0.06**2 - u**2) - 0.06)[:, None], atol=1e-12)
+
+
 def test_layers_each_have_their_own_displacement():
     wall = fuzzy_wall(FuzzySkin(0.3, 0.8), FDM)
     layers, per = _layer_rows(wall)
@@ -142,8 +153,8 @@ def test_bad_settings_are_refused():
             FuzzySkin(**bad)
     with pytest.raises(InputError, match="FDM"):
         fuzzy_wall(FuzzySkin(), PROFILES["msla-35um"])
-    with pytest.raises(InputError, match="whole number"):
-        fuzzy_wall(FuzzySkin(), FDM, pixel_mm=0.03)
+    with pytest.raises(InputError, match="fewer than 2 pixels"):
+        fuzzy_wall(FuzzySkin(), FDM, pixel_mm=0.12)
     with pytest.raises(InputError, match="MAX_HEIGHTMAP_PIXELS"):  # refused before anything is allocated
         fuzzy_wall(FuzzySkin(), FDM, tile_mm=200.0, pixel_mm=0.01)
 

@@ -63,7 +63,7 @@ def add_parser(sub) -> None:
     p.add_argument("--tile-mm", type=LENGTH, default=wall["tile_mm"],
                    help=f"side of the periodic wall tile, mm (default {wall['tile_mm']:g})")
     p.add_argument("--pixel-mm", type=PIXEL, default=wall["pixel_mm"],
-                   help=f"pixel size, mm; the layer height must be a whole number of them (default {wall['pixel_mm']:g})")
+                   help=f"pixel size, mm, at most half the layer height (default {wall['pixel_mm']:g})")
     p.add_argument("--sweep-thickness", type=lengths, metavar="MM,MM,...",
                    help="a table over these thicknesses (with --sweep-point-distance, or the one point distance)")
     p.add_argument("--sweep-point-distance", type=lengths, metavar="MM,MM,...",

@@ -43,6 +43,8 @@ SPACING_RANGE = 0.5
 SUPERSAMPLE = 4  # path samples per map pixel along the wall, for the bead's envelope
 MIN_EXTRUSION_WIDTH = 0.01  # mm: OrcaSlicer's least line width in extrusion mode
 MAX_WALL_POINTS = 5_000_000  # fuzzy points x layers of one tile
+MIN_LAYER_PIXELS = 2  # a layer's bead needs this many pixel rows at least
+MAX_LAYER_UNIT = 100  # the wall's period up it: at most this many layers to span whole pixels
 # the settings' domains (mm where lengths): OrcaSlicer's for the noise; thickness and point distance up to what a
 # hand can feel on a wall (OrcaSlicer allows thickness 0-1 mm and any point distance)
 RANGES = {"fuzzy_skin_thickness": (0.0, 5.0), "fuzzy_skin_point_distance": (0.01, 50.0),
@@ -133,8 +135,9 @@ def _outer_offset(r: np.ndarray, mode: str, width_mm: float) -> np.ndarray:
 
 def fuzzy_wall(skin: FuzzySkin, profile: FdmProfile, tile_mm: float = 12.0, pixel_mm: float = 0.05,
                seed: int = 0) -> FuzzyWall:
-    """The printed wall of ``skin`` on ``profile`` (its layer height and line width) as a periodic tile about
-    ``tile_mm`` square (x: exactly ``tile_mm``; y: the whole layers nearest it) on ``pixel_mm`` pixels."""
+    """The printed wall of ``skin`` on ``profile`` (its layer height and line width) as a periodic tile on
+    ``pixel_mm`` pixels: ``tile_mm`` along the wall (x), and up it (y) the fewest whole layers that span whole pixels
+    and at least ``tile_mm``."""
     if not isinstance(profile, FdmProfile):
         raise InputError(f"fuzzy skin is a setting of FDM slicers; printer {profile.name} is {profile.kind}",
                          parameter="printer")
@@ -142,36 +145,45 @@ def fuzzy_wall(skin: FuzzySkin, profile: FdmProfile, tile_mm: float = 12.0, pixe
     pixel_mm = in_range("pixel_mm", pixel_mm, 0.001, 1.0)
     h, w = profile.layer_mm, profile.line_width_mm
     nx = int(round(tile_mm / pixel_mm))
-    layers = max(1, int(round(tile_mm / h)))
-    rows_per_layer = h / pixel_mm
-    if abs(rows_per_layer - round(rows_per_layer)) > 1e-6 or round(rows_per_layer) < 2:
-        raise InputError(f"the {h:g} mm layer must be a whole number (at least 2) of {pixel_mm:g} mm pixels for the "
-                         "wall's period to be whole layers", parameter="pixel_mm")
     if abs(nx * pixel_mm - tile_mm) > 1e-6 * tile_mm:
         raise InputError(f"tile_mm ({tile_mm:g}) must be a whole number of {pixel_mm:g} mm pixels",
                          parameter="tile_mm")
+    if h < MIN_LAYER_PIXELS * pixel_mm * (1 - 1e-9):
+        raise InputError(f"the {h:g} mm layer spans fewer than {MIN_LAYER_PIXELS} pixels of {pixel_mm:g} mm: its bead "
+                         f"cannot be represented; use --pixel-mm {h / MIN_LAYER_PIXELS:g} or less", parameter="pixel_mm")
+    unit = _layer_unit(h, pixel_mm)
+    layers = unit * math.ceil(tile_mm / (unit * h) - 1e-9)
+    ny = int(round(layers * h / pixel_mm))
     points = layers * (tile_mm / (MIN_SPACING * skin.fuzzy_skin_point_distance) + 2)
     if points > MAX_WALL_POINTS:
         raise InputError(f"{points:,.0f} fuzzy points in a {tile_mm:g} mm tile (above {MAX_WALL_POINTS:,}): use a "
                          "larger fuzzy_skin_point_distance or a smaller tile", parameter="fuzzy_skin_point_distance")
-    per_layer = int(round(rows_per_layer))
-    check_size(f"a {tile_mm:g} mm wall tile of {pixel_mm:g} mm pixels", float(layers * per_layer * nx),
-               MAX_HEIGHTMAP_PIXELS, "pixel_mm")
-    taps = 2 * int(w / 2 / (pixel_mm / SUPERSAMPLE)) + 1  # the widest bead envelope's kernel
-    check_size("bead envelope filter taps", float(layers * per_layer * nx * SUPERSAMPLE) * taps, MAX_FILTER_TAPS,
+    check_size(f"a {tile_mm:g} mm wall tile of {pixel_mm:g} mm pixels", float(ny * nx), MAX_HEIGHTMAP_PIXELS,
                "pixel_mm")
+    taps = 2 * int(w / 2 / (pixel_mm / SUPERSAMPLE)) + 1  # the widest bead envelope's kernel
+    check_size("bead envelope filter taps", float(ny * nx * SUPERSAMPLE) * taps, MAX_FILTER_TAPS, "pixel_mm")
     rng = np.random.default_rng(seed)
     fine = (np.arange(nx * SUPERSAMPLE) + SUPERSAMPLE / 2) * pixel_mm / SUPERSAMPLE  # every SUPERSAMPLE-th: a pixel centre
-    u = (np.arange(per_layer) + 0.5) * pixel_mm - h / 2  # row centres from the layer's middle
+    made = tuple(fuzzy_points(skin, tile_mm, (k + 0.5) * h, w, seed, rng) for k in range(layers))
+    paths = [_path(layer, fine, tile_mm) for layer in made]
+    y = (np.arange(ny) + 0.5) * pixel_mm
+    row_layer = np.minimum((y / h).astype(int), layers - 1)
+    u = y - (row_layer + 0.5) * h  # each row's height above its layer's middle
     radius = (w - h) / 2 + np.sqrt(np.maximum((h / 2) ** 2 - u**2, 0.0))
-    out, made = np.empty((layers * per_layer, nx)), []
-    for k in range(layers):
-        layer = fuzzy_points(skin, tile_mm, (k + 0.5) * h, w, seed, rng)
-        made.append(layer)
-        path = _path(layer, fine, tile_mm)
-        for row, rad in enumerate(radius):
-            out[k * per_layer + row] = _envelope(path, rad, pixel_mm / SUPERSAMPLE)[::SUPERSAMPLE]
-    return FuzzyWall(Heightmap(out - w / 2, pixel_mm), tuple(made), skin, profile, seed)
+    out = np.empty((ny, nx))
+    for row, (k, rad) in enumerate(zip(row_layer, radius)):
+        out[row] = _envelope(paths[k], rad, pixel_mm / SUPERSAMPLE)[::SUPERSAMPLE]
+    return FuzzyWall(Heightmap(out - w / 2, pixel_mm), made, skin, profile, seed)
+
+
+def _layer_unit(layer_mm: float, pixel_mm: float) -> int:
+    """The fewest layers that span a whole number of pixels (the wall's period up it is a multiple)."""
+    for n in range(1, MAX_LAYER_UNIT + 1):
+        span = n * layer_mm / pixel_mm
+        if abs(span - round(span)) <= 1e-6 * span:
+            return n
+    raise InputError(f"no {MAX_LAYER_UNIT} or fewer {layer_mm:g} mm layers span a whole number of {pixel_mm:g} mm "
+                     "pixels: choose a pixel size that divides a few layers", parameter="pixel_mm")
 
 
 def _path(layer: FuzzyLayer, x: np.ndarray, length_mm: float) -> np.ndarray:
