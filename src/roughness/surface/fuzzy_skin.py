@@ -134,10 +134,11 @@ def _outer_offset(r: np.ndarray, mode: str, width_mm: float) -> np.ndarray:
 
 
 def fuzzy_wall(skin: FuzzySkin, profile: FdmProfile, tile_mm: float = 12.0, pixel_mm: float = 0.05,
-               seed: int = 0) -> FuzzyWall:
+               seed: int = 0, bead: bool = True) -> FuzzyWall:
     """The printed wall of ``skin`` on ``profile`` (its layer height and line width) as a periodic tile on
     ``pixel_mm`` pixels: ``tile_mm`` along the wall (x), and up it (y) the fewest whole layers that span whole pixels
-    and at least ``tile_mm``."""
+    and at least ``tile_mm``. ``bead`` False: each layer's path alone over the layer's rows (no bead; an
+    ablation that shows what the bead changes)."""
     if not isinstance(profile, FdmProfile):
         raise InputError(f"fuzzy skin is a setting of FDM slicers; printer {profile.name} is {profile.kind}",
                          parameter="printer")
@@ -170,6 +171,9 @@ def fuzzy_wall(skin: FuzzySkin, profile: FdmProfile, tile_mm: float = 12.0, pixe
     row_layer = np.minimum((y / h).astype(int), layers - 1)
     u = y - (row_layer + 0.5) * h  # each row's height above its layer's middle
     radius = (w - h) / 2 + np.sqrt(np.maximum((h / 2) ** 2 - u**2, 0.0))
+    if not bead:
+        return FuzzyWall(Heightmap(np.array([paths[k][::SUPERSAMPLE] for k in row_layer]), pixel_mm), made, skin,
+                         profile, seed)
     out = np.empty((ny, nx))
     for row, (k, rad) in enumerate(zip(row_layer, radius)):
         out[row] = _envelope(paths[k], rad, pixel_mm / SUPERSAMPLE)[::SUPERSAMPLE]
