@@ -112,12 +112,14 @@ def _line(feel) -> str:
         low, high = feel.lambda_range_mm or (where.equivalent_lambda_mm, where.equivalent_lambda_mm)
         scale = (f"~ lambda {where.equivalent_lambda_mm:.3f} mm ({low:.3f}-{high:.3f}){extrapolated}, "
                  f"{where.jnd_from_nearest + 0.0:+.1f} JND from {where.nearest_standard}")
-    notes = sorted({n for p in feel.predictions for n in p.domain_notes})
+    notes = "".join(f"\n  note: {n}" for n in sorted({n for p in feel.predictions for n in p.domain_notes}))
+    engines = ", ".join(sorted({p.engine for p in feel.predictions}))
     return (f"{feel.skin.describe()}: V = {feel.roughness:.4f} ± {' ± '.join(sure) or 'unknown'} "
-            f"({', '.join(sorted({p.engine for p in feel.predictions}))}; {', '.join(feel.engines)} scale), {scale}" + "".join(f"\n  note: {n}" for n in notes))
+            f"({engines}; {', '.join(feel.engines)} scale), {scale}{notes}")
 
 
 def run(args: argparse.Namespace) -> int:
+    from roughness.core.errors import InputError
     from roughness.core.files import check_output
     from roughness.fuzzy_feel import fuzzy_skin_feel, fuzzy_skin_sweep
     from roughness.objects.progress import StageMeter
@@ -128,13 +130,9 @@ def run(args: argparse.Namespace) -> int:
     sweep = args.sweep_thickness or args.sweep_point_distance
     plot = check_output(args.plot, args.overwrite, "plot") if args.plot else None
     if plot is not None and (not sweep or plot.suffix.lower() not in (".png", ".pdf", ".svg")):
-        from roughness.core.errors import InputError
-
         raise InputError("--plot draws a sweep (--sweep-thickness/--sweep-point-distance) to a .png, .pdf or .svg",
                          "plot")
     if sweep and out is not None:
-        from roughness.core.errors import InputError
-
         raise InputError("--out writes one wall: leave out --sweep-thickness/--sweep-point-distance", "out")
     header = [f"printer {profile.describe()}; the wall judged flat, as a periodic {args.tile_mm:g} mm tile "
               f"(seeds from {args.seed}: draws of the slicer's random numbers)", *(f"note: {n}" for n in notes)]
