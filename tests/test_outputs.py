@@ -56,6 +56,7 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
     ("ensemble",): ([0, "--data"], ["--out", "--int8"]),
     ("card",): ([1, "--latency"], ["--card"]),
     ("model-version",): ([0], []),  # rewritten in place
+    ("fuzzy-skin",): (["--config", "--printer"], ["--out", "--plot"]),
 }
 # String options that are not files: names, lists of names, addresses; --cache is a folder of FEM
 # results that a run reads and adds to (never replaces); card's RUN is a folder it reads two files from and
@@ -68,7 +69,7 @@ NOT_PATHS = {"NAME", "--param", "--scheduler", "--holdout-family", "--engines", 
 INPUT_VALUE = {"--recipe": "recipe.json", "--labels": "labels.jsonl.gz", "--extra-data": "data.h5",
                "--model": "model.onnx", "--like": "map.npy", "--from": "maps", "--palette": "maps",
                "--stimuli": "stimuli.csv", "--printer": "printer.json", "--scheduler-file": "scheduler.json",
-               "--data": "data.h5", "--latency": "latency.json"}
+               "--data": "data.h5", "--latency": "latency.json", "--config": "fuzzy.ini"}
 EXCLUDES = {"--like": "--target-lambda"}  # an input flag and the BASE option it cannot go with
 
 

@@ -120,11 +120,12 @@ def _line(feel) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from roughness.core.errors import InputError
-    from roughness.core.files import check_output
+    from roughness.core.files import check_distinct, check_output
     from roughness.fuzzy_feel import fuzzy_skin_feel, fuzzy_skin_sweep
     from roughness.objects.progress import StageMeter
     from roughness.surface.io import save_heightmap
 
+    check_distinct({"--out": args.out, "--plot": args.plot}, {"--config": args.config, "--printer": args.printer})
     skin, profile, notes = _settings(args)
     out = check_output(args.out, args.overwrite, "out") if args.out else None
     sweep = args.sweep_thickness or args.sweep_point_distance

@@ -20,6 +20,7 @@ from roughness.surface.heightmap import Heightmap
 
 from .braille import BrailleStyle, braille_relief, cells_of
 from .colours import PictureColours
+from .plate_relief import compose
 
 SWATCH_MM = 15.0
 LABEL_GAP_MM = 3.5  # at least the 1/8 inch (3.2 mm) between elements (guidelines.MIN_SPACING_MM)
@@ -90,8 +91,6 @@ def key_strip(entries: list[tuple[int, str, list[tuple[int, ...]]]], textures: l
     """The key strip's relief (mm) and region labels (``background`` between entries, -1 under the braille: no
     region's footprint) for a plate ``width_mm`` wide whose picture ends at ``top_mm``, and where each entry went;
     InputError if an entry is wider than the plate."""
-    from .tactile_image import compose
-
     nx = round(width_mm / pixel_mm)
     placed, x, y = [], KEY_GAP_MM, KEY_GAP_MM
     for region, label, cells in entries:

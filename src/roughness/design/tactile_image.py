@@ -22,14 +22,12 @@ seams would show the footprints' different indentations rather than the texture)
 """
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy import ndimage
 
 from roughness.core.checks import flag, non_negative, positive
 from roughness.core.errors import InputError
@@ -46,6 +44,7 @@ from .key import KeyEntry, KeySpec, key_entries, key_strip
 from .layout import FLAT, Layout
 from .lines import fill_lines, line_relief
 from .pages import scale_bar_mm
+from .plate_relief import compose, outline
 from .readability import MIN_TEXTURE_WIDTH_MM, SmallArea, merge_small_areas, small_areas
 
 if TYPE_CHECKING:
@@ -261,34 +260,6 @@ def check_outline(outline_mm: object, outline_height_mm: object) -> None:
         positive("outline_mm", outline_mm)
     if outline_height_mm is not None:
         non_negative("outline_height_mm", outline_height_mm)
-
-
-def outline(labels: np.ndarray, pixel_mm: float, width_mm: float, height_mm: float) -> np.ndarray:
-    """Smooth raised lines (mm) along region boundaries: height * cos^2(pi d / width) within width / 2 of them."""
-    edge = np.zeros(labels.shape, dtype=bool)
-    edge[:, 1:] |= labels[:, 1:] != labels[:, :-1]
-    edge[1:, :] |= labels[1:, :] != labels[:-1, :]
-    d = ndimage.distance_transform_edt(~edge) * pixel_mm
-    return np.where(d < width_mm / 2, height_mm * np.cos(math.pi * d / width_mm) ** 2, 0.0)
-
-
-def compose(labels: np.ndarray, textures: list[Heightmap | None], pixel_mm: float, outline_mm: float | None = None,
-            outline_height_mm: float | None = None) -> Heightmap:
-    """The plate's relief: texture i (periodic, lowest point at 0) in region i (None: flat), outlines on top."""
-    ny, nx = labels.shape
-    x = (np.arange(nx) + 0.5) * pixel_mm
-    y = (np.arange(ny) + 0.5) * pixel_mm
-    relief = np.zeros(labels.shape)
-    for i, texture in enumerate(textures):
-        inside = labels == i
-        if texture is not None and inside.any():
-            h = texture.sample(x[None, :], y[:, None], periodic=True)
-            relief[inside] = (h - texture.heights.min())[inside]
-    if outline_mm:
-        height = outline_height_mm if outline_height_mm is not None else float(np.median(
-            [np.ptp(t.heights) for t in textures if t is not None] or [0.0]))
-        relief = np.maximum(relief, outline(labels, pixel_mm, outline_mm, height))
-    return Heightmap(relief, pixel_mm)
 
 
 def footprint_labels(labels: np.ndarray, pixel_mm: float, xs: np.ndarray, ys: np.ndarray, footprint_mm: float
