@@ -39,14 +39,12 @@ def closest_pair(palette: dict, profile: str) -> tuple[dict, dict]:
 
 
 def rebuild(recipe: dict):
-    """A printer-aware palette member's digital heightmap from its recipe (design/palette.py printable_candidates)."""
+    """A printer-aware palette member's digital heightmap from its recipe."""
     from roughness.dataset.catalogue import make_texture
-    from roughness.design.tune import scaled
+    from roughness.design.palette import variant
 
-    base, _ = make_texture(recipe["name"], seed=recipe["seed"])
-    lateral, height = recipe["lateral_factor"], recipe["height_factor"]
-    return scaled(scaled(base, "lateral", lateral), "height", height) if lateral != 1 else scaled(base, "height",
-                                                                                                   height)
+    return variant(make_texture(recipe["name"], seed=recipe["seed"])[0], recipe["height_factor"],
+                   recipe["lateral_factor"])
 
 
 def main() -> None:

@@ -66,11 +66,12 @@ def _same_line(quoted: str, now: str, noise: float = NOISE) -> bool:
     return all(_matches(q, _float(n), noise=noise) for q, n in zip(re.findall(NUMBER, quoted), re.findall(NUMBER, now)))
 
 
-def _cli(*args: str, cwd: Path) -> str:
+def _cli(*args: str, cwd: Path, code: int = 0) -> str:
+    """A documented command's output: stdout if it exits 0, else (a documented refusal, exit ``code``) stderr."""
     out = subprocess.run([sys.executable, "-m", "roughness.cli", *args], cwd=cwd, capture_output=True, text=True,
                          timeout=300)
-    assert out.returncode == 0, out.stderr[-2000:]
-    return out.stdout
+    assert out.returncode == code, out.stderr[-2000:]
+    return out.stdout if code == 0 else out.stderr.strip()
 
 
 def _predict() -> dict:
@@ -98,22 +99,14 @@ def _jnd(tmp: Path) -> dict:
     return {"jnd.fem": _cli("jnd", "a.npz", "b.npz", "--engine", "fem", cwd=tmp).strip()}
 
 
-def _cli_error(*args: str, cwd: Path) -> str:
-    """A documented refusal: exit 2 and its one-line message."""
-    out = subprocess.run([sys.executable, "-m", "roughness.cli", *args], cwd=cwd, capture_output=True, text=True,
-                         timeout=300)
-    assert out.returncode == 2, out.stderr[-2000:]
-    return out.stderr.strip()
-
-
 def _tune(tmp: Path) -> dict:
     """docs/how-to/tune.md: the three tune examples (the first verified by the fine FEM, about 20 s)."""
     tmp.mkdir()
     _cli("texture", "make", "standard-1.0", "--out", "standard.npz", cwd=tmp)
     return {"tune.lambda": _cli("tune", "standard.npz", "--target-lambda", "0.8", "--out", "tuned.stl", "--quiet",
                                 cwd=tmp).strip(),
-            "tune.reach": _cli_error("tune", "standard.npz", "--target-lambda", "4", "--out", "t2.npz", "--quiet",
-                                     cwd=tmp),
+            "tune.reach": _cli("tune", "standard.npz", "--target-lambda", "4", "--out", "t2.npz", "--quiet",
+                               cwd=tmp, code=2),
             "tune.jnd": _cli("tune", "standard.npz", "--jnd", "+1", "--verify", "coarse", "--out", "rougher.npz",
                              "--quiet", cwd=tmp).strip()}
 

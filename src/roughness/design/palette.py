@@ -174,13 +174,18 @@ class Printable:
         return np.log(self.printed_lambda_mm[self.kept]) / LOG_JND
 
 
+def variant(base: Heightmap, height: float, lateral: float = 1.0) -> Heightmap:
+    """``base`` stretched laterally by ``lateral`` (if not 1), then its heights scaled by ``height``: a member of a
+    printer-aware palette from its recipe's ``height_factor`` and ``lateral_factor``."""
+    return scaled(scaled(base, "lateral", lateral), "height", height) if lateral != 1 else scaled(base, "height", height)
+
+
 def printable_candidates(base: Heightmap, factors: list[tuple[float, float]], evaluator: Evaluator,
                          rows: int = 1) -> Printable:
     """``base`` scaled by each (height, lateral) factor pair (``rows`` rows of a grid, neighbours in a row one step
     apart), printed (``evaluator.printer``) and placed on the standard scale by the surrogate, printed and
     digital; kept if the print is not flat, keeps its V and its neighbours' (``_stable``)."""
-    maps = [scaled(scaled(base, "lateral", lateral), "height", height) if lateral != 1 else
-            scaled(base, "height", height) for height, lateral in factors]
+    maps = [variant(base, height, lateral) for height, lateral in factors]
     v_printed, _ = evaluator.surrogate(maps)
     v_digital, _ = replace(evaluator, printer=None).surrogate(maps)
     floor = evaluator.scale.floor
