@@ -333,9 +333,7 @@ class _Dispatch:
 
     @classmethod
     def make(cls, engine: str, model: SurrogateModel | str | Path | None, options: PredictOptions) -> _Dispatch:
-        from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
-
-        model = model if isinstance(model, SurrogateModel) else SurrogateModel(model or DEFAULT_MODEL)
+        model = _domain_model(model)
         simulation = _fem_simulation(model, options)
         fem = FemEngine.of(options.fidelity or model.fidelity, simulation, options.centre_mm, options.tile)
         off_base = [CurvatureRange.load().outside(options.curved.radius_mm, options.curved.shape)] \
@@ -487,12 +485,14 @@ def _predict_spectral(named: Iterable[tuple[str, Heightmap]], spectral: Spectral
 
 
 def _domain_model(model: SurrogateModel | str | Path | None) -> SurrogateModel:
-    """The surrogate whose domain the spectral engine's answers are judged by: ``model``, else the shipped one
-    (loaded once per process and file)."""
+    """The surrogate that answers (and whose domain the spectral engine's answers are judged by): ``model``, else
+    the shipped one (loaded once per process and file)."""
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
     if isinstance(model, SurrogateModel):
         return model
+    if not isinstance(model, str | Path | None):
+        return SurrogateModel(model)  # refuses the type with an InputError naming it
     path = Path(model or DEFAULT_MODEL)
     stat = path.stat() if path.is_file() else None
     return _loaded_model(str(path), None if stat is None else (stat.st_mtime_ns, stat.st_size))
