@@ -19,7 +19,7 @@ LAYERS = [
     ("roughness.surrogate",),
     ("roughness.engines", "roughness.prediction", "roughness.maps", "roughness.classical", "roughness.compare",
      "roughness.report", "roughness.curvature_correction", "roughness.result_cache"),
-    ("roughness.design", "roughness.perception", "roughness.objects", "roughness.fuzzy_feel"),
+    ("roughness.design", "roughness.perception", "roughness.objects", "roughness.fuzzy_feel", "roughness.fuzzy_tune"),
     ("roughness.cli",),
 ]
 def layer_of(module: str) -> int | None:

@@ -4,9 +4,11 @@ from __future__ import annotations
 import argparse
 
 from .common import (
+    JND,
     LENGTH,
     PIXEL,
     SEED,
+    WAVELENGTH,
     Number,
     add_overwrite,
     add_quiet,
@@ -16,24 +18,28 @@ from .common import (
     json_text,
     write_stdout,
 )
+from .fuzzy_skin_tune import check_tune, run_tune
 from .perception_common import number_list
 
 MAX_DRAWS = 100
 
 
 def add_parser(sub) -> None:
+    from roughness.core.limits import MAX_JND
+    from roughness.design.tune import TOLERANCE_JND
     from roughness.fuzzy_feel import fuzzy_skin_feel
+    from roughness.fuzzy_tune import DRAWS, KNOB_RANGE, KNOBS
     from roughness.prediction import PREDICT_ENGINES
     from roughness.surface.fuzzy_noise import NOISE_TYPES
     from roughness.surface.fuzzy_skin import MODES, RANGES, FuzzySkin, fuzzy_wall
 
     skin, wall, feel = defaults(FuzzySkin), defaults(fuzzy_wall), defaults(fuzzy_skin_feel)
     domain = {name: Number(float, low=low, high=high) for name, (low, high) in RANGES.items()}
-    lengths = number_list(LENGTH, "lengths in mm")
     p = sub.add_parser("fuzzy-skin", help="how a slicer's fuzzy skin will feel on a printed wall")
     p.add_argument("--config", metavar="FILE",
                    help="read the fuzzy skin and layer/nozzle settings from a PrusaSlicer .ini or OrcaSlicer .json "
                         "export (options given on the command line override its fuzzy skin settings)")
+    lengths = number_list(LENGTH, "lengths in mm")
     p.add_argument("--fuzzy-skin-thickness", type=domain["fuzzy_skin_thickness"], metavar="MM",
                    help=f"largest offset of a point, both ways, mm (default {skin['fuzzy_skin_thickness']:g})")
     p.add_argument("--fuzzy-skin-point-distance", type=domain["fuzzy_skin_point_distance"], metavar="MM",
@@ -57,9 +63,9 @@ def add_parser(sub) -> None:
     p.add_argument("--seed", type=SEED, default=wall["seed"],
                    help=f"seed of the slicer's random numbers (the slicers draw new ones at every slice) "
                         f"(default {wall['seed']})")
-    p.add_argument("--draws", type=count(MAX_DRAWS), default=feel["draws"],
+    p.add_argument("--draws", type=count(MAX_DRAWS),
                    help="walls judged per setting, each with its own random numbers (seeds --seed, --seed + 1, "
-                        f"...): V is their mean, sure to their spread (default {feel['draws']})")
+                        f"...): V is their mean, sure to their spread (default {feel['draws']}; {DRAWS} with --tune)")
     p.add_argument("--tile-mm", type=LENGTH, default=wall["tile_mm"],
                    help=f"side of the periodic wall tile, mm (default {wall['tile_mm']:g})")
     p.add_argument("--pixel-mm", type=PIXEL, default=wall["pixel_mm"],
@@ -71,10 +77,23 @@ def add_parser(sub) -> None:
     p.add_argument("--plot", metavar="FILE",
                    help="with a sweep: V against point distance, a line per thickness (.png, .pdf, .svg)")
     p.add_argument("--out", metavar="FILE", help="write the printed wall's heightmap (.npz, .npy, .h5, .png, .tif)")
+    p.add_argument("--tune", choices=tuple(KNOBS),
+                   help="find the value of this setting (the others fixed) whose walls reach --target-lambda or "
+                        "--target-jnd, searched and verified by the spectral engine over --draws walls")
+    target = p.add_mutually_exclusive_group()
+    target.add_argument("--target-lambda", type=WAVELENGTH, metavar="MM",
+                        help="--tune: the target equivalent wavelength on the spectral standard scale, mm")
+    target.add_argument("--target-jnd", type=Number(float, low=-MAX_JND, high=MAX_JND), metavar="N",
+                        help="--tune: the target N JND from the given settings (positive: rougher)")
+    p.add_argument("--tune-range", type=lengths, metavar="MM,MM",
+                   help="--tune: the smallest and largest value searched, mm (default "
+                        + "; ".join(f"{k} {lo:g},{hi:g}" for k, (lo, hi) in KNOB_RANGE.items()) + ")")
+    p.add_argument("--tolerance-jnd", type=JND, default=TOLERANCE_JND,
+                   help=f"--tune: stop when the verified mean is this close to the target, JND (default {TOLERANCE_JND:g})")
     p.add_argument("--json", action="store_true", help="print the results as JSON, one line per setting")
     add_quiet(p)
     add_overwrite(p)
-    finish(p, run)
+    finish(p, run, target_lambda_mm="--target-lambda", target_jnd="--target-jnd", jnd="--target-jnd", tune_range="--tune-range")
 
 
 def _settings(args: argparse.Namespace):
@@ -126,6 +145,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.surface.io import save_heightmap
 
     check_distinct({"--out": args.out, "--plot": args.plot}, {"--config": args.config, "--printer": args.printer})
+    check_tune(args)
     skin, profile, notes = _settings(args)
     out = check_output(args.out, args.overwrite, "out") if args.out else None
     sweep = args.sweep_thickness or args.sweep_point_distance
@@ -137,8 +157,11 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--out writes one wall: leave out --sweep-thickness/--sweep-point-distance", "out")
     header = [f"printer {profile.describe()}; the wall judged flat, as a periodic {args.tile_mm:g} mm tile "
               f"(seeds from {args.seed}: draws of the slicer's random numbers)", *(f"note: {n}" for n in notes)]
+    if args.tune:
+        return run_tune(args, skin, profile, header, out)
+    draws = args.draws or defaults(fuzzy_skin_feel)["draws"]
     if not sweep:
-        feel = fuzzy_skin_feel(skin, profile, args.engine, args.seed, args.draws, args.tile_mm, args.pixel_mm)
+        feel = fuzzy_skin_feel(skin, profile, args.engine, args.seed, draws, args.tile_mm, args.pixel_mm)
         if out is not None:
             save_heightmap(feel.walls[0].heightmap, out, overwrite=args.overwrite)
             header.append(f"wrote {out}: the printed wall of seed {args.seed}, x along it, y up it, heights out of it (mm)")
@@ -156,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
         if report is not None:
             report(len(done) / total)
 
-    feels = fuzzy_skin_sweep(skin, thicknesses, distances, profile, args.engine, args.seed, args.draws,
+    feels = fuzzy_skin_sweep(skin, thicknesses, distances, profile, args.engine, args.seed, draws,
                              args.tile_mm, args.pixel_mm, on_result=step)
     if meter is not None:
         meter.close()
