@@ -9,6 +9,7 @@ import pytest
 from roughness.cli import main
 from roughness.core.errors import InputError
 from roughness.fuzzy_feel import fuzzy_skin_feel
+from roughness.fuzzy_palette import fuzzy_palette
 from roughness.fuzzy_tune import (
     equivalent_lambda,
     lambda_target,
@@ -60,3 +61,16 @@ def test_command(tmp_path, capsys):
                          (["--tune", "thickness", "--target-jnd", "1", "--tune-range", "0.1"], "two values")):
         assert main(["fuzzy-skin", *bad]) == 2
         assert message in capsys.readouterr().err
+
+
+def test_palette_of_settings_two_jnd_apart(capsys):
+    palette = fuzzy_palette(3, FuzzySkin(0.3, 0.8), "thickness", 2.0, FDM, (0.1, 0.9), draws=2)
+    thickness = [m.value_mm for m in palette.members]
+    assert thickness == sorted(thickness) and palette.verified and palette.closest_jnd >= 2.0
+    lam = palette.lambdas_mm
+    assert all(jnd(b, a) >= 2.0 for a, b in zip(lam, lam[1:]))  # each neighbour pair, from the verified means
+    assert all(m.reached for m in palette.members)
+    with pytest.raises(InputError, match="room for 3"):  # 0.1-0.9 mm spans ~5 JND: 3 fit at 2.2 JND planned
+        fuzzy_palette(5, FuzzySkin(0.3, 0.8), "thickness", 2.0, FDM, (0.1, 0.9), draws=2)
+    assert main(["fuzzy-skin", "--palette", "3", "--target-lambda", "0.8"]) == 2
+    assert "--palette" in capsys.readouterr().err

@@ -19,7 +19,8 @@ LAYERS = [
     ("roughness.surrogate",),
     ("roughness.engines", "roughness.prediction", "roughness.maps", "roughness.classical", "roughness.compare",
      "roughness.report", "roughness.curvature_correction", "roughness.result_cache"),
-    ("roughness.design", "roughness.perception", "roughness.objects", "roughness.fuzzy_feel", "roughness.fuzzy_tune"),
+    ("roughness.design", "roughness.perception", "roughness.objects", "roughness.fuzzy_feel", "roughness.fuzzy_tune",
+     "roughness.fuzzy_palette"),
     ("roughness.cli",),
 ]
 def layer_of(module: str) -> int | None:

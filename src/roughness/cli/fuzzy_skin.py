@@ -6,6 +6,7 @@ import argparse
 from .common import (
     JND,
     LENGTH,
+    MAX_PALETTE,
     PIXEL,
     SEED,
     WAVELENGTH,
@@ -18,7 +19,7 @@ from .common import (
     json_text,
     write_stdout,
 )
-from .fuzzy_skin_tune import check_tune, run_tune
+from .fuzzy_skin_tune import check_tune, run_palette, run_tune
 from .perception_common import number_list
 
 MAX_DRAWS = 100
@@ -88,6 +89,11 @@ def add_parser(sub) -> None:
     p.add_argument("--tune-range", type=lengths, metavar="MM,MM",
                    help="--tune: the smallest and largest value searched, mm (default "
                         + "; ".join(f"{k} {lo:g},{hi:g}" for k, (lo, hi) in KNOB_RANGE.items()) + ")")
+    p.add_argument("--palette", type=count(MAX_PALETTE, 2), metavar="K",
+                   help="K settings of the --tune setting (default thickness) that feel clearly different, at least "
+                        "--min-jnd apart, spread over its range, verified by the spectral engine over --draws walls")
+    p.add_argument("--min-jnd", type=JND, default=2.0,
+                   help="--palette: the least distance between any two settings, JND (default 2)")
     p.add_argument("--tolerance-jnd", type=JND, default=TOLERANCE_JND,
                    help=f"--tune: stop when the verified mean is this close to the target, JND (default {TOLERANCE_JND:g})")
     p.add_argument("--json", action="store_true", help="print the results as JSON, one line per setting")
@@ -157,6 +163,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--out writes one wall: leave out --sweep-thickness/--sweep-point-distance", "out")
     header = [f"printer {profile.describe()}; the wall judged flat, as a periodic {args.tile_mm:g} mm tile "
               f"(seeds from {args.seed}: draws of the slicer's random numbers)", *(f"note: {n}" for n in notes)]
+    if args.palette:
+        return run_palette(args, skin, profile, header)
     if args.tune:
         return run_tune(args, skin, profile, header, out)
     draws = args.draws or defaults(fuzzy_skin_feel)["draws"]

@@ -1,4 +1,5 @@
-"""`roughness fuzzy-skin --tune`: the fuzzy skin setting that reaches a target feel (roughness.fuzzy_tune)."""
+"""`roughness fuzzy-skin --tune` and `--palette`: the fuzzy skin setting that reaches a target feel
+(roughness.fuzzy_tune), and settings that feel clearly different (roughness.fuzzy_palette)."""
 from __future__ import annotations
 
 import argparse
@@ -7,26 +8,31 @@ from .common import json_text, log, write_stdout
 
 
 def check_tune(args: argparse.Namespace) -> None:
-    """InputError for options that do not go with --tune (or need it), before any work."""
+    """InputError for options that do not go with --tune or --palette (or need them), before any work."""
     from roughness.core.errors import InputError
     from roughness.fuzzy_tune import ENGINE
 
     targets = args.target_lambda is not None or args.target_jnd is not None
-    if not args.tune:
+    if args.palette:
+        if targets or args.out:
+            raise InputError("--palette spreads its settings over the --tune setting's range: leave out "
+                             "--target-lambda/--target-jnd/--out", "palette")
+    elif not args.tune:
         if targets or args.tune_range:
             raise InputError("--target-lambda, --target-jnd and --tune-range go with --tune", "tune")
         return
-    if not targets:
+    elif not targets:
         raise InputError("--tune needs a target: --target-lambda MM or --target-jnd N", "tune")
+    option = "--palette" if args.palette else "--tune"
     if args.sweep_thickness or args.sweep_point_distance or args.plot:
-        raise InputError("--tune finds one setting: leave out --sweep-thickness/--sweep-point-distance/--plot", "tune")
+        raise InputError(f"{option} leaves out --sweep-thickness/--sweep-point-distance/--plot", "tune")
     if args.engine not in ("auto", ENGINE):
-        raise InputError(f"--tune searches and verifies with the {ENGINE} engine; leave out --engine {args.engine}",
+        raise InputError(f"{option} searches and verifies with the {ENGINE} engine; leave out --engine {args.engine}",
                          "engine")
     if args.tune_range is not None and len(args.tune_range) != 2:
         raise InputError("--tune-range takes two values, the smallest and largest searched (mm)", "tune_range")
     if args.draws is not None and args.draws < 2:
-        raise InputError("--tune needs at least 2 --draws: the spread between walls is part of how sure it is",
+        raise InputError(f"{option} needs at least 2 --draws: the spread between walls is part of how sure it is",
                          "draws")
 
 
@@ -56,3 +62,21 @@ def run_tune(args: argparse.Namespace, skin, profile, header: list[str], out) ->
     else:
         write_stdout("\n".join([*header, result.describe(), *(f"note: {n}" for n in result.notes)]))
     return 0 if result.reached else 1
+
+
+def run_palette(args: argparse.Namespace, skin, profile, header: list[str]) -> int:
+    """--palette K settings of the --tune setting (default thickness) of ``skin`` on ``profile``; print them (text
+    after ``header``, or JSON). Exit code 1 if the closest pair is nearer than --min-jnd."""
+    from roughness.fuzzy_palette import fuzzy_palette
+    from roughness.fuzzy_tune import DRAWS
+
+    knob = args.tune or "thickness"
+    log(args, f"fuzzy-skin: {args.palette} settings of {knob} at least {args.min_jnd:g} JND apart")
+    palette = fuzzy_palette(args.palette, skin, knob, args.min_jnd, profile, args.tune_range, args.tolerance_jnd,
+                            args.seed, args.draws or DRAWS, args.tile_mm, args.pixel_mm,
+                            progress=None if args.quiet else (lambda line: log(args, "  " + line)))
+    if args.json:
+        write_stdout(json_text(palette.summary()))
+    else:
+        write_stdout("\n".join([*header, *palette.lines(), *(f"note: {n}" for n in palette.notes)]))
+    return 0 if palette.verified else 1
