@@ -10,6 +10,7 @@ import pytest
 
 from roughness.cli import main
 from roughness.core.errors import InputError
+from roughness.curvature_correction import for_base
 from roughness.fuzzy_feel import fuzzy_skin_feel
 from roughness.surface.fuzzy_noise import Lattice
 from roughness.surface.fuzzy_skin import FuzzySkin, fuzzy_points, fuzzy_wall
@@ -242,3 +243,20 @@ def test_command(tmp_path, capsys):
     assert "--plot" in capsys.readouterr().err
     assert main(["fuzzy-skin", "--config", str(tmp_path / "none.ini")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_a_cylinder_corrects_the_flat_wall_as_predict_does():
+    flat = fuzzy_skin_feel(FuzzySkin(0.3, 0.8), FDM, "spectral", draws=2)
+    wide = fuzzy_skin_feel(FuzzySkin(0.3, 0.8), FDM, "spectral", draws=2, radius_mm=5000.0)
+    assert abs(wide.roughness - flat.roughness) <= flat.engine_error  # a large radius: the flat wall
+    convex = fuzzy_skin_feel(FuzzySkin(0.3, 0.8), FDM, "spectral", draws=2, radius_mm=5.0)
+    concave = fuzzy_skin_feel(FuzzySkin(0.3, 0.8), FDM, "spectral", draws=2, radius_mm=-8.0)
+    for curved in (convex, concave):
+        fix = for_base(curved.radius_mm, "cylinder")
+        assert curved.roughness == pytest.approx(flat.roughness * fix.factor, rel=1e-12)
+        assert math.copysign(1, curved.roughness - flat.roughness) == math.copysign(1, fix.factor - 1)
+        assert curved.uncertainty > flat.uncertainty * fix.factor  # the correction's error is counted
+    assert convex.roughness > flat.roughness > concave.roughness  # the study: convex rougher, concave smoother
+    for bad, message in ((2.0, "measured range"), (-4.0, "cannot rest"), (0.0, "signed radius")):
+        with pytest.raises(InputError, match=message):
+            fuzzy_skin_feel(FuzzySkin(), FDM, "spectral", draws=1, radius_mm=bad)

@@ -85,11 +85,13 @@ class FuzzyPalette:
 def fuzzy_palette(k: int, skin: FuzzySkin, knob: str = "thickness", min_jnd: float = 2.0,
                   printer: FdmProfile | str = "fdm-0.4-0.2", tune_range: tuple[float, float] | None = None,
                   tolerance_jnd: float = TOLERANCE_JND, seed: int = 0, draws: int = DRAWS, tile_mm: float = 12.0,
-                  pixel_mm: float = 0.05, progress: Callable[[str], None] | None = None) -> FuzzyPalette:
-    """``k`` settings of ``knob`` (the rest of ``skin`` fixed) at least ``min_jnd`` apart (module docstring)."""
+                  pixel_mm: float = 0.05, radius_mm: float | None = None,
+                  progress: Callable[[str], None] | None = None) -> FuzzyPalette:
+    """``k`` settings of ``knob`` (the rest of ``skin`` fixed) at least ``min_jnd`` apart (module docstring), on a
+    cylinder of signed ``radius_mm`` if given."""
     k, min_jnd = integer("k", k, 2), positive("min_jnd", min_jnd)
     tolerance_jnd = positive("tolerance_jnd", tolerance_jnd)
-    grid = scan(skin, knob, printer, tune_range, seed, draws, tile_mm, pixel_mm, progress)
+    grid = scan(skin, knob, printer, tune_range, seed, draws, tile_mm, pixel_mm, radius_mm, progress)
     lo, hi = grid.reach_lambda_mm
     lo = max(lo, load_scale(ENGINE).floor_lambda_mm)  # below the floor a texture is not felt
     span = jnd(hi, lo) - 2 * MARGIN_JND
@@ -104,7 +106,8 @@ def fuzzy_palette(k: int, skin: FuzzySkin, knob: str = "thickness", min_jnd: flo
     for i in range(k):
         lam = lo * (1 + WEBER_FRACTION) ** (MARGIN_JND + i * spacing)
         members.append(tune_fuzzy_skin(skin, lambda_target(lam), knob, printer, tune_range, tolerance_jnd,
-                                       seed=seed, draws=draws, tile_mm=tile_mm, pixel_mm=pixel_mm, grid=grid))
+                                       seed=seed, draws=draws, tile_mm=tile_mm, pixel_mm=pixel_mm,
+                                       radius_mm=radius_mm, grid=grid))
         if progress:
             progress(f"grip {i + 1}/{k}: {knob} {members[-1].value_mm:.3f} mm, {members[-1].jnd_error:+.2f} JND "
                      f"from lambda {lam:.3f} mm")

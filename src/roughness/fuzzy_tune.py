@@ -162,27 +162,32 @@ class _Judge:
     draws: int
     tile_mm: float
     pixel_mm: float
+    radius_mm: float | None
 
     def __call__(self, value_mm: float) -> FuzzyFeel:
         """The feel at ``value_mm`` rounded to ``DIGITS`` decimals (a setting a slicer takes as typed)."""
         skin = replace(self.skin, **{KNOBS[self.knob]: round(float(value_mm), DIGITS)})
-        return fuzzy_skin_feel(skin, self.profile, ENGINE, self.seed, self.draws, self.tile_mm, self.pixel_mm)
+        return fuzzy_skin_feel(skin, self.profile, ENGINE, self.seed, self.draws, self.tile_mm, self.pixel_mm,
+                               self.radius_mm)
 
 
 def _judge(skin: FuzzySkin, knob: str, printer: FdmProfile | str, seed: int, draws: int, tile_mm: float,
-           pixel_mm: float) -> _Judge:
+           pixel_mm: float, radius_mm: float | None) -> _Judge:
     profile = printer_profile(printer) if isinstance(printer, str) else printer
     if knob not in KNOBS:
         raise InputError(f"unknown knob {knob!r}; choose one of {', '.join(KNOBS)}", parameter="tune")
-    return _Judge(skin, knob, profile, integer("seed", seed, 0), integer("draws", draws, 2), tile_mm, pixel_mm)
+    return _Judge(skin, knob, profile, integer("seed", seed, 0), integer("draws", draws, 2), tile_mm, pixel_mm,
+                  radius_mm)
 
 
 def scan(skin: FuzzySkin, knob: str = "thickness", printer: FdmProfile | str = "fdm-0.4-0.2",
          tune_range: tuple[float, float] | None = None, seed: int = 0, draws: int = DRAWS, tile_mm: float = 12.0,
-         pixel_mm: float = 0.05, progress: Callable[[str], None] | None = None) -> KnobScan:
-    """The spectral feel of ``skin`` at ``GRID`` values of ``knob`` over its range (log spaced, mm)."""
+         pixel_mm: float = 0.05, radius_mm: float | None = None,
+         progress: Callable[[str], None] | None = None) -> KnobScan:
+    """The spectral feel of ``skin`` at ``GRID`` values of ``knob`` over its range (log spaced, mm), on a cylinder
+    of signed ``radius_mm`` if given (``fuzzy_skin_feel``)."""
     lo, hi = knob_range(knob, tune_range)
-    judge = _judge(skin, knob, printer, seed, draws, tile_mm, pixel_mm)
+    judge = _judge(skin, knob, printer, seed, draws, tile_mm, pixel_mm, radius_mm)
     runs = []
     for value in np.geomspace(lo, hi, GRID):
         runs.append(Run(float(value), judge(value), 0.0))
@@ -216,15 +221,16 @@ def lambda_target(lambda_mm: float) -> Target:
 def tune_fuzzy_skin(skin: FuzzySkin, target: Target, knob: str = "thickness",
                     printer: FdmProfile | str = "fdm-0.4-0.2", tune_range: tuple[float, float] | None = None,
                     tolerance_jnd: float = TOLERANCE_JND, max_runs: int = MAX_RUNS, seed: int = 0,
-                    draws: int = DRAWS, tile_mm: float = 12.0, pixel_mm: float = 0.05,
+                    draws: int = DRAWS, tile_mm: float = 12.0, pixel_mm: float = 0.05, radius_mm: float | None = None,
                     grid: KnobScan | None = None, progress: Callable[[str], None] | None = None) -> FuzzyTune:
-    """The value of ``knob`` (other settings of ``skin`` fixed) whose walls reach ``target`` (module docstring);
-    ``grid``: a ``scan`` of the same knob, range and draws to search on (made here if not given)."""
+    """The value of ``knob`` (other settings of ``skin`` fixed) whose walls (on a cylinder of signed ``radius_mm``
+    if given) reach ``target`` (module docstring); ``grid``: a ``scan`` of the same knob, range, draws and radius to
+    search on (made here if not given)."""
     tolerance_jnd = positive("tolerance_jnd", tolerance_jnd)
     max_runs = integer("max_runs", max_runs, 1)
     lo, hi = knob_range(knob, tune_range)
-    judge = _judge(skin, knob, printer, seed, draws, tile_mm, pixel_mm)
-    grid = grid or scan(skin, knob, judge.profile, (lo, hi), seed, draws, tile_mm, pixel_mm, progress)
+    judge = _judge(skin, knob, printer, seed, draws, tile_mm, pixel_mm, radius_mm)
+    grid = grid or scan(skin, knob, judge.profile, (lo, hi), seed, draws, tile_mm, pixel_mm, radius_mm, progress)
     values = np.array([r.value_mm for r in grid.runs])
     v = np.array([r.feel.roughness for r in grid.runs])
     reach = grid.reach_lambda_mm

@@ -21,6 +21,7 @@ from .common import (
 )
 from .fuzzy_skin_tune import check_tune, run_palette, run_tune
 from .perception_common import number_list
+from .simulate import SIGNED_RADIUS
 
 MAX_DRAWS = 100
 
@@ -71,6 +72,10 @@ def add_parser(sub) -> None:
                    help=f"side of the periodic wall tile, mm (default {wall['tile_mm']:g})")
     p.add_argument("--pixel-mm", type=PIXEL, default=wall["pixel_mm"],
                    help=f"pixel size, mm, at most half the layer height (default {wall['pixel_mm']:g})")
+    p.add_argument("--radius-mm", type=SIGNED_RADIUS, metavar="MM",
+                   help="the wall is a cylinder of this radius (a round grip or knob; > 0 convex, < 0 concave, mm): "
+                        "the flat wall's V corrected as predict --curvature-mm corrects it, the correction's error "
+                        "added to V's uncertainty (default: a flat wall)")
     p.add_argument("--sweep-thickness", type=lengths, metavar="MM,MM,...",
                    help="a table over these thicknesses (with --sweep-point-distance, or the one point distance)")
     p.add_argument("--sweep-point-distance", type=lengths, metavar="MM,MM,...",
@@ -137,7 +142,11 @@ def _line(feel) -> str:
         low, high = feel.lambda_range_mm or (where.equivalent_lambda_mm, where.equivalent_lambda_mm)
         scale = (f"~ lambda {where.equivalent_lambda_mm:.3f} mm ({low:.3f}-{high:.3f}){extrapolated}, "
                  f"{where.jnd_from_nearest + 0.0:+.1f} JND from {where.nearest_standard}")
-    notes = "".join(f"\n  note: {n}" for n in sorted({n for p in feel.predictions for n in p.domain_notes}))
+    said = sorted({n for p in feel.predictions for n in p.domain_notes})
+    if feel.curvature is not None:
+        sure.append(f"{feel.curvature_error:.4f} curvature")
+        said.append(f"{feel.curvature.note}; the flat wall's V {feel.roughness / feel.factor:.4f}")
+    notes = "".join(f"\n  note: {n}" for n in said)
     engines = ", ".join(sorted({p.engine for p in feel.predictions}))
     return (f"{feel.skin.describe()}: V = {feel.roughness:.4f} ± {' ± '.join(sure) or 'unknown'} "
             f"({engines}; {', '.join(feel.engines)} scale), {scale}{notes}")
@@ -169,7 +178,8 @@ def run(args: argparse.Namespace) -> int:
         return run_tune(args, skin, profile, header, out)
     draws = args.draws or defaults(fuzzy_skin_feel)["draws"]
     if not sweep:
-        feel = fuzzy_skin_feel(skin, profile, args.engine, args.seed, draws, args.tile_mm, args.pixel_mm)
+        feel = fuzzy_skin_feel(skin, profile, args.engine, args.seed, draws, args.tile_mm, args.pixel_mm,
+                               args.radius_mm)
         if out is not None:
             save_heightmap(feel.walls[0].heightmap, out, overwrite=args.overwrite)
             header.append(f"wrote {out}: the printed wall of seed {args.seed}, x along it, y up it, heights out of it (mm)")
@@ -188,7 +198,7 @@ def run(args: argparse.Namespace) -> int:
             report(len(done) / total)
 
     feels = fuzzy_skin_sweep(skin, thicknesses, distances, profile, args.engine, args.seed, draws,
-                             args.tile_mm, args.pixel_mm, on_result=step)
+                             args.tile_mm, args.pixel_mm, args.radius_mm, on_result=step)
     if meter is not None:
         meter.close()
     if plot is not None:

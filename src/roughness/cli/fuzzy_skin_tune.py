@@ -47,13 +47,14 @@ def run_tune(args: argparse.Namespace, skin, profile, header: list[str], out) ->
     progress = None if args.quiet else (lambda line: log(args, "  " + line))
     if args.target_jnd is not None:
         log(args, f"fuzzy-skin: the given settings by the {ENGINE} engine over {draws} walls")
-        given = fuzzy_skin_feel(skin, profile, ENGINE, args.seed, draws, args.tile_mm, args.pixel_mm)
+        given = fuzzy_skin_feel(skin, profile, ENGINE, args.seed, draws, args.tile_mm, args.pixel_mm, args.radius_mm)
         target = relative_target(given, args.target_jnd)
     else:
         target = lambda_target(args.target_lambda)
     log(args, f"fuzzy-skin: target {target.describe()}; searching {args.tune}")
     result = tune_fuzzy_skin(skin, target, args.tune, profile, args.tune_range, args.tolerance_jnd, seed=args.seed,
-                             draws=draws, tile_mm=args.tile_mm, pixel_mm=args.pixel_mm, progress=progress)
+                             draws=draws, tile_mm=args.tile_mm, pixel_mm=args.pixel_mm, radius_mm=args.radius_mm,
+                             progress=progress)
     if out is not None:
         save_heightmap(result.feel.walls[0].heightmap, out, overwrite=args.overwrite)
         header.append(f"wrote {out}: the tuned setting's wall of seed {args.seed}")
@@ -73,7 +74,7 @@ def run_palette(args: argparse.Namespace, skin, profile, header: list[str]) -> i
     knob = args.tune or "thickness"
     log(args, f"fuzzy-skin: {args.palette} settings of {knob} at least {args.min_jnd:g} JND apart")
     palette = fuzzy_palette(args.palette, skin, knob, args.min_jnd, profile, args.tune_range, args.tolerance_jnd,
-                            args.seed, args.draws or DRAWS, args.tile_mm, args.pixel_mm,
+                            args.seed, args.draws or DRAWS, args.tile_mm, args.pixel_mm, args.radius_mm,
                             progress=None if args.quiet else (lambda line: log(args, "  " + line)))
     if args.json:
         write_stdout(json_text(palette.summary()))
