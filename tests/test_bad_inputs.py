@@ -79,7 +79,7 @@ FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
     ("ensemble",): [(0, ".pt", [])],
     ("card",): [(1, ".onnx", [])],
     ("model-version",): [(0, ".onnx", [])],
-    ("fuzzy-skin",): [("--config", ".ini", []), ("--config", ".json", [])],
+    ("fuzzy-skin",): [("--config", ".ini", []), ("--config", ".json", []), ("--config", ".3mf", [])],
 }
 # Outputs that must not be replaced without --overwrite, nor fail after the work is done.
 FILE_OUTPUTS: dict[tuple[str, ...], list[str]] = {

@@ -8,6 +8,12 @@ strings): ``fuzzy_skin_thickness``, ``fuzzy_skin_point_distance``, the noise key
 where absent), ``layer_height``, ``nozzle_diameter``, ``outer_wall_line_width`` (a percentage is of the nozzle) and
 ``wall_generator`` (its classic generator ignores ``fuzzy_skin_mode``: judged as displacement, with a note).
 Only these keys are read; a missing or bad one is an InputError naming it and the file.
+
+A ``.3mf`` project (a zip archive) is read for its embedded print config: PrusaSlicer's ``Metadata/Slic3r_PE.config``
+(the .ini's lines, each commented out as ``; key = value``: PrusaSlicer 2.9, src/libslic3r/Format/3mf.cpp,
+``_add_print_config_file_to_archive``), or OrcaSlicer's and Bambu Studio's ``Metadata/project_settings.config`` (the
+.json's object). The member's declared size is checked before it is unpacked, and no more than that is unpacked;
+nothing else in the archive is read (per-object settings and painted fuzzy skin are not: said in a note).
 """
 from __future__ import annotations
 
@@ -22,6 +28,10 @@ from .fuzzy_skin import FuzzySkin
 from .printing import AUTO_WIDTH, MAX_PROFILE_BYTES, PROFILES, FdmProfile
 
 MAX_CONFIG_BYTES = 4 * MAX_PROFILE_BYTES  # a slicer's full exported config is some 20-60 kB
+MAX_EMBEDDED_BYTES = 64 * MAX_PROFILE_BYTES  # a 3MF's embedded config (Orca's holds every preset: ~100 kB)
+MAX_PROJECT_BYTES = 2**31  # a 3MF project: its meshes are not read, but its zip directory is
+PROJECT_CONFIGS = {"Metadata/project_settings.config": "json", "Metadata/Slic3r_PE.config": "ini"}
+OBJECT_CONFIGS = ("Metadata/model_settings.config", "Metadata/Slic3r_PE_model.config")  # per-object overrides
 _CLOSING = PROFILES["fdm-0.4-0.2"].closing_radius_mm  # PrusaSlicer's slice_closing_radius (no effect on a wall)
 
 
@@ -35,38 +45,91 @@ class SlicerSettings:
 
 
 def read_slicer_config(path: str | Path) -> SlicerSettings:
-    """The fuzzy skin and printer of a PrusaSlicer .ini or OrcaSlicer .json config."""
+    """The fuzzy skin and printer of a PrusaSlicer .ini or OrcaSlicer .json config, or of a .3mf project's embedded
+    config."""
     path = Path(path)
     if not path.exists():
         raise InputError(f"slicer config {path} does not exist", parameter="config")
     if not path.is_file():
         raise InputError(f"slicer config {path} is not a file", parameter="config")
+    suffix = path.suffix.lower()
+    if suffix == ".3mf":
+        return _project(path)
+    if suffix not in (".ini", ".json"):
+        raise InputError(f"slicer config {path}: a PrusaSlicer .ini, an OrcaSlicer .json or a .3mf project expected",
+                         parameter="config")
     if path.stat().st_size > MAX_CONFIG_BYTES:
         raise InputError(f"slicer config {path}: {path.stat().st_size:,} bytes, above {MAX_CONFIG_BYTES:,}",
                          parameter="config")
+    return _parse(_text(path.read_bytes(), path), suffix[1:], path)
+
+
+def _text(data: bytes, path: Path) -> str:
     try:
-        text = path.read_text(encoding="utf-8")
+        return data.decode("utf-8")
     except UnicodeDecodeError as err:
         raise InputError(f"slicer config {path} is not UTF-8 text: {err}", parameter="config") from None
-    suffix = path.suffix.lower()
-    if suffix == ".ini":
-        return _prusa(_ini(text), path)
-    if suffix == ".json":
-        try:
-            data = json.loads(text)
-        except (ValueError, RecursionError) as err:
-            raise InputError(f"slicer config {path} is not valid JSON: {err}", parameter="config") from None
-        if not isinstance(data, dict):
-            raise InputError(f"slicer config {path}: a JSON object of settings expected", parameter="config")
-        return _orca(data, path)
-    raise InputError(f"slicer config {path}: a PrusaSlicer .ini or an OrcaSlicer .json expected", parameter="config")
 
 
-def _ini(text: str) -> dict[str, str]:
+def _parse(text: str, kind: str, path: Path, commented: bool = False) -> SlicerSettings:
+    """The settings of a config's text: ``kind`` "ini" (PrusaSlicer; ``commented``: each line as ``; key = value``,
+    as in a 3MF) or "json" (OrcaSlicer)."""
+    if kind == "ini":
+        return _prusa(_ini(text, commented), path)
+    try:
+        data = json.loads(text)
+    except (ValueError, RecursionError) as err:
+        raise InputError(f"slicer config {path} is not valid JSON: {err}", parameter="config") from None
+    if not isinstance(data, dict):
+        raise InputError(f"slicer config {path}: a JSON object of settings expected", parameter="config")
+    return _orca(data, path)
+
+
+def _project(path: Path) -> SlicerSettings:
+    """The settings embedded in a 3MF project (module docstring), each size checked before anything is unpacked."""
+    import zipfile
+
+    if path.stat().st_size > MAX_PROJECT_BYTES:
+        raise InputError(f"3MF project {path}: {path.stat().st_size:,} bytes, above {MAX_PROJECT_BYTES:,}",
+                         parameter="config")
+    try:
+        with zipfile.ZipFile(path) as archive:
+            names = set(archive.namelist())
+            member = next((m for m in PROJECT_CONFIGS if m in names), None)
+            if member is None:
+                raise InputError(f"3MF project {path} has no slicer config ({' or '.join(PROJECT_CONFIGS)}): save "
+                                 "the project from PrusaSlicer, OrcaSlicer or Bambu Studio, or export the config "
+                                 "(.ini or .json) and give that", parameter="config")
+            info = archive.getinfo(member)
+            if info.file_size > MAX_EMBEDDED_BYTES:
+                raise InputError(f"3MF project {path}: {member} unpacks to {info.file_size:,} bytes, above "
+                                 f"{MAX_EMBEDDED_BYTES:,} (a config is some 100 kB): not unpacked", parameter="config")
+            with archive.open(info) as f:  # zipfile unpacks no more than the declared size (then checks the CRC)
+                data = f.read()
+    except (zipfile.BadZipFile, OSError, EOFError, RuntimeError, NotImplementedError) as err:
+        raise InputError(f"cannot read {path} as a 3MF project (a zip archive): {err}", parameter="config") from None
+    read = _parse(_text(data, path), PROJECT_CONFIGS[member], path, commented=True)
+    notes = (f"read {member} of the 3MF project",)
+    overrides = [m for m in OBJECT_CONFIGS if m in names]
+    if overrides:
+        notes += (f"the project has per-object settings ({', '.join(overrides)}), which may change fuzzy skin for an "
+                  "object: not read (nor painted fuzzy skin); these are the project's print settings",)
+    return replace(read, notes=notes + read.notes)
+
+
+def _ini(text: str, commented: bool = False) -> dict[str, str]:
+    """``key = value`` lines (``commented``: only those written ``; key = value``, the marker removed)."""
     values = {}
     for line in text.splitlines():
+        line = line.strip()
+        if commented:
+            if not line.startswith(";"):
+                continue
+            line = line[1:]
+        elif line.startswith(("#", ";")):
+            continue
         key, sep, value = line.partition("=")
-        if sep and not line.lstrip().startswith(("#", ";")):
+        if sep:
             values[key.strip()] = value.strip()
     return values
 
