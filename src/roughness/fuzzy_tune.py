@@ -57,14 +57,14 @@ class Run:
 class KnobScan:
     """The feel over a knob's range: the search grid, shared by a palette's members."""
 
-    skin: FuzzySkin
     knob: str
-    runs: tuple[Run, ...]  # rising knob values; jnd_error 0 (no target yet)
+    values_mm: tuple[float, ...]  # rising
+    feels: tuple[FuzzyFeel, ...]  # one per value, all over the same seeds
 
     @property
     def reach_lambda_mm(self) -> tuple[float, float]:
         """The smallest and largest equivalent wavelength (mm) the grid reached."""
-        lams = [equivalent_lambda(r.feel) for r in self.runs]
+        lams = [equivalent_lambda(f) for f in self.feels]
         return min(lams), max(lams)
 
 
@@ -188,13 +188,13 @@ def scan(skin: FuzzySkin, knob: str = "thickness", printer: FdmProfile | str = "
     of signed ``radius_mm`` if given (``fuzzy_skin_feel``)."""
     lo, hi = knob_range(knob, tune_range)
     judge = _judge(skin, knob, printer, seed, draws, tile_mm, pixel_mm, radius_mm)
-    runs = []
-    for value in np.geomspace(lo, hi, GRID):
-        runs.append(Run(float(value), judge(value), 0.0))
+    values, feels = [float(v) for v in np.geomspace(lo, hi, GRID)], []
+    for value in values:
+        feels.append(judge(value))
         if progress:
-            progress(f"search: {knob} {value:.3f} mm: V {runs[-1].feel.roughness:.4f} "
-                     f"(lambda {equivalent_lambda(runs[-1].feel):.3f} mm)")
-    return KnobScan(skin, knob, tuple(runs))
+            progress(f"search: {knob} {value:.3f} mm: V {feels[-1].roughness:.4f} "
+                     f"(lambda {equivalent_lambda(feels[-1]):.3f} mm)")
+    return KnobScan(knob, tuple(values), tuple(feels))
 
 
 def relative_target(feel: FuzzyFeel, steps_jnd: float) -> Target:
@@ -231,8 +231,11 @@ def tune_fuzzy_skin(skin: FuzzySkin, target: Target, knob: str = "thickness",
     lo, hi = knob_range(knob, tune_range)
     judge = _judge(skin, knob, printer, seed, draws, tile_mm, pixel_mm, radius_mm)
     grid = grid or scan(skin, knob, judge.profile, (lo, hi), seed, draws, tile_mm, pixel_mm, radius_mm, progress)
-    values = np.array([r.value_mm for r in grid.runs])
-    v = np.array([r.feel.roughness for r in grid.runs])
+    if grid.knob != knob or [w.seed for w in grid.feels[0].walls] != list(range(seed, seed + draws)):
+        raise InputError(f"the grid scans {grid.knob} over seeds {[w.seed for w in grid.feels[0].walls]}: make it for "
+                         f"{knob} over seeds {seed}..{seed + draws - 1}", parameter="grid")
+    values = np.array(grid.values_mm)
+    v = np.array([f.roughness for f in grid.feels])
     reach = grid.reach_lambda_mm
     if not v.min() <= target.roughness <= v.max():
         raise InputError(f"target lambda {target.lambda_mm:.3f} mm (V {target.roughness:.4f}) is out of reach by "
@@ -242,7 +245,7 @@ def tune_fuzzy_skin(skin: FuzzySkin, target: Target, knob: str = "thickness",
     notes = [] if np.all(np.diff(v) > 0) else [
         f"V does not rise monotonically with {knob} over {lo:g}..{hi:g} mm: the first crossing is used"]
     value = _crossing(values, v, target.roughness)
-    searched = [Run(r.value_mm, r.feel, jnd(equivalent_lambda(r.feel), target.lambda_mm)) for r in grid.runs]
+    searched = [Run(x, f, jnd(equivalent_lambda(f), target.lambda_mm)) for x, f in zip(grid.values_mm, grid.feels)]
     runs: list[Run] = []
     for _ in range(max_runs):
         feel = judge(value)
