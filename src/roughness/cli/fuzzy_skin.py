@@ -30,13 +30,16 @@ def add_parser(sub) -> None:
     from roughness.core.limits import MAX_JND
     from roughness.design.tune import TOLERANCE_JND
     from roughness.fuzzy_feel import fuzzy_skin_feel
+    from roughness.fuzzy_palette import fuzzy_palette
     from roughness.fuzzy_tune import DRAWS, KNOB_RANGE, KNOBS
     from roughness.prediction import PREDICT_ENGINES
     from roughness.surface.fuzzy_noise import NOISE_TYPES
     from roughness.surface.fuzzy_skin import MODES, RANGES, FuzzySkin, fuzzy_wall
 
     skin, wall, feel = defaults(FuzzySkin), defaults(fuzzy_wall), defaults(fuzzy_skin_feel)
+    palette = defaults(fuzzy_palette)
     domain = {name: Number(float, low=low, high=high) for name, (low, high) in RANGES.items()}
+    lengths = number_list(LENGTH, "lengths in mm")
     p = sub.add_parser("fuzzy-skin", help="how a slicer's fuzzy skin will feel on a printed wall")
     p.add_argument("--config", metavar="FILE",
                    help="read the fuzzy skin and layer/nozzle settings from a PrusaSlicer .ini or OrcaSlicer .json "
@@ -67,7 +70,7 @@ def add_parser(sub) -> None:
                         f"(default {wall['seed']})")
     p.add_argument("--draws", type=count(MAX_DRAWS),
                    help="walls judged per setting, each with its own random numbers (seeds --seed, --seed + 1, "
-                        f"...): V is their mean, sure to their spread (default {feel['draws']}; {DRAWS} with --tune)")
+                        f"...): V is their mean, sure to their spread (default {feel['draws']}; {DRAWS} with --tune or --palette)")
     p.add_argument("--tile-mm", type=LENGTH, default=wall["tile_mm"],
                    help=f"side of the periodic wall tile, mm (default {wall['tile_mm']:g})")
     p.add_argument("--pixel-mm", type=PIXEL, default=wall["pixel_mm"],
@@ -82,7 +85,8 @@ def add_parser(sub) -> None:
                    help="a table over these point distances (with --sweep-thickness, or the one thickness)")
     p.add_argument("--plot", metavar="FILE",
                    help="with a sweep: V against point distance, a line per thickness (.png, .pdf, .svg)")
-    p.add_argument("--out", metavar="FILE", help="write the printed wall's heightmap (.npz, .npy, .h5, .png, .tif)")
+    p.add_argument("--out", metavar="FILE", help="write the printed wall's heightmap (.npz, .npy, .h5, .png, .tif; with "
+                                                 "--tune: the tuned setting's)")
     p.add_argument("--tune", choices=tuple(KNOBS),
                    help="find the value of this setting (the others fixed) whose walls reach --target-lambda or "
                         "--target-jnd, searched and verified by the spectral engine over --draws walls")
@@ -92,19 +96,21 @@ def add_parser(sub) -> None:
     target.add_argument("--target-jnd", type=Number(float, low=-MAX_JND, high=MAX_JND), metavar="N",
                         help="--tune: the target N JND from the given settings (positive: rougher)")
     p.add_argument("--tune-range", type=lengths, metavar="MM,MM",
-                   help="--tune: the smallest and largest value searched, mm (default "
+                   help="--tune, --palette: the smallest and largest value searched, mm (default "
                         + "; ".join(f"{k} {lo:g},{hi:g}" for k, (lo, hi) in KNOB_RANGE.items()) + ")")
     p.add_argument("--palette", type=count(MAX_PALETTE, 2), metavar="K",
                    help="K settings of the --tune setting (default thickness) that feel clearly different, at least "
                         "--min-jnd apart, spread over its range, verified by the spectral engine over --draws walls")
-    p.add_argument("--min-jnd", type=JND, default=2.0,
-                   help="--palette: the least distance between any two settings, JND (default 2)")
-    p.add_argument("--tolerance-jnd", type=JND, default=TOLERANCE_JND,
-                   help=f"--tune: stop when the verified mean is this close to the target, JND (default {TOLERANCE_JND:g})")
+    p.add_argument("--min-jnd", type=JND, default=palette["min_jnd"], metavar="N",
+                   help=f"--palette: the least distance between any two settings, JND (default {palette['min_jnd']:g})")
+    p.add_argument("--tolerance-jnd", type=JND, default=TOLERANCE_JND, metavar="N",
+                   help="--tune, --palette: stop when the verified mean is this close to the target, JND (default "
+                        f"{TOLERANCE_JND:g})")
     p.add_argument("--json", action="store_true", help="print the results as JSON, one line per setting")
     add_quiet(p)
     add_overwrite(p)
-    finish(p, run, target_lambda_mm="--target-lambda", target_jnd="--target-jnd", jnd="--target-jnd", tune_range="--tune-range")
+    finish(p, run, target_lambda_mm="--target-lambda", target_jnd="--target-jnd", jnd="--target-jnd",
+           tune_range="--tune-range")
 
 
 def _settings(args: argparse.Namespace):
