@@ -87,6 +87,8 @@ LIBRARY_ONLY = {
     "path": "load_scale(path): another scale table from Python; the CLI uses the shipped one",
     **{name: "printer profile field (a JSON profile's; load_profile reports it under --printer)"
        for name in ("nozzle_mm", "layer_mm", "line_width_mm", "closing_radius_mm")},
+    "max_runs": "fuzzy_tune.tune_fuzzy_skin(max_runs): the CLI uses the default number of verifications",
+    "grid": "fuzzy_tune.tune_fuzzy_skin(grid): a KnobScan fuzzy_palette shares among its members",
 }
 CHECK_HELPERS = {"real": 0, "positive": 0, "non_negative": 0, "in_range": 0, "integer": 0,
                  "check_output": 2, "check_output_folder": 2}  # function -> position of its parameter-name argument

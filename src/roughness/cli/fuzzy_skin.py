@@ -110,7 +110,7 @@ def add_parser(sub) -> None:
     add_quiet(p)
     add_overwrite(p)
     finish(p, run, target_lambda_mm="--target-lambda", target_jnd="--target-jnd", jnd="--target-jnd",
-           tune_range="--tune-range")
+           tune_range="--tune-range", k="--palette")
 
 
 def _settings(args: argparse.Namespace):
