@@ -144,3 +144,13 @@ def installed(tmp_path_factory) -> Path:
     subprocess.run([str(python), "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", "--ignore-installed",
                     str(wheel)], check=True, cwd=root)
     return python
+
+
+@pytest.fixture
+async def studio():
+    """The Roughness Studio (local, no token) under NiceGUI's browser-less test client, fresh for each test
+    (tests/studio_helpers.py; async tests: ``pytestmark = pytest.mark.anyio``)."""
+    from studio_helpers import running_studio
+
+    async with running_studio() as running:
+        yield running

@@ -275,9 +275,9 @@ def test_shipped_model_flags_inputs_it_cannot_answer_well():
     spiky = Heightmap(np.where(np.random.default_rng(0).random((240, 240)) < 0.01, 0.8, 0.0), 0.05)
     p = predict(spiky, engine="surrogate", model=model)[0]
     assert p.domain_notes and np.isfinite(p.roughness) and np.isfinite(p.roughness_std)
-    from roughness.cli.predict import _prediction_line
+    from roughness.cli.predict import prediction_line
 
-    assert "uncertain: relative spread" in _prediction_line(p)  # the text line says why auto would not trust it
+    assert "uncertain: relative spread" in prediction_line(p)  # the text line says why auto would not trust it
 
 
 def test_auto_runs_fem_outside_the_domain():

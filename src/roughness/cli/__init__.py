@@ -13,7 +13,8 @@ DESCRIPTION = ("Predict how rough a surface texture feels to a fingertip (the FE
 COMMANDS = {"simulate": "simulate", "texture": "texture", "dataset": "dataset", "train": "train",
             "predict": "predict", "compare": "compare", "jnd": "jnd", "perception": "perception", "tune": "tune",
             "palette": "palette", "tactile-image": "tactile_image", "homogeneity": "homogeneity",
-            "object": "object", "fuzzy-skin": "fuzzy_skin", "ensemble": "ensemble", "card": "card", "model-version": "model_version"}
+            "object": "object", "fuzzy-skin": "fuzzy_skin", "ensemble": "ensemble", "card": "card", "model-version": "model_version",
+            "studio": "studio"}
 
 
 class _VersionAction(argparse.Action):
@@ -51,7 +52,8 @@ def _command(argv: list[str]) -> str | None:
 
 # the optional dependencies (pyproject.toml's extras) by the name they import as
 EXTRA_OF = {"trimesh": "objects", "rtree": "objects", "lxml": "objects", "torch": "train", "onnx": "train",
-            "onnxscript": "train", "sklearn": "train", "cvxpy": "perception", "SurfaceTopography": "scans"}
+            "onnxscript": "train", "sklearn": "train", "cvxpy": "perception", "SurfaceTopography": "scans",
+            "nicegui": "studio"}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -136,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
         show_notes(args, record.lines(tile=False) if record else [])
         loaded_json = {"readings": [record.as_dict()] if record else []}
         if printer is None:
-            print(json_text(p.as_dict() | loaded_json) if args.json else _prediction_line(p), flush=True)
+            print(json_text(p.as_dict() | loaded_json) if args.json else prediction_line(p), flush=True)
         else:
             _show_printed(args, digital.pop(), p, pairs.prints.popleft(), loaded_json)
         if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
@@ -218,13 +218,13 @@ def _show_printed(args: argparse.Namespace, digital, printed, result, readings: 
                          **readings}),
               flush=True)
         return
-    lines = [_prediction_line(printed).replace(": V = ", " as printed: V = ", 1),
+    lines = [prediction_line(printed).replace(": V = ", " as printed: V = ", 1),
              f"  printer {result.profile.describe()}: {diff.describe()}",
              *(f"  print: {step}" for step in result.steps), *(f"  note: {note}" for note in notes)]
     print("\n".join(lines), flush=True)
 
 
-def _prediction_line(p) -> str:
+def prediction_line(p) -> str:
     from roughness.prediction import domain_words
 
     where = p.placement
