@@ -52,6 +52,7 @@ BASE: dict[tuple[str, ...], list[str]] = {
     ("card",): ["run", "model.onnx", "--card", "new.md", "--plots", "."],
     ("model-version",): ["model.onnx", "--version", "2"],
     ("fuzzy-skin",): ["--engine", "surrogate", "--draws", "1"],
+    ("studio",): ["--no-browser"],  # every case is refused by argparse before a server starts
 }
 # Input files per subcommand: (position in BASE or flag, suffix the broken file gets, extra arguments).
 FILE_INPUTS: dict[tuple[str, ...], list[tuple[int | str, str, list[str]]]] = {
