@@ -115,7 +115,7 @@ def test_upload_limit_and_stored_name(tmp_path):
 
 
 def test_upload_read_as_the_cli_reads_it(tmp_path):
-    from roughness.studio.pages.texture import example_path
+    from roughness.studio.texture_source import example_path
 
     with pytest.raises(InputError) as err:
         open_heightmap(example_path())

@@ -41,8 +41,8 @@ def run(args: argparse.Namespace) -> int:
         named = [(f"{name} as printed", result.heightmap) for name, result in zip([args.a, args.b], prints)] + named
     results = predictions(named, args.engine, args.model)  # checked as they were loaded
     pa, pb = results[:2]
-    distance = _distance(pa, pb)
-    digital = _distance(*results[2:]) if printer is not None else None
+    distance = jnd_between(pa, pb)
+    digital = jnd_between(*results[2:]) if printer is not None else None
     if args.json:
         extra = {} if digital is None else {
             "digital": {"a": results[2].as_dict(), "b": results[3].as_dict(), **digital.as_dict()},
@@ -52,23 +52,23 @@ def run(args: argparse.Namespace) -> int:
                                 "provenance": combined([p.provenance for p in results]).as_dict()}))
         return 0
     lines = [_line(p) for p in (pa, pb)]
-    lines.append(_distance_line(distance, _kinds(pa, pb)))
+    lines.append(distance_line(distance, uncertainty_kinds(pa, pb)))
     if digital is not None:
         lines += [f"printer {printer.describe()}", *("digital " + _line(p) for p in results[2:]),
-                  "digital " + _distance_line(digital, _kinds(*results[2:])),
+                  "digital " + distance_line(digital, uncertainty_kinds(*results[2:])),
                   *(f"print note: {n}" for n in dict.fromkeys(n for r in prints for n in r.notes))]
     write_stdout("\n".join(lines))
     return 0
 
 
-def _distance(pa, pb):
+def jnd_between(pa, pb):
     """The ``JndDistance`` of two predictions on the standard scale of the first's fidelity."""
     from roughness.perceptual_scale import jnd_distance, load_scale
 
     return jnd_distance(load_scale(pa.fidelity), pa.roughness, pb.roughness, _uncertainty(pa), _uncertainty(pb))
 
 
-def _kinds(pa, pb) -> str:
+def uncertainty_kinds(pa, pb) -> str:
     """Where the two V's uncertainties come from, in words."""
     return " and ".join(dict.fromkeys("Monte Carlo of V" if p.roughness_stderr is not None else "ensemble spread"
                                       for p in (pa, pb)))
@@ -80,7 +80,7 @@ def _uncertainty(p) -> float | None:
     return p.roughness_stderr if p.roughness_stderr is not None else p.roughness_std
 
 
-def _distance_line(distance, kinds: str) -> str:
+def distance_line(distance, kinds: str) -> str:
     """The distance and verdict in words; none when both are below the scale, "at least" when one is."""
     tail = "(one JND = a 19% step in equivalent wavelength, told apart 75% of the time)"
     if distance.jnd is None:

@@ -19,8 +19,8 @@ class JobPanel:
         with ui.column().classes("w-full gap-1") as self.box:
             self.bar = ui.linear_progress(value=0, show_value=False).props(f'aria-label="{label} progress"')
             with ui.row().classes("items-center"):
-                self.text = ui.label("").props('role="status" aria-live="polite"')
-                self.cancel_button = ui.button("Cancel", on_click=self.cancel).props(f'aria-label="Cancel {label}"')
+                self.text = ui.label("").props('role="status" aria-live="polite"').mark(f"{label}-progress")
+                self.cancel_button = ui.button("Cancel", on_click=self.cancel).props(f'aria-label="Cancel {label}"').mark(f"{label}-cancel")
         self.box.set_visibility(False)
         self.job: Job | None = None
         self._on_done: Callable[[object], None] | None = None

@@ -1,38 +1,30 @@
-"""The Texture page: open a heightmap, scan or picture, or make a named texture; its V, live under the height and
-lateral-scale sliders (the surrogate), verified by the spectral engine or the FEM in the background."""
+"""The Texture page: open or make a texture; its V, live under height and lateral-scale sliders (the surrogate),
+verified by the spectral engine or the FEM in the background; tune it to a target; compare textures; download."""
 from __future__ import annotations
 
-from dataclasses import dataclass
-from importlib import resources
+import dataclasses
 
-from nicegui import events, ui
+from nicegui import ui
 
+import roughness
 from roughness.core.errors import InputError
+from roughness.design.palette import variant
+from roughness.design.tune import FACTOR_RANGE
+from roughness.prediction import Prediction
 from roughness.surface.heightmap import Heightmap
 
-from ..pictures import heightmap_url
+from ..downloads import KINDS, write_download
+from ..feel_view import FeelView
+from ..job_panel import JobPanel
 from ..sessions import Session
-from ..uploads import MAX_UPLOAD_BYTES, missing_units, open_heightmap, store
+from ..texture_source import Texture, TextureSource
+from ..work import VERIFY_ENGINES, tune, verify
 
 PATH = "/texture"
 TITLE = "Texture"
 SUMMARY = "open or make a texture, see how rough it feels, tune it, compare it, download it"
-EXAMPLE = "standard-1.0mm.png"
-EXAMPLE_UNITS = {"pixel_mm": 0.05, "height_mm": 1.0}  # the README's: roughness predict ... --pixel-mm 0.05 --height-mm 1
-
-
-def example_path():
-    """The bundled example heightmap (the README's examples/standard-1.0mm.png)."""
-    return resources.files("roughness.studio") / "example" / EXAMPLE
-
-
-@dataclass
-class Texture:
-    """The texture the page works on: the heightmap as opened or made, its name, and what loading noted."""
-
-    base: Heightmap
-    name: str
-    notes: tuple[str, ...] = ()
+LIVE_SECONDS = 0.05  # the sliders' answers are recomputed at most this often while they move
+TUNE_VERIFIERS = ("spectral", "coarse", "default")  # roughness.design.evaluation.VERIFIERS, fastest first
 
 
 class TexturePage:
@@ -41,83 +33,216 @@ class TexturePage:
     def __init__(self, session: Session) -> None:
         self.session = session
         self.texture: Texture | None = None
-        self.pending_upload = None  # an uploaded file that waits for the units it does not state
+        self.prediction: Prediction | None = None
+        self.verified: Prediction | None = None
+        self.compared: list[tuple[str, Heightmap]] = []
+        self.stale = False  # the sliders moved since the last answer
+        TextureSource(session, self.set_texture)
+        self.view = FeelView()
+        self._sliders()
+        self._verify()
+        self._tune()
+        self._compare()
+        self._downloads()
+        ui.timer(LIVE_SECONDS, self._live)
+
+    # the texture and its live answer ---------------------------------------------------------------------------
+
+    def _sliders(self) -> None:
         with ui.card().classes("w-full"):
-            ui.label("Texture in").classes("text-lg").props('role="heading" aria-level="2"')
-            with ui.row().classes("items-end gap-4"):
-                ui.button("Open the bundled example", on_click=self.open_example)
-                self.upload = ui.upload(label=f"Heightmap, scan or picture (up to {MAX_UPLOAD_BYTES // 2**20} MiB)",
-                                        auto_upload=True, max_file_size=MAX_UPLOAD_BYTES,
-                                        on_upload=self.on_upload).props('accept="*"')
-            with ui.row().classes("items-end gap-4") as self.units_row:
-                self.pixel_mm = ui.number("Pixel size, mm (--pixel-mm)", min=0, format="%.4g")
-                self.height_mm = ui.number("Height of full-scale white, mm (--height-mm)", min=0, format="%.4g")
-                ui.button("Read with these units", on_click=self.read_pending)
-            self.units_row.set_visibility(False)
-            self.error = ui.label("").classes("text-red-10").props('role="alert"')
-        with ui.card().classes("w-full"):
-            ui.label("How it feels").classes("text-lg").props('role="heading" aria-level="2"')
-            self.answer = ui.label("Open or make a texture.").props('role="status" aria-live="polite"')
-            self.picture = ui.image().classes("w-64").props('alt=""')
-
-    def open_example(self) -> None:
-        self._open(lambda: open_heightmap(example_path(), **EXAMPLE_UNITS), EXAMPLE)
-
-    async def on_upload(self, event: events.UploadEventArguments) -> None:
-        data = await event.file.read()
-        try:
-            path = store(self.session, event.file.name, data)
-        except InputError as err:
-            self.show_error(f"error: {err}")
-            return
-        self.pending_upload = path
-        self.read_pending(first=True)
-
-    def read_pending(self, first: bool = False) -> None:
-        """Read the uploaded file, with the units typed in (none the first time)."""
-        path = self.pending_upload
-        if path is None:
-            return
-        pixel = None if first else self.pixel_mm.value
-        height = None if first else self.height_mm.value
-        try:
-            opened = open_heightmap(path, pixel, height)
-        except InputError as err:
-            needed = missing_units(err)
-            self.units_row.set_visibility(bool(needed) or self.units_row.visible)
-            self.pixel_mm.set_visibility("pixel_mm" in needed or self.pixel_mm.value is not None)
-            self.height_mm.set_visibility("height_mm" in needed or self.height_mm.value is not None)
-            self.show_error(f"error: {err}")
-            return
-        self.units_row.set_visibility(False)
-        self.pending_upload = None
-        self.set_texture(Texture(opened.heightmap, path.name, tuple(opened.notes())))
-
-    def _open(self, make, name: str) -> None:
-        try:
-            opened = make()
-        except InputError as err:
-            self.show_error(f"error: {err}")
-            return
-        self.set_texture(Texture(opened.heightmap, name, tuple(opened.notes())))
-
-    def show_error(self, text: str) -> None:
-        self.error.set_text(text)
+            ui.label("Height and lateral scale (live, surrogate)").classes("text-lg").props('role="heading" '
+                                                                                            'aria-level="2"')
+            low, high = FACTOR_RANGE["height"]
+            ui.label("Height factor (heights above their lowest point times this)")
+            self.height = ui.slider(min=low, max=high, step=0.01, value=1.0, on_change=self._moved).props(
+                'label aria-label="Height factor"').mark("height-slider")
+            low, high = FACTOR_RANGE["lateral"]
+            ui.label("Lateral scale (the texture stretched by this)")
+            self.lateral = ui.slider(min=low, max=high, step=0.01, value=1.0, on_change=self._moved).props(
+                'label aria-label="Lateral scale"').mark("lateral-slider")
+            self.factors = ui.label("height x 1.00, lateral x 1.00")
 
     def set_texture(self, texture: Texture) -> None:
-        import roughness
+        self.texture = texture
+        self.height.value = self.lateral.value = 1.0
+        self.stale = False
+        self.verified = None
+        self.verify_result.set_text("")
+        self._answer("auto")  # as `roughness predict` answers (its default engine)
+
+    def current(self) -> Heightmap:
+        """The texture as the sliders scale it (``roughness.design.palette.variant``)."""
+        return variant(self.texture.heightmap, float(self.height.value), float(self.lateral.value))
+
+    def current_name(self) -> str:
+        h, lat = float(self.height.value), float(self.lateral.value)
+        return self.texture.name if (h, lat) == (1.0, 1.0) else f"{self.texture.name} (height x {h:.2f}, lateral x {lat:.2f})"
+
+    def _moved(self) -> None:
+        self.stale = self.texture is not None
+        self.factors.set_text(f"height x {float(self.height.value):.2f}, lateral x {float(self.lateral.value):.2f}")
+
+    def _live(self) -> None:
+        if self.stale:
+            self.stale = False
+            self._answer("surrogate")
+
+    def _answer(self, engine: str) -> None:
+        hm = self.current()
+        name = self.current_name()
+        try:
+            [p] = roughness.predict({name: hm}, engine=engine, units_ok=True)  # units checked as it was read
+        except InputError as err:
+            self.view.answer.set_text(f"error: {err}")
+            return
+        self.prediction = p
+        self.view.show_texture(name, hm, self.texture.notes)
+        self.view.show_prediction(p)
+
+    # verify ------------------------------------------------------------------------------------------------------
+
+    def _verify(self) -> None:
+        with ui.card().classes("w-full"):
+            ui.label("Verify").classes("text-lg").props('role="heading" aria-level="2"')
+            with ui.row().classes("items-end gap-4"):
+                self.verify_engine = ui.select(list(VERIFY_ENGINES), value="spectral", label="Engine").classes("w-48").mark("verify-engine")
+                ui.button("Verify", on_click=self.start_verify).props('aria-label="Verify the current texture"').mark("verify")
+            self.verify_job = JobPanel("verify")
+            self.verify_result = ui.label("").props('role="status" aria-live="polite"').mark("verify-result")
+
+    def start_verify(self) -> None:
+        if self.texture is None:
+            self.verify_result.set_text("Open or make a texture first.")
+            return
+        self.verify_job.start(f"verify ({self.verify_engine.value})", verify, self.current_name(), self.current(),
+                              self.verify_engine.value, on_done=self._verified)
+
+    def _verified(self, p: Prediction) -> None:
         from roughness.cli.predict import prediction_line
 
-        self.error.set_text("")
-        self.texture = texture
-        try:
-            [p] = roughness.predict({texture.name: texture.base}, units_ok=True)  # units checked as it was read
-        except InputError as err:
-            self.show_error(f"error: {err}")
+        self.verified = p
+        self.verify_result.set_text("Verified: " + prediction_line(p))
+
+    # tune --------------------------------------------------------------------------------------------------------
+
+    def _tune(self) -> None:
+        with ui.card().classes("w-full"):
+            ui.label("Tune to a target").classes("text-lg").props('role="heading" aria-level="2"')
+            with ui.row().classes("items-end gap-4"):
+                self.tune_kind = ui.select({"lambda": "equivalent lambda (mm)", "jnd": "JND from this texture"},
+                                           value="lambda", label="Target").classes("w-56").mark("tune-kind")
+                self.tune_value = ui.number("Target value", value=1.0, format="%.4g").classes("w-32").mark("tune-value")
+                self.tune_by = ui.select(["height", "lateral"], value="height", label="Knob").classes("w-32").mark("tune-by")
+                self.tune_verifier = ui.select(list(TUNE_VERIFIERS), value="spectral",
+                                               label="Verified by").classes("w-32")
+                ui.button("Tune", on_click=self.start_tune).props('aria-label="Tune the current texture"').mark("tune")
+            self.tune_job = JobPanel("tune")
+            self.tune_result = ui.label("").props('role="status" aria-live="polite"').mark("tune-result")
+
+    def start_tune(self) -> None:
+        if self.texture is None:
+            self.tune_result.set_text("Open or make a texture first.")
             return
-        self.answer.set_text(prediction_line(p))
-        self.picture.set_source(heightmap_url(texture.base))
-        self.picture.props(f'alt="Heightmap of {texture.name}: dark is low, light is high"')
+        value = self.tune_value.value
+        lam, jnd = (value, None) if self.tune_kind.value == "lambda" else (None, value)
+        self.tune_job.start("tune", tune, self.current(), self.tune_by.value, lam, jnd, self.tune_verifier.value,
+                            on_done=self._tuned)
+
+    def _tuned(self, result) -> None:
+        self.tune_result.set_text(f"Tuned: {result!r}. The tuned texture is now the page's texture.")
+        name = f"{self.texture.name} tuned ({result.by} x {result.factor:.3f})"
+        self.set_texture(dataclasses.replace(self.texture, heightmap=result.heightmap, name=name))
+
+    # compare -----------------------------------------------------------------------------------------------------
+
+    def _compare(self) -> None:
+        with ui.card().classes("w-full"):
+            ui.label("Compare textures").classes("text-lg").props('role="heading" aria-level="2"')
+            with ui.row().classes("gap-4"):
+                ui.button("Add this texture", on_click=self.add_to_comparison).props(
+                    'aria-label="Add the current texture to the comparison"').mark("compare-add")
+                ui.button("Compare", on_click=self.compare).mark("compare")
+                ui.button("Clear", on_click=self.clear_comparison).props('aria-label="Clear the comparison"')
+            self.compare_list = ui.label("No textures to compare yet.")
+            self.compare_table = ui.table(columns=[], rows=[]).classes("w-full")
+            self.compare_table.set_visibility(False)
+            self.verdicts = ui.column().props('role="status" aria-live="polite"').mark("verdicts")
+
+    def add_to_comparison(self) -> None:
+        if self.texture is None:
+            self.compare_list.set_text("Open or make a texture first.")
+            return
+        self.compared.append((self.current_name(), self.current()))
+        self.compare_list.set_text("To compare: " + "; ".join(n for n, _ in self.compared))
+
+    def clear_comparison(self) -> None:
+        self.compared.clear()
+        self.compare_list.set_text("No textures to compare yet.")
+        self.compare_table.set_visibility(False)
+        self.verdicts.clear()
+
+    def compare(self) -> None:
+        """The JND matrix (row texture against column texture, signed: positive, the row is rougher) and the
+        verdict of each pair, as `roughness jnd A B` gives them."""
+        from roughness.cli.jnd import distance_line, jnd_between, uncertainty_kinds
+
+        if len(self.compared) < 2:
+            self.compare_list.set_text("Add at least two textures to compare.")
+            return
+        names = [f"{i + 1}: {name}" for i, (name, _) in enumerate(self.compared)]
+        predictions = roughness.predict({n: hm for n, (_, hm) in zip(names, self.compared)}, units_ok=True)
+        columns = [{"name": "texture", "label": "texture", "field": "texture", "align": "left"},
+                   {"name": "V", "label": "V", "field": "V"}]
+        columns += [{"name": str(j), "label": f"JND vs {j + 1}", "field": str(j)} for j in range(len(names))]
+        rows = []
+        self.verdicts.clear()
+        for i, pa in enumerate(predictions):
+            se = pa.roughness_stderr if pa.roughness_stderr is not None else pa.roughness_std
+            row = {"texture": names[i], "V": f"{pa.roughness:.4f}" + (f" ± {se:.4f}" if se is not None else "")}
+            for j, pb in enumerate(predictions):
+                d = jnd_between(pa, pb)
+                row[str(j)] = "-" if i == j else "none" if d.jnd is None else f"{d.jnd:+.2f}"
+                if j > i:
+                    with self.verdicts:
+                        ui.label(f"{i + 1} vs {j + 1}: " + distance_line(d, uncertainty_kinds(pa, pb)))
+            rows.append(row)
+        self.compare_table.columns, self.compare_table.rows = columns, rows
+        self.compare_table.set_visibility(True)
+        self.compare_table.update()
+
+    # downloads ---------------------------------------------------------------------------------------------------
+
+    def _downloads(self) -> None:
+        with ui.card().classes("w-full"):
+            ui.label("Downloads").classes("text-lg").props('role="heading" aria-level="2"')
+            with ui.row().classes("gap-4"):
+                for kind, label in KINDS.items():
+                    ui.button(f"Download {label}", on_click=lambda k=kind: self.download(k)).mark(f"download-{kind}")
+            self.download_links = ui.column().mark("download-links")
+
+    def report(self) -> dict:
+        """The JSON report: the texture, the sliders, the answer (as `roughness predict --json`), any verification."""
+        return {"texture": self.texture.name, "recipe": self.texture.recipe,
+                "height_factor": float(self.height.value), "lateral_factor": float(self.lateral.value),
+                "prediction": self.prediction.as_dict(), "notes": list(self.texture.notes),
+                "verified": None if self.verified is None else self.verified.as_dict()}
+
+    def download(self, kind: str) -> None:
+        if self.texture is None or self.prediction is None:
+            with self.download_links:
+                ui.label("Open or make a texture first.")
+            return
+        stem = "texture" if kind != "json" else "report"
+        try:
+            path = write_download(self.session, stem, kind, self.current(), self.report())
+        except InputError as err:
+            with self.download_links:
+                ui.label(f"error: {err}").props('role="alert"')
+            return
+        url = self.session.download_url(path.name)
+        with self.download_links:
+            ui.link(f"{path.name} ({path.stat().st_size:,} bytes)", url).props(f'download="{path.name}"')
+        ui.download(url, path.name)
 
 
 def build(session: Session) -> None:
