@@ -13,6 +13,7 @@
 """
 from __future__ import annotations
 
+import asyncio
 import os
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -25,6 +26,8 @@ from nicegui.testing.user import User
 
 from roughness.studio.app import StudioSettings, build_app
 from roughness.studio.sessions import Sessions
+
+README_UNITS = ("--pixel-mm", "0.05", "--height-mm", "1")  # the README's units of the bundled example
 
 
 @dataclass
@@ -54,3 +57,19 @@ async def running_studio(settings: StudioSettings = StudioSettings(show=False)) 
                     yield Studio(User(client), sessions, client)
         finally:
             os.environ.pop("NICEGUI_USER_SIMULATION", None)
+
+
+def text_of(user, marker: str) -> str:
+    """The text of the one visible element marked ``marker``."""
+    [element] = user.find(marker=marker).elements
+    return element.text
+
+
+async def wait_for(user, marker: str, words: str, timeout_s: float = 120.0) -> str:
+    """The text of the element ``marker`` once it contains ``words`` (a background job's answer)."""
+    for _ in range(int(timeout_s / 0.1)):
+        text = text_of(user, marker)
+        if words in text:
+            return text
+        await asyncio.sleep(0.1)
+    raise AssertionError(f"{marker!r} never showed {words!r}; it shows {text!r}")

@@ -1,7 +1,6 @@
 """The Texture page through NiceGUI's test client (no browser): every flow, each number the library's own."""
 from __future__ import annotations
 
-import asyncio
 import json
 import subprocess
 import sys
@@ -13,9 +12,9 @@ from nicegui import ui
 import roughness
 from roughness.design.palette import variant
 from roughness.studio.texture_source import example_path
+from studio_helpers import README_UNITS, text_of, wait_for
 
 pytestmark = pytest.mark.anyio
-README_UNITS = ("--pixel-mm", "0.05", "--height-mm", "1")
 
 
 def cli_line(*args: str) -> str:
@@ -26,21 +25,6 @@ def cli_line(*args: str) -> str:
 
 def v_of(line: str) -> float:
     return float(line.split("V = ", 1)[1].split(" ", 1)[0])
-
-
-def text_of(user, marker: str) -> str:
-    [element] = user.find(marker=marker).elements
-    return element.text
-
-
-async def wait_for(user, marker: str, words: str, timeout_s: float = 120.0) -> str:
-    """The text of the element ``marker`` once it contains ``words`` (a background job's answer)."""
-    for _ in range(int(timeout_s / 0.1)):
-        text = text_of(user, marker)
-        if words in text:
-            return text
-        await asyncio.sleep(0.1)
-    raise AssertionError(f"{marker!r} never showed {words!r}; it shows {text!r}")
 
 
 async def open_example(studio) -> None:

@@ -18,7 +18,7 @@ from starlette.responses import FileResponse, PlainTextResponse
 
 from .sessions import Sessions
 
-PAGES = ["roughness.studio.pages.texture"]
+PAGES = ["roughness.studio.pages.texture", "roughness.studio.pages.printed"]
 """The studio's pages, in the order of its navigation bar (module names)."""
 TITLE = "Roughness Studio"
 TOKEN_COOKIE = "roughness_studio_token"

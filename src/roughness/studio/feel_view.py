@@ -24,11 +24,12 @@ def placement_text(p: Prediction) -> str:
 class FeelView:
     """The results card of a texture page."""
 
-    def __init__(self, heading: str = "How it feels") -> None:
+    def __init__(self, heading: str = "How it feels", mark: str = "") -> None:
+        """``mark``: a prefix of the markers of its texts (tests find them by it)."""
         with ui.card().classes("w-full"):
             ui.label(heading).classes("text-lg").props('role="heading" aria-level="2"')
-            self.answer = ui.label("Open or make a texture.").props('role="status" aria-live="polite"').mark("answer")
-            self.placement = ui.label("").mark("placement")
+            self.answer = ui.label("Open or make a texture.").props('role="status" aria-live="polite"').mark(f"{mark}answer")
+            self.placement = ui.label("").mark(f"{mark}placement")
             self.notes = ui.label("").classes("text-sm text-grey-8")
             with ui.row().classes("gap-4 items-start"):
                 self.heightmap = ui.image().classes("w-64 h-64").props('alt="no texture yet" fit="contain"')
