@@ -16,7 +16,7 @@ from __future__ import annotations
 import asyncio
 import os
 from collections.abc import AsyncIterator
-from contextlib import asynccontextmanager
+from contextlib import asynccontextmanager, contextmanager
 from dataclasses import dataclass
 
 import httpx
@@ -73,3 +73,54 @@ async def wait_for(user, marker: str, words: str, timeout_s: float = 120.0) -> s
             return text
         await asyncio.sleep(0.1)
     raise AssertionError(f"{marker!r} never showed {words!r}; it shows {text!r}")
+
+
+# --- a real server and a real browser (tests/test_studio_browser.py, benchmarks/studio_latency.py) ---------------
+
+CHROMIUM_PATHS = ("/usr/bin/chromium", "/usr/bin/chromium-browser", "/usr/lib/chromium/chromium")
+"""Debian's chromium (`.ci/run` installs it when missing); Playwright's own browser download cannot work here."""
+
+
+def find_chromium() -> str | None:
+    """The path of a Chromium executable, or None."""
+    import shutil
+
+    found = [p for p in CHROMIUM_PATHS if os.path.exists(p)] + [shutil.which("chromium") or ""]
+    return next((p for p in found if p), None)
+
+
+def free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextmanager
+def served_studio(timeout_s: float = 60.0):
+    """`roughness studio --no-browser` in its own process on a free port; yields its base URL, stops it after."""
+    import subprocess
+    import sys
+    import time
+    import urllib.request
+
+    port = free_port()
+    env = {k: v for k, v in os.environ.items() if k != "PYTEST_CURRENT_TEST"}  # NiceGUI serves differently under it
+    server = subprocess.Popen([sys.executable, "-m", "roughness.cli", "studio", "--no-browser", "--port", str(port)],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env)
+    url = f"http://127.0.0.1:{port}"
+    try:
+        end = time.monotonic() + timeout_s
+        while True:
+            try:
+                urllib.request.urlopen(url, timeout=1).close()
+                break
+            except OSError:
+                if server.poll() is not None or time.monotonic() > end:
+                    raise RuntimeError(f"the studio did not start: {server.stderr.read()}") from None
+                time.sleep(0.2)
+        yield url
+    finally:
+        server.terminate()
+        server.wait(timeout=10)

@@ -21,6 +21,19 @@ from .sessions import Sessions
 PAGES = ["roughness.studio.pages.texture", "roughness.studio.pages.printed"]
 """The studio's pages, in the order of its navigation bar (module names)."""
 TITLE = "Roughness Studio"
+PRIMARY = "#1d4e89"  # buttons: white text on it has a contrast of 8.6:1 (WCAG AA asks 4.5:1)
+# Quasar's file picker is an unlabelled <input type=file> inside an unnamed button: the input, which the keyboard
+# reaches and which opens the file dialog, gets the uploader's label; the button around it is only its frame.
+LABEL_UPLOADERS = """<script>
+new MutationObserver(() => document.querySelectorAll('.q-uploader').forEach(up => {
+  const label = (up.querySelector('.q-uploader__title') || {}).textContent || 'Choose a file';
+  up.querySelectorAll('.q-uploader__input').forEach(input => {
+    input.setAttribute('aria-label', label);
+    const frame = input.closest('.q-btn');
+    if (frame) { frame.setAttribute('role', 'none'); frame.removeAttribute('tabindex'); }
+  });
+})).observe(document.documentElement, {childList: true, subtree: true});
+</script>"""
 TOKEN_COOKIE = "roughness_studio_token"
 LOCAL_HOSTS = ("127.0.0.1", "localhost", "::1")
 
@@ -75,6 +88,8 @@ def page_modules() -> list[ModuleType]:
 
 def frame(current: ModuleType | None, pages: list[ModuleType]) -> None:
     """The header every page shares: the studio's name and a link to each page (the current one marked)."""
+    ui.colors(primary=PRIMARY)
+    ui.add_body_html(LABEL_UPLOADERS)
     with ui.header().classes("items-center gap-6 bg-blue-10"):
         ui.link(TITLE, "/").classes("text-lg font-bold text-white no-underline")
         with ui.element("nav").props('aria-label="Pages"').classes("flex gap-4"):
@@ -95,12 +110,12 @@ def build_app(settings: StudioSettings = StudioSettings()) -> Sessions:
     @ui.page("/", title=TITLE)
     def index() -> None:
         frame(None, pages)
-        with ui.column().classes("p-4 gap-2").props('role="main"'):
+        with ui.column().classes("p-4 gap-2"):
             ui.label(TITLE).classes("text-2xl").props('role="heading" aria-level="1"')
             ui.label("Design textures by feel: every number comes from the roughness library.")
             for page in pages:
                 with ui.row().classes("items-baseline"):
-                    ui.link(page.TITLE, page.PATH).classes("text-lg")
+                    ui.link(page.TITLE, page.PATH).classes("text-lg text-primary")
                     ui.label(page.SUMMARY)
 
     for page in pages:
@@ -123,7 +138,7 @@ def _register(page: ModuleType, pages: list[ModuleType], sessions: Sessions) -> 
         session = sessions.open()
         ui.context.client.on_delete(lambda: sessions.end(session))
         frame(page, pages)
-        with ui.column().classes("w-full p-4 gap-4").props('role="main"'):
+        with ui.column().classes("w-full p-4 gap-4"):
             ui.label(page.TITLE).classes("text-2xl").props('role="heading" aria-level="1"')
             page.build(session)
 
@@ -132,5 +147,5 @@ def serve(settings: StudioSettings) -> None:
     """Build the app and serve it until interrupted (opening a browser if ``settings.show``)."""
     build_app(settings)
     show = settings.show and ("/" if settings.token is None else f"/?token={settings.token}")
-    ui.run(host=settings.host, port=settings.port, show=show, reload=False, title=TITLE, favicon="🖐",
+    ui.run(host=settings.host, port=settings.port, show=show, reload=False, title=TITLE, favicon="🖐", language="en-US",
            show_welcome_message=settings.token is None, uvicorn_logging_level="warning")

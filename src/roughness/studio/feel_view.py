@@ -15,10 +15,12 @@ def placement_text(p: Prediction) -> str:
     where = p.placement
     if where.below_scale:
         return f"Below the standard scale: V {p.roughness:.4f} is under its floor {where.floor:.4f}."
-    side = "rougher" if where.jnd_from_nearest > 0 else "smoother"
+    steps = round(where.jnd_from_nearest, 1)
+    side = (f"{abs(steps):.1f} JND {'rougher' if steps > 0 else 'smoother'} than" if steps else
+            "0.0 JND from (as rough as)")
     off = "" if where.on_scale else " (extrapolated beyond the scale's ends)"
     return (f"On the standard scale{off}: feels like bumps {where.equivalent_lambda_mm:.3f} mm apart, "
-            f"{abs(where.jnd_from_nearest):.1f} JND {side} than {where.nearest_standard}.")
+            f"{side} {where.nearest_standard}.")
 
 
 class FeelView:
@@ -54,7 +56,7 @@ class FeelView:
             self.relief.set_url(shaded)
             self.relief.set_coordinates(points)
         width = nx * hm.pixel_mm
-        self.scene.move_camera(x=width / 2, y=-1.6 * width, z=width, look_at_x=width / 2, look_at_y=-width / 2,
+        self.scene.move_camera(x=width / 2, y=-1.05 * width, z=0.75 * width, look_at_x=width / 2, look_at_y=-width / 2,
                                duration=0)
         self.scene.props(f'aria-label="Shaded 3D relief of {name}, {size}, relief {relief:.3f} mm (drag to orbit)"')
         self.notes.set_text(" ".join(f"Note: {n}" for n in notes))

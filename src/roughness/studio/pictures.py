@@ -65,7 +65,7 @@ def scale_url(scale: StandardScale, roughness: float, placement: Placement) -> s
     ax.axhline(roughness, color="tab:red", lw=1, label=f"this texture: V = {roughness:.4f}")
     if placement.equivalent_lambda_mm is not None:
         ax.plot([placement.equivalent_lambda_mm], [roughness], "D", color="tab:red", ms=8)
-        ax.annotate(f"λ {placement.equivalent_lambda_mm:.3f} mm\n{placement.jnd_from_nearest:+.1f} JND from "
+        ax.annotate(f"λ {placement.equivalent_lambda_mm:.3f} mm\n{round(placement.jnd_from_nearest, 1) + 0.0:+.1f} JND from "
                     f"{placement.nearest_standard}", (placement.equivalent_lambda_mm, roughness),
                     textcoords="offset points", xytext=(8, -28), fontsize=8)
     ax.set(xlabel="wavelength λ of the standard bumps (mm)", ylabel=f"V ({scale.fidelity} FEM)",
