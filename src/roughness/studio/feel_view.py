@@ -2,6 +2,8 @@
 shaded 3D relief, and its place on the standard scale as a picture and in words."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from nicegui import ui
 
 from roughness.prediction import Prediction
@@ -41,14 +43,16 @@ class FeelView:
                     self.relief = None
                 self.scale = ui.image().classes("w-96").props('alt="standard scale: no texture yet" fit="contain"')
 
-    def show_texture(self, name: str, hm: Heightmap, notes: tuple[str, ...] = ()) -> None:
-        """The pictures of the heightmap ``hm``."""
+    def show_texture(self, name: str, hm: Heightmap, notes: tuple[str, ...] = (),
+                     drawn: TexturePictures | None = None) -> None:
+        """The pictures of the heightmap ``hm`` (``drawn``: already drawn, e.g. in a worker thread)."""
         ny, nx = hm.shape
         size = f"{nx * hm.pixel_mm:.3g} x {ny * hm.pixel_mm:.3g} mm"
         relief = float(hm.heights.max() - hm.heights.min())
-        self.heightmap.set_source(heightmap_url(hm))
+        drawn = drawn or TexturePictures.draw(hm)
+        self.heightmap.set_source(drawn.heightmap)
         self.heightmap.props(f'alt="Heightmap of {name}, {size}, relief {relief:.3f} mm: dark is low, light is high"')
-        points, shaded = relief_points(hm), shaded_url(hm)
+        points, shaded = drawn.points, drawn.shaded
         if self.relief is None:
             with self.scene:
                 self.relief = self.scene.texture(shaded, points)
@@ -63,11 +67,37 @@ class FeelView:
 
     def show_prediction(self, p: Prediction) -> None:
         """V, its uncertainty and engine (as `roughness predict` prints it), and the scale picture."""
+        self.show_answer(p)
+        self.show_scale(p)
+
+    def show_answer(self, p: Prediction) -> None:
+        """The answer in words: V, its uncertainty, the engine, the place on the scale."""
         from roughness.cli.predict import prediction_line
-        from roughness.perceptual_scale import load_scale
 
         self.answer.set_text(prediction_line(p))
-        words = placement_text(p)
-        self.placement.set_text(words)
-        self.scale.set_source(scale_url(load_scale(p.fidelity), p.roughness, p.placement))
-        self.scale.props(f'alt="Standard scale picture. {words}"')
+        self.placement.set_text(placement_text(p))
+
+    def show_scale(self, p: Prediction, drawn: str | None = None) -> None:
+        """The standard scale picture of ``p`` (``drawn``: its ``scale_picture``, already drawn)."""
+        self.scale.set_source(drawn or scale_picture(p))
+        self.scale.props(f'alt="Standard scale picture. {placement_text(p)}"')
+
+
+def scale_picture(p: Prediction) -> str:
+    """The standard scale picture (a data URL) of the prediction ``p``, on the scale of its fidelity."""
+    from roughness.perceptual_scale import load_scale
+
+    return scale_url(load_scale(p.fidelity), p.roughness, p.placement)
+
+
+@dataclass(frozen=True)
+class TexturePictures:
+    """The pictures of a heightmap (data URLs) and the points of its 3D relief, drawn apart from showing them."""
+
+    heightmap: str
+    shaded: str
+    points: list
+
+    @classmethod
+    def draw(cls, hm: Heightmap) -> TexturePictures:
+        return cls(heightmap_url(hm), shaded_url(hm), relief_points(hm))

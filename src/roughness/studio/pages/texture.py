@@ -3,8 +3,9 @@ verified by the spectral engine or the FEM in the background; tune it to a targe
 from __future__ import annotations
 
 import dataclasses
+import time
 
-from nicegui import ui
+from nicegui import run, ui
 
 import roughness
 from roughness.core.errors import InputError
@@ -14,7 +15,7 @@ from roughness.prediction import Prediction
 from roughness.surface.heightmap import Heightmap
 
 from ..downloads import KINDS, write_download
-from ..feel_view import FeelView
+from ..feel_view import FeelView, TexturePictures, scale_picture
 from ..job_panel import JobPanel
 from ..sessions import Session
 from ..texture_source import Texture, TextureSource
@@ -24,6 +25,7 @@ PATH = "/texture"
 TITLE = "Texture"
 SUMMARY = "open or make a texture, see how rough it feels, tune it, compare it, download it"
 LIVE_SECONDS = 0.05  # the sliders' answers are recomputed at most this often while they move
+PICTURES_REST_S = 0.3  # the pictures of a live answer are drawn once the sliders rest this long
 TUNE_VERIFIERS = ("spectral", "coarse", "default")  # roughness.design.evaluation.VERIFIERS, fastest first
 
 
@@ -37,6 +39,9 @@ class TexturePage:
         self.verified: Prediction | None = None
         self.compared: list[tuple[str, Heightmap]] = []
         self.stale = False  # the sliders moved since the last answer
+        self.pictures_due = False  # the answer is new, its pictures not yet drawn (drawn once the sliders rest)
+        self.rested_from = 0.0  # when the sliders' last answer was shown (time.monotonic)
+        self.busy = False  # a live answer or its pictures are being made
         TextureSource(session, self.set_texture)
         self.view = FeelView()
         self._sliders()
@@ -82,22 +87,46 @@ class TexturePage:
         self.stale = self.texture is not None
         self.factors.set_text(f"height x {float(self.height.value):.2f}, lateral x {float(self.lateral.value):.2f}")
 
-    def _live(self) -> None:
-        if self.stale:
-            self.stale = False
-            self._answer("surrogate")
+    async def _live(self) -> None:
+        """While the sliders move, the answer in words (the surrogate, in a worker thread, so the page stays
+        responsive); its pictures (tenths of a second to draw) once the sliders have rested ``PICTURES_REST_S``."""
+        if self.busy or self.texture is None:
+            return
+        self.busy = True
+        try:
+            if self.stale:
+                self.stale = False
+                hm, name = self.current(), self.current_name()
+                p = await run.io_bound(self._predict, name, hm, "surrogate")
+                if p is not None:
+                    self.view.show_answer(p)
+                    self.pictures_due, self.rested_from = True, time.monotonic()
+            elif self.pictures_due and time.monotonic() - self.rested_from >= PICTURES_REST_S:
+                self.pictures_due = False
+                hm, name, p = self.current(), self.current_name(), self.prediction
+                drawn, scale = await run.io_bound(lambda: (TexturePictures.draw(hm), scale_picture(p)))
+                self.view.show_texture(name, hm, self.texture.notes, drawn)
+                self.view.show_scale(p, scale)
+        finally:
+            self.busy = False
 
-    def _answer(self, engine: str) -> None:
-        hm = self.current()
-        name = self.current_name()
+    def _predict(self, name: str, hm: Heightmap, engine: str) -> Prediction | None:
+        """V of the texture (``roughness.predict``); None with the error shown."""
         try:
             [p] = roughness.predict({name: hm}, engine=engine, units_ok=True)  # units checked as it was read
         except InputError as err:
             self.view.answer.set_text(f"error: {err}")
-            return
+            return None
         self.prediction = p
-        self.view.show_texture(name, hm, self.texture.notes)
-        self.view.show_prediction(p)
+        return p
+
+    def _answer(self, engine: str) -> None:
+        """The answer and all its pictures at once (a texture just opened)."""
+        hm, name = self.current(), self.current_name()
+        p = self._predict(name, hm, engine)
+        if p is not None:
+            self.view.show_texture(name, hm, self.texture.notes)
+            self.view.show_prediction(p)
 
     # verify ------------------------------------------------------------------------------------------------------
 
