@@ -25,7 +25,7 @@ PATH = "/texture"
 TITLE = "Texture"
 SUMMARY = "open or make a texture, see how rough it feels, tune it, compare it, download it"
 LIVE_SECONDS = 0.05  # the sliders' answers are recomputed at most this often while they move
-PICTURES_REST_S = 0.3  # the pictures of a live answer are drawn once the sliders rest this long
+PICTURES_REST_S = 0.6  # the pictures of a live answer are drawn once the sliders rest this long
 TUNE_VERIFIERS = ("spectral", "coarse", "default")  # roughness.design.evaluation.VERIFIERS, fastest first
 
 
