@@ -1,6 +1,7 @@
 """The studio's foundation: pages, sessions, downloads, the token gate, jobs, uploads, the command."""
 from __future__ import annotations
 
+import asyncio
 import subprocess
 import sys
 import time
@@ -32,6 +33,9 @@ async def test_each_tab_has_its_own_session_and_folder(studio):
     assert len(studio.sessions) == 2
     folders = {s.folder for s in studio.sessions._live.values()}
     assert len(folders) == 2 and all(f.is_dir() for f in folders)
+    other.client.delete()  # the tab goes away: its session and folder with it
+    await asyncio.sleep(0.1)  # (delete handlers may run as tasks)
+    assert len(studio.sessions) == 1 and sum(f.is_dir() for f in folders) == 1
 
 
 async def test_downloads_only_from_the_session_folder(studio, tmp_path):

@@ -10,7 +10,7 @@ import re
 import secrets
 import shutil
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from roughness.core.errors import InputError
@@ -21,12 +21,11 @@ _FILE_NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]{0,199}")
 
 @dataclass
 class Session:
-    """One browser tab's state: its id (a random token, also the secret part of its download addresses) and its
-    temporary folder; ``state`` holds what the tab's page keeps between events."""
+    """One browser tab's session: its id (a random token, also the secret part of its download addresses) and its
+    temporary folder (the page's own state lives in its page object, one per tab)."""
 
     id: str
     folder: Path
-    state: dict = field(default_factory=dict)
 
     def path(self, name: str) -> Path:
         """Where the session keeps the file ``name`` (a plain file name, checked: ``InputError`` otherwise)."""

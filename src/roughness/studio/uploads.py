@@ -29,7 +29,6 @@ class Opened:
 
     heightmap: Heightmap
     loaded: Loaded
-    name: str
 
     def notes(self) -> list[str]:
         return self.loaded.lines()
@@ -72,7 +71,7 @@ def open_heightmap(path: Path, pixel_mm: float | None = None, height_mm: float |
     from roughness.cli.common import load
 
     hm, loaded = load(reading_args(pixel_mm, height_mm, units_ok), str(path))
-    return Opened(hm, loaded, path.name)
+    return Opened(hm, loaded)
 
 
 def missing_units(err: InputError) -> tuple[str, ...]:
