@@ -31,15 +31,19 @@ def browser():
 
 @pytest.fixture
 def page(browser):
-    """A fresh tab; the console errors and uncaught page errors it saw are checked after the test."""
+    """A fresh tab; the console errors, uncaught page errors and requests to anywhere but the studio (it works
+    offline: no CDN) it saw are checked after the test."""
     chromium, url = browser
     tab = chromium.new_page(viewport={"width": 1280, "height": 900}, base_url=url)
     errors: list[str] = []
+    elsewhere: list[str] = []
     tab.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
     tab.on("pageerror", lambda e: errors.append(str(e)))
+    tab.on("request", lambda r: None if r.url.startswith((url, "data:")) else elsewhere.append(r.url))
     yield tab
     tab.close()
     assert not errors, f"console errors: {errors}"
+    assert not elsewhere, f"requests outside the studio: {elsewhere}"
 
 
 def serious_violations(page) -> list[str]:
