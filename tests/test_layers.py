@@ -1,5 +1,5 @@
 """The package's layers import only downward: core <- surface <- simulate <- dataset <- surrogate <- engines <-
-design / perception / objects <- cli. Every import counts, at module level or inside a function (a lazy import
+design / perception / objects <- cli, studio. Every import counts, at module level or inside a function (a lazy import
 is still a dependency), except imports for type checkers only (``if TYPE_CHECKING:``)."""
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ LAYERS = [
      "roughness.report", "roughness.curvature_correction", "roughness.result_cache"),
     ("roughness.design", "roughness.perception", "roughness.objects", "roughness.fuzzy_feel", "roughness.fuzzy_tune",
      "roughness.fuzzy_palette"),
-    ("roughness.cli",),
+    ("roughness.cli", "roughness.studio"),  # the two front ends: the studio shows what the CLI prints, in its words
 ]
 def layer_of(module: str) -> int | None:
     """The layer of a roughness module (None: the package's lazy front door, or not ours)."""
