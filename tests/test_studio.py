@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import asyncio
+import os
 import subprocess
 import sys
 import time
@@ -141,3 +142,35 @@ def test_command_without_the_extra_exits_2_with_the_extra_named(tmp_path):
                          text=True, env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"})
     assert run.returncode == 2
     assert "'studio' extra" in run.stderr and "Traceback" not in run.stderr
+
+
+def test_command_on_another_host_warns_and_needs_its_token():
+    import re
+    import urllib.error
+    import urllib.request
+
+    from studio_helpers import free_port
+
+    port = free_port()
+    env = {k: v for k, v in os.environ.items() if k != "PYTEST_CURRENT_TEST"}
+    server = subprocess.Popen([sys.executable, "-m", "roughness.cli", "studio", "--host", "127.0.0.2", "--port",
+                               str(port), "--no-browser"], stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        line = server.stderr.readline()
+        assert "warning: serving on 127.0.0.2" in line
+        token = re.search(r"\?token=(\S+)", line).group(1)
+        base = f"http://127.0.0.2:{port}/texture"
+        for _ in range(100):
+            try:
+                urllib.request.urlopen(base, timeout=1)
+            except urllib.error.HTTPError as refused:
+                assert refused.code == 403
+                break
+            except OSError:
+                time.sleep(0.2)
+        else:
+            raise AssertionError("the server never answered")
+        assert urllib.request.urlopen(f"{base}?token={token}", timeout=5).status == 200
+    finally:
+        server.terminate()
+        server.wait(timeout=10)
