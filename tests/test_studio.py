@@ -13,7 +13,7 @@ from roughness.core.errors import InputError
 from roughness.studio import jobs
 from roughness.studio.app import PAGES, StudioSettings
 from roughness.studio.sessions import Sessions
-from roughness.studio.uploads import MAX_UPLOAD_BYTES, missing_units, open_heightmap, store
+from roughness.studio.uploads import MAX_UPLOAD_BYTES, missing_units, open_heightmap, upload_path
 from studio_helpers import running_studio
 
 pytestmark = pytest.mark.anyio
@@ -113,10 +113,11 @@ def test_job_cancel_ends_its_process():
 
 def test_upload_limit_and_stored_name(tmp_path):
     session = Sessions().open()
-    path = store(session, "../../etc/passwd", b"abc")
+    path = upload_path(session, "../../etc/passwd", 3)
     assert path.parent == session.folder and path.name == "passwd"
+    assert upload_path(session, "big.png", MAX_UPLOAD_BYTES).name == "big.png"
     with pytest.raises(InputError, match="upload limit"):
-        store(session, "big.png", bytearray(MAX_UPLOAD_BYTES + 1))
+        upload_path(session, "big.png", MAX_UPLOAD_BYTES + 1)
 
 
 def test_upload_read_as_the_cli_reads_it(tmp_path):

@@ -14,7 +14,7 @@ from roughness.core.errors import InputError
 from roughness.surface.heightmap import Heightmap
 
 from .sessions import Session
-from .uploads import MAX_UPLOAD_BYTES, Opened, missing_units, open_heightmap, store
+from .uploads import MAX_UPLOAD_BYTES, Opened, missing_units, open_heightmap, upload_path
 
 EXAMPLE = "standard-1.0mm.png"
 EXAMPLE_UNITS = {"pixel_mm": 0.05, "height_mm": 1.0}  # the README's: roughness predict ... --pixel-mm 0.05 --height-mm 1
@@ -99,12 +99,13 @@ class TextureSource:
         self._take(lambda: make_named(self.name.value or "", self.params.value or "", int(seed or 0)))
 
     async def on_upload(self, event: events.UploadEventArguments) -> None:
-        data = await event.file.read()
         try:
-            self.pending = store(self.session, event.file.name, data)
+            path = upload_path(self.session, event.file.name, event.file.size())
         except InputError as err:
             self.error.set_text(f"error: {err}")
             return
+        await event.file.save(path)
+        self.pending = path
         self.pixel_mm.value = self.height_mm.value = None
         self.read_pending(first=True)
 

@@ -40,14 +40,13 @@ def stored_name(name: str) -> str:
     return base[-120:] or "upload"
 
 
-def store(session: Session, name: str, data: bytes) -> Path:
-    """Keep the uploaded ``data`` (file ``name``) in the session's folder, after the size limit."""
-    if len(data) > MAX_UPLOAD_BYTES:
-        raise InputError(f"{name}: {len(data):,} bytes is above the upload limit of {MAX_UPLOAD_BYTES:,} bytes "
+def upload_path(session: Session, name: str, size: int) -> Path:
+    """Where the session keeps the uploaded file ``name`` of ``size`` bytes; InputError above the size limit
+    (checked before anything is read or written)."""
+    if size > MAX_UPLOAD_BYTES:
+        raise InputError(f"{name}: {size:,} bytes is above the upload limit of {MAX_UPLOAD_BYTES:,} bytes "
                          f"({MAX_UPLOAD_BYTES // 2**20} MiB)")
-    path = session.path(stored_name(name))
-    path.write_bytes(data)
-    return path
+    return session.path(stored_name(name))
 
 
 def reading_args(pixel_mm: float | None = None, height_mm: float | None = None,
