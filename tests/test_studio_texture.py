@@ -109,6 +109,19 @@ async def test_tune_to_a_target_lambda(studio):
     assert "lambda" in text
 
 
+async def test_a_job_error_is_the_clis_message(studio):
+    await open_example(studio)
+    studio.user.find(marker="tune-value").elements.pop().value = 0.0001
+    studio.user.find(marker="tune").click()
+    shown = await wait_for(studio.user, "tune-progress", "error: ", timeout_s=300)
+    run = subprocess.run([sys.executable, "-m", "roughness.cli", "tune", str(example_path()), *README_UNITS,
+                          "--target-lambda", "0.0001", "--verify", "spectral", "--out", "never.npz"],
+                         capture_output=True, text=True)
+    assert run.returncode == 2 and "Traceback" not in shown
+    assert shown == run.stderr.strip().splitlines()[-1].removeprefix("roughness: ")  # after its progress line
+    assert text_of(studio.user, "tune-result") == ""  # nothing made, nothing lost: the texture is as it was
+
+
 async def test_compare_gives_the_jnd_matrix_and_verdicts(studio):
     await studio.user.open("/texture")
     for name in ("standard-0.75", "standard-1.5"):

@@ -30,11 +30,13 @@ class JobPanel:
     def running(self) -> bool:
         return self.job is not None and self.job.state.status == RUNNING
 
-    def start(self, name: str, function: Callable, *args: object, on_done: Callable[[object], None]) -> None:
-        """Start ``function(report, *args)`` as a background job (one at a time: a running one is cancelled)."""
+    def start(self, name: str, function: Callable, *args: object, on_done: Callable[[object], None],
+              flags: dict[str, str] | None = None) -> None:
+        """Start ``function(report, *args)`` as a background job (one at a time: a running one is cancelled);
+        ``flags``: the command line's, to word its errors (``jobs.cli_flags``)."""
         if self.running:
             self.cancel()
-        self.job, self._on_done = Job(name, function, *args), on_done
+        self.job, self._on_done = Job(name, function, *args, flags=flags), on_done
         self.box.set_visibility(True)
         self.cancel_button.set_visibility(True)
         self._show(self.job.state)

@@ -47,8 +47,9 @@ class JobState:
         return ", ".join(parts)
 
 
-def _child(function: Callable, args: tuple, messages) -> None:
-    """The job's process: run ``function`` and send its progress, then its result or its error message."""
+def _child(function: Callable, args: tuple, flags: dict[str, str], messages) -> None:
+    """The job's process: run ``function`` and send its progress, then its result or its error message (parameters
+    named by ``flags``, as the command line names them)."""
     from roughness.cli.common import error_message
     from roughness.core.errors import InputError, SimulationError
 
@@ -58,20 +59,33 @@ def _child(function: Callable, args: tuple, messages) -> None:
     try:
         messages.put((DONE, function(report, *args)))
     except InputError as err:
-        messages.put((FAILED, f"error: {error_message(err, {})}"))
+        messages.put((FAILED, f"error: {error_message(err, flags)}"))
     except SimulationError as err:
         messages.put((FAILED, f"failed: {err}"))
     except Exception as err:  # noqa: BLE001  # any other: one line, not a traceback
         messages.put((FAILED, f"failed: {type(err).__name__}: {err}"))
 
 
-class Job:
-    """One background job: ``poll()`` gives its state, ``cancel()`` ends it."""
+def cli_flags(command: str) -> dict[str, str]:
+    """The flags of `roughness COMMAND` by the library's parameter names (its parser's own map)."""
+    import argparse
 
-    def __init__(self, name: str, function: Callable, *args: object) -> None:
+    from roughness.cli import build_parser
+
+    parser = build_parser(command)
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return sub.choices[command].get_default("flags")
+
+
+class Job:
+    """One background job: ``poll()`` gives its state, ``cancel()`` ends it. ``flags``: the command line's flags by
+    the library's parameter names (``cli_flags``), so that an error names them as the CLI would."""
+
+    def __init__(self, name: str, function: Callable, *args: object, flags: dict[str, str] | None = None) -> None:
         context = multiprocessing.get_context("spawn")
         self._messages = context.Queue()
-        self._process = context.Process(target=_child, args=(function, args, self._messages), daemon=True)
+        self._process = context.Process(target=_child, args=(function, args, flags or {}, self._messages),
+                                        daemon=True)
         self._start = time.monotonic()
         self.state = JobState(name)
         self._process.start()

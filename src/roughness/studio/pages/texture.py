@@ -17,6 +17,7 @@ from roughness.surface.heightmap import Heightmap
 from ..downloads import KINDS, write_download
 from ..feel_view import FeelView, TexturePictures, scale_picture
 from ..job_panel import JobPanel
+from ..jobs import cli_flags
 from ..sessions import Session
 from ..texture_source import Texture, TextureSource
 from ..work import VERIFY_ENGINES, tune, verify
@@ -144,7 +145,7 @@ class TexturePage:
             self.verify_result.set_text("Open or make a texture first.")
             return
         self.verify_job.start(f"verify ({self.verify_engine.value})", verify, self.current_name(), self.current(),
-                              self.verify_engine.value, on_done=self._verified)
+                              self.verify_engine.value, on_done=self._verified, flags=cli_flags("predict"))
 
     def _verified(self, p: Prediction) -> None:
         from roughness.cli.predict import prediction_line
@@ -175,7 +176,7 @@ class TexturePage:
         value = self.tune_value.value
         lam, jnd = (value, None) if self.tune_kind.value == "lambda" else (None, value)
         self.tune_job.start("tune", tune, self.current(), self.tune_by.value, lam, jnd, self.tune_verifier.value,
-                            on_done=self._tuned)
+                            on_done=self._tuned, flags=cli_flags("tune"))
 
     def _tuned(self, result) -> None:
         self.tune_result.set_text(f"Tuned: {result!r}. The tuned texture is now the page's texture.")
