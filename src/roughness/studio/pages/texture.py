@@ -14,7 +14,8 @@ from roughness.design.tune import FACTOR_RANGE
 from roughness.prediction import Prediction
 from roughness.surface.heightmap import Heightmap
 
-from ..downloads import KINDS, write_download
+from ..compare_panel import ComparePanel
+from ..downloads import DownloadPanel
 from ..feel_view import FeelView, TexturePictures, scale_picture
 from ..job_panel import JobPanel
 from ..jobs import cli_flags
@@ -34,11 +35,9 @@ class TexturePage:
     """The page's controls and results for one session."""
 
     def __init__(self, session: Session) -> None:
-        self.session = session
         self.texture: Texture | None = None
         self.prediction: Prediction | None = None
         self.verified: Prediction | None = None
-        self.compared: list[tuple[str, Heightmap]] = []
         self.stale = False  # the sliders moved since the last answer
         self.pictures_due = False  # the answer is new, its pictures not yet drawn (drawn once the sliders rest)
         self.rested_from = 0.0  # when the sliders' last answer was shown (time.monotonic)
@@ -48,8 +47,8 @@ class TexturePage:
         self._sliders()
         self._verify()
         self._tune()
-        self._compare()
-        self._downloads()
+        ComparePanel(self.shown)
+        DownloadPanel(session, self.downloadable)
         ui.timer(LIVE_SECONDS, self._live)
 
     # the texture and its live answer ---------------------------------------------------------------------------
@@ -183,96 +182,20 @@ class TexturePage:
         name = f"{self.texture.name} tuned ({result.by} x {result.factor:.3f})"
         self.set_texture(dataclasses.replace(self.texture, heightmap=result.heightmap, name=name))
 
-    # compare -----------------------------------------------------------------------------------------------------
+    def shown(self) -> tuple[str, Heightmap] | None:
+        """The texture as the page shows it (name, heightmap), or None."""
+        return None if self.texture is None else (self.current_name(), self.current())
 
-    def _compare(self) -> None:
-        with ui.card().classes("w-full"):
-            ui.label("Compare textures").classes("text-lg").props('role="heading" aria-level="2"')
-            with ui.row().classes("gap-4"):
-                ui.button("Add this texture", on_click=self.add_to_comparison).props(
-                    'aria-label="Add the current texture to the comparison"').mark("compare-add")
-                ui.button("Compare", on_click=self.compare).mark("compare")
-                ui.button("Clear", on_click=self.clear_comparison).props('aria-label="Clear the comparison"')
-            self.compare_list = ui.label("No textures to compare yet.")
-            self.compare_table = ui.table(columns=[], rows=[]).classes("w-full")
-            self.compare_table.set_visibility(False)
-            self.verdicts = ui.column().props('role="status" aria-live="polite"').mark("verdicts")
-
-    def add_to_comparison(self) -> None:
-        if self.texture is None:
-            self.compare_list.set_text("Open or make a texture first.")
-            return
-        self.compared.append((self.current_name(), self.current()))
-        self.compare_list.set_text("To compare: " + "; ".join(n for n, _ in self.compared))
-
-    def clear_comparison(self) -> None:
-        self.compared.clear()
-        self.compare_list.set_text("No textures to compare yet.")
-        self.compare_table.set_visibility(False)
-        self.verdicts.clear()
-
-    def compare(self) -> None:
-        """The JND matrix (row texture against column texture, signed: positive, the row is rougher) and the
-        verdict of each pair, as `roughness jnd A B` gives them."""
-        from roughness.cli.jnd import distance_line, jnd_between, uncertainty_kinds
-
-        if len(self.compared) < 2:
-            self.compare_list.set_text("Add at least two textures to compare.")
-            return
-        names = [f"{i + 1}: {name}" for i, (name, _) in enumerate(self.compared)]
-        predictions = roughness.predict({n: hm for n, (_, hm) in zip(names, self.compared)}, units_ok=True)
-        columns = [{"name": "texture", "label": "texture", "field": "texture", "align": "left"},
-                   {"name": "V", "label": "V", "field": "V"}]
-        columns += [{"name": str(j), "label": f"JND vs {j + 1}", "field": str(j)} for j in range(len(names))]
-        rows = []
-        self.verdicts.clear()
-        for i, pa in enumerate(predictions):
-            se = pa.roughness_stderr if pa.roughness_stderr is not None else pa.roughness_std
-            row = {"texture": names[i], "V": f"{pa.roughness:.4f}" + (f" ± {se:.4f}" if se is not None else "")}
-            for j, pb in enumerate(predictions):
-                d = jnd_between(pa, pb)
-                row[str(j)] = "-" if i == j else "none" if d.jnd is None else f"{d.jnd:+.2f}"
-                if j > i:
-                    with self.verdicts:
-                        ui.label(f"{i + 1} vs {j + 1}: " + distance_line(d, uncertainty_kinds(pa, pb)))
-            rows.append(row)
-        self.compare_table.columns, self.compare_table.rows = columns, rows
-        self.compare_table.set_visibility(True)
-        self.compare_table.update()
-
-    # downloads ---------------------------------------------------------------------------------------------------
-
-    def _downloads(self) -> None:
-        with ui.card().classes("w-full"):
-            ui.label("Downloads").classes("text-lg").props('role="heading" aria-level="2"')
-            with ui.row().classes("gap-4"):
-                for kind, label in KINDS.items():
-                    ui.button(f"Download {label}", on_click=lambda k=kind: self.download(k)).mark(f"download-{kind}")
-            self.download_links = ui.column().mark("download-links")
-
-    def report(self) -> dict:
-        """The JSON report: the texture, the sliders, the answer (as `roughness predict --json`), any verification."""
-        return {"texture": self.texture.name, "recipe": self.texture.recipe,
-                "height_factor": float(self.height.value), "lateral_factor": float(self.lateral.value),
-                "prediction": self.prediction.as_dict(), "notes": list(self.texture.notes),
-                "verified": None if self.verified is None else self.verified.as_dict()}
-
-    def download(self, kind: str) -> None:
+    def downloadable(self) -> tuple[Heightmap, dict] | None:
+        """The texture as shown and its JSON report: the texture, the sliders, the answer (as `roughness predict
+        --json` gives it), any verification."""
         if self.texture is None or self.prediction is None:
-            with self.download_links:
-                ui.label("Open or make a texture first.")
-            return
-        stem = "texture" if kind != "json" else "report"
-        try:
-            path = write_download(self.session, stem, kind, self.current(), self.report())
-        except InputError as err:
-            with self.download_links:
-                ui.label(f"error: {err}").props('role="alert"')
-            return
-        url = self.session.download_url(path.name)
-        with self.download_links:
-            ui.link(f"{path.name} ({path.stat().st_size:,} bytes)", url).props(f'download="{path.name}"')
-        ui.download(url, path.name)
+            return None
+        return self.current(), {"texture": self.texture.name, "recipe": self.texture.recipe,
+                                "height_factor": float(self.height.value),
+                                "lateral_factor": float(self.lateral.value), "prediction": self.prediction.as_dict(),
+                                "notes": list(self.texture.notes),
+                                "verified": None if self.verified is None else self.verified.as_dict()}
 
 
 def build(session: Session) -> None:
