@@ -1,4 +1,5 @@
-"""A picture of an object coloured by how it feels: V, or JNDs from a reference texture.
+"""A picture of an object coloured by how it feels: V, or JNDs from a reference texture (``feel_figure``; the
+faces and their colours alone: ``feel_colours``, for other views such as the studio's 3D view).
 
 Each face takes the value of the nearest evaluation point of the ``FeelMap`` (within 1.5 spacings);
 faces outside the textured regions are light grey, faces whose nearest point was refused dark grey.
@@ -6,6 +7,8 @@ Two views, front and back. Long faces are split to half the spacing for the draw
 ``MAX_FACES`` faces are drawn (a sample where there are more, said in the title).
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -20,13 +23,25 @@ REFUSED = (0.3, 0.3, 0.3, 1.0)
 COLOURINGS = ("roughness", "jnd")
 
 
-def feel_figure(mesh, feel: FeelMap, textured: np.ndarray | None = None, by: str = "roughness", title: str = ""):
-    """The object (trimesh.Trimesh) coloured by ``by`` (``roughness``: V; ``jnd``: JNDs from the map's
-    reference), with a colour bar; ``textured``: bool per face (default: all). Returns a matplotlib Figure."""
+@dataclass(frozen=True)
+class FeelColours:
+    """An object's faces coloured by how they feel: ``triangles`` (n, 3, 3) mm as drawn (long faces split),
+    ``colours`` (n, 4) RGBA 0..1, the colour scale (``norm``, ``cmap``: matplotlib's) and its ``label``; ``note``
+    says when only a sample of the faces is drawn."""
+
+    triangles: np.ndarray
+    colours: np.ndarray
+    norm: object
+    cmap: object
+    label: str
+    note: str = ""
+
+
+def feel_colours(mesh, feel: FeelMap, textured: np.ndarray | None = None, by: str = "roughness") -> FeelColours:
+    """The faces of ``mesh`` (trimesh.Trimesh) coloured by ``by`` (``roughness``: V; ``jnd``: JNDs from the map's
+    reference; module docstring); ``textured``: bool per face (default: all)."""
     from matplotlib import colormaps
-    from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize, TwoSlopeNorm
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
     from scipy.spatial import cKDTree
 
     if by not in COLOURINGS:
@@ -59,19 +74,30 @@ def feel_figure(mesh, feel: FeelMap, textured: np.ndarray | None = None, by: str
     ok = mapped & np.isfinite(face_values)
     colours[ok] = cmap(norm(face_values[ok]))
     colours[mapped & ~np.isfinite(face_values)] = REFUSED
+    return FeelColours(triangles, colours, norm, cmap, label, note)
+
+
+def feel_figure(mesh, feel: FeelMap, textured: np.ndarray | None = None, by: str = "roughness", title: str = ""):
+    """The object (trimesh.Trimesh) coloured by ``by`` (``roughness``: V; ``jnd``: JNDs from the map's
+    reference), with a colour bar; ``textured``: bool per face (default: all). Returns a matplotlib Figure."""
+    from matplotlib.cm import ScalarMappable
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    drawn = feel_colours(mesh, feel, textured, by)
     fig = new_figure(figsize=(10, 5), layout="constrained")
     lo, hi = mesh.bounds
     for k, azimuth in enumerate((-60, 120)):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
-        ax.add_collection3d(Poly3DCollection(triangles, facecolors=colours, edgecolors="none", linewidths=0))
+        ax.add_collection3d(Poly3DCollection(drawn.triangles, facecolors=drawn.colours, edgecolors="none",
+                                             linewidths=0))
         ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x (mm)", ylabel="y (mm)",
                zlabel="z (mm)")
         ax.set_box_aspect(hi - lo)
         ax.view_init(elev=25, azim=azimuth)
-    fig.colorbar(ScalarMappable(norm, cmap), ax=fig.axes, shrink=0.7, label=label)
+    fig.colorbar(ScalarMappable(drawn.norm, drawn.cmap), ax=fig.axes, shrink=0.7, label=drawn.label)
     refused = feel.method.count("refused")
     fig.suptitle((title + "\n" if title else "") + f"{len(feel.points)} footprints {feel.spacing_mm:g} mm apart, "
-                 f"{refused} refused (dark grey), untextured light grey" + note)
+                 f"{refused} refused (dark grey), untextured light grey" + drawn.note)
     return fig
 
 
