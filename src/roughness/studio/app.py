@@ -19,7 +19,8 @@ from starlette.responses import FileResponse, PlainTextResponse
 from .sessions import Sessions
 
 PAGES = ["roughness.studio.pages.texture", "roughness.studio.pages.printed",
-         "roughness.studio.pages.tactile"]
+         "roughness.studio.pages.tactile",
+         "roughness.studio.pages.object"]
 """The studio's pages, in the order of its navigation bar (module names)."""
 TITLE = "Roughness Studio"
 PRIMARY = "#1d4e89"  # buttons: white text on it has a contrast of 8.6:1 (WCAG AA asks 4.5:1)

@@ -1,0 +1,123 @@
+"""The Object page through NiceGUI's test client (no browser): open a mesh into the 3D view, preview it textured,
+map its feel (legend and table as the command prints them), tune, and download the textured mesh."""
+from __future__ import annotations
+
+import io
+
+import pytest
+import trimesh
+from nicegui import ui
+
+from roughness.studio.pages.object import example_path
+
+pytestmark = pytest.mark.anyio
+JOB_RETRIES = 600  # should_see waits 0.1 s a try: a job (a fresh process, then the library) within a minute
+
+
+def field(user, kind, label: str):
+    """The one element of ``kind`` whose label contains ``label``."""
+    [element] = [e for e in user.find(kind).elements if label in (e.props.get("label") or "")]
+    return element
+
+
+def views(user) -> list[str]:
+    """The addresses of the glTF files in the 3D view."""
+    [scene] = user.find(ui.scene).elements
+    return [obj.args[0] for obj in scene.objects.values() if type(obj).__name__ == "Gltf"]
+
+
+async def open_example(user) -> None:
+    await user.open("/object")
+    user.find("Open the example knob").click()
+    await user.should_see("knob.stl: 128 triangles, 24.0 x 24.0 x 24.0 mm")
+
+
+async def test_example_opens_into_the_3d_view(studio):
+    await open_example(studio.user)
+    [address] = views(studio.user)
+    response = await studio.http.get(address)
+    shown = trimesh.load(io.BytesIO(response.content), file_type="glb", force="mesh")
+    assert len(shown.faces) == 128 and shown.is_watertight
+    await studio.user.should_see("The 3D view shows the object as read, untextured.")
+
+
+async def test_preview_then_feel_map_with_legend_and_the_commands_table(studio):
+    from roughness.cli.object_feel import feel_lines
+    from roughness.dataset.textures import named_texture
+    from roughness.objects.feel import feel_map
+    from roughness.objects.layout import make_mapping
+    from roughness.objects.meshes import read_mesh
+
+    user = studio.user
+    await open_example(user)
+    user.find("Preview the textured object").click()
+    await user.should_see("preview: textured 128 of 128 faces with triangles of at most 1 mm", retries=JOB_RETRIES)
+    field(user, ui.select, "Engine").set_value("surrogate")
+    user.find("Map the feel").click()
+    await user.should_see("Colours: JND from standard-1.0 (positive: rougher)", retries=JOB_RETRIES)
+    await user.should_see("light grey untextured, dark grey refused")
+    mesh = read_mesh(example_path()).mesh
+    texture = named_texture("standard-1.0")
+    expected = feel_map(mesh, make_mapping("triplanar", texture, mesh), {"all": mesh.faces[:, 0] >= 0}, None,
+                        "surrogate", reference="standard-1.0")
+    for line in feel_lines(expected, "knob.stl")[1:]:  # the first line holds the seconds it took
+        await user.should_see(line)
+    assert len(views(user)) == 1  # the feel map replaced the preview
+
+
+async def test_region_errors_are_the_commands_messages(studio):
+    user = studio.user
+    await open_example(user)
+    field(user, ui.select, "Region kind").set_value("cone")
+    field(user, ui.input, "Region parameters").set_value("0,0,1")
+    user.find("Preview the textured object").click()
+    await user.should_see("error: ")
+    field(user, ui.input, "Region parameters").set_value("0,0,-1,10")  # the bottom: no textured wall left
+    field(user, ui.select, "Region kind").set_value("box")
+    field(user, ui.input, "Region parameters").set_value("100,100,100,101,101,101")
+    user.find("Preview the textured object").click()
+    await user.should_see("selects no face of the mesh")
+
+
+async def test_clicking_the_object_picks_faces(studio):
+    user = studio.user
+    await open_example(user)
+    field(user, ui.select, "Region kind").set_value("faces")
+    mesh = trimesh.load(str(example_path()))
+    top = int(mesh.face_normals[:, 2].argmax())
+    centre = mesh.triangles_center[top]
+    [scene] = user.find(ui.scene).elements
+    scene._handle_click(type("Event", (), {"args": {  # the arguments NiceGUI's scene.js sends for a click
+        "click_type": "click", "button": 0, "alt_key": False, "ctrl_key": False, "meta_key": False,
+        "shift_key": False, "hits": [{"object_id": "x", "object_name": "", "point": dict(zip("xyz", centre))}]}})())
+    await user.should_see(f"face {top} added to the region: 1 face(s) picked")
+    assert field(user, ui.input, "Region parameters").value == str(top)
+
+
+async def test_full_resolution_estimate_then_a_watertight_download(studio):
+    user = studio.user
+    await open_example(user)
+    field(user, ui.number, "Edge, mm").set_value(1.5)
+    user.find("Estimate").click()
+    await user.should_see("full resolution, edges of 1.5 mm: expected: about ")
+    field(user, ui.select, "Format").set_value("3MF")
+    user.find("Make the full-resolution mesh").click()
+    await user.should_see("Download knob-textured-1.3mf", retries=JOB_RETRIES)
+    [link] = [e for e in user.find(ui.link).elements if "knob-textured-1.3mf" in e.text]
+    response = await studio.http.get(link.props["href"])
+    mesh = trimesh.load(io.BytesIO(response.content), file_type="3mf", force="mesh")
+    assert mesh.is_watertight and mesh.is_volume
+    assert f"({len(mesh.faces):,} triangles" in link.text
+
+
+async def test_tune_on_the_object_reaches_the_target_and_is_used_next(studio):
+    user = studio.user
+    await open_example(user)
+    field(user, ui.select, "Mapping").set_value("cylinder")
+    field(user, ui.select, "Region kind").set_value("angle")
+    field(user, ui.input, "Region parameters").set_value("0,0,1,45,135")
+    field(user, ui.number, "Target equivalent wavelength").set_value(1.2)
+    user.find(kind=ui.button, content="Tune").click()
+    await user.should_see("target lambda 1.200 mm", retries=JOB_RETRIES)
+    await user.should_see("JND from the target (reached within 0.1 JND")
+    await user.should_see("now use standard-1.0 tuned (height x ")
