@@ -57,14 +57,14 @@ async def test_upload_palette_plate_guidelines_and_watertight_downloads(studio):
     await user.should_see("neighbours >= 2 JND apart on the plate")
     [session] = studio.sessions._live.values()
     for kind in ("stl", "3mf"):
-        [link] = [e for e in user.find(ui.link).elements if f"as {kind.upper()}" in e.text]
+        [link] = [e for e in user.find(ui.link).elements if f"plate-1.{kind} (" in e.text]
         response = await studio.http.get(link.props["href"])
         assert response.status_code == 200
         mesh = trimesh.load(io.BytesIO(response.content), file_type=kind, force="mesh")
         assert mesh.is_watertight and mesh.is_volume
         width_mm = 60.0  # the page's default plate width
         assert mesh.extents[0] == pytest.approx(width_mm, abs=0.2)  # one pixel (0.1 mm) each side at most
-    assert session.file("plate-1.stl") is not None
+    assert {f.name for f in session.folder.iterdir()} >= {"plate-1.npz", "plate-1.json", "plate-1.stl", "plate-1.3mf"}
 
 
 async def test_plate_before_a_palette_is_a_message_not_a_job(studio):

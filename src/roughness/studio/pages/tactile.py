@@ -4,13 +4,12 @@ previewed as relief and as feel map, the tactile-graphics guidelines checked, th
 Everything comes from the library as ``roughness tactile-image`` uses it: ``roughness.design.colours`` clusters the
 colours, ``roughness.design.layout`` says what each becomes, ``roughness.palette`` makes the textures,
 ``roughness.tactile_image`` the plate, ``roughness.design.guidelines`` checks it (the guidelines it cites), and
-``roughness.objects.meshes.write_mesh`` writes the files after checking that they are closed solids. Making the
-palette and the plate run as background jobs.
+the studio's ``downloads`` writes its files (the STL and 3MF checked closed solids). Making the palette and the
+plate run as background jobs.
 """
 from __future__ import annotations
 
 import io
-import tempfile
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -27,6 +26,7 @@ from roughness.design.palette import Palette
 from roughness.design.tactile_image import WIDTH_MM, TactilePlate
 from roughness.studio.jobs import Report
 
+from ..downloads import KINDS, write_download
 from ..job_panel import JobPanel
 from ..pictures import png_url
 from ..sessions import Session
@@ -88,14 +88,13 @@ class PaletteChoice:
 @dataclass(frozen=True)
 class MadePlate:
     """A plate and what the page shows and serves of it: the guideline checks, the relief and feel-map pictures
-    (PNG) and the plate as STL and 3MF (bytes, each checked a closed solid before it was written)."""
+    (PNG) and the names of its files in the session folder by kind (``downloads.KINDS``: .npz, STL, 3MF, JSON)."""
 
     plate: TactilePlate
     checks: tuple[Check, ...]
     relief_png: bytes
     map_png: bytes
-    stl: bytes
-    threemf: bytes
+    files: dict[str, str]
 
 
 def read_picture(path: Path, tolerance: float, width_mm: float) -> Picture:
@@ -123,9 +122,10 @@ def make_palette(report: Report, choice: PaletteChoice) -> Palette:
 
 
 def make_plate(report: Report, rgb: np.ndarray, palette_folder: str, choice: PaletteChoice, width_mm: float,
-               tolerance: float) -> MadePlate:
+               tolerance: float, session: Session, stem: str) -> MadePlate:
     """The job: the plate of ``rgb`` with the palette in ``palette_folder`` (``roughness.tactile_image``), its
-    guideline checks, pictures and mesh files."""
+    guideline checks and pictures; its files written under the new ``stem`` in the session's folder by
+    ``downloads.write_download`` (the plate checked a closed solid first), so nothing made before is replaced."""
     import roughness
     from roughness.design.guidelines import check_plate
     from roughness.design.tactile_image import figures
@@ -138,30 +138,19 @@ def make_plate(report: Report, rgb: np.ndarray, palette_folder: str, choice: Pal
     report(0.6, "drawing the relief and the feel map")
     drawn = figures(plate)
     relief, feel = (_png(drawn[name]) for name in ("relief.png", "roughness_map.png"))
-    report(0.75, "writing the STL and the 3MF (each checked a closed solid)")
-    stl, threemf = plate_files(plate)
-    return MadePlate(plate, checks, relief, feel, stl, threemf)
+    summary = {**plate.summary(), "guidelines": [c.as_dict() for c in checks],
+               "printer": choice.printer, "verifier": choice.verify}
+    files = {}
+    for i, kind in enumerate(KINDS):
+        report(0.7 + 0.3 * i / len(KINDS), f"writing {KINDS[kind]}")
+        files[kind] = write_download(session, stem, kind, plate.heightmap, summary).name
+    return MadePlate(plate, checks, relief, feel, files)
 
 
 def _png(figure) -> bytes:
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=80)
     return buffer.getvalue()
-
-
-def plate_files(plate: TactilePlate) -> tuple[bytes, bytes]:
-    """The plate as a binary STL and a 3MF (mm): ``roughness.surface.stl.plate``'s solid, written by
-    ``roughness.objects.meshes.write_mesh`` (a closed solid, checked)."""
-    import trimesh
-
-    from roughness.objects.meshes import write_mesh
-    from roughness.surface.stl import plate as solid_plate
-
-    solid = solid_plate(plate.heightmap)
-    mesh = trimesh.Trimesh(solid.vertices, solid.triangles, process=False)
-    with tempfile.TemporaryDirectory() as folder:
-        written = [Path(write_mesh(mesh, Path(folder) / name).path).read_bytes() for name in ("plate.stl", "plate.3mf")]
-    return written[0], written[1]
 
 
 def palette_lines(palette: Palette, choice: PaletteChoice) -> list[str]:
@@ -195,7 +184,7 @@ class TactilePage:
         self.session = session
         self.picture: Picture | None = None
         self.palette: tuple[Palette, PaletteChoice] | None = None
-        self.made = 0  # plates made: each one's files get new names, so a browser shows no stale picture
+        self.made = 0  # plates asked for: each one's files get new names (no stale picture, nothing replaced)
         self._picture_card()
         self._palette_card()
         self._plate_card()
@@ -335,15 +324,15 @@ class TactilePage:
             self.show_error(f"error: {err}")
             return
         self.error.set_text("")
+        self.made += 1
         self.plate_job.start("plate", make_plate, self.picture.rgb, str(self.session.path(PALETTE_FOLDER)),
-                             self.palette[1], width, tolerance, on_done=self.plate_made)
+                             self.palette[1], width, tolerance, Session(self.session.id, self.session.folder),
+                             f"plate-{self.made}", on_done=self.plate_made)
 
     def plate_made(self, made: MadePlate) -> None:
-        self.made += 1
         names = {}
-        for kind, data in (("stl", made.stl), ("3mf", made.threemf), ("relief.png", made.relief_png),
-                           ("feel.png", made.map_png)):
-            names[kind] = f"plate-{self.made}.{kind}"
+        for kind, data in (("relief", made.relief_png), ("feel", made.map_png)):
+            names[kind] = f"plate-{self.made}-{kind}.png"
             self.session.path(names[kind]).write_bytes(data)
         plate = made.plate
         width, height = plate.heightmap.size_mm
@@ -353,9 +342,9 @@ class TactilePage:
         with self.plate_text:
             for line in [summary, *region_lines(plate), *(f"note: {n}" for n in plate.notes)]:
                 ui.label(line)
-        self.relief.set_source(self.session.download_url(names["relief.png"]))
+        self.relief.set_source(self.session.download_url(names["relief"]))
         self.relief.props(f'alt="Relief of the plate, {width:.0f} by {height:.0f} mm: dark is low, light is high"')
-        self.feel.set_source(self.session.download_url(names["feel.png"]))
+        self.feel.set_source(self.session.download_url(names["feel"]))
         self.feel.props('alt="Feel map of the plate: the predicted roughness V at each footprint centre, dark smooth, '
                         'light rough; the regions are listed as text"')
         self.checks.clear()
@@ -364,10 +353,10 @@ class TactilePage:
                 ui.label(check.describe()).classes("text-green-10" if check.passed else "text-red-10")
         self.downloads.clear()
         with self.downloads:
-            for kind, what in (("stl", "STL"), ("3mf", "3MF")):
-                size = len(made.stl if kind == "stl" else made.threemf)
-                ui.link(f"Download the plate as {what} ({size / 1e6:.1f} MB)",
-                        self.session.download_url(names[kind])).props(f'download="plate.{kind}"')
+            for kind, name in made.files.items():
+                size = self.session.path(name).stat().st_size
+                ui.link(f"Download the {KINDS[kind]}: {name} ({size / 1e6:.2f} MB)",
+                        self.session.download_url(name)).props(f'download="{name}"')
 
 
 def _number(value: object, flag: str) -> float:
