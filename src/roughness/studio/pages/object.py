@@ -128,7 +128,7 @@ def preview(report: Report, mesh_file: MeshFile, lay: Lay, edge_mm: float) -> Pr
     lines = (f"preview: textured {result.textured_faces_in:,} of {result.triangles_in:,} faces with triangles of at "
              f"most {edge_mm:g} mm ({result.triangles_out:,} triangles; detail finer than that is not shown); "
              f"heights up to {result.max_height_mm:.3f} mm", *(f"note: {n}" for n in result.notes))
-    return Preview(_glb(result.mesh), lines)
+    return Preview(_mesh_glb(result.mesh), lines)
 
 
 def feel(report: Report, mesh_file: MeshFile, lay: Lay, engine: str, reference: str | None) -> FeelMap:
@@ -175,18 +175,28 @@ def _meter(report: Report):
     return lambda step: (lambda done: report(done, step))
 
 
-def _glb(mesh) -> bytes:
-    """``mesh`` (a trimesh) as binary glTF."""
-    return mesh.export(file_type="glb")
+def _glb(vertices: np.ndarray, faces: np.ndarray, vertex_colours: np.ndarray | None = None) -> bytes:
+    """A mesh (mm) as binary glTF with normals and a matte, non-metallic material (glTF's default is a metal, which
+    three.js shows black without an environment); ``vertex_colours`` (RGBA 0..255) paint it."""
+    import trimesh
+
+    shown = trimesh.Trimesh(vertices, faces, process=False)
+    shown.visual = trimesh.visual.TextureVisuals(
+        material=trimesh.visual.material.PBRMaterial(metallicFactor=0.0, roughnessFactor=0.8))
+    if vertex_colours is not None:
+        shown.visual.vertex_attributes["color"] = vertex_colours
+    return shown.export(file_type="glb", include_normals=True)
+
+
+def _mesh_glb(mesh) -> bytes:
+    """A trimesh as glTF (``_glb``)."""
+    return _glb(np.asarray(mesh.vertices), np.asarray(mesh.faces))
 
 
 def _painted_glb(triangles: np.ndarray, colours: np.ndarray) -> bytes:
-    """Triangles (n, 3, 3) mm, each painted its colour (n, 4 RGBA 0..1), as binary glTF."""
-    import trimesh
-
-    painted = trimesh.Trimesh(triangles.reshape(-1, 3), np.arange(3 * len(triangles)).reshape(-1, 3), process=False,
-                              face_colors=np.rint(np.asarray(colours) * 255).astype(np.uint8))
-    return painted.export(file_type="glb")
+    """Triangles (n, 3, 3) mm, each painted its colour (n, 4 RGBA 0..1), as glTF (``_glb``)."""
+    corners = np.repeat(np.rint(np.asarray(colours) * 255).astype(np.uint8), 3, axis=0)
+    return _glb(triangles.reshape(-1, 3), np.arange(3 * len(triangles)).reshape(-1, 3), corners)
 
 
 def plan_line(mesh, lay: Lay, edge_mm: float | None) -> tuple[str, str | None]:
@@ -253,7 +263,7 @@ class ObjectPage:
             self.mesh_text = ui.column().classes("gap-0").props('role="status" aria-live="polite"')
             self.view_text = ui.label("").classes("text-sm")
             with ui.scene(width=640, height=420, on_click=self.on_click).props(
-                    'aria-label="3D view of the object: drag to orbit, scroll to zoom"') as self.scene:
+                    'role="img" aria-label="3D view of the object: drag to orbit, scroll to zoom; what it shows is said above it"') as self.scene:
                 pass
             self.picked_text = ui.label("").props('aria-live="polite"')
 
@@ -264,10 +274,10 @@ class ObjectPage:
         with ui.card().classes("w-full"):
             ui.label("2. Texture, mapping and region").classes("text-lg").props('role="heading" aria-level="2"')
             with ui.row().classes("items-end gap-4"):
-                self.texture = ui.select(texture_names(), value="standard-1.0", label="Texture (--texture)")
-                self.mapping = ui.select(list(MAPPINGS), value="triplanar", label="Mapping (--mapping)")
+                self.texture = ui.select(texture_names(), value="standard-1.0", label="Texture (--texture)").classes("w-48")
+                self.mapping = ui.select(list(MAPPINGS), value="triplanar", label="Mapping (--mapping)").classes("w-48")
                 self.region_kind = ui.select(list(KINDS), value="all", label="Region kind (--region)",
-                                             on_change=self._region_hint)
+                                             on_change=self._region_hint).classes("w-48")
                 self.region_text = ui.input("Region parameters", placeholder="").classes("w-96")
                 self._region_hint()
             with ui.row().classes("items-end gap-4"):
@@ -284,11 +294,11 @@ class ObjectPage:
         with ui.card().classes("w-full"):
             ui.label("3. How it feels").classes("text-lg").props('role="heading" aria-level="2"')
             with ui.row().classes("items-end gap-4"):
-                self.engine = ui.select(list(ENGINES), value="spectral", label="Engine (--engine)")
+                self.engine = ui.select(list(ENGINES), value="spectral", label="Engine (--engine)").classes("w-48")
                 self.reference = ui.select([NO_REFERENCE, *texture_names()], value="standard-1.0",
-                                           label="JND from (--reference)")
+                                           label="JND from (--reference)").classes("w-48")
                 self.colour_by = ui.select(list(COLOUR_BY), value="JND from the reference",
-                                           label="Colour by (--colour-by)")
+                                           label="Colour by (--colour-by)").classes("w-56")
                 ui.button("Map the feel", on_click=self.start_feel)
             self.feel_job = JobPanel("the feel map")
             self.legend = ui.row().classes("items-center gap-2")
@@ -301,7 +311,7 @@ class ObjectPage:
             with ui.row().classes("items-end gap-4"):
                 self.target = ui.number("Target equivalent wavelength, mm (--target-lambda)", value=1.0, min=0.1, max=5,
                                         step=0.05, format="%.4g").classes("w-72")
-                self.by = ui.select(["height", "lateral"], value="height", label="Scale by (--by)")
+                self.by = ui.select(["height", "lateral"], value="height", label="Scale by (--by)").classes("w-40")
                 ui.button("Tune", on_click=self.start_tune)
             self.tune_job = JobPanel("the tune")
             self.tune_text = ui.column().classes("gap-0").props('role="status" aria-live="polite"')
@@ -311,8 +321,8 @@ class ObjectPage:
             ui.label("5. The textured mesh").classes("text-lg").props('role="heading" aria-level="2"')
             with ui.row().classes("items-end gap-4"):
                 self.export_edge = ui.number("Edge, mm (--edge-mm; empty: sqrt(2) x the texture's pixel)",
-                                             min=0.01, max=20, format="%.3g").classes("w-96")
-                self.export_format = ui.select(["STL", "3MF"], value="STL", label="Format")
+                                             min=0.01, max=20, format="%.3g").classes("w-[28rem]")
+                self.export_format = ui.select(["STL", "3MF"], value="STL", label="Format").classes("w-32")
                 ui.button("Estimate", on_click=self.estimate)
                 ui.button("Make the full-resolution mesh", on_click=self.start_export)
             self.plan_text = ui.label("").props('role="status" aria-live="polite"')
@@ -350,19 +360,20 @@ class ObjectPage:
             for line in [f"{Path(read.path).name}: {read.triangles:,} triangles, {size[0]:.1f} x {size[1]:.1f} x "
                          f"{size[2]:.1f} mm, area {read.mesh.area:.0f} mm^2", *(f"note: {n}" for n in read.notes)]:
                 ui.label(line)
-        self.show(_glb(read.mesh), "the object as read, untextured")
+        self.show(_mesh_glb(read.mesh), "the object as read, untextured")
         lo, hi = read.mesh.bounds
         centre, reach = (lo + hi) / 2, float(np.linalg.norm(hi - lo))
-        self.scene.move_camera(*(centre + reach * np.array([1.2, -1.6, 1.0])), *centre, duration=0)
+        self.scene.move_camera(*(centre + reach * np.array([0.55, -0.75, 0.5])), *centre, duration=0)
 
-    def show(self, glb: bytes, what: str) -> None:
-        """Show a glTF in the 3D view (from the session folder), and say in words what it shows."""
+    def show(self, glb: bytes, what: str, painted: bool = False) -> None:
+        """Show a glTF in the 3D view (from the session folder), and say in words what it shows; ``painted``: in
+        its own vertex colours (else light grey)."""
         self.shown += 1
         name = f"view-{self.shown}.glb"
         self.session.path(name).write_bytes(glb)
         self.scene.clear()
         with self.scene:
-            ui.scene.gltf(self.session.download_url(name))
+            ui.scene.gltf(self.session.download_url(name)).material(None if painted else "#c8c8c8")
         self.view_text.set_text(f"The 3D view shows {what}.")
 
     def on_click(self, event: events.SceneClickEventArguments) -> None:
@@ -441,7 +452,8 @@ class ObjectPage:
 
         _, faces, _ = self.lay.on(self.mesh)
         drawn = feel_colours(self.mesh, result, faces, by)
-        self.show(_painted_glb(drawn.triangles, drawn.colours), f"the feel map on the object, coloured by {drawn.label}")
+        self.show(_painted_glb(drawn.triangles, drawn.colours), f"the feel map on the object, coloured by {drawn.label}",
+                  painted=True)
         stops = ", ".join(f"rgb({r * 255:.0f},{g * 255:.0f},{b * 255:.0f}) {100 * t:.0f}%"
                           for t in np.linspace(0, 1, 9) for r, g, b, _ in [drawn.cmap(t)])
         low, high = (f"{drawn.norm.vmin:+.2f} JND", f"{drawn.norm.vmax:+.2f} JND") if by == "jnd" else \
@@ -506,7 +518,7 @@ class ObjectPage:
         name = Path(written.path).name
         with self.downloads:
             ui.link(f"Download {name} ({written.triangles:,} triangles, {written.bytes / 1e6:.1f} MB; "
-                    f"{written.check.line()})", self.session.download_url(name)).props(f'download="{name}"')
+                    f"{written.check.line()})", self.session.download_url(name)).props(f'download="{name}"').classes("text-primary")
 
 
 def build(session: Session) -> None:

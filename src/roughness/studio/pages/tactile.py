@@ -356,7 +356,7 @@ class TactilePage:
             for kind, name in made.files.items():
                 size = self.session.path(name).stat().st_size
                 ui.link(f"Download the {KINDS[kind]}: {name} ({size / 1e6:.2f} MB)",
-                        self.session.download_url(name)).props(f'download="{name}"')
+                        self.session.download_url(name)).props(f'download="{name}"').classes("text-primary")
 
 
 def _number(value: object, flag: str) -> float:
