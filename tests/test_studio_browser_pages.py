@@ -47,7 +47,7 @@ def test_tactile_page_from_the_keyboard_to_a_watertight_stl(page, tmp_path):
 def test_object_page_feel_legend(page):
     page.goto("/object")
     page.get_by_role("button", name="Open the example knob").click()
-    page.get_by_text("knob.stl: 128 triangles").wait_for()
+    page.get_by_text("knob.stl: 128 triangles, 24 x 24 x 24 mm").wait_for()
     page.get_by_label("Engine (--engine)").click()
     page.get_by_role("option", name="surrogate").click()
     page.get_by_role("button", name="Map the feel").click()

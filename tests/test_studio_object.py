@@ -29,7 +29,7 @@ def views(user) -> list[str]:
 async def open_example(user) -> None:
     await user.open("/object")
     user.find("Open the example knob").click()
-    await user.should_see("knob.stl: 128 triangles, 24.0 x 24.0 x 24.0 mm")
+    await user.should_see("knob.stl: 128 triangles, 24 x 24 x 24 mm")
 
 
 async def test_example_opens_into_the_3d_view(studio):
@@ -121,3 +121,23 @@ async def test_tune_on_the_object_reaches_the_target_and_is_used_next(studio):
     await user.should_see("target lambda 1.200 mm", retries=JOB_RETRIES)
     await user.should_see("JND from the target (reached within 0.1 JND")
     await user.should_see("now use standard-1.0 tuned (height x ")
+
+
+async def test_a_mesh_in_metres_is_refused_until_its_units_are_confirmed(studio, tmp_path):
+    from roughness.core.errors import InputError
+    from roughness.objects.meshes import read_mesh
+
+    user = studio.user
+    await user.open("/object")
+    knob = trimesh.load(str(example_path()))
+    knob.apply_scale(0.001)  # exported in metres: 24 mm reads as 0.024 mm
+    data = knob.export(file_type="stl")
+    (tmp_path / "knob-m.stl").write_bytes(data)
+    with pytest.raises(InputError) as refused:
+        read_mesh(tmp_path / "knob-m.stl")
+    [upload] = user.find(ui.upload).elements
+    await upload.handle_uploads([ui.upload.SmallFileUpload("knob-m.stl", "model/stl", data)])
+    message = str(refused.value).split(": ", 1)[1]  # after the file's path, which differs
+    await user.should_see(message.replace("pass units_ok", "pass --units-ok"))
+    user.find(ui.checkbox).click()
+    await user.should_see("knob-m.stl: 128 triangles, 0.024 x 0.024 x 0.024 mm")

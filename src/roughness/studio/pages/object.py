@@ -71,20 +71,17 @@ class MeshFile:
 @dataclass(frozen=True)
 class Lay:
     """How the texture lies on the object: the texture (its name, heightmap), the mapping and the region (the
-    ``--region`` text, or the clicked faces)."""
+    ``--region`` text; ``faces:`` takes face numbers here, clicked or typed, where the command takes a file)."""
 
     texture_name: str
     texture: Heightmap
     mapping: str = "triplanar"
     region: str = "all"
-    faces: tuple[int, ...] = ()
 
     def parsed_region(self) -> Region:
         """The region (``parse_region``; clicked or typed face numbers as a ``faces`` region)."""
-        if self.region.split(":", 1)[0] == "faces":
-            ids = self.faces or _face_numbers(self.region.partition(":")[2])
-            return Region("faces", ids=ids)
-        return parse_region(self.region)
+        kind, _, text = self.region.partition(":")
+        return Region("faces", ids=_face_numbers(text)) if kind == "faces" else parse_region(self.region)
 
     def on(self, mesh):
         """The region, its faces (bool per face; InputError if none) and the mapping of the texture on them."""
@@ -240,6 +237,7 @@ class ObjectPage:
     def __init__(self, session: Session) -> None:
         self.session = session
         self.mesh_file: MeshFile | None = None
+        self.refused: Path | None = None  # an upload refused, read again if its units are confirmed
         self.mesh = None  # the trimesh read from it
         self.lay: Lay | None = None
         self.shown = 0  # glTF files shown so far: each gets a new name
@@ -258,7 +256,8 @@ class ObjectPage:
                 ui.upload(label=f"Mesh: STL, OBJ, PLY or 3MF (up to {MAX_UPLOAD_BYTES // 2**20} MiB)",
                           auto_upload=True, max_file_size=MAX_UPLOAD_BYTES,
                           on_upload=self.on_upload).props('accept=".stl,.obj,.ply,.3mf"')
-                self.units_ok = ui.checkbox("The file's size is right as read (--units-ok)")
+                self.units_ok = ui.checkbox("The file's size is right as read (--units-ok)",
+                                            on_change=self.retry_units)
             self.error = ui.label("").classes("text-red-10").props('role="alert"')
             self.mesh_text = ui.column().classes("gap-0").props('role="status" aria-live="polite"')
             self.view_text = ui.label("").classes("text-sm")
@@ -346,19 +345,28 @@ class ObjectPage:
             return
         self._open(MeshFile(str(path), bool(self.units_ok.value)))
 
+    def retry_units(self) -> None:
+        """The units confirmed (or not) after an upload was refused: read it again."""
+        if self.refused is not None:
+            self._open(MeshFile(str(self.refused), bool(self.units_ok.value)))
+
     def _open(self, mesh_file: MeshFile) -> None:
         try:
             read = mesh_file.read()
         except InputError as err:
-            self.show_error(f"error: {err}")
+            from roughness.cli.common import error_message
+
+            self.refused = Path(mesh_file.path)
+            self.show_error(f"error: {error_message(err, {'units_ok': '--units-ok'})}")  # the checkbox's flag
             return
+        self.refused = None
         self.error.set_text("")
         self.mesh_file, self.mesh, self.lay = mesh_file, read.mesh, None
         size = read.mesh.extents
         self.mesh_text.clear()
         with self.mesh_text:
-            for line in [f"{Path(read.path).name}: {read.triangles:,} triangles, {size[0]:.1f} x {size[1]:.1f} x "
-                         f"{size[2]:.1f} mm, area {read.mesh.area:.0f} mm^2", *(f"note: {n}" for n in read.notes)]:
+            for line in [f"{Path(read.path).name}: {read.triangles:,} triangles, {size[0]:.3g} x {size[1]:.3g} x "
+                         f"{size[2]:.3g} mm, area {read.mesh.area:.3g} mm^2", *(f"note: {n}" for n in read.notes)]:
                 ui.label(line)
         self.show(_mesh_glb(read.mesh), "the object as read, untextured")
         lo, hi = read.mesh.bounds

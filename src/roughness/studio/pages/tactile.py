@@ -355,7 +355,7 @@ class TactilePage:
         with self.downloads:
             for kind, name in made.files.items():
                 size = self.session.path(name).stat().st_size
-                ui.link(f"Download the {KINDS[kind]}: {name} ({size / 1e6:.2f} MB)",
+                ui.link(f"Download the {KINDS[kind]}: {name} ({size:,} bytes)",
                         self.session.download_url(name)).props(f'download="{name}"').classes("text-primary")
 
 
