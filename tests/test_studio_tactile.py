@@ -96,3 +96,24 @@ async def test_tolerance_merges_colours_when_clustered_again(studio):
     tolerance.set_value(20.0)
     user.find("Cluster the colours again").click()
     await user.should_see("into 2 flat colours")
+
+
+async def test_a_failed_plate_says_why_and_a_cancelled_palette_keeps_the_last(studio):
+    user = studio.user
+    await user.open("/tactile")
+    user.find("Open example: four colours").click()
+    await user.should_see("3 to texture")
+    [k] = [e for e in user.find(ui.number).elements if "(--k)" in e.props["label"]]
+    k.set_value(2)  # fewer textures than colours to texture
+    user.find("Make the palette").click()
+    await user.should_see("closest pair", retries=JOB_RETRIES)
+    shown = [e.text for e in user.find(ui.label).elements if e.text.startswith("texture-")]
+    user.find("Make the plate").click()
+    await user.should_see("error: the picture has 3 flat colours to texture", retries=JOB_RETRIES)
+    [verifier] = [e for e in user.find(ui.select).elements if "(--verify)" in e.props["label"]]
+    verifier.set_value("FEM, default (many minutes)")
+    user.find("Make the palette").click()
+    await user.should_see("palette: making 2 textures 2 JND apart, verified by default", retries=JOB_RETRIES)
+    user.find(kind=ui.button, content="Cancel").click()  # the palette's (the plate's job has ended)
+    await user.should_see("palette: cancelled")
+    assert [e.text for e in user.find(ui.label).elements if e.text.startswith("texture-")] == shown

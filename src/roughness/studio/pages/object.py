@@ -223,10 +223,12 @@ def tune_lines(result: ObjectTuneResult) -> list[str]:
     """An object tune in words: the target, the factor found, the object's curved parts against the target."""
     o, flat = result.on_object, result.flat
     where = "curved parts" if o.curved else "judged parts (none curved)"
+    judged = np.isfinite(result.feel.uncertainty)  # as `roughness object tune` gives it: the footprints' median
+    spread = f" (± {np.median(result.feel.uncertainty[judged]):.4f} per footprint, median)" if judged.any() else ""
     return [f"target lambda {result.target_lambda_mm:.3f} mm (V {result.target_roughness:.4f}, spectral scale)",
             f"tuned: {flat.by} x {flat.factor:.4g}; as a flat tile lambda {flat.achieved.equivalent_lambda_mm:.3f} mm "
             f"({result.flat_jnd_error:+.2f} JND from the target)",
-            f"on the object's {where}: median V {o.roughness:.4f} over {o.points} footprints, lambda {o.lambda_mm:.3f} "
+            f"on the object's {where}: median V {o.roughness:.4f}{spread} over {o.points} footprints, lambda {o.lambda_mm:.3f} "
             f"mm, {o.jnd_error:+.2f} JND from the target ({'reached' if result.reached else 'NOT reached'} within "
             f"{result.tolerance_jnd:g} JND, {result.rounds} round(s))", *(f"note: {n}" for n in result.notes)]
 
