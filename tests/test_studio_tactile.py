@@ -117,3 +117,18 @@ async def test_a_failed_plate_says_why_and_a_cancelled_palette_keeps_the_last(st
     user.find(kind=ui.button, content="Cancel").click()  # the palette's (the plate's job has ended)
     await user.should_see("palette: cancelled")
     assert [e.text for e in user.find(ui.label).elements if e.text.startswith("texture-")] == shown
+
+
+@pytest.mark.parametrize("label, value, message", [
+    ("Plate width", -5, "--size-mm must be a positive finite number, got -5"),
+    ("Colour tolerance", None, "--colour-tolerance: give a number"),
+    ("(--k)", 2.5, "--k must be an integer, got 2.5")])
+async def test_bad_numbers_are_refused_with_their_flag(studio, label, value, message):
+    user = studio.user
+    await user.open("/tactile")
+    user.find("Open example: shapes").click()
+    await user.should_see("to texture")
+    [field] = [e for e in user.find(ui.number).elements if label in e.props["label"]]
+    field.set_value(value)
+    user.find("Cluster the colours again" if label != "(--k)" else "Make the palette").click()
+    await user.should_see(f"error: {message}")

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 from nicegui import events, ui
 
+from roughness.core.checks import integer, positive
 from roughness.core.errors import InputError
 from roughness.design.colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
 from roughness.design.guidelines import Check
@@ -292,7 +293,7 @@ class TactilePage:
 
     def start_palette(self) -> None:
         try:
-            choice = PaletteChoice(int(_number(self.k.value, "--k")), _number(self.min_jnd.value, "--min-jnd"),
+            choice = PaletteChoice(_count(self.k.value, "--k"), _number(self.min_jnd.value, "--min-jnd"),
                                    None if self.printer.value == NO_PRINTER else self.printer.value,
                                    VERIFIERS[self.verify.value])
         except InputError as err:
@@ -360,10 +361,16 @@ class TactilePage:
 
 
 def _number(value: object, flag: str) -> float:
-    """A number typed into a field, or InputError naming its command-line flag."""
+    """A positive number typed into a field, or InputError naming its command-line flag."""
     if value is None:
         raise InputError(f"{flag}: give a number")
-    return float(value)
+    return positive(flag, value)
+
+
+def _count(value: object, flag: str) -> int:
+    """A whole number (at least 2) typed into a field, or InputError naming its flag."""
+    number = _number(value, flag)
+    return integer(flag, int(number) if number.is_integer() else number, minimum=2)
 
 
 def _image(rgb: np.ndarray):
