@@ -141,3 +141,12 @@ async def test_a_mesh_in_metres_is_refused_until_its_units_are_confirmed(studio,
     await user.should_see(message.replace("pass units_ok", "pass --units-ok"))
     user.find(ui.checkbox).click()
     await user.should_see("knob-m.stl: 128 triangles, 0.024 x 0.024 x 0.024 mm")
+
+
+async def test_a_preview_too_fine_to_stay_interactive_is_refused_before_it_starts(studio):
+    user = studio.user
+    await open_example(user)
+    field(user, ui.number, "Preview edge").set_value(0.1)  # about 1.7 million triangles on the knob
+    user.find("Preview the textured object").click()
+    await user.should_see("above the preview's 300,000: give a larger preview edge")
+    await user.should_not_see("preview: starting")  # no job started

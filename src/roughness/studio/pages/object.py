@@ -38,6 +38,8 @@ EXAMPLE = "knob.stl"
 EXAMPLE_TEXT = "a knob: a 24 mm cylinder, 24 mm tall, 128 triangles"
 PREVIEW_EDGE_MM = 1.0
 """Longest edge (mm) of the preview's textured triangles: coarse, so the preview stays quick."""
+PREVIEW_MAX_TRIANGLES = 300_000
+"""The most triangles a preview may have (estimated before it starts): more is for the full-resolution mesh."""
 REGION_PARAMETERS = {"all": "", "cone": "AX,AY,AZ,DEG, e.g. 0,0,1,30 (the top)",
                      "angle": "AX,AY,AZ,MIN,MAX, e.g. 0,0,1,45,135 (the walls)",
                      "box": "X0,Y0,Z0,X1,Y1,Z1 (mm)", "colour": "R,G,B[,TOL] (0-255)",
@@ -196,9 +198,10 @@ def _painted_glb(triangles: np.ndarray, colours: np.ndarray) -> bytes:
     return _glb(triangles.reshape(-1, 3), np.arange(3 * len(triangles)).reshape(-1, 3), corners)
 
 
-def plan_line(mesh, lay: Lay, edge_mm: float | None) -> tuple[str, str | None]:
-    """The full-resolution mesh's estimate in words (``objects.print_plan``) and its slicer warning (or None);
-    InputError if it would pass the mesh limit (with the coarsest edge that fits)."""
+def plan_of(mesh, lay: Lay, edge_mm: float | None):
+    """The ``MeshPlan`` of texturing ``mesh`` as ``lay`` says with edges of ``edge_mm`` (None: sqrt(2) x the
+    texture's pixel on the surface, the command's default); InputError if it would pass the mesh limit (with the
+    coarsest edge that fits)."""
     from roughness.objects.print_plan import mesh_plan, require_within
 
     _, faces, mapping = lay.on(mesh)
@@ -206,7 +209,13 @@ def plan_line(mesh, lay: Lay, edge_mm: float | None) -> tuple[str, str | None]:
     vertices, triangles = np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces)
     plan = mesh_plan(vertices, triangles, faces, edge)
     require_within(plan, vertices, triangles, faces)
-    return f"full resolution, edges of {edge:.3g} mm: {plan.line()}", plan.warning()
+    return plan
+
+
+def plan_line(mesh, lay: Lay, edge_mm: float | None) -> tuple[str, str | None]:
+    """The full-resolution mesh's estimate in words (``objects.print_plan``) and its slicer warning (or None)."""
+    plan = plan_of(mesh, lay, edge_mm)
+    return f"full resolution, edges of {plan.edge_mm:.3g} mm: {plan.line()}", plan.warning()
 
 
 def legend_text(drawn, by: str) -> str:
@@ -437,6 +446,16 @@ class ObjectPage:
         edge = self.preview_edge.value
         if edge is None or edge <= 0:
             self.show_error("error: the preview edge is a positive length in mm")
+            return
+        try:
+            plan = plan_of(self.mesh, self.current_lay(), float(edge))
+        except InputError as err:
+            self.show_error(f"error: {err}")
+            return
+        if plan.triangles > PREVIEW_MAX_TRIANGLES:
+            self.show_error(f"error: a preview with edges of {edge:g} mm would have about {plan.triangles:,} "
+                            f"triangles, above the preview's {PREVIEW_MAX_TRIANGLES:,}: give a larger preview edge "
+                            "(the full resolution is made under 5. The textured mesh)")
             return
         self._start(self.preview_job, "preview", preview, float(edge), on_done=self.preview_made)
 
