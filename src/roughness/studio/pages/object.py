@@ -342,10 +342,8 @@ class ObjectPage:
     # the object
 
     def open_example(self) -> None:
-        with resources.as_file(example_path()) as path:
-            copy = self.session.path(EXAMPLE)
-            copy.write_bytes(Path(path).read_bytes())
-        self._open(MeshFile(str(copy)))
+        with resources.as_file(example_path()) as path:  # the installed package's file (read, never written)
+            self._open(MeshFile(str(path)))
 
     async def on_upload(self, event: events.UploadEventArguments) -> None:
         data = await event.file.read()
