@@ -1,6 +1,6 @@
 """The Tactile picture and Object pages in a real browser (the browser, tab and axe-core scan of
 tests/test_studio_browser.py: skipped, with the reason, only where no Chromium is found). The tactile flow runs from
-the keyboard alone, as a screen-reader user would; screenshots go to docs/_static/studio/."""
+the keyboard alone, as a screen-reader user would; screenshots go where test_studio_browser's go."""
 from __future__ import annotations
 
 import pytest

@@ -29,7 +29,7 @@ from roughness.surface.heightmap import Heightmap
 
 from ..job_panel import JobPanel
 from ..sessions import Session
-from ..uploads import MAX_UPLOAD_BYTES, store
+from ..uploads import MAX_UPLOAD_BYTES, upload_path
 
 PATH = "/object"
 TITLE = "Object"
@@ -346,12 +346,12 @@ class ObjectPage:
             self._open(MeshFile(str(path)))
 
     async def on_upload(self, event: events.UploadEventArguments) -> None:
-        data = await event.file.read()
         try:
-            path = store(self.session, event.file.name, data)
+            path = upload_path(self.session, event.file.name, event.file.size())
         except InputError as err:
             self.show_error(f"error: {err}")
             return
+        await event.file.save(path)
         self._open(MeshFile(str(path), bool(self.units_ok.value)))
 
     def retry_units(self) -> None:

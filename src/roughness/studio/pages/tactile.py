@@ -31,7 +31,7 @@ from ..downloads import KINDS, write_download
 from ..job_panel import JobPanel
 from ..pictures import png_url
 from ..sessions import Session
-from ..uploads import MAX_UPLOAD_BYTES, store
+from ..uploads import MAX_UPLOAD_BYTES, upload_path
 
 PATH = "/tactile"
 TITLE = "Tactile picture"
@@ -251,8 +251,13 @@ class TactilePage:
             self._read(lambda: read_picture(path, self._tolerance(), self._width()))
 
     async def on_upload(self, event: events.UploadEventArguments) -> None:
-        data = await event.file.read()
-        self._read(lambda: read_picture(store(self.session, event.file.name, data), self._tolerance(), self._width()))
+        try:
+            path = upload_path(self.session, event.file.name, event.file.size())
+        except InputError as err:
+            self.show_error(f"error: {err}")
+            return
+        await event.file.save(path)
+        self._read(lambda: read_picture(path, self._tolerance(), self._width()))
 
     def recluster(self) -> None:
         if self.picture is None:
