@@ -34,9 +34,11 @@ NOISE = 1e-5  # relative: float32 ensemble outputs and summation order differ at
 # equal strains, carries it amplified: one or four BLAS threads gave V 0.1484 and 0.1483 (7e-4 apart)
 FEM_NOISE = 1e-3
 FEM = ("jnd.", "homogeneity.fem.")  # prefixes of the keys answered by the FEM
-# tune's lines: the FEM's V also depends on the meshes cached by earlier runs (docs/how-to/fem.md's example: 0.10063
-# alone, 0.10084 after other FEM runs, 2.1e-3), and the search corrects its factor by the FEM's answer, so the factor
-# and the surrogate's V at it move with it (the tune.jnd line's surrogate V 0.1454 alone, 0.1450 in a whole CI run)
+# tune's lines: the search corrects its factor by the FEM's answer, so the factor and the surrogate's V at it move
+# with the FEM's V, and in a whole CI run they moved more than FEM_NOISE (the tune.jnd line's surrogate V 0.1454 alone,
+# 0.1450 in the whole run). Cause not found: docs/how-to/fem.md's example gave V = 0.100630290733 with a fresh and a
+# cached mesh, one and two BLAS threads, alone and after another FEM run in the same process (checked 2026-11-28);
+# the 0.10084 once seen "after other FEM runs" did not come back.
 TUNE_NOISE = 5e-3
 TUNE = ("tune.lambda", "tune.jnd")
 NUMBER = r"[−+-]?\d[\d,]*(?:\.\d+)?"
