@@ -57,6 +57,7 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
     ("card",): ([1, "--latency"], ["--card"]),
     ("model-version",): ([0], []),  # rewritten in place
     ("fuzzy-skin",): (["--config", "--printer"], ["--out", "--plot"]),
+    ("studio",): ([], []),  # a server: files come by upload and go to a per-session temporary folder
 }
 # String options that are not files: names, lists of names, addresses; --cache is a folder of FEM
 # results that a run reads and adds to (never replaces); card's RUN is a folder it reads two files from and
