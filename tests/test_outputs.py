@@ -66,7 +66,7 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
 # table name, --assign a colour mapping (or @FILE, read only, as text).
 NOT_PATHS = {"NAME", "--param", "--scheduler", "--holdout-family", "--engines", "--reference", "--roughest",
              "--family", "--cache", "--axis", "--region", "RUN", "--plots", "--background", "--line-colour",
-             "--key-labels", "--braille-table", "--assign"}
+             "--key-labels", "--braille-table", "--assign", "--host"}
 INPUT_VALUE = {"--recipe": "recipe.json", "--labels": "labels.jsonl.gz", "--extra-data": "data.h5",
                "--model": "model.onnx", "--like": "map.npy", "--from": "maps", "--palette": "maps",
                "--stimuli": "stimuli.csv", "--printer": "printer.json", "--scheduler-file": "scheduler.json",
