@@ -1,0 +1,55 @@
+"""The look measure (roughness.design.look): rendered luminance and region comparison, where the answer is plain."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from roughness.core.errors import InputError
+from roughness.dataset.textures import standard_texture
+from roughness.design.look import THRESHOLD, compare, render
+from roughness.surface.heightmap import Heightmap, flat
+
+
+@pytest.fixture(scope="module")
+def plate():
+    """A standard texture 2 mm tall, tiled to 36 mm, with a 16 mm disk and the ring beyond 20 mm around it."""
+    hm = standard_texture(1.0, seed=0, height_mm=2.0).tiled(3, 3)
+    y, x = np.mgrid[:hm.shape[0], :hm.shape[1]] * hm.pixel_mm
+    r2 = (x - 18) ** 2 + (y - 18) ** 2
+    return hm, r2 < 8**2, r2 > 10**2
+
+
+def test_a_flat_plate_is_uniformly_lit_at_the_lights_sine():
+    assert np.allclose(render(flat(5.0, 0.1)), np.sin(np.radians(45)))
+
+
+def test_identical_textures_look_the_same(plate):
+    hm, disk, ring = plate
+    assert compare(render(hm), disk, ring).difference < 1
+
+
+def test_a_raised_flat_shape_of_half_a_millimetre_is_visible(plate):
+    hm, disk, ring = plate
+    raised = Heightmap(np.where(disk, np.maximum(hm.heights, 0.5), hm.heights), hm.pixel_mm)
+    look = compare(render(raised), disk, ring)
+    assert look.verdict == "visible" and look.weber_contrast > THRESHOLD  # less shadow: brighter
+
+
+def test_a_change_in_shaded_valley_floors_shows_less_than_the_same_change_on_the_tops(plate):
+    hm, disk, ring = plate
+    h = hm.heights
+    ripple = 0.1 * np.sin(2 * np.pi * np.arange(h.shape[1]) * hm.pixel_mm / 0.4)[None, :]
+    valleys, tops = h <= np.quantile(h, 0.05), h >= np.quantile(h, 0.95)
+    looks = [compare(render(Heightmap(h + np.where(where & disk, ripple, 0.0), hm.pixel_mm)), disk, ring).difference
+             for where in (valleys, tops)]
+    assert looks[0] < looks[1] / 2
+
+
+def test_regions_too_small_or_black_are_refused():
+    lum = np.ones((10, 10))
+    small = np.zeros((10, 10), bool)
+    small[0, :3] = True
+    with pytest.raises(InputError, match="at least 16"):
+        compare(lum, small, ~small)
+    with pytest.raises(InputError, match="black"):
+        compare(np.zeros((10, 10)), small | True, small | True)
