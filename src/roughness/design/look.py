@@ -6,7 +6,8 @@ distant point source: a pixel facing it gets cos(angle to the light), a pixel fa
 of higher ground along the light's direction gets 0. Eight azimuths at 45 degrees stand for a plate held under
 room light and turned in the hand: no direction is favoured, so what remains is what any light shows (steep
 flanks darker than tops and floor, deep narrow valleys shaded out), not one light's highlights. There is no
-ambient term: a pixel no light reaches is black.
+ambient term: a pixel no light reaches is black. Beyond the map's edges the texture continues as its mirror image
+(as the spectral engine extends it), so that a plate's rim is not lit as if nothing stood beside it.
 
 Comparison (``compare``): the luminance of the pixels of region A (e.g. inside a shape) against region B
 (outside): the Weber contrast of their mean luminance, (mean A - mean B) / mean B, and the Wasserstein-1
@@ -74,8 +75,7 @@ class LookDifference:
 
 
 def render(heightmap: Heightmap, elevation_deg: float = ELEVATION_DEG, azimuths: int = AZIMUTHS) -> np.ndarray:
-    """Luminance (0..1, rows = y) of ``heightmap`` (mm) as a matte print seen from above, lit as the module says.
-    Outside the map there is nothing to cast a shadow."""
+    """Luminance (0..1, rows = y) of ``heightmap`` (mm) as a matte print seen from above, lit as the module says."""
     elevation = math.radians(in_range("elevation_deg", elevation_deg, 1.0, 90.0))
     azimuths = integer("azimuths", azimuths, minimum=1)
     h, pixel = heightmap.heights, heightmap.pixel_mm
@@ -97,7 +97,7 @@ def _shadowed(h: np.ndarray, pixel_mm: float, azimuth: float, slope: float) -> n
     steps = int(math.ceil(float(np.ptp(h)) / slope / pixel_mm))
     ny, nx = h.shape
     pad = steps + 1
-    padded = np.pad(h, pad, constant_values=-np.inf)  # nothing outside the map
+    padded = np.pad(h, pad, mode="symmetric")  # the texture mirrored beyond the map's edges
     shadow = np.zeros(h.shape, dtype=bool)
     for s in range(1, steps + 1):
         i, j = pad + round(s * dy), pad + round(s * dx)
