@@ -118,6 +118,9 @@ def _tripwires(monkeypatch) -> None:
     import roughness.objects.texturing
 
     monkeypatch.setattr(roughness.objects.texturing, "texture_mesh", tripped)
+    import roughness.design.hidden_shapes
+
+    monkeypatch.setattr(roughness.design.hidden_shapes, "hidden_plate", tripped)
 
 
 def _source_copy(dest: Path) -> Path:

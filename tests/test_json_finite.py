@@ -237,6 +237,9 @@ CASES = {
                            "--json", "--quiet"], 2, None)],
     ("fuzzy-skin",): [(["--fuzzy-skin-thickness", "0", "--engine", "surrogate", "--json", "--quiet"], 0,
                        _check_fuzzy_plain)],
+    # a flat base: the skin touches all of it, so nothing can be hidden from touch (refused)
+    ("hidden-shapes",): [(["--shape", "circle", "--texture", "flat.npy", *MAP, "--size-mm", "20", "--mode", "seen",
+                           "--out", "plate", "--json", "--quiet"], 2, None)],
 }
 
 

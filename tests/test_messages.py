@@ -85,6 +85,10 @@ LIBRARY_ONLY = {
     "max_blocks": "Simulator(max_blocks): blocks kept per process; the CLI keeps the default",
     "factor_range": "roughness.tune(factor_range=(lo, hi)): the CLI has --min-factor and --max-factor",
     "path": "load_scale(path): another scale table from Python; the CLI uses the shipped one",
+    "span": "design.shapes.builtin_mask(span): the CLI draws the built-in shapes at the default span",
+    "region_b": "design.look.compare(region_a, region_b): masks from Python; hidden-shapes makes them from the shape",
+    "elevation_deg": "design.look.render(elevation_deg): the CLI renders under the standard light",
+    "azimuths": "design.look.render(azimuths): the CLI renders under the standard light",
     **{name: "printer profile field (a JSON profile's; load_profile reports it under --printer)"
        for name in ("nozzle_mm", "layer_mm", "line_width_mm", "closing_radius_mm")},
     "max_runs": "fuzzy_tune.tune_fuzzy_skin(max_runs): the CLI uses the default number of verifications",

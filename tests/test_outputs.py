@@ -50,6 +50,7 @@ PATHS: dict[tuple[str, ...], tuple[list[int | str], list[str]]] = {
     ("tune",): ([0, "--like", "--model", "--printer"], ["--out"]),
     ("palette",): (["--from", "--model", "--printer"], ["--out"]),
     ("tactile-image",): ([0, "--palette", "--model", "--printer"], ["--out"]),
+    ("hidden-shapes",): (["--mask", "--texture"], ["--out"]),
     ("object", "texture"): ([0, "--texture", "--printer"], ["--out", "--preview"]),
     ("object", "feel"): ([0, "--texture", "--printer"], ["--picture"]),
     ("object", "tune"): ([0, "--texture", "--printer"], ["--out", "--mesh-out"]),
@@ -70,7 +71,7 @@ NOT_PATHS = {"NAME", "--param", "--scheduler", "--holdout-family", "--engines", 
 INPUT_VALUE = {"--recipe": "recipe.json", "--labels": "labels.jsonl.gz", "--extra-data": "data.h5",
                "--model": "model.onnx", "--like": "map.npy", "--from": "maps", "--palette": "maps",
                "--stimuli": "stimuli.csv", "--printer": "printer.json", "--scheduler-file": "scheduler.json",
-               "--data": "data.h5", "--latency": "latency.json", "--config": "fuzzy.ini"}
+               "--data": "data.h5", "--latency": "latency.json", "--config": "fuzzy.ini", "--texture": "map.npy"}
 EXCLUDES = {"--like": "--target-lambda"}  # an input flag and the BASE option it cannot go with
 
 

@@ -13,8 +13,8 @@ DESCRIPTION = ("Predict how rough a surface texture feels to a fingertip (the FE
 COMMANDS = {"simulate": "simulate", "texture": "texture", "dataset": "dataset", "train": "train",
             "predict": "predict", "compare": "compare", "jnd": "jnd", "perception": "perception", "tune": "tune",
             "palette": "palette", "tactile-image": "tactile_image", "homogeneity": "homogeneity",
-            "object": "object", "fuzzy-skin": "fuzzy_skin", "ensemble": "ensemble", "card": "card", "model-version": "model_version",
-            "studio": "studio"}
+            "object": "object", "fuzzy-skin": "fuzzy_skin", "hidden-shapes": "hidden_shapes", "ensemble": "ensemble",
+            "card": "card", "model-version": "model_version", "studio": "studio"}
 
 
 class _VersionAction(argparse.Action):
