@@ -46,6 +46,10 @@ def add_parser(sub) -> None:
                              "V sets the start, one JND is a 19%% step in equivalent wavelength")
     p.add_argument("--by", choices=KNOBS, default=given["by"],
                    help=f"scale the heights or the lateral size (default: {given['by']})")
+    p.add_argument("--keep-look", action="store_true",
+                   help="reach the target with the mix of lateral and height scale that changes the look least "
+                        "(roughness.design.look_keeping: about ten tunes, so use --verify spectral; --by and the "
+                        "factor range do not apply); the look change is reported beside the feel change")
     p.add_argument("--out", required=True, metavar="FILE",
                    help="the scaled texture: .npz, .npy, .h5 (mm), .png (16-bit), .tif, or .stl (printable plate)")
     p.add_argument("--base-mm", type=LENGTH,
@@ -80,6 +84,8 @@ def run(args: argparse.Namespace) -> int:
                          f"supported: {', '.join(SAVE_SUFFIXES)}", "out")
     if args.base_mm is not None and out.suffix.lower() != ".stl":
         raise InputError("applies only to STL output", "base_mm")
+    if args.keep_look and (args.min_factor or args.max_factor):
+        raise InputError("--keep-look searches its own mixes of lateral and height factors", "min_factor")
     lo, hi = FACTOR_RANGE[args.by]
     factors = (args.min_factor or lo, args.max_factor or hi)
     if not factors[0] < factors[1]:
@@ -95,14 +101,23 @@ def run(args: argparse.Namespace) -> int:
         log(args, f"tune: {evaluator.verifier} of the input {args.heightmap}")
     target = target_of(evaluator, args.target_lambda, args.target_v, reference, args.like or "", args.tile,
                        args.jnd, hm)
-    log(args, f"tune: target {target.describe()}; surrogate search over {args.by} factors "
-              f"{factors[0]:g}..{factors[1]:g}")
-    result = tune(hm, target, args.by, evaluator, factors, args.tolerance_jnd, args.max_fem, args.tile,
-                  progress=lambda line: log(args, "  " + line))
+    kept = None
+    if args.keep_look:
+        from roughness.design.look_keeping import keep_look
+
+        log(args, f"tune: target {target.describe()}; the mix of lateral and height scale that keeps the look")
+        kept = keep_look(hm, target, evaluator, args.tile, tolerance_jnd=args.tolerance_jnd, max_fem=args.max_fem,
+                         progress=lambda line: log(args, "  " + line))
+        result = kept.chosen.result
+    else:
+        log(args, f"tune: target {target.describe()}; surrogate search over {args.by} factors "
+                  f"{factors[0]:g}..{factors[1]:g}")
+        result = tune(hm, target, args.by, evaluator, factors, args.tolerance_jnd, args.max_fem, args.tile,
+                      progress=lambda line: log(args, "  " + line))
     save_heightmap(result.heightmap, out, base_mm=args.base_mm, overwrite=args.overwrite)
     summary = {"input": args.heightmap, "out": str(out), **result.summary(), "verifier": evaluator.verifier,
                "provenance": evaluator.provenance.as_dict(),
-               "readings": readings(args)}
+               "readings": readings(args), **({"keep_look": kept.summary()} if kept else {})}
     if printing:
         printing.verify(result.heightmap, result.achieved.roughness, args.tile)
         summary["printing"] = printing.as_dict()
@@ -110,13 +125,33 @@ def run(args: argparse.Namespace) -> int:
         write_stdout(json_text(summary))
     else:
         a = result.achieved
-        lines = [f"{args.heightmap} -> {out}: {args.by} x {result.factor:.4f}",
+        lines = [f"{args.heightmap} -> {out}: " + (_kept_text(kept) if kept else f"{args.by} x {result.factor:.4f}"),
                  f"target: {target.describe()}",
                  (f"achieved ({evaluator.verifier}): V {a.roughness:.4f} ± {a.roughness_stderr:.4f}, lambda "
                   f"{a.equivalent_lambda_mm:.3f} mm; error {result.jnd_error:+.2f} ± {result.jnd_stderr:.2f} JND "
                   f"({'within' if result.reached else 'NOT within'} {result.tolerance_jnd:g} JND after "
                   f"{len(result.steps)} {evaluator.verifier} run(s)); surrogate V {result.surrogate_roughness:.4f}"
                   + (", searched with the spectral engine" if result.search_engine == "spectral" else "")),
+                 *(_look_lines(kept) if kept else []),
                  *(f"note: {n}" for n in result.notes), *(printing.lines() if printing else [])]
         write_stdout("\n".join(lines))
     return 0 if result.reached else 1
+
+
+def _kept_text(kept) -> str:
+    c = kept.chosen
+    return f"lateral x {c.lateral:.4f}, height x {c.height or 1:.4f} (the mix that keeps the look)"
+
+
+def _look_lines(kept) -> list[str]:
+    """The look change of the kept mix beside the plain knobs' (height alone, lateral alone), for the same feel."""
+    c = kept.chosen
+    lines = [f"look change: {c.look.difference:.2f} look JND (Weber contrast {c.look.weber_contrast:+.4f}; "
+             f"threshold {c.look.threshold:g} assumed)"]
+    for label, found in (("height alone", [k for k in kept.candidates if k.lateral == 1.0]),
+                         ("lateral alone", [k for k in kept.candidates if k.height is None and k.result is not None])):
+        if found and found[0].reached:
+            lines.append(f"  {label}: {found[0].look.difference:.2f} look JND for the same target")
+        elif found:
+            lines.append(f"  {label}: target not reached")
+    return lines

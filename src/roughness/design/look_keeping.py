@@ -19,7 +19,7 @@ from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator
 from .look import LookDifference, look_difference
-from .tune import Target, TuneResult, scaled, tune
+from .tune import MAX_FEM, TOLERANCE_JND, Target, TuneResult, scaled, tune
 
 LATERAL_FACTORS = (0.6, 0.7, 0.8, 0.85, 0.9, 1.0, 1.1, 1.25, 1.4)  # 1.0: height alone
 
@@ -75,18 +75,20 @@ class KeptLook:
 
 
 def keep_look(heightmap: Heightmap, target: Target, evaluator: Evaluator | None = None, tile: bool = False,
-              laterals: tuple[float, ...] = LATERAL_FACTORS,
-              progress: Callable[[str], None] | None = None) -> KeptLook:
-    """The candidates of the module docstring for ``heightmap`` (mm) and ``target``; InputError if none reaches it."""
+              laterals: tuple[float, ...] = LATERAL_FACTORS, tolerance_jnd: float = TOLERANCE_JND,
+              max_fem: int = MAX_FEM, progress: Callable[[str], None] | None = None) -> KeptLook:
+    """The candidates of the module docstring for ``heightmap`` (mm) and ``target`` (each ``tune`` run with
+    ``tolerance_jnd`` and ``max_fem``); InputError if none reaches it."""
     evaluator = evaluator or Evaluator()
     say = progress or (lambda _: None)
-    candidates = [_candidate(heightmap, target, evaluator, tile, lateral, say) for lateral in (None, *laterals)]
+    settings = _Settings(evaluator, tile, tolerance_jnd, max_fem, say)
+    candidates = [_candidate(heightmap, target, settings, lateral) for lateral in (None, *laterals)]
     grid = sorted(c.lateral for c in candidates[1:] if c.reached)
     if grid:  # one refinement: halfway to the grid's neighbours of the best
         best = min((c for c in candidates[1:] if c.reached), key=lambda c: c.look.difference).lateral
         at = grid.index(best)
         for other in grid[max(at - 1, 0):at] + grid[at + 1:at + 2]:
-            candidates.append(_candidate(heightmap, target, evaluator, tile, (best + other) / 2, say))
+            candidates.append(_candidate(heightmap, target, settings, (best + other) / 2))
     reached = [i for i, c in enumerate(candidates) if c.reached]
     if not reached:
         raise InputError("no mix of lateral and height scale reaches the target: "
@@ -95,18 +97,31 @@ def keep_look(heightmap: Heightmap, target: Target, evaluator: Evaluator | None 
     return KeptLook(tuple(candidates), min(reached, key=lambda i: candidates[i].look.difference))
 
 
-def _candidate(heightmap: Heightmap, target: Target, evaluator: Evaluator, tile: bool, lateral: float | None,
-               say: Callable[[str], None]) -> LookCandidate:
+@dataclass(frozen=True)
+class _Settings:
+    """How every candidate is tuned."""
+
+    evaluator: Evaluator
+    tile: bool
+    tolerance_jnd: float
+    max_fem: int
+    say: Callable[[str], None]
+
+
+def _candidate(heightmap: Heightmap, target: Target, settings: _Settings, lateral: float | None) -> LookCandidate:
     """Lateral scale alone (``lateral`` None), or lateral x ``lateral`` then height, tuned to ``target``."""
+    s = settings
     try:
         if lateral is None:
-            say("keep look: lateral scale alone")
-            result = tune(heightmap, target, "lateral", evaluator, tile=tile)
+            s.say("keep look: lateral scale alone")
+            result = tune(heightmap, target, "lateral", s.evaluator, tolerance_jnd=s.tolerance_jnd, max_fem=s.max_fem,
+                          tile=s.tile)
             lateral, height = result.factor, None
         else:
-            say(f"keep look: lateral x {lateral:.4g}, then height")
+            s.say(f"keep look: lateral x {lateral:.4g}, then height")
             start = heightmap if lateral == 1 else scaled(heightmap, "lateral", lateral)
-            result = tune(start, target, "height", evaluator, tile=tile)
+            result = tune(start, target, "height", s.evaluator, tolerance_jnd=s.tolerance_jnd, max_fem=s.max_fem,
+                          tile=s.tile)
             height = result.factor
     except InputError as err:
         return LookCandidate(lateral, None, None, None, str(err))
