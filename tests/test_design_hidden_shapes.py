@@ -109,3 +109,24 @@ def test_a_felt_plate_is_felt_with_the_look_change_reported(tile, circle):
     kept = plate.change[f"{plate.change['target_jnd']:+g} JND"]
     assert kept["look_jnd"] == min(c["look"]["difference_look_jnd"] for c in kept["candidates"] if c["reached"])
     assert plate.look.difference > 0
+
+
+def test_the_command_writes_every_plate_file_and_the_measures(tmp_path, capsys):
+    import json
+
+    import trimesh
+
+    from roughness.cli import main
+
+    out = tmp_path / "plate"
+    code = main(["hidden-shapes", "--shape", "square", "--mode", "seen", "--size-mm", "24", "--step-mm", "4",
+                 "--out", str(out), "--json", "--quiet"])
+    assert code == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert {p.name for p in out.iterdir()} == {"seen.npz", "seen.stl", "seen.3mf", "seen.png", "hidden_shapes.json"}
+    seen = summary["seen"]
+    assert seen["look"]["difference_look_jnd"] >= 1 and seen["feel"]["inside"]["positions"] > 0
+    assert [c["claim"].split(":")[0] for c in seen["checks"]] == ["look", "feel", "contact", "homogeneity"]
+    mesh = trimesh.load(out / "seen.3mf", force="mesh")
+    assert mesh.is_watertight and mesh.bounds[1][0] == pytest.approx(24 - 0.025, abs=0.03)
+    assert main(["hidden-shapes", "--shape", "square", "--out", str(out)]) == 2  # nothing replaced without --overwrite

@@ -149,7 +149,7 @@ def _look_lines(kept) -> list[str]:
     lines = [f"look change: {c.look.difference:.2f} look JND (Weber contrast {c.look.weber_contrast:+.4f}; "
              f"threshold {c.look.threshold:g} assumed)"]
     for label, found in (("height alone", [k for k in kept.candidates if k.lateral == 1.0]),
-                         ("lateral alone", [k for k in kept.candidates if k.height is None and k.result is not None])):
+                         ("lateral alone", [k for k in kept.candidates if k.height is None])):
         if found and found[0].reached:
             lines.append(f"  {label}: {found[0].look.difference:.2f} look JND for the same target")
         elif found:
