@@ -53,3 +53,12 @@ def test_regions_too_small_or_black_are_refused():
         compare(lum, small, ~small)
     with pytest.raises(InputError, match="black"):
         compare(np.zeros((10, 10)), small | True, small | True)
+
+
+def test_look_distances_of_a_set_compare_every_pair():
+    from roughness.design.look import look_distances
+
+    a, taller = standard_texture(1.0), standard_texture(1.0, height_mm=1.5)
+    d = look_distances([a, taller, a])
+    assert np.all(np.diag(d) == 0) and d[0, 2] == d[2, 0] == 0  # the same texture twice looks the same
+    assert d[0, 1] >= 1 and d[1, 0] >= 1  # half again as tall: steeper, darker flanks

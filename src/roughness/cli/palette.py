@@ -112,6 +112,19 @@ def run(args: argparse.Namespace) -> int:
                      + (f"VERIFIED >= {args.min_jnd:g} JND; written to {out}" if palette.verified else
                         f"NOT VERIFIED >= {args.min_jnd:g} JND; nothing written (ask for fewer textures or a smaller "
                         "--min-jnd)"))
-        lines += [f"note: {n}" for n in palette.notes]
+        lines += _look_lines(palette) + [f"note: {n}" for n in palette.notes]
         write_stdout("\n".join(lines + (printing.lines() if printing else [])))
     return 0 if palette.verified else 1
+
+
+def _look_lines(palette) -> list[str]:
+    """How alike the members look (design.look), beside how far apart they feel: the pair most alike in look."""
+    import numpy as np
+
+    look = np.maximum(palette.look_differences, palette.look_differences.T)
+    if len(look) < 2:
+        return []
+    i, j = np.unravel_index(np.argmin(look + np.diag([np.inf] * len(look))), look.shape)
+    a, b = palette.members[i], palette.members[j]
+    return [f"most alike in look: {a.name} and {b.name}, {look[i, j]:.2f} look JND apart (2% contrast threshold "
+            f"assumed), {abs(palette.distances_jnd[i, j]):.2f} JND apart in feel"]

@@ -25,6 +25,7 @@ shape, so the upper end is taken. It is an assumption of this measure, not a mea
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -123,6 +124,19 @@ def compare(luminance: np.ndarray, region_a: np.ndarray, region_b: np.ndarray) -
 
 def look_difference(a: Heightmap, b: Heightmap) -> LookDifference:
     """How texture ``a`` looks beside texture ``b`` (each rendered whole, on its own)."""
-    la, lb = render(a), render(b)
-    return compare(np.concatenate([la.ravel(), lb.ravel()]), np.arange(la.size + lb.size) < la.size,
-                   np.arange(la.size + lb.size) >= la.size)
+    both = np.concatenate([render(a).ravel(), render(b).ravel()])
+    first = np.arange(both.size) < a.heights.size
+    return compare(both, first, ~first)
+
+
+def look_distances(heightmaps: Sequence[Heightmap]) -> np.ndarray:
+    """(K, K) look difference (look JND) of texture i beside texture j, each rendered whole once; 0 on the diagonal."""
+    lum = [render(hm).ravel() for hm in heightmaps]
+    out = np.zeros((len(lum), len(lum)))
+    for i, a in enumerate(lum):
+        for j, b in enumerate(lum):
+            if i != j:
+                both = np.concatenate([a, b])
+                first = np.arange(both.size) < a.size
+                out[i, j] = compare(both, first, ~first).difference
+    return out

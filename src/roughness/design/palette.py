@@ -30,6 +30,7 @@ import math
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -44,6 +45,7 @@ from roughness.perceptual_scale import LOG_JND, WEBER_FRACTION, jnd
 from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator, Verified
+from .look import look_distances
 from .tune import FACTOR_RANGE, GRID, TOLERANCE_JND, scaled, target_of, tune
 
 if TYPE_CHECKING:
@@ -91,6 +93,12 @@ class Palette:
         d = np.abs(self.distances_jnd)
         return float(d[np.triu_indices(len(d), 1)].min()) if len(d) > 1 else math.inf
 
+    @cached_property
+    def look_differences(self) -> np.ndarray:
+        """(K, K) how different member i looks beside member j (look JND, ``design.look``), beside the feel's
+        ``distances_jnd``."""
+        return look_distances([m.heightmap for m in self.members])
+
     @property
     def verified(self) -> bool:
         return self.closest_jnd >= self.min_jnd
@@ -102,7 +110,8 @@ class Palette:
                              "fem_roughness_stderr": m.fem.roughness_stderr,
                              "equivalent_lambda_mm": m.fem.equivalent_lambda_mm, "on_scale": m.fem.on_scale,
                              "surrogate_roughness": m.surrogate_roughness, "recipe": m.recipe} for m in self.members],
-                "distances_jnd": np.round(self.distances_jnd, 4).tolist(), "notes": list(self.notes),
+                "distances_jnd": np.round(self.distances_jnd, 4).tolist(),
+                "look_differences": np.round(self.look_differences, 3).tolist(), "notes": list(self.notes),
                 **({"printing": self.printing} if self.printing else {}),
                 **({"print_forecast": self.forecast} if self.forecast else {}),
                 **({"provenance": self.provenance.as_dict()} if self.provenance else {})}
