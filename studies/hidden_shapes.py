@@ -27,7 +27,7 @@ LATERALS = (0.75, 0.8, 0.85)
 FEM_CENTRES_MM = {"inside": (20.0, 20.0), "across the outline": (30.0, 20.0), "outside": (6.0, 6.0)}
 
 
-def plates() -> dict:
+def plates(out: Path) -> dict:
     from roughness.design.hidden_shapes import default_base, hidden_plate
     from roughness.design.shapes import SHAPES, builtin_mask
 
@@ -40,6 +40,7 @@ def plates() -> dict:
             made[shape, mode] = hidden_plate(tile, builtin_mask(shape, (n, n)), mode, step_mm=STEP_MM,
                                              laterals=LATERALS)
             print(f"{shape} {mode}: {made[shape, mode]!r} ({time.perf_counter() - start:.0f} s)", flush=True)
+            (out / "hidden_shapes.md").write_text(table(made, []))  # what is done so far survives an interruption
     return made
 
 
@@ -118,7 +119,7 @@ def main(argv: list[str] | None = None) -> None:
     from roughness.design.hidden_shapes import figure as plate_figure
 
     out = Path(args.out)
-    made = plates()
+    made = plates(out)
     fem = fem_footprints(made["circle", "seen"]) if args.fem else []
     (out / "hidden_shapes.md").write_text(table(made, fem))
     (out / "hidden_shapes.json").write_text(json.dumps({f"{s} {m}": p.summary() for (s, m), p in made.items()}
