@@ -56,6 +56,14 @@ def add_parser(actions) -> None:
     p.add_argument("--border-mm", type=Number(float, low=0, high=MAX_LENGTH_MM), default=DEFAULT_BORDER_MM, metavar="MM",
                    help="the heights ramp from 0 on the region's border to full height over this distance, so the "
                         f"border and the faces beside it keep their shape (0: no ramp) (default {DEFAULT_BORDER_MM:g})")
+    p.add_argument("--decimate-mm", type=Number(float, low=0, high=MAX_LENGTH_MM, low_open=True), metavar="MM",
+                   help="decimate the textured mesh to the fewest triangles whose surface is measured within MM of "
+                        "the full one (two-sided, e.g. 0.005: well under a print's resolution), checked closed and not "
+                        "crossing itself; reports triangles and sizes before and after and the change of V (default: "
+                        "not decimated)")
+    p.add_argument("--no-feel-check", action="store_true",
+                   help="with --decimate-mm: do not compare V of the decimated and the full mesh (minutes on a large "
+                        "part; reported as not checked)")
     p.add_argument("--no-intersection-check", action="store_true",
                    help="skip the test for faces crossing each other (the slowest step on large meshes; reported)")
     p.add_argument("--out", required=True, metavar="FILE", help="the textured mesh: .stl (binary) or .3mf")
@@ -67,6 +75,7 @@ def add_parser(actions) -> None:
     add_quiet(p)
     add_overwrite(p)
     finish(p, run, edge_mm="--edge-mm", region="--region", sharp_deg="--sharp-deg", min_face_mm="--min-face-mm",
+           decimate_mm="--decimate-mm",
            **MAPPING_FLAGS)
 
 
@@ -112,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
     result = texture_mesh(read.mesh, mapping, region, edge_mm, args.normal_radius_mm,
                           check_intersections=not args.no_intersection_check, progress=step_done,
                           border_mm=args.border_mm, meter=stage, sharp_deg=args.sharp_deg,
-                          min_face_mm=args.min_face_mm)
+                          min_face_mm=args.min_face_mm, decimate_mm=args.decimate_mm)
+    change = _feel_change(args, result, meter)
     written = write_mesh(result.mesh, out, args.overwrite, progress=stage and stage(f"writing {out.name}"))
     meter.close()
     if preview is not None:
@@ -130,9 +140,11 @@ def run(args: argparse.Namespace) -> int:
                                 "bytes": written.bytes, "check": written.check.as_dict(), "preview": None if preview is None else str(preview),
                                 "plan": plan.as_dict(),
                                 "printing": None if printing is None else printing.as_dict(),
-                                "result": result.as_dict(), "notes": notes, "readings": readings(args)}))
+                                "result": result.as_dict(), "full": _full(result),
+                                "feel_change": None if change is None else change.as_dict(),
+                                "notes": notes, "readings": readings(args)}))
     else:
-        lines = [written.line(),
+        lines = [written.line(), *_decimation_lines(result, change),
                  f"textured {result.textured_faces_in:,} of {result.triangles_in:,} faces "
                  f"({result.textured_area_mm2:.1f} mm^2); heights up to {result.max_height_mm:.3f} mm, mean "
                  f"{result.mean_height_mm:.3f} mm; volume {result.volume_in_mm3:.1f} -> {result.volume_out_mm3:.1f} mm^3",
@@ -142,6 +154,39 @@ def run(args: argparse.Namespace) -> int:
             lines.append(f"wrote {preview}")
         write_stdout("\n".join(lines))
     return 0
+
+
+def _feel_change(args: argparse.Namespace, result, meter):
+    """V of the decimated against the full mesh (``objects.feel_change``), or None if not decimated or not asked."""
+    if result.decimation is None or args.no_feel_check:
+        return None
+    from roughness.objects.feel_change import feel_change
+
+    log(args, "object texture: V of the decimated mesh against the full one")
+    stage = None if args.quiet else meter.stage("feel, both meshes")
+    change = feel_change(result.full_mesh, result.mesh, progress=stage and (lambda done, total: stage(done / total)))
+    meter.close()
+    return change
+
+
+def _full(result) -> dict | None:
+    """The full (undecimated) mesh's triangles and binary STL size, if the mesh written was decimated."""
+    from roughness.objects.meshes import stl_bytes
+
+    if result.decimation is None:
+        return None
+    return {"triangles": result.triangles_out, "stl_bytes": stl_bytes(result.triangles_out)}
+
+
+def _decimation_lines(result, change) -> list[str]:
+    """What decimating did: the full mesh's size, the measured distance, the change of V (or that it was not checked)."""
+    from roughness.objects.meshes import stl_bytes
+
+    if result.decimation is None:
+        return []
+    return [f"before decimating: {result.triangles_out:,} triangles, {stl_bytes(result.triangles_out) / 1e6:.1f} MB "
+            "as binary STL", result.decimation.line(),
+            change.line() if change is not None else "feel: V of the decimated mesh NOT compared (--no-feel-check)"]
 
 
 def _plan(args: argparse.Namespace, mesh, region, mapping, printer):

@@ -24,10 +24,13 @@ Steps, each reported in ``TexturedMesh.notes``:
    its ends);
 5. displaced, then checked: no face turned over, a closed solid by an independent check (``roughness.surface.solid``:
    every edge shared by exactly two triangles, consistently wound, no zero-area triangle), no two faces crossing
-   (``intersections``). Writing the mesh checks it again as the file holds it (``meshes.write_mesh``).
+   (``intersections``). Writing the mesh checks it again as the file holds it (``meshes.write_mesh``);
+6. optionally (``decimate_mm``) decimated within a geometric tolerance, the distance measured and the result checked
+   again, closed and not crossing itself (``decimate``).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable
@@ -40,6 +43,7 @@ from roughness.core.checks import length, positive
 from roughness.core.errors import InputError
 from roughness.surface.stl import require_solid
 
+from .decimate import Decimated, decimate
 from .intersections import folded_faces, self_intersections, triangles_cross
 from .mapping import TextureMapping
 from .meshes import require_closed
@@ -96,10 +100,13 @@ class TexturedMesh:
     intersection_pairs_tested: int | None
     notes: list[str] = field(default_factory=list)
     seconds: dict[str, float] = field(default_factory=dict)
+    decimation: Decimated | None = None  # with ``decimate_mm``: how ``mesh`` was decimated from ``full_mesh``
+    full_mesh: Any = None  # with ``decimate_mm``: the textured mesh before decimation (``triangles_out``)
 
     def as_dict(self) -> dict:
         """JSON-ready; ``min_concave_radius_mm`` is null where no textured part is concave (an infinite radius)."""
-        out = {k: v for k, v in self.__dict__.items() if k != "mesh"}
+        out = {k: v for k, v in self.__dict__.items() if k not in ("mesh", "full_mesh", "decimation")}
+        out["decimation"] = None if self.decimation is None else self.decimation.as_dict()
         if not math.isfinite(self.min_concave_radius_mm):
             out["min_concave_radius_mm"] = None
         return out
@@ -140,7 +147,8 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
                  progress: Callable[[str], object] | None = None,
                  border_mm: float = DEFAULT_BORDER_MM,
                  meter: Callable[[str], Callable[[float], object]] | None = None,
-                 sharp_deg: float = DEFAULT_SHARP_DEG, min_face_mm: float = DEFAULT_MIN_FACE_MM) -> TexturedMesh:
+                 sharp_deg: float = DEFAULT_SHARP_DEG, min_face_mm: float = DEFAULT_MIN_FACE_MM,
+                 decimate_mm: float | None = None) -> TexturedMesh:
     """``mesh`` (a closed trimesh, mm) with ``mapping``'s texture on the faces of ``region`` (module docstring).
 
     ``edge_mm``: longest edge of a textured face (default: sqrt(2) times the mapping's ``pixel_mm``, so that the
@@ -152,8 +160,12 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     ``meter``: given a step's name ("refine", "self-intersection check"), the callback to which that step reports
     the fraction of its work done (``progress.StageMeter.stage``); ``sharp_deg``: edges whose faces' normals turn by
     more than this (degrees) are borders of the texture (180: none); ``min_face_mm``: faces between sharp edges
-    narrower than this (mm) are left untextured (0: none).
+    narrower than this (mm) are left untextured (0: none); ``decimate_mm``: the result decimated to the fewest
+    triangles whose surface is measured within this distance (mm) of the full one (``decimate``; step 6:
+    ``TexturedMesh.mesh`` is the decimated mesh, ``full_mesh`` the full one).
     """
+    if decimate_mm is not None:
+        positive("decimate_mm", decimate_mm)
     clock = _Clock(progress, meter)
     given, notes = _checked_input(mesh, mapping, region, edge_mm, normal_radius_mm, border_mm, sharp_deg, min_face_mm)
     notes += _input_notes(given, mapping)
@@ -176,11 +188,17 @@ def texture_mesh(mesh, mapping: TextureMapping, region: Region = Region(), edge_
     import trimesh
 
     area, volume = _area_and_volume(refined, relief)
-    return TexturedMesh(trimesh.Trimesh(displaced, refined.faces, process=False, validate=False), len(given.faces),
-                        len(refined.faces), int(given.selected.sum()), area, given.sharp.count, given.edge_mm,
-                        refined.rounds, rounds, relief.depth_mm, volume / area, volume, concave.radius_mm,
-                        concave.ratio, volume_in, signed_volume(displaced, refined.faces), tested, notes,
-                        clock.seconds)
+    full = trimesh.Trimesh(displaced, refined.faces, process=False, validate=False)
+    result = TexturedMesh(full, len(given.faces), len(refined.faces), int(given.selected.sum()), area,
+                          given.sharp.count, given.edge_mm, refined.rounds, rounds, relief.depth_mm, volume / area,
+                          volume, concave.radius_mm, concave.ratio, volume_in, signed_volume(displaced, refined.faces),
+                          tested, notes, clock.seconds)
+    if decimate_mm is None:
+        return result
+    found = decimate(displaced, refined.faces, decimate_mm, progress)
+    clock.step("decimate", f"{found.triangles:,} triangles")
+    return dataclasses.replace(result, mesh=trimesh.Trimesh(found.vertices, found.faces, process=False, validate=False),
+                               decimation=found, full_mesh=full)
 
 
 def _checked_input(mesh, mapping: TextureMapping, region: Region, edge_mm: float | None, normal_radius_mm: float,
