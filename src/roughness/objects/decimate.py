@@ -13,8 +13,9 @@ removes them). So the count is searched and every candidate is judged by measure
 2. the candidates that passed, fewest triangles first, are verified until one holds: the distance measured on every
    sample, and no two faces crossing (``intersections.self_intersections``, every pair tested).
 
-The surfaces are sampled ``spacing_mm`` apart: the full mesh's longest edge (its vertices, where the texture's
-heights are; the decimated mesh's triangles on a grid as fine). The measured maximum is what is reported and held
+The surfaces are sampled about as densely as the full mesh's vertices (``spacing_mm``: ``SPACING_PERCENTILE`` of
+its triangles' longest edges): the full mesh at its vertices, where the texture's heights are (its few larger
+triangles on a grid as fine), the decimated mesh's triangles on a grid as fine. The measured maximum is what is reported and held
 to the tolerance; ``SurfaceDistance.covering_mm`` says how far apart the samples are.
 """
 from __future__ import annotations
@@ -37,6 +38,9 @@ MIN_KEPT = 1 / 1024
 BISECTIONS = 3
 """Bisection steps between the last count that passed the screen and the first that failed (each halves the gap
 in log(count): the result is within a factor of 2^(1/8), 9%, of the fewest triangles that pass)."""
+SPACING_PERCENTILE = 99.0
+"""The samples' spacing is this percentile of the full mesh's longest edges (its textured triangles' size; not the
+largest, which a few large untextured faces would set)."""
 SCREEN_SAMPLES = 200_000
 """Samples each way (at most) in the screen."""
 
@@ -101,7 +105,7 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, tolerance_mm: float,
     tolerance_mm = positive("decimate_mm", tolerance_mm)
     vertices, faces = np.asarray(vertices, dtype=float), np.asarray(faces, dtype=np.int64)
     full = TriangleSurface(vertices, faces)
-    spacing = float(longest_edges(vertices, faces).max())
+    spacing = float(np.percentile(longest_edges(vertices, faces), SPACING_PERCENTILE))
     search = _Search(full, spacing, tolerance_mm, np.random.default_rng(seed), progress)
     passed, failed = [], None
     count = len(faces) // 2

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from roughness.perceptual_scale import jnd_distance
+from roughness.core.errors import InputError
+from roughness.perceptual_scale import StandardScale, jnd_distance
 
 from .feel import feel_map
 from .feel_budget import feel_budget
@@ -59,7 +60,8 @@ class FeelChange:
 def feel_change(full, decimated, spacing_mm: float | None = None, engine: str = "spectral",
                 progress: Callable[[int, int], None] | None = None) -> FeelChange:
     """V of ``decimated`` against ``full`` (trimeshes, mm) at the same points, about ``spacing_mm`` apart (default:
-    ``feel_budget``'s for a mesh's own relief) (module docstring); ``progress(done, total)`` over both maps."""
+    ``feel_budget``'s for a mesh's own relief) (module docstring); ``progress(done, total)`` over both maps.
+    InputError (parameter ``spacing_mm``) if no footprint is judged on both."""
     from scipy.spatial import cKDTree
 
     budget = feel_budget(float(full.area), float(full.area), spacing_mm, relief=True)
@@ -73,13 +75,16 @@ def feel_change(full, decimated, spacing_mm: float | None = None, engine: str = 
                              progress=told))
     a, b = maps
     both = np.flatnonzero(np.isfinite(a.roughness) & np.isfinite(b.roughness))
-    changes = [jnd_distance(a.scale, float(b.roughness[i]), float(a.roughness[i]), float(b.uncertainty[i]),
+    if not len(both):
+        raise InputError(f"no footprint {budget.point_spacing_mm:g} mm apart could be judged on both meshes (reasons on "
+                         f"the full one: {'; '.join(sorted(set(a.reasons)))[:300]}): the part is too small or too "
+                         "curved to compare how it feels", parameter="spacing_mm")
+    scale: StandardScale = a.scale  # type: ignore[assignment]  # FeelMap keeps it untyped
+    changes = [jnd_distance(scale, float(b.roughness[i]), float(a.roughness[i]), float(b.uncertainty[i]),
                             float(a.uncertainty[i])) for i in both]
-    sizes = np.array([abs(c.jnd) if c.jnd is not None else 0.0 for c in changes])
-    worst = int(np.argmax(sizes)) if len(sizes) else 0
-    stderr = changes[worst].jnd_stderr if changes and changes[worst].jnd_stderr is not None else math.nan
-    v = a.roughness[both]
-    return FeelChange(len(both), len(a.roughness) - len(both), float(sizes.max()) if len(sizes) else math.nan,
-                      float(stderr), float(np.median(sizes)) if len(sizes) else math.nan,
-                      float(np.median(v)) if len(v) else math.nan,
-                      float(np.median(a.uncertainty[both])) if len(v) else math.nan, budget.point_spacing_mm)
+    sizes = np.array([abs(c.jnd) if c.jnd is not None else 0.0 for c in changes])  # None: both below the scale
+    worst = changes[int(np.argmax(sizes))]
+    return FeelChange(len(both), len(a.roughness) - len(both), float(sizes.max()),
+                      math.nan if worst.jnd_stderr is None else float(worst.jnd_stderr), float(np.median(sizes)),
+                      float(np.median(a.roughness[both])), float(np.median(a.uncertainty[both])),
+                      budget.point_spacing_mm)
