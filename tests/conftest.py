@@ -150,6 +150,13 @@ def installed(tmp_path_factory) -> Path:
 
 
 @pytest.fixture
+def anyio_backend() -> str:
+    """Async tests run on asyncio, the loop NiceGUI serves on (anyio would also run them on trio where that is
+    installed, as in CI's interpreter, and NiceGUI's client cannot run there)."""
+    return "asyncio"
+
+
+@pytest.fixture
 async def studio():
     """The Roughness Studio (local, no token) under NiceGUI's browser-less test client, fresh for each test
     (tests/studio_helpers.py; async tests: ``pytestmark = pytest.mark.anyio``)."""
