@@ -63,9 +63,9 @@ def cached(path: Path, make):
     return record
 
 
-def run_part(part: str, work: Path, feel_spacing_mm: float, record: dict) -> None:
-    """Every stage of ``part`` not yet cached in ``work``/``part``; ``record`` updated (and the report written)
-    after each."""
+def run_part(part: str, work: Path, feel_spacing_mm: float, tolerances: tuple[float, ...], record: dict) -> None:
+    """Every stage of ``part`` at ``tolerances`` (mm) not yet cached in ``work``/``part``; ``record`` updated (and
+    the report written) after each."""
     import trimesh
 
     from roughness.objects.decimate import decimate
@@ -89,7 +89,7 @@ def run_part(part: str, work: Path, feel_spacing_mm: float, record: dict) -> Non
     write_report(record)
     data = np.load(full_npz)
     full = trimesh.Trimesh(data["vertices"], data["faces"], process=False)
-    for tol in TOLERANCES_MM:
+    for tol in tolerances:
         dec_npz = folder / f"decimated_{tol:g}.npz"
 
         def make_decimated():
@@ -104,7 +104,7 @@ def run_part(part: str, work: Path, feel_spacing_mm: float, record: dict) -> Non
 
         row[f"decimated_{tol:g}"] = cached(folder / f"decimated_{tol:g}.json", make_decimated)
         write_report(record)
-    for tol in TOLERANCES_MM:
+    for tol in tolerances:
         def make_feel():
             data = np.load(folder / f"decimated_{tol:g}.npz")
             start = time.perf_counter()
@@ -171,6 +171,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--work", help="folder for the cached stages (resumed if it exists)")
     parser.add_argument("--part", action="append", choices=PARTS, help="parts to run (default: knob, then ball)")
+    parser.add_argument("--tolerance", action="append", type=float, choices=TOLERANCES_MM,
+                        help="decimation tolerances to run, mm (default: all of them)")
     parser.add_argument("--feel-spacing-mm", type=float, default=10.0,
                         help="footprints this far apart in the V comparison (default 10: a footprint apart)")
     parser.add_argument("--no-record", action="store_true", help="print the report, do not write results/")
@@ -184,8 +186,11 @@ def main() -> None:
         parser.error("--work is required (except with --report-only)")
     record = {"machine": f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}",
               "feel_spacing_mm": args.feel_spacing_mm, "parts": {}, "no_record": args.no_record}
+    earlier = RESULTS / "slicer_size.json"
+    if earlier.exists() and not args.no_record:  # rows of parts and stages not run now are kept
+        record["parts"] = json.loads(earlier.read_text())["parts"]
     for part in args.part or PARTS:
-        run_part(part, Path(args.work), args.feel_spacing_mm, record)
+        run_part(part, Path(args.work), args.feel_spacing_mm, tuple(args.tolerance or TOLERANCES_MM), record)
 
 
 if __name__ == "__main__":
