@@ -72,8 +72,11 @@ def table(made: dict, fem: list[dict]) -> str:
              f"spectral engine over the whole plate, footprints {STEP_MM:g} mm apart, mean V of the positions whose "
              "8 mm sampling window lies in the shape against those clear of it, in JND (± its standard error over "
              "the positions, a lower bound: neighbours overlap). Look: design.look, in units of the assumed 2% "
-             "contrast threshold (the base plate's same regions in brackets: the texture's own variation).", "",
-             "| shape | mode | change | feel (JND) | look (look JND) | checks |", "|---|---|---|---|---|---|"]
+             "contrast threshold and, for the texture of light and dark, of the assumed 15% contrast-discrimination "
+             "fraction (the base plate's same regions in brackets: the texture's own variation); 'texture' is the "
+             "part of the look from the bands alone.", "",
+             "| shape | mode | change | feel (JND) | look (look JND) | texture (look JND) | checks |",
+             "|---|---|---|---|---|---|---|"]
     for (shape, mode), p in made.items():
         if mode == "seen":
             change = f"recess {p.change['recess_mm']:g} mm on {100 * p.change['changed_fraction_of_shape']:.1f}% of it"
@@ -85,6 +88,7 @@ def table(made: dict, fem: list[dict]) -> str:
         passed = sum(c.passed for c in p.checks)
         failed = "; ".join(c.claim.split(":")[0] for c in p.checks if not c.passed)
         lines.append(f"| {shape} | {mode} | {change} | {feel} | {p.look.difference:.2f} ({p.base_look.difference:.2f}) "
+                     f"| {p.look.texture_difference:.2f} "
                      f"| {passed}/{len(p.checks)}{' (fails: ' + failed + ')' if failed else ''} |")
     if fem:
         lines += ["", "FEM (coarse) on footprints of the seen circle plate against the same footprints on the base:",
@@ -98,17 +102,19 @@ def table(made: dict, fem: list[dict]) -> str:
 def figure(made: dict, path: Path) -> None:
     """The rendered look of all eight plates, shapes across, modes down."""
     from roughness.core.figures import new_figure
+    from roughness.design.look import photograph
 
     fig = new_figure(figsize=(16, 8.4), layout="constrained")
     axes = fig.subplots(2, 4)
     for col, shape in enumerate(dict.fromkeys(s for s, _ in made)):
         for row, mode in enumerate(("seen", "felt")):
             p = made[shape, mode]
-            axes[row, col].imshow(p.luminance, cmap="gray", vmin=0, vmax=1, extent=(0, PLATE_MM, PLATE_MM, 0))
+            axes[row, col].imshow(photograph(p.luminance), cmap="gray", vmin=0, vmax=1, interpolation="antialiased",
+                                  extent=(0, PLATE_MM, PLATE_MM, 0))
             feel = "-" if p.feel is None or p.feel.jnd is None else f"{p.feel.jnd:+.2f}"
             axes[row, col].set_title(f"{shape}, {mode}: feel {feel} JND, look {p.look.difference:.1f}", fontsize=10)
-    fig.suptitle("rendered look (top: seen, not felt; bottom: felt, not seen)")
-    fig.savefig(path, dpi=90)
+    fig.suptitle("rendered look, as photographed (top: seen, not felt; bottom: felt, not seen)")
+    fig.savefig(path, dpi=120)
 
 
 def main(argv: list[str] | None = None) -> None:

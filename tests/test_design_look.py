@@ -6,7 +6,7 @@ import pytest
 
 from roughness.core.errors import InputError
 from roughness.dataset.textures import standard_texture
-from roughness.design.look import THRESHOLD, compare, render
+from roughness.design.look import THRESHOLD, compare, look_difference, photograph, render
 from roughness.surface.heightmap import Heightmap, flat
 
 
@@ -25,13 +25,13 @@ def test_a_flat_plate_is_uniformly_lit_at_the_lights_sine():
 
 def test_identical_textures_look_the_same(plate):
     hm, disk, ring = plate
-    assert compare(render(hm), disk, ring).difference < 1
+    assert compare(render(hm), disk, ring, hm.pixel_mm).difference < 1
 
 
 def test_a_raised_flat_shape_of_half_a_millimetre_is_visible(plate):
     hm, disk, ring = plate
     raised = Heightmap(np.where(disk, np.maximum(hm.heights, 0.5), hm.heights), hm.pixel_mm)
-    look = compare(render(raised), disk, ring)
+    look = compare(render(raised), disk, ring, hm.pixel_mm)
     assert look.verdict == "visible" and look.weber_contrast > THRESHOLD  # less shadow: brighter
 
 
@@ -40,7 +40,7 @@ def test_a_change_in_shaded_valley_floors_shows_less_than_the_same_change_on_the
     h = hm.heights
     ripple = 0.1 * np.sin(2 * np.pi * np.arange(h.shape[1]) * hm.pixel_mm / 0.4)[None, :]
     valleys, tops = h <= np.quantile(h, 0.05), h >= np.quantile(h, 0.95)
-    looks = [compare(render(Heightmap(h + np.where(where & disk, ripple, 0.0), hm.pixel_mm)), disk, ring).difference
+    looks = [compare(render(Heightmap(h + np.where(where & disk, ripple, 0.0), hm.pixel_mm)), disk, ring, hm.pixel_mm).difference
              for where in (valleys, tops)]
     assert looks[0] < looks[1] / 2
 
@@ -50,9 +50,9 @@ def test_regions_too_small_or_black_are_refused():
     small = np.zeros((10, 10), bool)
     small[0, :3] = True
     with pytest.raises(InputError, match="at least 16"):
-        compare(lum, small, ~small)
+        compare(lum, small, ~small, 0.1)
     with pytest.raises(InputError, match="black"):
-        compare(np.zeros((10, 10)), small | True, small | True)
+        compare(np.zeros((10, 10)), small | True, small | True, 0.1)
 
 
 def test_look_distances_of_a_set_compare_every_pair():
@@ -62,3 +62,24 @@ def test_look_distances_of_a_set_compare_every_pair():
     d = look_distances([a, taller, a])
     assert np.all(np.diag(d) == 0) and d[0, 2] == d[2, 0] == 0  # the same texture twice looks the same
     assert d[0, 1] >= 1 and d[1, 0] >= 1  # half again as tall: steeper, darker flanks
+
+
+def test_the_same_bumps_laid_closer_look_different_though_their_light_and_dark_are_alike():
+    """Bumps and spacing scaled down together: every flank keeps its slope, so the luminance histogram barely
+    moves; the bands see the finer texture."""
+    from roughness.design.tune import scaled
+
+    a = standard_texture(1.0, seed=0, height_mm=2.0)
+    closer = scaled(scaled(a, "lateral", 0.7), "height", 0.7)  # 30% closer: 1.6 look JND by its bands
+    look = look_difference(closer, a)
+    assert max(abs(look.weber_contrast), look.distribution_distance) / THRESHOLD < look.texture_difference
+    assert look.texture_difference >= 1 and look.verdict == "visible"
+    assert look_difference(a, a).texture_difference == 0
+
+
+def test_a_photograph_is_white_at_the_brightest_pixels_and_keeps_the_order_of_light():
+    lum = np.linspace(0.0, 0.4, 1001).reshape(7, 143)
+    shown = photograph(lum)
+    assert shown.max() == 1 and shown.min() == 0 and np.all(np.diff(shown.ravel()) >= 0)
+    assert np.isclose(shown.ravel()[500], (0.2 / np.percentile(lum, 99.5)) ** (1 / 2.2))
+    assert np.all(photograph(np.zeros((4, 4))) == 0)

@@ -46,7 +46,7 @@ from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator
 from .homogeneity import homogeneity
-from .look import LookDifference, compare, render
+from .look import LookDifference, compare, photograph, render
 from .look_keeping import LATERAL_FACTORS, keep_look
 from .plate_relief import compose
 from .shapes import check_mask, inscribed_width_mm
@@ -176,7 +176,8 @@ def hidden_plate(tile: Heightmap, mask: np.ndarray, mode: str, *, gap_margin_mm:
     say(f"{mode}: rendering the look and mapping the feel (spectral, footprints {step_mm:g} mm apart)")
     inside_look, outside_look = look_regions(mask, tile.pixel_mm)
     luminance = render(plate)
-    look, base_look = compare(luminance, inside_look, outside_look), compare(render(base), inside_look, outside_look)
+    look = compare(luminance, inside_look, outside_look, tile.pixel_mm)
+    base_look = compare(render(base), inside_look, outside_look, tile.pixel_mm)
     feel_map, map_notes = spectral_map(plate, step_mm, config=config)
     inside, outside, fallback = _region_feel(feel_map, mask, tile.pixel_mm, config)
     if fallback:
@@ -347,8 +348,8 @@ def figure(plate: HiddenPlate):
     axes = fig.subplots(1, 3)
     w, h = plate.heightmap.size_mm
     extent = (0, w, h, 0)
-    axes[0].imshow(plate.luminance, cmap="gray", vmin=0, vmax=1, extent=extent)
-    axes[0].set_title(f"look (rendered): {plate.look.difference:.2f} look JND")
+    axes[0].imshow(photograph(plate.luminance), cmap="gray", vmin=0, vmax=1, extent=extent, interpolation="antialiased")
+    axes[0].set_title(f"look (rendered, as photographed): {plate.look.difference:.2f} look JND")
     shown = axes[1].imshow(plate.heightmap.heights, cmap="viridis", extent=extent)
     fig.colorbar(shown, ax=axes[1], label="height (mm)", shrink=0.8)
     axes[1].set_title(f"heightmap, relief {np.ptp(plate.heightmap.heights):.2f} mm")

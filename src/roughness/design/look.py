@@ -10,10 +10,18 @@ ambient term: a pixel no light reaches is black. Beyond the map's edges the text
 (as the spectral engine extends it), so that a plate's rim is not lit as if nothing stood beside it.
 
 Comparison (``compare``): the luminance of the pixels of region A (e.g. inside a shape) against region B
-(outside): the Weber contrast of their mean luminance, (mean A - mean B) / mean B, and the Wasserstein-1
-distance between their luminance distributions over mean B (the same units: a difference of means alone
-gives |Weber|, a different texture of light and dark at the same mean gives more). ``difference`` is the larger
-of the two, in units of ``THRESHOLD`` ("look JND"): 1 and above is taken as visible.
+(outside), three ways, each in units of its threshold ("look JND"); ``difference`` is the largest, and 1 and
+above is taken as visible:
+
+* the Weber contrast of their mean luminance, (mean A - mean B) / mean B, over ``THRESHOLD``;
+* the Wasserstein-1 distance between their luminance distributions over mean B (the same units: a difference of
+  means alone gives |Weber|, a different mix of light and dark at the same mean gives more), over ``THRESHOLD``;
+* the texture of light and dark, band by band: the luminance filtered by a difference of Gaussians (sigma and
+  2 sigma, ``BAND_SIGMAS_MM``, octaves from the bumps' flanks to their spacing), its RMS over each region divided
+  by mean B (the band's contrast, c_A and c_B), and |c_A - c_B| over the contrast-discrimination threshold
+  sqrt(THRESHOLD^2 + (CONTRAST_FRACTION c_B)^2). This is what the two above cannot see: the same bumps laid
+  closer together, or scaled as a whole, have the same luminance histogram but move contrast from one band to
+  the next.
 
 Assumption (the visibility threshold): ``THRESHOLD`` = 0.02, a 2% contrast. At a plate's viewing distance of
 about 400 mm a shape 20-60 mm across subtends 3-9 degrees; its outline's contrast lies at 0.3-3 cycles/degree,
@@ -21,6 +29,14 @@ where human contrast sensitivity is about 50-200 (a threshold of 0.5-2%: Barten,
 Human Eye and Its Effects on Image Quality", SPIE 1999; Weber's fraction for luminance increments on large
 fields, about 1-2%). The texture's own bumps (a few cycles/degree at 400 mm, contrast tens of %) mask the
 shape, so the upper end is taken. It is an assumption of this measure, not a measurement of an observer.
+Contrast discrimination above threshold follows Weber's law for contrast: an increment is seen at about 10-20% of
+the contrast already there (Legge and Foley, "Contrast masking in human vision", JOSA 70, 1980); ``CONTRAST_FRACTION``
+takes 15%, an assumption in the same way.
+
+Display (``photograph``): luminance is linear in light; shown as a grey picture at its linear values, a plate's
+mostly dark relief lands in the screen's darkest codes, where differences the eye would see on the plate vanish.
+Pictures of the look are therefore shown as a photograph would record them: white at the plate's brightest
+(99.5th percentile) pixels, sRGB-like gamma 1/2.2.
 """
 from __future__ import annotations
 
@@ -29,9 +45,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import ndimage
 from scipy.stats import wasserstein_distance
 
-from roughness.core.checks import in_range, integer
+from roughness.core.checks import in_range, integer, positive
 from roughness.core.errors import InputError
 from roughness.core.reprs import short_repr
 from roughness.surface.heightmap import Heightmap
@@ -39,6 +56,10 @@ from roughness.surface.heightmap import Heightmap
 ELEVATION_DEG = 45.0
 AZIMUTHS = 8
 THRESHOLD = 0.02  # contrast at which a region is taken as visible (module docstring: an assumption, with its source)
+CONTRAST_FRACTION = 0.15  # a band's contrast is told apart when it changes by this fraction of itself (an assumption)
+BAND_SIGMAS_MM = (0.1, 0.2, 0.4, 0.8)  # difference-of-Gaussian bands (sigma, 2 sigma), mm
+DISPLAY_GAMMA = 2.2
+DISPLAY_WHITE_PERCENTILE = 99.5
 MIN_REGION_PIXELS = 16  # a region of fewer pixels has no luminance statistics to speak of
 
 
@@ -50,16 +71,27 @@ class LookDifference:
     distribution_distance: float  # Wasserstein-1 distance of the luminance distributions / mean luminance B
     mean_a: float  # mean luminance (0..1) of region A
     mean_b: float
+    band_contrasts_a: tuple[float, ...]  # RMS of each band (BAND_SIGMAS_MM) over region A / mean luminance B
+    band_contrasts_b: tuple[float, ...]
     threshold: float = THRESHOLD
 
     def __repr__(self) -> str:
         return short_repr(self, f"{self.difference:.2f} look JND", f"Weber {self.weber_contrast:+.4f}",
-                          f"distribution {self.distribution_distance:.4f}", self.verdict)
+                          f"distribution {self.distribution_distance:.4f}", f"texture {self.texture_difference:.2f}",
+                          self.verdict)
+
+    @property
+    def texture_difference(self) -> float:
+        """The largest band's contrast difference over its discrimination threshold (look JND)."""
+        return max((abs(a - b) / np.hypot(self.threshold, CONTRAST_FRACTION * b)
+                    for a, b in zip(self.band_contrasts_a, self.band_contrasts_b, strict=True)), default=0.0)
 
     @property
     def difference(self) -> float:
-        """The larger of |Weber contrast| and the distribution distance, in units of the threshold."""
-        return max(abs(self.weber_contrast), self.distribution_distance) / self.threshold
+        """The largest of |Weber contrast| and the distribution distance over the threshold, and the texture
+        difference (look JND)."""
+        return max(max(abs(self.weber_contrast), self.distribution_distance) / self.threshold,
+                   self.texture_difference)
 
     @property
     def verdict(self) -> str:
@@ -68,11 +100,15 @@ class LookDifference:
     def as_dict(self) -> dict:
         return {"weber_contrast": self.weber_contrast, "distribution_distance": self.distribution_distance,
                 "mean_luminance_a": self.mean_a, "mean_luminance_b": self.mean_b,
+                "band_sigmas_mm": list(BAND_SIGMAS_MM), "band_contrasts_a": list(self.band_contrasts_a),
+                "band_contrasts_b": list(self.band_contrasts_b), "texture_difference_look_jnd": self.texture_difference,
                 "difference_look_jnd": self.difference, "threshold_contrast": self.threshold, "verdict": self.verdict,
                 "definition": f"Lambertian single-material print seen from above, {AZIMUTHS} lights at "
-                              f"{ELEVATION_DEG:g} deg elevation averaged, cast shadows; look JND = max(|Weber "
-                              "contrast of mean luminance|, Wasserstein-1 of the luminance distributions / mean B) "
-                              f"/ {self.threshold:g} (assumed visibility threshold)"}
+                              f"{ELEVATION_DEG:g} deg elevation averaged, cast shadows; look JND = the largest of "
+                              "|Weber contrast of mean luminance| and the Wasserstein-1 distance of the luminance "
+                              f"distributions / mean B, over {self.threshold:g} (assumed visibility threshold), and "
+                              "each difference-of-Gaussian band's contrast difference over sqrt(threshold^2 + "
+                              f"({CONTRAST_FRACTION:g} x its contrast in B)^2)"}
 
 
 def render(heightmap: Heightmap, elevation_deg: float = ELEVATION_DEG, azimuths: int = AZIMUTHS) -> np.ndarray:
@@ -106,37 +142,79 @@ def _shadowed(h: np.ndarray, pixel_mm: float, azimuth: float, slope: float) -> n
     return shadow
 
 
-def compare(luminance: np.ndarray, region_a: np.ndarray, region_b: np.ndarray) -> LookDifference:
-    """How region A (a boolean mask over ``luminance``) looks beside region B; InputError if either has fewer than
-    ``MIN_REGION_PIXELS`` pixels or B is black."""
-    for name, region in (("region_a", region_a), ("region_b", region_b)):
-        if np.shape(region) != np.shape(luminance):
-            raise InputError(f"{name} is {np.shape(region)}, the luminance {np.shape(luminance)}", parameter=name)
-        if np.count_nonzero(region) < MIN_REGION_PIXELS:
-            raise InputError(f"{name} has {np.count_nonzero(region)} pixels: at least {MIN_REGION_PIXELS} are needed "
-                             "to compare how regions look", parameter=name)
-    a, b = luminance[region_a], luminance[region_b]
-    mean_a, mean_b = float(a.mean()), float(b.mean())
+@dataclass(frozen=True)
+class RegionLook:
+    """What the comparison needs of one region: its pixels' luminance (0..1) and each band's mean square
+    (``BAND_SIGMAS_MM``; luminance units squared)."""
+
+    luminance: np.ndarray
+    band_power: tuple[float, ...]
+
+
+def bands(luminance: np.ndarray, pixel_mm: float) -> list[np.ndarray]:
+    """``luminance`` filtered by each difference-of-Gaussians band (``BAND_SIGMAS_MM``; mirrored at the edges)."""
+    pixel_mm = positive("pixel_mm", pixel_mm)
+    blurred = {s: ndimage.gaussian_filter(luminance, s / pixel_mm, mode="reflect")
+               for s in sorted({*BAND_SIGMAS_MM, *(2 * s for s in BAND_SIGMAS_MM)})}
+    return [blurred[s] - blurred[2 * s] for s in BAND_SIGMAS_MM]
+
+
+def region_look(luminance: np.ndarray, region: np.ndarray, filtered: list[np.ndarray], name: str) -> RegionLook:
+    """The look of ``region`` (a boolean mask over ``luminance``) with the ``filtered`` bands of the same image;
+    InputError if it is the wrong shape or has fewer than ``MIN_REGION_PIXELS`` pixels."""
+    if np.shape(region) != np.shape(luminance):
+        raise InputError(f"{name} is {np.shape(region)}, the luminance {np.shape(luminance)}", parameter=name)
+    if np.count_nonzero(region) < MIN_REGION_PIXELS:
+        raise InputError(f"{name} has {np.count_nonzero(region)} pixels: at least {MIN_REGION_PIXELS} are needed "
+                         "to compare how regions look", parameter=name)
+    return RegionLook(luminance[region], tuple(float(np.mean(b[region] ** 2)) for b in filtered))
+
+
+def whole_look(heightmap: Heightmap) -> RegionLook:
+    """The look of a whole texture, rendered on its own."""
+    luminance = render(heightmap)
+    return region_look(luminance, np.ones(luminance.shape, dtype=bool), bands(luminance, heightmap.pixel_mm),
+                       "texture")
+
+
+def compare_looks(a: RegionLook, b: RegionLook) -> LookDifference:
+    """How region ``a`` looks beside region ``b`` (module docstring); InputError if ``b`` is black."""
+    mean_a, mean_b = float(a.luminance.mean()), float(b.luminance.mean())
     if mean_b <= 0:
         raise InputError("region B is black under every light: no contrast is defined against it", parameter="region_b")
-    return LookDifference((mean_a - mean_b) / mean_b, float(wasserstein_distance(a, b)) / mean_b, mean_a, mean_b)
+    return LookDifference((mean_a - mean_b) / mean_b, float(wasserstein_distance(a.luminance, b.luminance)) / mean_b,
+                          mean_a, mean_b, tuple(float(np.sqrt(p)) / mean_b for p in a.band_power),
+                          tuple(float(np.sqrt(p)) / mean_b for p in b.band_power))
+
+
+def compare(luminance: np.ndarray, region_a: np.ndarray, region_b: np.ndarray, pixel_mm: float) -> LookDifference:
+    """How region A (a boolean mask over ``luminance``, pixels ``pixel_mm`` mm) looks beside region B; InputError if
+    either has fewer than ``MIN_REGION_PIXELS`` pixels or B is black."""
+    filtered = bands(luminance, pixel_mm)
+    return compare_looks(region_look(luminance, region_a, filtered, "region_a"),
+                         region_look(luminance, region_b, filtered, "region_b"))
 
 
 def look_difference(a: Heightmap, b: Heightmap) -> LookDifference:
     """How texture ``a`` looks beside texture ``b`` (each rendered whole, on its own)."""
-    both = np.concatenate([render(a).ravel(), render(b).ravel()])
-    first = np.arange(both.size) < a.heights.size
-    return compare(both, first, ~first)
+    return compare_looks(whole_look(a), whole_look(b))
 
 
 def look_distances(heightmaps: Sequence[Heightmap]) -> np.ndarray:
     """(K, K) look difference (look JND) of texture i beside texture j, each rendered whole once; 0 on the diagonal."""
-    lum = [render(hm).ravel() for hm in heightmaps]
-    out = np.zeros((len(lum), len(lum)))
-    for i, a in enumerate(lum):
-        for j, b in enumerate(lum):
+    looks = [whole_look(hm) for hm in heightmaps]
+    out = np.zeros((len(looks), len(looks)))
+    for i, a in enumerate(looks):
+        for j, b in enumerate(looks):
             if i != j:
-                both = np.concatenate([a, b])
-                first = np.arange(both.size) < a.size
-                out[i, j] = compare(both, first, ~first).difference
+                out[i, j] = compare_looks(a, b).difference
     return out
+
+
+def photograph(luminance: np.ndarray) -> np.ndarray:
+    """``luminance`` as a photograph records it (module docstring, Display): 0..1, white at the
+    ``DISPLAY_WHITE_PERCENTILE`` percentile, gamma 1/``DISPLAY_GAMMA``."""
+    white = float(np.percentile(luminance, DISPLAY_WHITE_PERCENTILE))
+    if white <= 0:
+        return np.zeros_like(luminance)
+    return np.clip(luminance / white, 0.0, 1.0) ** (1 / DISPLAY_GAMMA)
