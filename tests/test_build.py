@@ -75,7 +75,8 @@ def test_failed_samples_are_recorded_and_do_not_stop_the_run(tmp_path):
 KILL_N = 16
 
 
-@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT], ids=["SIGKILL", "SIGINT"])
+@pytest.mark.parametrize("sig", [signal.SIGKILL, pytest.param(signal.SIGINT, marks=pytest.mark.slow)],
+                         ids=["SIGKILL", "SIGINT"])  # Ctrl-C takes the same resume path: opt-in (1 min)
 def test_killed_build_resumes_to_exactly_n_distinct_samples(tmp_path, sig):
     out = tmp_path / "k.h5"
     cmd = [sys.executable, "-m", "roughness.cli", "dataset", "build", "--out", str(out), "--n", str(KILL_N),

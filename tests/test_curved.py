@@ -207,7 +207,19 @@ def test_predict_routes_curved_bases_by_the_range(tmp_path, monkeypatch):
         assert any(n.startswith("curved base") for n in outside.domain_notes), (radius, base)
     with pytest.raises(InputError, match="narrower"):
         predict(hm, engine="surrogate", options=on(-4.0))
-    [fem] = predict(hm, engine="auto", options=on(5.0, tile=True))  # outside: auto runs the curved FEM
+
+
+@pytest.mark.slow  # a curved FEM solve, about 3 min on 2 cores
+def test_auto_runs_the_curved_fem_outside_the_range(tmp_path, monkeypatch):
+    from roughness import prediction
+    from roughness.prediction import CurvedBase, PredictOptions, predict
+
+    path = tmp_path / "range.json"
+    path.write_text(json.dumps({"tolerance": 0.19, "bases": {
+        "cylinder": {"min_convex_radius_mm": 10.0, "min_concave_radius_mm": 20.0}}}))
+    monkeypatch.setattr(prediction, "CURVATURE_RANGE_PATH", path)
+    options = PredictOptions(tile=True, curved=CurvedBase(5.0, "cylinder"))
+    [fem] = predict(standard_texture(1.0, seed=0), engine="auto", options=options)  # outside: the curved FEM
     assert fem.engine == "fem" and not fem.in_domain and fem.roughness > 0
     assert any(n.startswith("curved base") for n in fem.domain_notes)
 

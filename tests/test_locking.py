@@ -29,6 +29,7 @@ def contact_radius(element: str, h_mm: float) -> float:
     return float(np.sqrt(block.area[result.state.in_contact].sum() / np.pi))
 
 
+@pytest.mark.slow  # two FEM solves at nu = 0.499, about 1.5 min
 def test_p2_is_locking_free_where_p1_locks():
     a_hertz = (3 * FORCE * R / (4 * 0.042 / (1 - NU**2))) ** (1 / 3)
     assert contact_radius("p2", 0.6) == pytest.approx(a_hertz, rel=0.05)

@@ -127,6 +127,7 @@ def test_cli_texture_decimate(tmp_path, capsys):
     assert "--decimate-mm" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # 40-100 s; benchmarks/slicer_size.py measures the same on whole parts
 def test_decimated_part_feels_the_same():
     """V of a 24 mm ball textured at a 0.2 mm edge, decimated within 0.01 mm, against the full one at the same
     footprints: within 0.1 JND at every point judged."""
