@@ -90,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
     from roughness.surrogate.predictor import DEFAULT_MODEL, SurrogateModel
 
     from .inputs import InputReader
+    from .predict_look import Looks
     from .printer import PrintPairs, printer_of
 
     cluster = next((name for name in ("workers", "scheduler", "scheduler_file") if getattr(args, name) is not None),
@@ -122,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
 
     reader = InputReader(args.inputs, footprint_mm, args.centre, args.tile, load_one)
     pairs = PrintPairs(reader, printer, args.tile) if printer is not None else None  # each input, then its print
+    looks = Looks(args.centre, args.tile, pairs is not None) if args.json else None  # how each looks (JSON only)
     start, done, digital = time.monotonic(), 0, []
 
     def show(p) -> None:
@@ -136,16 +138,17 @@ def run(args: argparse.Namespace) -> int:
         show_notes(args, record.lines(tile=False) if record else [])
         loaded_json = {"readings": [record.as_dict()] if record else []}
         if printer is None:
-            print(json_text(p.as_dict() | loaded_json) if args.json else prediction_line(p), flush=True)
+            print(json_text(p.as_dict() | looks.take() | loaded_json) if args.json else prediction_line(p), flush=True)
         else:
-            _show_printed(args, digital.pop(), p, pairs.prints.popleft(), loaded_json)
+            _show_printed(args, digital.pop(), p, pairs.prints.popleft(), loaded_json, looks)
         if reader.total > 1 and not args.quiet and (done % 500 == 0 or done == reader.total):
             log(args, f"predicted {done}/{reader.total} in {time.monotonic() - start:.1f} s")
 
     options = PredictOptions(centre_mm=args.centre, tile=args.tile, fidelity=args.fidelity, tolerance=args.tolerance,
                              max_std=args.max_std, batch_size=args.batch_size, curved=curved_base(args))
     # each input was checked as it was loaded (surface.loading; the reader skips those that fail)
-    predictions(reader.named() if pairs is None else pairs.named(), args.engine, model, options, on_result=show)
+    named = reader.named() if pairs is None else pairs.named()
+    predictions(named if looks is None else looks.named(named), args.engine, model, options, on_result=show)
     for source, error in reader.errors:
         message = error_message(error, args.flags)
         print(f"roughness: error: {message}", file=sys.stderr)
@@ -201,9 +204,10 @@ def _predict_map(args: argparse.Namespace, model, printer) -> int:
     return 0
 
 
-def _show_printed(args: argparse.Namespace, digital, printed, result, readings: dict) -> None:
+def _show_printed(args: argparse.Namespace, digital, printed, result, readings: dict, looks) -> None:
     """One input's prediction for its print, with the digital texture's and the difference between them
-    (``readings``: what loading did to the input, for the JSON)."""
+    (``readings``: what loading did to the input, and ``looks``: how the digital texture and its print look, for the
+    JSON)."""
     from .printer import PrintDifference
 
     diff = PrintDifference(digital.roughness, printed.roughness, digital.placement.equivalent_lambda_mm,
@@ -213,9 +217,10 @@ def _show_printed(args: argparse.Namespace, digital, printed, result, readings: 
         notes.append(f"the digital texture was answered by the {digital.engine}, the print by the {printed.engine}: "
                      "each is placed on its own engine's standard scale")
     if args.json:
-        print(json_text({**printed.as_dict(), "printer": result.profile.as_dict(), "print_steps": list(result.steps),
-                         "print_notes": notes, "print_difference": diff.as_dict(), "digital": digital.as_dict(),
-                         **readings}),
+        digital_look = looks.take()
+        print(json_text({**printed.as_dict(), **looks.take(), "printer": result.profile.as_dict(),
+                         "print_steps": list(result.steps), "print_notes": notes, "print_difference": diff.as_dict(),
+                         "digital": digital.as_dict() | digital_look, **readings}),
               flush=True)
         return
     lines = [prediction_line(printed).replace(": V = ", " as printed: V = ", 1),

@@ -170,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
         key = key_spec(found, args.key_labels, args.braille_table)
     # a picture of lines on a flat background needs no palette
     textures = _textures(args, len(layout.textured), evaluator) if layout.textured else _Textures([], None)
-    log(args, "tactile-image: composing the plate and mapping its roughness (surrogate)"
+    log(args, "tactile-image: composing the plate, mapping its roughness (surrogate), rendering its look"
         + ("; FEM strain image" if args.strain else ""))
     pixel_mm, pixel_note = plate_pixel(args.pixel_mm, found.labels.shape, args.size_mm,
                                        [hm for _, hm, _ in textures.members], evaluator.printer)
@@ -320,11 +320,35 @@ def _text_lines(args: argparse.Namespace, out: Path, plate: TactilePlate, summar
     pairs = [abs(d[i, j]) for i in range(len(d)) for j in range(i + 1, len(d)) if not np.isnan(d[i, j])]
     if pairs:
         lines.append(f"closest regions on the plate's map: {min(pairs):.2f} JND apart (surrogate)")
+    lines += _look_lines(plate)
     lines += [f"key {e['label']} ({e['braille']}): {e['colour']} -> {e['texture']}, sample at x {e['swatch_mm'][0]:.0f}-"
               f"{e['swatch_mm'][2]:.0f}, y {e['swatch_mm'][1]:.0f}-{e['swatch_mm'][3]:.0f} mm" for e in summary["key"]]
     lines += [f"guideline {c['rule']}: {'PASS' if c['passed'] else 'FAIL'}, {c['value']}"
               + (f" ({c['where']})" if c["where"] else "") for c in summary["guidelines"]]
     return lines + [f"note: {n}" for n in plate.notes]
+
+
+def _look_lines(plate: TactilePlate) -> list[str]:
+    """How different each pair of regions looks (the larger of its two directions, design.look) beside how far apart
+    they feel on the plate's map."""
+    import numpy as np
+
+    from roughness.design.look import THRESHOLD
+    from roughness.design.tactile_image import hex_colour
+
+    if plate.looks is None or len(plate.regions) < 2:
+        return []
+    looks, feel = plate.looks.differences, plate.distances_jnd("plate")
+    lines = [f"how different the regions look (look JND, rendered: exact for these heights; 1 = a {THRESHOLD:.0%} "
+             "contrast, an assumed visibility threshold) and feel (JND on the plate's map, surrogate):"]
+    for a in range(len(looks)):
+        for b in range(a + 1, len(looks)):
+            pair = [x for x in (looks[a][b], looks[b][a]) if x is not None]
+            look = max(pair, key=lambda x: x.difference) if pair else None
+            lines.append(f"  {hex_colour(plate.regions[a].colour)} / {hex_colour(plate.regions[b].colour)}: "
+                         + (f"look {look.difference:.2f} ({look.verdict})" if look else "look not measured")
+                         + (", feel not measured" if np.isnan(feel[a, b]) else f", feel {abs(feel[a, b]):.2f} JND"))
+    return lines + [f"  look not measured: {why}" for why in plate.looks.unmeasured]
 
 
 def _line_lines(summary: dict) -> list[str]:

@@ -30,7 +30,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from roughness.core.checks import choice, in_range, non_negative, positive
 from roughness.core.errors import InputError
@@ -46,7 +45,7 @@ from roughness.surface.heightmap import Heightmap
 
 from .evaluation import Evaluator
 from .homogeneity import homogeneity
-from .look import LookDifference, compare, photograph, render
+from .look import BAND_MM, MIN_REGION_PIXELS, LookDifference, compare, photograph, region_interiors, render
 from .look_keeping import LATERAL_FACTORS, keep_look
 from .plate_relief import compose
 from .shapes import check_mask, inscribed_width_mm
@@ -60,7 +59,6 @@ MIN_CLEAR = 0.02  # fraction of the base that must be clear of the skin by the m
 MATCH_JND = 0.25  # "not felt": V inside and outside within this many JND
 FELT_JND = 2.0
 STEP_MM = 1.0
-BAND_MM = 1.0
 ROOM_FACTORS = {"height": (1.0, 3.0), "lateral": (1.0, 3.0)}  # searched for the least change that makes room
 ROOM_STEPS = 8  # bisection steps (a factor to within 2/256)
 
@@ -311,10 +309,9 @@ def _felt(tile: Heightmap, mask: np.ndarray, felt_jnd: float, laterals: tuple[fl
 def look_regions(mask: np.ndarray, pixel_mm: float) -> tuple[np.ndarray, np.ndarray]:
     """Inside and outside the shape, a band of ``BAND_MM`` either side of the outline left out (each region whole
     if the band would leave too little of it)."""
-    band = BAND_MM / pixel_mm
-    inside = ndimage.distance_transform_edt(mask) > band
-    outside = ndimage.distance_transform_edt(~mask) > band
-    return (inside if inside.sum() >= 16 else mask), (outside if outside.sum() >= 16 else ~mask)
+    outside, inside = region_interiors(mask.astype(int), pixel_mm, 2, BAND_MM)
+    return ((inside if inside.sum() >= MIN_REGION_PIXELS else mask),
+            (outside if outside.sum() >= MIN_REGION_PIXELS else ~mask))
 
 
 def _region_feel(feel_map: RoughnessMap, mask: np.ndarray, pixel_mm: float,

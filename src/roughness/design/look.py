@@ -45,8 +45,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
-from scipy.stats import wasserstein_distance
 
 from roughness.core.checks import in_range, integer, positive
 from roughness.core.errors import InputError
@@ -103,11 +101,10 @@ class LookDifference:
                 "band_sigmas_mm": list(BAND_SIGMAS_MM), "band_contrasts_a": list(self.band_contrasts_a),
                 "band_contrasts_b": list(self.band_contrasts_b), "texture_difference_look_jnd": self.texture_difference,
                 "difference_look_jnd": self.difference, "threshold_contrast": self.threshold, "verdict": self.verdict,
-                "definition": f"Lambertian single-material print seen from above, {AZIMUTHS} lights at "
-                              f"{ELEVATION_DEG:g} deg elevation averaged, cast shadows; look JND = the largest of "
-                              "|Weber contrast of mean luminance| and the Wasserstein-1 distance of the luminance "
-                              f"distributions / mean B, over {self.threshold:g} (assumed visibility threshold), and "
-                              "each difference-of-Gaussian band's contrast difference over sqrt(threshold^2 + "
+                "definition": f"{RENDERING}; look JND = the largest of |Weber contrast of mean luminance| and the "
+                              "Wasserstein-1 distance of the luminance distributions / mean B, over "
+                              f"{self.threshold:g} (assumed visibility threshold), and each difference-of-Gaussian "
+                              "band's contrast difference over sqrt(threshold^2 + "
                               f"({CONTRAST_FRACTION:g} x its contrast in B)^2)"}
 
 
@@ -153,6 +150,8 @@ class RegionLook:
 
 def bands(luminance: np.ndarray, pixel_mm: float) -> list[np.ndarray]:
     """``luminance`` filtered by each difference-of-Gaussians band (``BAND_SIGMAS_MM``; mirrored at the edges)."""
+    from scipy import ndimage  # not at import: predict renders looks without it (0.3 s)
+
     pixel_mm = positive("pixel_mm", pixel_mm)
     blurred = {s: ndimage.gaussian_filter(luminance, s / pixel_mm, mode="reflect")
                for s in sorted({*BAND_SIGMAS_MM, *(2 * s for s in BAND_SIGMAS_MM)})}
@@ -218,3 +217,103 @@ def photograph(luminance: np.ndarray) -> np.ndarray:
     if white <= 0:
         return np.zeros_like(luminance)
     return np.clip(luminance / white, 0.0, 1.0) ** (1 / DISPLAY_GAMMA)
+
+
+RENDERING = (f"Lambertian single-material print seen from above, {AZIMUTHS} lights at {ELEVATION_DEG:g} deg elevation "
+             "averaged, cast shadows")  # how every luminance here is made, in the words of the JSON's definitions
+BAND_MM = 1.0  # regions are compared this far from their borders, clear of the shadows one casts on the other
+
+
+def wasserstein_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Wasserstein-1 distance between the empirical distributions of the values ``a`` and ``b``: the area between
+    their cumulative distributions (``scipy.stats.wasserstein_distance``'s arithmetic, in numpy: importing
+    scipy.stats takes about 0.6 s, more than a whole ``predict``)."""
+    a, b = np.sort(np.ravel(a)), np.sort(np.ravel(b))
+    values = np.sort(np.concatenate([a, b]), kind="mergesort")
+    below_a = np.searchsorted(a, values[:-1], side="right") / a.size
+    below_b = np.searchsorted(b, values[:-1], side="right") / b.size
+    return float(np.sum(np.abs(below_a - below_b) * np.diff(values)))
+
+
+@dataclass(frozen=True)
+class TextureLook:
+    """How one texture looks on its own: its rendered luminance's mean (0..1) and contrast (std / mean)."""
+
+    mean_luminance: float
+    contrast: float
+    pixels: int  # rendered
+
+    def __repr__(self) -> str:
+        return short_repr(self, f"mean luminance {self.mean_luminance:.4f}", f"contrast {self.contrast:.4f}",
+                          f"{self.pixels:,} pixels")
+
+    def as_dict(self) -> dict:
+        return {"mean_luminance": self.mean_luminance, "luminance_contrast": self.contrast, "pixels": self.pixels,
+                "definition": f"{RENDERING}; luminance 0..1 (1: a surface facing every light); contrast = std / "
+                              "mean of the luminance; rendered, so exact for these heights (no uncertainty of its "
+                              "own). Two looks compare by the Weber contrast of their mean luminance, visible from "
+                              f"about {THRESHOLD:g} (an assumed threshold: roughness.design.look)"}
+
+
+def texture_look(heightmap: Heightmap) -> TextureLook:
+    """The mean luminance and contrast of ``heightmap`` (mm) rendered whole (``render``)."""
+    luminance = render(heightmap)
+    mean = float(luminance.mean())  # > 0: the highest pixel faces at least half the lights, unshadowed
+    return TextureLook(mean, float(luminance.std()) / mean, int(luminance.size))
+
+
+def region_interiors(labels: np.ndarray, pixel_mm: float, regions: int, band_mm: float = BAND_MM) -> list[np.ndarray]:
+    """For each region 0..``regions``-1 of ``labels`` (an index per pixel; others, e.g. -1, belong to none): its
+    pixels further than ``band_mm`` (mm) from every pixel not in it, where no other region's shadow or light falls."""
+    from scipy import ndimage  # not at import: predict renders looks without it (0.3 s)
+
+    band = band_mm / pixel_mm
+    return [ndimage.distance_transform_edt(labels == k) > band for k in range(regions)]
+
+
+@dataclass(frozen=True)
+class RegionLooks:
+    """How different each region of a plate looks beside each other one (``region_looks``)."""
+
+    differences: tuple[tuple[LookDifference | None, ...], ...]  # [a][b]: region a beside region b; None: not measured
+    unmeasured: tuple[str, ...] = ()  # why some pairs have no look difference
+
+    def __repr__(self) -> str:
+        d = self.matrix
+        pairs = d[~np.eye(len(d), dtype=bool) & ~np.isnan(d)]
+        return short_repr(self, f"{len(d)} regions", f"least {pairs.min():.2f} look JND" if pairs.size else "",
+                          f"{len(self.unmeasured)} unmeasured" if self.unmeasured else "")
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """(K, K) look JND of region a beside region b: NaN where not measured, 0 on the diagonal."""
+        d = np.array([[np.nan if x is None else x.difference for x in row] for row in self.differences], dtype=float)
+        np.fill_diagonal(d, 0.0)
+        return d
+
+
+def region_looks(heightmap: Heightmap, labels: np.ndarray, names: Sequence[str], band_mm: float = BAND_MM
+                 ) -> RegionLooks:
+    """How each region 0..len(``names``)-1 of ``labels`` (an index per pixel of ``heightmap``, mm) looks beside each
+    other one: the heightmap rendered whole, each region's pixels more than ``band_mm`` from its borders
+    (``region_interiors``) compared (``compare``). A pair with a region too small for that, or black, is None and
+    ``unmeasured`` says why, by the regions' ``names``."""
+    luminance = render(heightmap)
+    filtered = bands(luminance, heightmap.pixel_mm)
+    interiors = region_interiors(labels, heightmap.pixel_mm, len(names), band_mm)
+    rows, why = [], {}
+    for a in range(len(names)):
+        row = []
+        for b in range(len(names)):
+            try:
+                row.append(None if a == b else compare_looks(region_look(luminance, interiors[a], filtered, "region_a"),
+                                                             region_look(luminance, interiors[b], filtered, "region_b")))
+            except InputError as err:
+                row.append(None)
+                small = [k for k in (a, b) if np.count_nonzero(interiors[k]) < MIN_REGION_PIXELS]
+                why.update(dict.fromkeys([f"{names[k]}: {np.count_nonzero(interiors[k])} pixels lie more than "
+                                          f"{band_mm:g} mm inside its borders, fewer than the {MIN_REGION_PIXELS} "
+                                          "needed to compare how it looks" for k in small]
+                                         or [f"{names[a]} beside {names[b]}: {err}"]))
+        rows.append(tuple(row))
+    return RegionLooks(tuple(rows), tuple(why))

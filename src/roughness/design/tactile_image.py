@@ -19,6 +19,11 @@ regions' values are read at positions whose whole footprint lies in one region, 
 fluctuation of the maximum compressive strain, as the paper's figure of its lion; each footprint's field
 is shown minus its mean (V, built from differences, is blind to that offset; without it the tiles'
 seams would show the footprints' different indentations rather than the texture).
+
+How different the regions look, beside how different they feel (``roughness.design.look.region_looks``): the plate
+the roughness map is of (as printed, with a printer) is rendered whole and each region's pixels more than
+``look.BAND_MM`` inside its borders (outlines and lines are borders too: their shadows fall on the regions beside
+them) are compared with every other region's, in look JND (1: the assumed visibility threshold).
 """
 from __future__ import annotations
 
@@ -43,6 +48,7 @@ from .evaluation import Evaluator
 from .key import KeyEntry, KeySpec, key_entries, key_strip
 from .layout import FLAT, Layout
 from .lines import fill_lines, line_relief
+from .look import RegionLooks, region_looks
 from .pages import scale_bar_mm
 from .plate_relief import compose, outline
 from .readability import MIN_TEXTURE_WIDTH_MM, SmallArea, merge_small_areas, small_areas
@@ -86,6 +92,7 @@ class TactilePlate:
     small_specks: int = 0  # and specks under readability.MIN_AREA_MM2 not listed
     key: tuple[KeyEntry, ...] = ()  # the key strip's entries (none: no key)
     line_mask: np.ndarray | None = None  # the strokes drawn as lines, on the picture's part of the plate
+    looks: RegionLooks | None = None  # how different the regions look (None: not measured)
 
     def __repr__(self) -> str:
         regions = ", ".join(f"{hex_colour(r.colour)} {r.texture}" for r in self.regions)
@@ -109,12 +116,27 @@ class TactilePlate:
                              "footprints_inside": r.footprints} for r in self.regions],
                 "colour_clustering": self.colours.summary(),
                 "plate_distances_jnd": _rounded(self.distances_jnd("plate")),
-                "texture_distances_jnd": _rounded(self.distances_jnd("fem")), **self._layout_summary(),
+                "texture_distances_jnd": _rounded(self.distances_jnd("fem")), **self._look_summary(),
+                **self._layout_summary(),
                 "small_areas": [a.as_dict() for a in self.small_areas], "small_specks": self.small_specks,
                 "key": [{"label": e.label, "braille": e.braille(), "colour": hex_colour(self.regions[e.region].colour),
                          "texture": self.regions[e.region].texture, "swatch_mm": [round(v, 2) for v in e.swatch_mm]}
                         for e in self.key],
                 "notes": list(self.notes)}
+
+    def _look_summary(self) -> dict:
+        """How different the regions look (look JND, ``design.look``) beside how far apart they feel on the plate's
+        map: the matrix, and each pair's full comparison (region a beside region b, b the reference)."""
+        if self.looks is None:
+            return {}
+        feel = self.distances_jnd("plate")
+        colours = [hex_colour(r.colour) for r in self.regions]
+        return {"plate_look_differences_jnd": _rounded(self.looks.matrix),
+                "look_pairs": [{"a": colours[a], "b": colours[b],
+                                "feel_distance_jnd": None if np.isnan(feel[a, b]) else round(float(feel[a, b]), 3),
+                                "look": None if look is None else look.as_dict()}
+                               for a, row in enumerate(self.looks.differences) for b, look in enumerate(row) if a < b],
+                "look_unmeasured": list(self.looks.unmeasured)}
 
     def _layout_summary(self) -> dict:
         """Lines (their colours, threshold and measured widths, mm), their style and the flat background."""
@@ -349,7 +371,8 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     rmap = roughness_map(evaluator.model, felt, step_mm, progress=map_progress)
     digital_map = roughness_map(evaluator.model, plate, step_mm) if evaluator.printer else None
     if evaluator.printer:
-        notes.append(f"the roughness map is of the plate as printed by {evaluator.printer.describe()}; "
+        notes.append(f"the roughness map and the regions' look are of the plate as printed by "
+                     f"{evaluator.printer.describe()}; "
                      "plate.npz and plate.stl are the digital design")
     clear = labels if not outline_mm else np.where(outline(labels, pixel_mm, outline_mm, 1.0) > 0, -1, labels)
     if keep_out is not None:
@@ -371,11 +394,12 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     textured = {i: hex_colour(colours[c]) for i, (c, t) in enumerate(zip(region_colours, chosen)) if t}
     small, specks = small_areas(labels, clear < 0, pixel_mm, textured)
     notes += [a.describe() for a in small]
+    looks = region_looks(felt, clear, [hex_colour(colours[c]) for c in region_colours])
     strain_progress = (lambda done, total: progress("strain image", done, total)) if progress else None
     strain_mosaic, extent = (strain_image(felt, evaluator, strain_progress) if strain else (None, None))
     return TactilePlate(plate, labels, tuple(regions), rmap.x_mm, rmap.y_mm, rmap.roughness, where, found,
                         strain_mosaic, extent, tuple(notes), layout, tuple(small), specks, tuple(entries),
-                        plate_lines if layout.lines else None)
+                        plate_lines if layout.lines else None, looks)
 
 
 def strain_image(plate: Heightmap, evaluator: Evaluator, progress=None
