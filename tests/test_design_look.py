@@ -83,3 +83,51 @@ def test_a_photograph_is_white_at_the_brightest_pixels_and_keeps_the_order_of_li
     assert shown.max() == 1 and shown.min() == 0 and np.all(np.diff(shown.ravel()) >= 0)
     assert np.isclose(shown.ravel()[500], (0.2 / np.percentile(lum, 99.5)) ** (1 / 2.2))
     assert np.all(photograph(np.zeros((4, 4))) == 0)
+
+
+def test_wasserstein_distance_is_scipys():
+    from scipy.stats import wasserstein_distance as scipys
+
+    from roughness.design.look import wasserstein_distance
+
+    rng = np.random.default_rng(0)
+    for a, b in ((rng.random(7), rng.random(11) ** 2), (rng.random(3000), rng.normal(size=1000)),
+                 (np.array([0.0, 0.0, 1.0, 1.0]), np.array([0.0, 1.0, 1.0]))):  # ties between and within samples
+        assert wasserstein_distance(a, b) == pytest.approx(scipys(a, b), rel=1e-12, abs=1e-15)
+    assert wasserstein_distance(a, a) == 0.0
+
+
+def test_a_texture_look_is_its_luminance_mean_and_contrast():
+    from roughness.design.look import texture_look
+
+    level = texture_look(flat(5.0, 0.1))
+    assert level.mean_luminance == pytest.approx(np.sin(np.radians(45)), rel=1e-12)
+    assert level.contrast == pytest.approx(0.0, abs=1e-12)
+    bumps = texture_look(standard_texture(1.0))
+    lum = render(standard_texture(1.0))
+    assert bumps.mean_luminance == pytest.approx(lum.mean()) and bumps.contrast == pytest.approx(lum.std() / lum.mean())
+
+
+def test_region_interiors_leave_out_a_band_at_every_border():
+    from roughness.design.look import region_interiors
+
+    labels = np.zeros((40, 60), int)
+    labels[:, 30:] = 1
+    labels[:, 29:31] = -1  # a line between the regions: a border of both
+    left, right = region_interiors(labels, 0.1, 2, band_mm=1.0)
+    assert left[:, :19].all() and not left[:, 19:].any()  # more than 10 pixels from column 29
+    assert right[:, 41:].all() and not right[:, :41].any()
+
+
+def test_a_region_too_small_to_compare_is_left_out_with_the_reason():
+    from roughness.design.look import region_looks
+
+    hm = standard_texture(1.0)
+    labels = np.zeros(hm.shape, int)
+    labels[:, 100:] = 1
+    labels[:, 100:130] = 2  # 1.5 mm wide: nothing lies more than 1 mm inside it
+    looks = region_looks(hm, labels, ["left", "right", "strip"])
+    assert looks.differences[0][1] is not None and looks.differences[0][2] is None and looks.differences[2][1] is None
+    assert np.isnan(looks.matrix[0, 2]) and looks.matrix[0, 0] == 0 and looks.matrix[0, 1] < 1  # one texture
+    assert looks.unmeasured == ("strip: 0 pixels lie more than 1 mm inside its borders, fewer than the 16 needed to "
+                                "compare how it looks",)

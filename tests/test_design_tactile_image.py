@@ -8,6 +8,7 @@ from roughness.core.errors import InputError
 from roughness.dataset.textures import standard_texture
 from roughness.design.evaluation import Evaluator
 from roughness.design.tactile_image import compose, flat_colours, outline, plate_labels, tactile_image
+from roughness.surface.heightmap import flat
 
 EVALUATOR = Evaluator()
 WHITE, GREY, BLACK = (255, 255, 255), (128, 128, 128), (0, 0, 0)
@@ -179,3 +180,28 @@ def test_with_a_printer_the_plate_is_composed_at_the_textures_pixel():
     assert plate_pixel(None, (40, 60, 3), 60.0, [], fdm) == (PIXEL_MM, None)  # lines only: no texture to keep
     pixel, note = plate_pixel(None, (400, 400, 3), 150.0, [tile], fdm)  # 9 M pixels at 0.05 mm, 2.25 M at 0.1
     assert pixel == PIXEL_MM and "too many" in note
+
+
+def two_halves() -> np.ndarray:
+    """40 x 20 px: a white and a black half (a 40 mm plate: 20 mm halves)."""
+    rgb = np.zeros((20, 40, 3), dtype=np.uint8)
+    rgb[:, :20] = WHITE
+    return rgb
+
+
+@pytest.mark.parametrize("textures, alike", [
+    ([("a", standard_texture(1.0, seed=1), None), ("b", standard_texture(1.0, seed=1), None)], True),
+    ([("flat", flat(10.0, 0.1), None), ("tall", standard_texture(1.0, seed=1, height_mm=2.0), None)], False)])
+def test_regions_look_alike_when_they_carry_one_texture_and_different_when_flat_meets_tall_bumps(textures, alike):
+    from roughness.cli.tactile_image import _look_lines
+
+    plate = tactile_image(two_halves(), textures, width_mm=40.0, pixel_mm=0.1, step_mm=4.0, evaluator=EVALUATOR)
+    look = plate.looks.matrix
+    assert (max(look[0, 1], look[1, 0]) < 1) if alike else (min(look[0, 1], look[1, 0]) >= 1)
+    [pair] = plate.summary()["look_pairs"]
+    assert pair["a"] == "#ffffff" and pair["b"] == "#000000"
+    assert pair["look"]["difference_look_jnd"] == pytest.approx(look[0, 1])
+    assert plate.summary()["plate_look_differences_jnd"][1][0] == pytest.approx(look[1, 0], abs=1e-3)
+    lines = _look_lines(plate)
+    assert len(lines) == 2 and lines[1].startswith("  #ffffff / #000000: look ")
+    assert ("(not visible)" if alike else "(visible)") in lines[1]
