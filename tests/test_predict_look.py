@@ -62,9 +62,10 @@ def test_the_text_output_is_unchanged(capsys):
     assert " V = " in line and "luminance" not in line
 
 
-def test_predict_json_imports_neither_torch_nor_scipy_stats():
+def test_predict_json_imports_neither_torch_nor_scipy():
+    """The look costs milliseconds, not the 0.3-0.6 s of importing scipy.ndimage or scipy.stats."""
     code = ("import sys; from roughness.cli import main; main(['predict', *sys.argv[1:], '--json']); "
-            "print(sorted(m for m in ('torch', 'scipy.stats', 'scipy.ndimage') if m in sys.modules))")
+            "print(sorted(m for m in sys.modules if m.split('.')[0] in ('torch', 'scipy', 'matplotlib')))")
     out = subprocess.run([sys.executable, "-c", code, *EXAMPLE], capture_output=True, text=True, cwd=ROOT)
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines()[-1] == "[]"
