@@ -69,3 +69,11 @@ def test_predict_json_imports_neither_torch_nor_scipy():
     out = subprocess.run([sys.executable, "-c", code, *EXAMPLE], capture_output=True, text=True, cwd=ROOT)
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines()[-1] == "[]"
+
+
+def test_an_input_the_engine_refuses_gets_the_engines_message(tmp_path, capsys):
+    """The look is made after the answer: a map too coarse for the footprint is refused by the engine, as without
+    --json, not by the renderer of a one-pixel footprint."""
+    np.save(tmp_path / "coarse.npy", np.random.default_rng(0).random((3, 3)))
+    assert main(["predict", str(tmp_path / "coarse.npy"), "--pixel-mm", "8", "--units-ok", "--json"]) == 2
+    assert "footprint spans only 1.25 pixels" in capsys.readouterr().err

@@ -16,7 +16,8 @@ LOOK_PIXEL_MM = 0.05  # no finer: the eye at 400 mm resolves about 0.1 mm, and t
 
 
 class Looks:
-    """The look of each (name, heightmap) that ``named`` passes on, for ``take`` to give back in the same order.
+    """The look of each (name, heightmap) that ``named`` passes on, made by ``take`` in the same order once its
+    prediction is shown (so that the engines' checks of the input come first).
 
     ``pairs``: the heightmaps come as (digital, its print) pairs (``printer.PrintPairs``): each print's look also
     carries ``print_look_difference``, the print beside the digital texture (the reference of its contrasts).
@@ -24,28 +25,28 @@ class Looks:
 
     def __init__(self, centre_mm: tuple[float, float] | None, tile: bool, pairs: bool) -> None:
         self.centre_mm, self.tile, self.pairs = centre_mm, tile, pairs
-        self._looks: deque[dict] = deque()
+        self._heightmaps: deque[Heightmap] = deque()  # passed on, look not yet taken
+        self._digital: Heightmap | None = None  # pairs: the digital texture's footprint, until its print's turn
 
     def named(self, named: Iterable[tuple[str, Heightmap]]) -> Iterator[tuple[str, Heightmap]]:
-        """``named``, unchanged, each heightmap's look recorded as it passes."""
-        from roughness.design.look import look_difference, texture_look
-
-        digital = None
+        """``named``, unchanged, each heightmap kept for ``take``."""
         for name, hm in named:
-            window = self.window(hm)
-            look = {"look": {"window_mm": window.size_mm[0], "pixel_mm": window.pixel_mm,
-                             **texture_look(window).as_dict()}}
-            if self.pairs and digital is not None:
-                look["print_look_difference"] = look_difference(window, digital).as_dict()
-                digital = None
-            elif self.pairs:
-                digital = window
-            self._looks.append(look)
+            self._heightmaps.append(hm)
             yield name, hm
 
     def take(self) -> dict:
-        """The next look recorded, as JSON fields."""
-        return self._looks.popleft()
+        """The next heightmap's look, as JSON fields."""
+        from roughness.design.look import look_difference, texture_look
+
+        window = self.window(self._heightmaps.popleft())
+        look = {"look": {"window_mm": window.size_mm[0], "pixel_mm": window.pixel_mm,
+                         **texture_look(window).as_dict()}}
+        if self.pairs and self._digital is not None:
+            look["print_look_difference"] = look_difference(window, self._digital).as_dict()
+            self._digital = None
+        elif self.pairs:
+            self._digital = window
+        return look
 
     def window(self, hm: Heightmap) -> Heightmap:
         """The skin footprint of ``hm`` (mm) that its V is of, on pixels no finer than LOOK_PIXEL_MM."""

@@ -249,8 +249,8 @@ class TextureLook:
 
     def as_dict(self) -> dict:
         return {"mean_luminance": self.mean_luminance, "luminance_contrast": self.contrast, "pixels": self.pixels,
-                "definition": f"{RENDERING}; luminance 0..1 (1: a surface facing every light); contrast = std / "
-                              "mean of the luminance; rendered, so exact for these heights (no uncertainty of its "
+                "definition": f"{RENDERING}; luminance 0..1 (albedo 1: a flat surface gives the sine of the "
+                              "elevation, 0.7071); contrast = std / mean of the luminance; rendered, so exact for these heights (no uncertainty of its "
                               "own). Two looks compare by the Weber contrast of their mean luminance, visible from "
                               f"about {THRESHOLD:g} (an assumed threshold: roughness.design.look)"}
 
