@@ -7,7 +7,7 @@ import pytest
 from roughness.core.errors import InputError
 from roughness.dataset.textures import standard_texture
 from roughness.design.evaluation import Evaluator
-from roughness.design.tactile_image import compose, flat_colours, outline, plate_labels, tactile_image
+from roughness.design.tactile_image import compose, flat_colours, hex_colour, outline, plate_labels, tactile_image
 from roughness.surface.heightmap import flat
 
 EVALUATOR = Evaluator()
@@ -205,3 +205,20 @@ def test_regions_look_alike_when_they_carry_one_texture_and_different_when_flat_
     lines = _look_lines(plate)
     assert len(lines) == 2 and lines[1].startswith("  #ffffff / #000000: look ")
     assert ("(not visible)" if alike else "(visible)") in lines[1]
+
+
+def test_a_region_too_narrow_to_compare_has_no_look_and_says_why():
+    from roughness.cli.tactile_image import _look_lines
+
+    rgb = two_halves()
+    rgb[:, 20:22] = GREY  # a 2 mm stripe between the halves: no pixel lies more than 1 mm inside it
+    textures = [(f"standard-{lam}", standard_texture(lam, seed=1), None) for lam in (0.625, 1.0, 1.625)]
+    plate = tactile_image(rgb, textures, width_mm=40.0, pixel_mm=0.1, step_mm=4.0, evaluator=EVALUATOR)
+    grey = [hex_colour(r.colour) for r in plate.regions].index("#808080")
+    look = plate.looks.matrix
+    assert np.isnan(look[grey]).sum() == 2 and np.isnan(look[:, grey]).sum() == 2  # every pair with it
+    summary = plate.summary()
+    assert [p["look"] is None for p in summary["look_pairs"]] == [True, False, True]  # white, grey, black pairs
+    assert summary["look_unmeasured"] == ["#808080: 0 pixels lie more than 1 mm inside its borders, fewer than the "
+                                          "16 needed to compare how it looks"]
+    assert sum("look not measured" in line for line in _look_lines(plate)) == 3  # two pairs and the reason

@@ -371,7 +371,7 @@ def tactile_image(picture: np.ndarray | PictureColours, textures: list[tuple[str
     rmap = roughness_map(evaluator.model, felt, step_mm, progress=map_progress)
     digital_map = roughness_map(evaluator.model, plate, step_mm) if evaluator.printer else None
     if evaluator.printer:
-        notes.append(f"the roughness map and the regions' look are of the plate as printed by "
+        notes.append("the roughness map and the regions' look are of the plate as printed by "
                      f"{evaluator.printer.describe()}; "
                      "plate.npz and plate.stl are the digital design")
     clear = labels if not outline_mm else np.where(outline(labels, pixel_mm, outline_mm, 1.0) > 0, -1, labels)
