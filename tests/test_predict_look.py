@@ -33,7 +33,7 @@ def test_the_bundled_example_carries_its_look(capsys):
     assert 0 < look["mean_luminance"] < np.sin(np.radians(45))  # flanks and shadows: darker than a flat plate
     assert look["luminance_contrast"] > 0
     assert look["definition"].startswith(RENDERING)  # the same words as a look difference's definition
-    assert LookDifference(0.0, 0.0, 0.5, 0.5).as_dict()["definition"].startswith(RENDERING)
+    assert LookDifference(0.0, 0.0, 0.5, 0.5, (0.1,), (0.1,)).as_dict()["definition"].startswith(RENDERING)
 
 
 def test_a_flat_map_looks_uniform_at_the_lights_sine(tmp_path, capsys):
@@ -48,7 +48,7 @@ def test_with_a_printer_the_print_looks_different_from_the_digital_texture(capsy
     out = _predict(capsys, *EXAMPLE, "--printer", "fdm-0.4-0.2")
     digital, printed, diff = out["digital"]["look"], out["look"], out["print_look_difference"]
     assert digital == plain  # the same heights, the same look
-    assert _finite(printed) and _finite(diff) and diff.keys() == LookDifference(0, 0, 1, 1).as_dict().keys()
+    assert _finite(printed) and _finite(diff) and diff.keys() == LookDifference(0, 0, 1, 1, (0.1,), (0.1,)).as_dict().keys()
     assert diff["mean_luminance_a"] == printed["mean_luminance"]  # the print (a) beside the digital texture (b)
     assert diff["mean_luminance_b"] == digital["mean_luminance"]
     # 0.2 mm layers turn the 1 mm bumps into terraces: flat treads and steep risers, far more contrast
