@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from roughness.dataset.textures import standard_texture
 from roughness.design.colours import cluster_colours
@@ -83,3 +84,18 @@ def test_the_bundled_outlined_drawing_passes_every_guideline():
     assert [e.label for e in plate.key] == ["a", "b", "c"]
     checks = check_plate(plate)
     assert len(checks) == 7 and all(c.passed for c in checks), [c.describe() for c in checks if not c.passed]
+
+
+def test_a_flat_region_is_as_far_from_a_texture_in_the_table_as_in_the_contrast_check():
+    """V of a flat region is 0; the table counts it at the scale's floor as the check does, not as a wavelength
+    far below any a fingertip tells apart (the table said 25.5 JND where the check said 3.8)."""
+    from roughness.perceptual_scale import FLOOR_LAMBDA_MM, jnd
+
+    plate = tactile_image(stripes(2), [None, ("standard-1.0", standard_texture(1.0, seed=1), None)], width_mm=60.0,
+                          pixel_mm=0.2, step_mm=2.0, evaluator=EVALUATOR)
+    flat, textured = plate.felt_lambdas_mm("plate")
+    assert flat == FLOOR_LAMBDA_MM and textured >= FLOOR_LAMBDA_MM
+    d = plate.distances_jnd("plate")
+    assert d[0, 1] == pytest.approx(jnd(FLOOR_LAMBDA_MM, textured)) and d[0, 1] == -d[1, 0]
+    contrast = checks_of(plate)["neighbours >="]
+    assert f"{abs(d[0, 1]):.2f}" in contrast.value

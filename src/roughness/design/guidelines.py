@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from roughness.perceptual_scale import FLOOR_LAMBDA_MM, jnd
+from roughness.perceptual_scale import jnd
 
 from .colours import hex_colour
 from .key import LABEL_GAP_MM
@@ -82,8 +82,7 @@ def _contrast(plate, min_jnd: float) -> Check:
     for a, b in ((labels[:, 1:], labels[:, :-1]), (labels[1:], labels[:-1])):
         touch = (a != b) & (a >= 0) & (b >= 0)
         pairs |= {tuple(sorted(p)) for p in np.unique(np.stack([a[touch], b[touch]], axis=1), axis=0).tolist()}
-    lam = [FLOOR_LAMBDA_MM if r.texture == FLAT else None if r.plate_lambda_mm is None
-           else max(r.plate_lambda_mm, FLOOR_LAMBDA_MM) for r in plate.regions]
+    lam = plate.felt_lambdas_mm("plate")
     worst, closest, failing, unmeasured = np.inf, "", [], []
     for i, j in sorted(pairs):
         name = f"{hex_colour(plate.regions[i].colour)}/{hex_colour(plate.regions[j].colour)}"

@@ -39,7 +39,7 @@ from roughness.core.errors import InputError
 from roughness.core.figures import new_figure, save_figure
 from roughness.core.limits import MAX_IMAGE_PIXELS, MAX_MAP_POSITIONS, MAX_PLATE_PIXELS, check_size
 from roughness.core.reprs import short_repr
-from roughness.perceptual_scale import jnd
+from roughness.perceptual_scale import FLOOR_LAMBDA_MM, jnd
 from roughness.surface.heightmap import Heightmap, pixel_size
 
 from .colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
@@ -100,9 +100,19 @@ class TactilePlate:
                           "strain image" if self.strain is not None else "", f"{len(self.notes)} note(s)"
                           if self.notes else "")
 
-    def distances_jnd(self, which: str = "plate") -> np.ndarray:
-        """Signed pairwise distances of the regions (JND): on the plate's map ("plate") or of the textures (FEM)."""
+    def felt_lambdas_mm(self, which: str = "plate") -> list[float | None]:
+        """Each region's equivalent wavelength (mm) on the plate's map ("plate") or of its texture (FEM), counted
+        at least at the scale's floor (``FLOOR_LAMBDA_MM``, where a flat region is): below it nothing is felt finer,
+        and a V near 0 would otherwise count as a wavelength far below anything a fingertip tells apart. None: not
+        measured."""
         lam = [r.plate_lambda_mm if which == "plate" else r.fem_lambda_mm for r in self.regions]
+        return [FLOOR_LAMBDA_MM if r.texture == FLAT else None if x is None else max(x, FLOOR_LAMBDA_MM)
+                for r, x in zip(self.regions, lam, strict=True)]
+
+    def distances_jnd(self, which: str = "plate") -> np.ndarray:
+        """Signed pairwise distances of the regions (JND, ``felt_lambdas_mm``): on the plate's map ("plate") or of
+        the textures (FEM); NaN where a region is not measured."""
+        lam = self.felt_lambdas_mm(which)
         return np.array([[jnd(a, b) if a and b else np.nan for b in lam] for a in lam])
 
     def summary(self) -> dict:
