@@ -209,3 +209,28 @@ def test_object_feel_without_texture_judges_the_mesh_as_it_is(tmp_path, capsys):
     assert row["points"] > 0 and row["refused_fraction"] < 1 and abs(row["jnd_median"]) < 1
     assert main(["object", "feel", str(tmp_path / "plate.stl"), "--axis", "0,0,0,0,0,1"]) == 2
     assert "--axis applies to a texture given by --texture" in capsys.readouterr().err
+
+
+def test_a_gltf_with_its_files_is_read_and_checked_whole_before_reading(tmp_path, monkeypatch):
+    """A glTF names its buffers; they count toward the size limit and must lie beside it (a glTF naming
+    /dev/zero or a file elsewhere is refused before anything is read)."""
+    import json
+
+    from roughness.objects import meshes
+
+    box = trimesh.creation.box([0.02, 0.01, 0.008])
+    box.export(tmp_path / "box.gltf")
+    buffers = [tmp_path / b["uri"] for b in json.loads((tmp_path / "box.gltf").read_text())["buffers"]]
+    whole = (tmp_path / "box.gltf").stat().st_size + sum(b.stat().st_size for b in buffers)
+    assert read_mesh(tmp_path / "box.gltf").mesh.volume == pytest.approx(1600)
+    monkeypatch.setattr(meshes, "MAX_MESH_FILE_BYTES", whole - 1)  # the .gltf alone is far below it
+    with pytest.raises(InputError, match=f"with the files it names is {whole:,} bytes"):
+        read_mesh(tmp_path / "box.gltf")
+    monkeypatch.undo()
+    document = json.loads((tmp_path / "box.gltf").read_text())
+    for uri, why in (("/dev/zero", "in its own folder"), ("../box.bin", "in its own folder"),
+                     ("missing.bin", "not a file beside it")):
+        document["buffers"][0]["uri"] = uri
+        (tmp_path / "named.gltf").write_text(json.dumps(document))
+        with pytest.raises(InputError, match=why):
+            read_mesh(tmp_path / "named.gltf")

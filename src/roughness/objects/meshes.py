@@ -4,8 +4,9 @@ and 3MF.
 Units: a 3MF states its unit; glTF (and GLB) are metres by their specification (trimesh reads them so); STL, OBJ,
 OFF and PLY carry none and are read as mm, with a note saying so.
 
-Sizes are checked before anything is allocated: the file's bytes (MAX_MESH_FILE_BYTES; a 3MF's unpacked members too),
-a binary STL's declared triangle count and every mesh's triangles (MAX_MESH_TRIANGLES). trimesh parses the files as
+Sizes are checked before anything is allocated: the file's bytes (MAX_MESH_FILE_BYTES; a 3MF's unpacked members and
+a glTF's external files, which must lie in its folder, too), a binary STL's declared triangle count and every mesh's
+triangles (MAX_MESH_TRIANGLES). trimesh parses the files as
 data (no code runs; 3MF's XML with entities, DTDs and network access off). Polygons with more than three corners
 (OBJ, PLY) are triangulated by trimesh as it reads them.
 """
@@ -79,6 +80,8 @@ def read_mesh(path: str | Path, watertight: bool = True, parameter: str = "mesh"
         _check_obj_indices(path, parameter)
     if suffix == ".3mf":
         _check_zip(path, parameter)
+    if suffix == ".gltf":
+        _check_gltf_files(path, size, parameter)
     try:  # unprocessed: trimesh's processing would silently drop the faces of non-finite vertices
         loaded = trimesh.load(str(path), file_type=suffix[1:], force="mesh", process=False)
     except Exception as err:  # trimesh raises many kinds for a malformed file
@@ -163,6 +166,39 @@ def _check_zip(path: Path, parameter: str) -> None:
     if unpacked > MAX_MESH_FILE_BYTES:
         raise InputError(f"{path} unpacks to {unpacked:,} bytes, above the limit of {MAX_MESH_FILE_BYTES:,} "
                          "(MAX_MESH_FILE_BYTES)", parameter=parameter)
+
+
+def _check_gltf_files(path: Path, size: int, parameter: str) -> None:
+    """A glTF's external files (buffers and images named by ``uri``; ``data:`` URIs are inside the file) must be
+    regular files in its own folder (no ``..``, no absolute path: a file names no device or file elsewhere for the
+    reader to read), and the glTF with them within MAX_MESH_FILE_BYTES: checked before any is read."""
+    import json
+    from urllib.parse import unquote
+
+    try:
+        document = json.loads(path.read_bytes())
+    except (ValueError, UnicodeDecodeError) as err:
+        raise InputError(f"cannot read {path} as a glTF (JSON) mesh: {err}", parameter=parameter) from None
+    if not isinstance(document, dict):
+        raise InputError(f"cannot read {path} as a glTF mesh: its JSON is not an object", parameter=parameter)
+    folder, total = path.parent.resolve(), size
+    for kind in ("buffers", "images"):
+        entries = document.get(kind, [])
+        for entry in entries if isinstance(entries, list) else []:
+            uri = entry.get("uri") if isinstance(entry, dict) else None
+            if not isinstance(uri, str) or uri.startswith("data:"):
+                continue
+            target = (folder / unquote(uri)).resolve()
+            if Path(unquote(uri)).is_absolute() or folder not in target.parents:
+                raise InputError(f"{path} names {uri!r} among its {kind}: a glTF's files must lie in its own folder",
+                                 parameter=parameter)
+            if not target.is_file():
+                raise InputError(f"{path} names {uri!r} among its {kind}, which is not a file beside it: copy the "
+                                 "glTF with all its files, or export it as one .glb", parameter=parameter)
+            total += target.stat().st_size
+    if total > MAX_MESH_FILE_BYTES:
+        raise InputError(f"{path} with the files it names is {total:,} bytes, above the limit of "
+                         f"{MAX_MESH_FILE_BYTES:,} (MAX_MESH_FILE_BYTES)", parameter=parameter)
 
 
 def _to_mm(read: ReadMesh) -> str | None:
