@@ -3,6 +3,9 @@ map its feel (legend and table as the command prints them), tune, and download t
 from __future__ import annotations
 
 import io
+import math
+import re
+from importlib import resources
 
 import pytest
 import trimesh
@@ -63,6 +66,66 @@ async def test_preview_then_feel_map_with_legend_and_the_commands_table(studio):
     for line in feel_lines(expected, "knob.stl")[1:]:  # the first line holds the seconds it took
         await user.should_see(line)
     assert len(views(user)) == 1  # the feel map replaced the preview
+
+
+def cli_feel_lines(*options: str) -> list[str]:
+    """What `roughness object feel knob.stl` prints (the example knob, named as the page names it) with
+    ``options``."""
+    import subprocess
+    import sys
+
+    with resources.as_file(example_path()) as knob:
+        out = subprocess.run([sys.executable, "-m", "roughness.cli", "object", "feel", knob.name, "--quiet",
+                              *options], cwd=knob.parent, capture_output=True, text=True, check=True).stdout
+    return out.splitlines()
+
+
+async def test_a_printer_maps_the_printed_object_as_the_command_does(studio):
+    user = studio.user
+    await open_example(user)
+    field(user, ui.select, "Printer profile").set_value("fdm-0.4-0.2")
+    field(user, ui.select, "Engine").set_value("surrogate")
+    user.find("Map the feel").click()
+    await user.should_see("The 3D view shows the feel map on the object as printed by fdm-0.4-0.2",
+                          retries=JOB_RETRIES)
+    command = cli_feel_lines("--texture", "standard-1.0", "--engine", "surrogate", "--reference", "standard-1.0",
+                             "--printer", "fdm-0.4-0.2")
+    assert command[0].startswith("as printed (fdm-0.4-0.2): knob.stl: ")
+    await user.should_see(command[0].split("; ")[0])  # the rest of the first line holds the seconds it took
+    for line in command[1:]:  # the table of the printed object, then each region as printed beside digital
+        await user.should_see(line.strip())
+    [beside] = [line for line in command if line.strip().startswith("all: as printed (fdm-0.4-0.2) V ")]
+    (printed, printed_u), (digital, digital_u) = [tuple(map(float, m)) for m in
+                                                  re.findall(r"V (\d\.\d+) ± (\d\.\d+)", beside)]
+    assert abs(printed - digital) > math.hypot(printed_u, digital_u)  # FDM's 0.2 mm layers change how it feels
+
+
+async def test_a_printer_sets_the_full_resolution_edge_and_reports_the_print(studio):
+    from roughness.cli.object_printing import texture_print
+    from roughness.dataset.textures import named_texture
+    from roughness.objects.print_plan import printer_edge
+    from roughness.surface.printing import PROFILES
+
+    user = studio.user
+    await open_example(user)
+    user.find("Estimate").click()
+    digital = math.sqrt(2) * named_texture("standard-1.0").pixel_mm  # the default without a printer
+    await user.should_see(f"full resolution, edges of {digital:.3g} mm: expected: about ")
+    field(user, ui.select, "Printer profile").set_value("fdm-0.4-0.2")
+    user.find("Estimate").click()
+    edge = printer_edge(PROFILES["fdm-0.4-0.2"], named_texture("standard-1.0").pixel_mm)  # triplanar: its own pixel
+    assert edge.edge_mm > 2 * digital  # half the 0.45 mm line: the printer's bound, not the texture's
+    await user.should_see(f"full resolution, edges of {edge.edge_mm:.3g} mm: expected: about ")
+    await user.should_see(edge.note())
+    [plan] = [e.text for e in user.find(ui.label).elements if e.text.startswith("full resolution, edges of")]
+    estimate = int(re.search(r"about ([\d,]+) triangles", plan)[1].replace(",", ""))
+    user.find("Make the full-resolution mesh").click()
+    await user.should_see("Download knob-textured-1.stl", retries=JOB_RETRIES)
+    for line in texture_print(named_texture("standard-1.0"), PROFILES["fdm-0.4-0.2"], 0.05).lines():
+        await user.should_see(line.strip())
+    [link] = [e for e in user.find(ui.link).elements if "knob-textured-1.stl" in e.text]
+    triangles = int(re.search(r"\(([\d,]+) triangles", link.text)[1].replace(",", ""))
+    assert abs(triangles / estimate - 1) < 0.1  # textured at the printer's edge (the estimate: a sample's)
 
 
 async def test_region_errors_are_the_commands_messages(studio):

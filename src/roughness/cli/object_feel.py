@@ -164,10 +164,7 @@ def run(args: argparse.Namespace) -> int:
                          "picture": args.picture, "readings": readings(args), **feel.as_dict(),
                          "printing": None if printing is None else printing.as_dict(feel)}))
     else:
-        lines = feel_lines(feel, args.mesh, args.picture)
-        if printing is not None:
-            lines = [f"as printed ({printer.name}): {lines[0]}", *lines[1:], *printing.lines(feel)]
-        print("\n".join(lines))
+        print("\n".join(map_lines(feel, args.mesh, printing, args.picture)))
     return 0
 
 
@@ -234,6 +231,15 @@ def _jnd_change(printed, digital) -> str:
     if printed.lambda_median_mm is None or digital.lambda_median_mm is None:
         return ""
     return f" ({jnd(printed.lambda_median_mm, digital.lambda_median_mm):+.2f} JND)"
+
+
+def map_lines(feel, mesh: str, printing: PrintedFeel | None = None, picture: str | None = None) -> list[str]:
+    """``feel_lines``; with ``printing`` the map said to be of the printed object, each region's median V beside the
+    digital object's and the print's steps after it."""
+    lines = feel_lines(feel, mesh, picture)
+    if printing is None:
+        return lines
+    return [f"as printed ({printing.result.profile.name}): {lines[0]}", *lines[1:], *printing.lines(feel)]
 
 
 def feel_lines(feel, mesh: str, picture: str | None = None) -> list[str]:

@@ -192,21 +192,12 @@ def _decimation_lines(result, change) -> list[str]:
 def _plan(args: argparse.Namespace, mesh, region, mapping, printer):
     """The edge length (mm: --edge-mm, else from --printer, else sqrt(2) x the texture's pixel on the surface), the
     ``MeshPlan`` of refining to it, and notes: the plan, then the slicer warning if the mesh would be too large."""
-    import math
-
     import numpy as np
 
-    from roughness.objects.print_plan import mesh_plan, printer_edge, require_within
+    from roughness.objects.print_plan import chosen_edge, mesh_plan, require_within
 
-    notes = []
-    if args.edge_mm is not None:
-        edge_mm = args.edge_mm
-    elif printer is not None:
-        choice = printer_edge(printer, mapping.pixel_mm)
-        edge_mm = choice.edge_mm
-        notes.append(choice.note())
-    else:
-        edge_mm = math.sqrt(2) * mapping.pixel_mm
+    edge_mm, rule = chosen_edge(args.edge_mm, printer, mapping.pixel_mm)
+    notes = [rule] if rule else []
     selected = np.asarray(region.faces(mesh), dtype=bool)
     vertices, faces = np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces)
     plan = mesh_plan(vertices, faces, selected, edge_mm, not args.no_intersection_check)

@@ -92,6 +92,18 @@ def printer_edge(profile, texture_pixel_mm: float) -> EdgeChoice:
     return EdgeChoice(max(step, texture), step, texture, profile.name, words)
 
 
+def chosen_edge(edge_mm: float | None, profile, texture_pixel_mm: float) -> tuple[float, str | None]:
+    """The longest textured edge (mm) and the note of its rule: ``edge_mm`` if given (no note), else the printer's
+    (``printer_edge``; ``profile`` a ``PrintProfile`` or None), else sqrt(2) x the texture's pixel on the surface
+    (``texture_pixel_mm``, mm; no note)."""
+    if edge_mm is not None:
+        return edge_mm, None
+    if profile is not None:
+        choice = printer_edge(profile, texture_pixel_mm)
+        return choice.edge_mm, choice.note()
+    return math.sqrt(2) * texture_pixel_mm, None
+
+
 @dataclass(frozen=True)
 class MeshPlan:
     """What refining to ``edge_mm`` (mm) will make: about ``triangles`` (measured on a sample), an STL of ``stl_bytes``, in

@@ -67,14 +67,18 @@ def _child(function: Callable, args: tuple, flags: dict[str, str], messages) -> 
 
 
 def cli_flags(command: str) -> dict[str, str]:
-    """The flags of `roughness COMMAND` by the library's parameter names (its parser's own map)."""
+    """The flags of `roughness COMMAND` (an action's too: "object feel") by the library's parameter names (its
+    parser's own map)."""
     import argparse
 
     from roughness.cli import build_parser
 
-    parser = build_parser(command)
-    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-    return sub.choices[command].get_default("flags")
+    words = command.split()
+    parser = build_parser(words[0])
+    for word in words:
+        sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        parser = sub.choices[word]
+    return parser.get_default("flags")
 
 
 class Job:

@@ -6,12 +6,12 @@ Everything comes from the library as ``roughness object`` uses it: ``objects.mes
 checks), ``objects.regions`` selects faces (the command's ``--region`` kinds; faces also by clicking the view),
 ``objects.layout.make_mapping`` lays the texture, ``objects.texturing.texture_mesh`` textures,
 ``objects.print_plan`` estimates, ``objects.feel.feel_map`` maps the feel (``feel_figure.feel_colours`` colours it,
-``cli.object_feel.feel_lines`` words it), ``objects.tuning.tune_on_object`` tunes. The slow steps are background
+``cli.object_feel.map_lines`` words it), ``objects.tuning.tune_on_object`` tunes; a printer (``--printer``) is
+``studio.object_printer``'s. The slow steps are background
 jobs; the 3D view shows glTF files from the tab's session folder (three.js, served by NiceGUI: offline).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from importlib import resources
 from pathlib import Path
@@ -20,14 +20,16 @@ import numpy as np
 from nicegui import events, ui
 
 from roughness.core.errors import InputError
-from roughness.objects.feel import FeelMap
 from roughness.objects.meshes import Written
 from roughness.objects.regions import KINDS, Region, parse_region
 from roughness.objects.tuning import ObjectTuneResult
-from roughness.studio.jobs import Report
+from roughness.studio.jobs import Report, cli_flags
 from roughness.surface.heightmap import Heightmap
+from roughness.surface.printing import PrintProfile
 
 from ..job_panel import JobPanel
+from ..object_printer import ObjectFeel, print_lines, printed_feel
+from ..printer_choice import PrinterChoice
 from ..sessions import Session
 from ..uploads import MAX_UPLOAD_BYTES, upload_path
 
@@ -130,18 +132,26 @@ def preview(report: Report, mesh_file: MeshFile, lay: Lay, edge_mm: float) -> Pr
     return Preview(_mesh_glb(result.mesh), lines)
 
 
-def feel(report: Report, mesh_file: MeshFile, lay: Lay, engine: str, reference: str | None) -> FeelMap:
+def feel(report: Report, mesh_file: MeshFile, lay: Lay, engine: str, reference: str | None,
+         printer: PrintProfile | None = None) -> ObjectFeel:
     """The job: the feel map of the object with the texture (``roughness.objects.feel.feel_map``, curvature by the
-    measured correction), JNDs from ``reference`` (a texture name) if given."""
+    measured correction), JNDs from ``reference`` (a texture name) if given; with ``printer``, of the printed
+    object, the digital one beside it (``object_printer.printed_feel``)."""
     from roughness.objects.feel import feel_map
 
     mesh = mesh_file.read().mesh
     _, faces, mapping = lay.on(mesh)
+    share = 1.0 if printer is None else 0.5  # with a printer the object is mapped twice
 
-    def progress(done: int, total: int) -> None:
-        report(done / total, f"{done}/{total} footprints judged")
+    def judge(laid, start: float, what: str):
+        def progress(done: int, total: int) -> None:
+            report(start + share * done / total, f"{what}: {done}/{total} footprints judged")
 
-    return feel_map(mesh, mapping, {lay.region: faces}, None, engine, "correction", reference, progress=progress)
+        return feel_map(mesh, laid, {lay.region: faces}, None, engine, "correction", reference, progress=progress)
+
+    if printer is None:
+        return ObjectFeel(judge(mapping, 0.0, "the object"))
+    return printed_feel(lay.texture, mapping, lambda hm: replace(lay, texture=hm).on(mesh)[2], printer, judge)
 
 
 def tune(report: Report, mesh_file: MeshFile, lay: Lay, target_lambda_mm: float, by: str) -> ObjectTuneResult:
@@ -156,17 +166,30 @@ def tune(report: Report, mesh_file: MeshFile, lay: Lay, target_lambda_mm: float,
                           {lay.region: faces}, by, progress=lambda line: report(None, line))
 
 
-def export(report: Report, mesh_file: MeshFile, lay: Lay, edge_mm: float | None, out: str) -> Written:
-    """The job: the object textured at full resolution (``edge_mm``; None: sqrt(2) x the texture's pixel on the
-    surface), written to ``out`` (.stl or .3mf, a new file; checked a closed solid first)."""
+@dataclass(frozen=True)
+class Exported:
+    """The full-resolution mesh written, and with a printer the texture's V as printed beside digital (lines)."""
+
+    written: Written
+    printing: tuple[str, ...] = ()
+
+
+def export(report: Report, mesh_file: MeshFile, lay: Lay, edge_mm: float | None, out: str,
+           printer: PrintProfile | None = None) -> Exported:
+    """The job: the object textured at full resolution (``edge_mm``; None: from ``printer``, else sqrt(2) x the
+    texture's pixel on the surface, as ``object texture``), written to ``out`` (.stl or .3mf, a new file; checked a
+    closed solid first); the mesh is the digital design."""
     from roughness.objects.meshes import write_mesh
+    from roughness.objects.print_plan import chosen_edge
     from roughness.objects.texturing import texture_mesh
 
     mesh = mesh_file.read().mesh
     region, _, mapping = lay.on(mesh)
+    printing = print_lines(lay.texture, printer, mapping.pixel_mm)  # a pixel too coarse for it refused first
     meter = _meter(report)
-    result = texture_mesh(mesh, mapping, region, edge_mm, meter=meter)
-    return write_mesh(result.mesh, out, overwrite=False, progress=meter(f"writing {Path(out).name}"))
+    result = texture_mesh(mesh, mapping, region, chosen_edge(edge_mm, printer, mapping.pixel_mm)[0], meter=meter)
+    return Exported(write_mesh(result.mesh, out, overwrite=False, progress=meter(f"writing {Path(out).name}")),
+                    printing)
 
 
 def _meter(report: Report):
@@ -198,24 +221,26 @@ def _painted_glb(triangles: np.ndarray, colours: np.ndarray) -> bytes:
     return _glb(triangles.reshape(-1, 3), np.arange(3 * len(triangles)).reshape(-1, 3), corners)
 
 
-def plan_of(mesh, lay: Lay, edge_mm: float | None):
-    """The ``MeshPlan`` of texturing ``mesh`` as ``lay`` says with edges of ``edge_mm`` (None: sqrt(2) x the
-    texture's pixel on the surface, the command's default); InputError if it would pass the mesh limit (with the
-    coarsest edge that fits)."""
-    from roughness.objects.print_plan import mesh_plan, require_within
+def plan_of(mesh, lay: Lay, edge_mm: float | None, printer: PrintProfile | None = None):
+    """The ``MeshPlan`` of texturing ``mesh`` as ``lay`` says with edges of ``edge_mm`` (None: the command's default,
+    from ``printer`` if given, ``print_plan.chosen_edge``) and the default's rule (or None); InputError if it would
+    pass the mesh limit (with the coarsest edge that fits)."""
+    from roughness.objects.print_plan import chosen_edge, mesh_plan, require_within
 
     _, faces, mapping = lay.on(mesh)
-    edge = edge_mm if edge_mm is not None else math.sqrt(2) * mapping.pixel_mm
+    edge, rule = chosen_edge(edge_mm, printer, mapping.pixel_mm)
     vertices, triangles = np.asarray(mesh.vertices, dtype=float), np.asarray(mesh.faces)
     plan = mesh_plan(vertices, triangles, faces, edge)
     require_within(plan, vertices, triangles, faces)
-    return plan
+    return plan, rule
 
 
-def plan_line(mesh, lay: Lay, edge_mm: float | None) -> tuple[str, str | None]:
-    """The full-resolution mesh's estimate in words (``objects.print_plan``) and its slicer warning (or None)."""
-    plan = plan_of(mesh, lay, edge_mm)
-    return f"full resolution, edges of {plan.edge_mm:.3g} mm: {plan.line()}", plan.warning()
+def plan_line(mesh, lay: Lay, edge_mm: float | None, printer: PrintProfile | None = None) -> tuple[str, str | None]:
+    """The full-resolution mesh's estimate in words (``objects.print_plan``; the printer's edge rule if it set the
+    edge) and its slicer warning (or None)."""
+    plan, rule = plan_of(mesh, lay, edge_mm, printer)
+    return f"full resolution, edges of {plan.edge_mm:.3g} mm: {plan.line()}" + (f"; {rule}" if rule else ""), \
+        plan.warning()
 
 
 def legend_text(drawn, by: str) -> str:
@@ -291,6 +316,11 @@ class ObjectPage:
                 self.region_text = ui.input("Region parameters", placeholder="").classes("w-96")
                 self._region_hint()
             with ui.row().classes("items-end gap-4"):
+                self.printer = PrinterChoice()
+                ui.label("with a printer, the feel map is of the printed object (the digital one beside it in its "
+                         "table) and the full-resolution mesh's edge defaults to what the printer reproduces; the "
+                         "preview, the tune and the mesh written are the digital design").classes("text-sm w-[36rem]")
+            with ui.row().classes("items-end gap-4"):
                 self.preview_edge = ui.number("Preview edge, mm", value=PREVIEW_EDGE_MM, min=0.05, max=20, step=0.25,
                                               format="%.3g").classes("w-40")
                 ui.button("Preview the textured object", on_click=self.start_preview)
@@ -330,8 +360,8 @@ class ObjectPage:
         with ui.card().classes("w-full"):
             ui.label("5. The textured mesh").classes("text-lg").props('role="heading" aria-level="2"')
             with ui.row().classes("items-end gap-4"):
-                self.export_edge = ui.number("Edge, mm (--edge-mm; empty: sqrt(2) x the texture's pixel)",
-                                             min=0.01, max=20, format="%.3g").classes("w-[28rem]")
+                self.export_edge = ui.number("Edge, mm (--edge-mm; empty: the printer's, else sqrt(2) x the texture's pixel)",
+                                             min=0.01, max=20, format="%.3g").classes("w-[34rem]")
                 self.export_format = ui.select(["STL", "3MF"], value="STL", label="Format").classes("w-32")
                 ui.button("Estimate", on_click=self.estimate)
                 ui.button("Make the full-resolution mesh", on_click=self.start_export)
@@ -426,7 +456,7 @@ class ObjectPage:
             return replace(self.lay, mapping=self.mapping.value, region=region)
         return Lay(self.texture.value, named_texture(self.texture.value), self.mapping.value, region)
 
-    def _start(self, panel: JobPanel, name: str, function, *args, on_done) -> Lay | None:
+    def _start(self, panel: JobPanel, name: str, function, *args, on_done, command: str | None = None) -> Lay | None:
         try:
             lay = self.current_lay()
             lay.on(self.mesh)  # the region and mapping checked before a job starts
@@ -435,7 +465,8 @@ class ObjectPage:
             return None
         self.error.set_text("")
         self.lay = lay
-        panel.start(name, function, self.mesh_file, lay, *args, on_done=on_done)
+        panel.start(name, function, self.mesh_file, lay, *args, on_done=on_done,  # errors worded as `roughness command`'s
+                    flags=cli_flags(command) if command else None)
         return lay
 
     # preview, feel, tune, export
@@ -446,7 +477,7 @@ class ObjectPage:
             self.show_error("error: the preview edge is a positive length in mm")
             return
         try:
-            plan = plan_of(self.mesh, self.current_lay(), float(edge))
+            plan, _ = plan_of(self.mesh, self.current_lay(), float(edge))
         except InputError as err:
             self.show_error(f"error: {err}")
             return
@@ -470,17 +501,16 @@ class ObjectPage:
         if by == "jnd" and reference is None:
             self.show_error("error: colouring by JND needs a reference texture (--reference)")
             return
-        self._start(self.feel_job, "feel map", feel, self.engine.value, reference,
-                    on_done=lambda result: self.feel_made(result, by))
+        self._start(self.feel_job, "feel map", feel, self.engine.value, reference, self.printer.profile,
+                    on_done=lambda result: self.feel_made(result, by), command="object feel")
 
-    def feel_made(self, result: FeelMap, by: str) -> None:
-        from roughness.cli.object_feel import feel_lines
+    def feel_made(self, result: ObjectFeel, by: str) -> None:
         from roughness.objects.feel_figure import feel_colours
 
         _, faces, _ = self.lay.on(self.mesh)
-        drawn = feel_colours(self.mesh, result, faces, by)
-        self.show(_painted_glb(drawn.triangles, drawn.colours), f"the feel map on the object, coloured by {drawn.label}",
-                  painted=True)
+        drawn = feel_colours(self.mesh, result.feel, faces, by)
+        self.show(_painted_glb(drawn.triangles, drawn.colours),
+                  f"the feel map on {result.shows()}, coloured by {drawn.label}", painted=True)
         stops = ", ".join(f"rgb({r * 255:.0f},{g * 255:.0f},{b * 255:.0f}) {100 * t:.0f}%"
                           for t in np.linspace(0, 1, 9) for r, g, b, _ in [drawn.cmap(t)])
         low, high = (f"{drawn.norm.vmin:+.2f} JND", f"{drawn.norm.vmax:+.2f} JND") if by == "jnd" else \
@@ -494,7 +524,7 @@ class ObjectPage:
         self.legend_text.set_text(legend_text(drawn, by))
         self.feel_text.clear()
         with self.feel_text:
-            for line in feel_lines(result, Path(self.mesh_file.path).name):
+            for line in result.lines(Path(self.mesh_file.path).name):
                 ui.label(line)
 
     def start_tune(self) -> None:
@@ -524,7 +554,7 @@ class ObjectPage:
         """Show the full-resolution mesh's estimate; False (and the message) if it cannot be made."""
         try:
             lay = self.current_lay()
-            line, warning = plan_line(self.mesh, lay, self._export_edge())
+            line, warning = plan_line(self.mesh, lay, self._export_edge(), self.printer.profile)
         except InputError as err:
             self.show_error(f"error: {err}")
             return False
@@ -539,13 +569,17 @@ class ObjectPage:
         suffix = self.export_format.value.lower()
         name = f"{Path(self.mesh_file.path).stem}-textured-{self.exports}.{suffix}"
         self._start(self.export_job, "full-resolution mesh", export, self._export_edge(),
-                    str(self.session.path(name)), on_done=self.exported)
+                    str(self.session.path(name)), self.printer.profile, on_done=self.exported,
+                    command="object texture")
 
-    def exported(self, written: Written) -> None:
+    def exported(self, made: Exported) -> None:
+        written = made.written
         name = Path(written.path).name
         with self.downloads:
             ui.link(f"Download {name} ({written.triangles:,} triangles, {written.bytes / 1e6:.1f} MB; "
                     f"{written.check.line()})", self.session.download_url(name)).props(f'download="{name}"').classes("text-primary")
+            for line in made.printing:
+                ui.label(line)
 
 
 def build(session: Session) -> None:

@@ -30,6 +30,7 @@ from roughness.studio.jobs import Report
 from ..downloads import KINDS, write_download
 from ..job_panel import JobPanel
 from ..pictures import png_url
+from ..printer_choice import PrinterChoice
 from ..sessions import Session
 from ..uploads import MAX_UPLOAD_BYTES, upload_path
 
@@ -42,7 +43,6 @@ EXAMPLES = {"shapes": "tactile-shapes.png", "four colours": "tactile-four-colour
 VERIFIERS = {"spectral engine (seconds)": "spectral", "FEM, coarse (minutes)": "coarse",
              "FEM, default (many minutes)": "default"}
 """What verifies the palette's textures: label -> ``verify`` of ``roughness.palette``."""
-NO_PRINTER = "none (the digital design)"
 PALETTE_FOLDER = "palette"
 GUIDELINE_SOURCES = ("BANA/CBA Guidelines and Standards for Tactile Graphics (2010): no more than 5 area textures; "
                      "tactilegraphics.org, Keys to readability: areas at least 1/4 inch (6.35 mm) across, 1/8 inch "
@@ -212,8 +212,6 @@ class TactilePage:
                 self.colour_list = ui.column().classes("gap-0")
 
     def _palette_card(self) -> None:
-        from roughness.surface.printing import PROFILES
-
         with ui.card().classes("w-full"):
             ui.label("2. The palette").classes("text-lg").props('role="heading" aria-level="2"')
             ui.label("Textures that feel different: standard-1.0 scaled in height, each pair at least the minimum "
@@ -222,8 +220,7 @@ class TactilePage:
                 self.k = ui.number("Textures, k (--k)", value=2, min=2, max=12, step=1, format="%d").classes("w-40")
                 self.min_jnd = ui.number("Minimum distance, JND (--min-jnd)", value=2.0, min=0.1, max=20, step=0.5,
                                          format="%.3g").classes("w-64")
-                self.printer = ui.select([NO_PRINTER, *PROFILES], value=NO_PRINTER,
-                                         label="Printer profile (--printer)").classes("w-64")
+                self.printer = PrinterChoice()
                 self.verify = ui.select(list(VERIFIERS), value=next(iter(VERIFIERS)),
                                         label="Verified by (--verify)").classes("w-64")
                 self.palette_button = ui.button("Make the palette", on_click=self.start_palette)
@@ -299,7 +296,7 @@ class TactilePage:
     def start_palette(self) -> None:
         try:
             choice = PaletteChoice(_count(self.k.value, "--k"), _number(self.min_jnd.value, "--min-jnd"),
-                                   None if self.printer.value == NO_PRINTER else self.printer.value,
+                                   self.printer.name,
                                    VERIFIERS[self.verify.value])
         except InputError as err:
             self.show_error(f"error: {err}")
