@@ -509,6 +509,16 @@ def test_the_printer_sets_the_edge_but_never_below_the_texture_pixel():
     assert coarse.edge_mm == pytest.approx(math.sqrt(2) * 0.05) and "texture's (" in coarse.note()
 
 
+def test_the_edge_given_wins_then_the_printers_then_the_textures():
+    from roughness.objects.print_plan import chosen_edge, printer_edge
+    from roughness.surface.printing import PROFILES
+
+    fdm = PROFILES["fdm-0.4-0.2"]
+    assert chosen_edge(0.3, fdm, 0.05) == (0.3, None)  # --edge-mm: no rule to state
+    assert chosen_edge(None, fdm, 0.05) == (printer_edge(fdm, 0.05).edge_mm, printer_edge(fdm, 0.05).note())
+    assert chosen_edge(None, None, 0.05) == (pytest.approx(math.sqrt(2) * 0.05), None)
+
+
 def test_a_mesh_too_large_for_slicers_is_warned_before_refining():
     from roughness.objects.print_plan import SLICER_TRIANGLES, mesh_plan
 

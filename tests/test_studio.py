@@ -101,6 +101,12 @@ def test_job_error_is_the_cli_message_not_a_traceback():
     assert state.error == "error: lambda_mm must be positive"
 
 
+def test_job_errors_name_an_actions_flags():
+    flags = jobs.cli_flags("object feel")
+    assert flags["printer"] == "--printer" and flags["regions"] == "--region"  # an alias of the action's parser
+    assert jobs.cli_flags("object texture")["edge_mm"] == "--edge-mm"
+
+
 def test_job_cancel_ends_its_process():
     job = jobs.Job("long", _count, 1000, 0.05)
     end = time.monotonic() + 60
