@@ -6,9 +6,9 @@ Everything comes from the library as ``roughness object`` uses it: ``objects.mes
 checks), ``objects.regions`` selects faces (the command's ``--region`` kinds; faces also by clicking the view),
 ``objects.layout.make_mapping`` lays the texture, ``objects.texturing.texture_mesh`` textures,
 ``objects.print_plan`` estimates, ``objects.feel.feel_map`` maps the feel (``feel_figure.feel_colours`` colours it,
-``cli.object_feel.map_lines`` words it), ``objects.tuning.tune_on_object`` tunes; a printer (``--printer``) is
-``studio.object_printer``'s. The slow steps are background
-jobs; the 3D view shows glTF files from the tab's session folder (three.js, served by NiceGUI: offline).
+``cli.object_feel.map_lines`` words it), ``objects.tuning.tune_on_object`` tunes; ``studio.object_printer`` adds
+a printer (``--printer``). The slow steps are background jobs; the 3D view shows glTF files from the tab's session
+folder (three.js, served by NiceGUI: offline).
 """
 from __future__ import annotations
 
