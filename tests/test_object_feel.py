@@ -100,6 +100,7 @@ def test_a_large_flat_face_gives_the_flat_plates_V_within_the_monte_carlo_error(
 def test_with_the_surrogate_the_map_loads_the_model_once_and_answers_as_the_surrogate_flat(monkeypatch):
     """engine="surrogate": each footprint's V is the surrogate's answer for the unrolled texture, from one model
     loaded once for the whole map (not once per batch of footprints)."""
+    from roughness.objects import feel as feel_module
     from roughness.surrogate import predictor
 
     loads = []
@@ -110,7 +111,8 @@ def test_with_the_surrogate_the_map_loads_the_model_once_and_answers_as_the_surr
         original(self, *args, **kwargs)
 
     monkeypatch.setattr(predictor.SurrogateModel, "__init__", counted)
-    monkeypatch.setattr("roughness.objects.feel.BATCH_POINTS", 2)  # several batches
+    monkeypatch.setattr(feel_module, "BATCH_POINTS", 2)  # several batches (the module itself: after the studio's
+    # tests the dotted path "roughness.objects..." no longer resolves as attributes of the package)
     box = trimesh.creation.box([40, 40, 6])
     feel = feel_map(box, Planar(), {"top": box.face_normals[:, 2] > 0.9}, spacing_mm=8.0, engine="surrogate",
                     reference="standard-1.0")
