@@ -9,8 +9,12 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterable, Iterator
+from typing import TYPE_CHECKING
 
 from roughness.surface.heightmap import Heightmap
+
+if TYPE_CHECKING:
+    from roughness.design.look import RegionLook
 
 LOOK_PIXEL_MM = 0.05  # no finer: the eye at 400 mm resolves about 0.1 mm, and the render's cost grows as pixel^-3
 
@@ -26,7 +30,7 @@ class Looks:
     def __init__(self, centre_mm: tuple[float, float] | None, tile: bool, pairs: bool) -> None:
         self.centre_mm, self.tile, self.pairs = centre_mm, tile, pairs
         self._heightmaps: deque[Heightmap] = deque()  # passed on, look not yet taken
-        self._digital: Heightmap | None = None  # pairs: the digital texture's footprint, until its print's turn
+        self._digital: RegionLook | None = None  # pairs: the digital texture footprint's look, until its print's turn
 
     def named(self, named: Iterable[tuple[str, Heightmap]]) -> Iterator[tuple[str, Heightmap]]:
         """``named``, unchanged, each heightmap kept for ``take``."""
@@ -36,16 +40,17 @@ class Looks:
 
     def take(self) -> dict:
         """The next heightmap's look, as JSON fields."""
-        from roughness.design.look import look_difference, texture_look
+        from roughness.design.look import compare_looks, render, texture_look, whole_look
 
         window = self.window(self._heightmaps.popleft())
+        luminance = render(window)  # once: the look, and with a printer the comparison of print and digital
         look = {"look": {"window_mm": window.size_mm[0], "pixel_mm": window.pixel_mm,
-                         **texture_look(window).as_dict()}}
+                         **texture_look(window, luminance).as_dict()}}
         if self.pairs and self._digital is not None:
-            look["print_look_difference"] = look_difference(window, self._digital).as_dict()
+            look["print_look_difference"] = compare_looks(whole_look(window, luminance), self._digital).as_dict()
             self._digital = None
         elif self.pairs:
-            self._digital = window
+            self._digital = whole_look(window, luminance)
         return look
 
     def window(self, hm: Heightmap) -> Heightmap:

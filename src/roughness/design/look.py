@@ -59,6 +59,9 @@ BAND_SIGMAS_MM = (0.1, 0.2, 0.4, 0.8)  # difference-of-Gaussian bands (sigma, 2 
 DISPLAY_GAMMA = 2.2
 DISPLAY_WHITE_PERCENTILE = 99.5
 MIN_REGION_PIXELS = 16  # a region of fewer pixels has no luminance statistics to speak of
+BAND_MM = 1.0  # regions are compared this far from their borders, clear of the shadows one casts on the other
+RENDERING = (f"Lambertian single-material print seen from above, {AZIMUTHS} lights at {ELEVATION_DEG:g} deg elevation "
+             "averaged, cast shadows")  # how every luminance here is made, in the words of the JSON's definitions
 
 
 @dataclass(frozen=True)
@@ -169,9 +172,9 @@ def region_look(luminance: np.ndarray, region: np.ndarray, filtered: list[np.nda
     return RegionLook(luminance[region], tuple(float(np.mean(b[region] ** 2)) for b in filtered))
 
 
-def whole_look(heightmap: Heightmap) -> RegionLook:
-    """The look of a whole texture, rendered on its own."""
-    luminance = render(heightmap)
+def whole_look(heightmap: Heightmap, luminance: np.ndarray | None = None) -> RegionLook:
+    """The look of a whole texture, rendered on its own (``luminance``: its ``render``, if already made)."""
+    luminance = render(heightmap) if luminance is None else luminance
     return region_look(luminance, np.ones(luminance.shape, dtype=bool), bands(luminance, heightmap.pixel_mm),
                        "texture")
 
@@ -219,10 +222,6 @@ def photograph(luminance: np.ndarray) -> np.ndarray:
     return np.clip(luminance / white, 0.0, 1.0) ** (1 / DISPLAY_GAMMA)
 
 
-RENDERING = (f"Lambertian single-material print seen from above, {AZIMUTHS} lights at {ELEVATION_DEG:g} deg elevation "
-             "averaged, cast shadows")  # how every luminance here is made, in the words of the JSON's definitions
-BAND_MM = 1.0  # regions are compared this far from their borders, clear of the shadows one casts on the other
-
 
 def wasserstein_distance(a: np.ndarray, b: np.ndarray) -> float:
     """Wasserstein-1 distance between the empirical distributions of the values ``a`` and ``b``: the area between
@@ -255,9 +254,10 @@ class TextureLook:
                               f"about {THRESHOLD:g} (an assumed threshold: roughness.design.look)"}
 
 
-def texture_look(heightmap: Heightmap) -> TextureLook:
-    """The mean luminance and contrast of ``heightmap`` (mm) rendered whole (``render``)."""
-    luminance = render(heightmap)
+def texture_look(heightmap: Heightmap, luminance: np.ndarray | None = None) -> TextureLook:
+    """The mean luminance and contrast of ``heightmap`` (mm) rendered whole (``luminance``: its ``render``, if
+    already made)."""
+    luminance = render(heightmap) if luminance is None else luminance
     mean = float(luminance.mean())  # > 0: the highest pixel faces at least half the lights, unshadowed
     return TextureLook(mean, float(luminance.std()) / mean, int(luminance.size))
 
@@ -301,19 +301,26 @@ def region_looks(heightmap: Heightmap, labels: np.ndarray, names: Sequence[str],
     luminance = render(heightmap)
     filtered = bands(luminance, heightmap.pixel_mm)
     interiors = region_interiors(labels, heightmap.pixel_mm, len(names), band_mm)
+    looks, too_small = [], {}  # each region's look once (None: too small), and why not
+    for k, (name, interior) in enumerate(zip(names, interiors, strict=True)):
+        try:
+            looks.append(region_look(luminance, interior, filtered, name))
+        except InputError:
+            looks.append(None)
+            too_small[k] = (f"{name}: {np.count_nonzero(interior)} pixels lie more than {band_mm:g} mm inside its "
+                            f"borders, fewer than the {MIN_REGION_PIXELS} needed to compare how it looks")
     rows, why = [], {}
-    for a in range(len(names)):
+    for a, look_a in enumerate(looks):
         row = []
-        for b in range(len(names)):
-            try:
-                row.append(None if a == b else compare_looks(region_look(luminance, interiors[a], filtered, "region_a"),
-                                                             region_look(luminance, interiors[b], filtered, "region_b")))
-            except InputError as err:
+        for b, look_b in enumerate(looks):
+            if a == b or look_a is None or look_b is None:
                 row.append(None)
-                small = [k for k in (a, b) if np.count_nonzero(interiors[k]) < MIN_REGION_PIXELS]
-                why.update(dict.fromkeys([f"{names[k]}: {np.count_nonzero(interiors[k])} pixels lie more than "
-                                          f"{band_mm:g} mm inside its borders, fewer than the {MIN_REGION_PIXELS} "
-                                          "needed to compare how it looks" for k in small]
-                                         or [f"{names[a]} beside {names[b]}: {err}"]))
+                why.update(dict.fromkeys(too_small[k] for k in (a, b) if a != b and k in too_small))
+                continue
+            try:
+                row.append(compare_looks(look_a, look_b))
+            except InputError as err:  # region b black under every light
+                row.append(None)
+                why[f"{names[a]} beside {names[b]}: {err}"] = None
         rows.append(tuple(row))
     return RegionLooks(tuple(rows), tuple(why))
