@@ -102,8 +102,10 @@ def test_decimate_holds_the_tolerance_measured_independently(textured):
 
 def test_decimate_refuses_a_tolerance_nothing_holds(textured):
     with pytest.raises(InputError, match="no decimation") as err:
+        decimate(textured.vertices, textured.faces, 1e-4)  # above the file's rounding, far below the texture
+    assert err.value.parameter == "decimate_mm" and "candidates" in str(err.value)
+    with pytest.raises(InputError, match="rounds each vertex"):
         decimate(textured.vertices, textured.faces, 1e-7)
-    assert err.value.parameter == "decimate_mm"
     with pytest.raises(InputError):
         decimate(textured.vertices, textured.faces, 0.0)
 

@@ -8,8 +8,9 @@ removes them). So the count is searched and every candidate is judged by measure
    then bisect (geometric mean of the counts) ``BISECTIONS`` times between the last that passed (or the full mesh)
    and the first that failed. The screen: the candidate is a closed solid by the independent check (``roughness.surface.solid``, as
    the 3MF will hold it), and its two-sided distance from the full surface (``surface_distance``), measured on a
-   random ``SCREEN_SAMPLES`` of the samples each way, is within the tolerance (a subset's maximum is a lower bound
-   of the whole's, so a failure is certain);
+   random ``SCREEN_SAMPLES`` of the samples each way, is within the tolerance less the file's rounding
+   (``threemf.ROUNDING_MM``, 0.00009 mm, reserved so that the written file holds the tolerance; an STL's float32
+   rounds less on parts under 500 mm) (a subset's maximum is a lower bound of the whole's, so a failure is certain);
 2. the candidates that passed, fewest triangles first, are verified until one holds: the distance measured on every
    sample, and no two faces crossing (``intersections.self_intersections``, every pair tested).
 
@@ -32,6 +33,7 @@ from roughness.surface.solid import SolidCheck, check_solid
 
 from .intersections import self_intersections
 from .surface_distance import SurfaceDistance, TriangleSurface, longest_edges, samples, surface_distance
+from .threemf import ROUNDING_MM
 
 MIN_KEPT = 1 / 1024
 """The search does not go below this fraction of the full mesh's triangles."""
@@ -103,6 +105,10 @@ def decimate(vertices: np.ndarray, faces: np.ndarray, tolerance_mm: float,
     the full mesh (``vertices`` (n, 3) mm, ``faces``), measured; InputError (parameter ``decimate_mm``) if no
     candidate holds it. ``progress``: told each candidate's verdict."""
     tolerance_mm = positive("decimate_mm", tolerance_mm)
+    if tolerance_mm <= ROUNDING_MM:
+        raise InputError(f"no decimation holds {tolerance_mm:g} mm: a written 3MF rounds each vertex by up to "
+                         f"{ROUNDING_MM:.5f} mm; allow a larger --decimate-mm (0.005 is well under a print's "
+                         "resolution)", parameter="decimate_mm")
     vertices, faces = np.asarray(vertices, dtype=float), np.asarray(faces, dtype=np.int64)
     full = TriangleSurface(vertices, faces)
     spacing = float(np.percentile(longest_edges(vertices, faces), SPACING_PERCENTILE))
@@ -167,6 +173,7 @@ class _Search:
     def __init__(self, full: TriangleSurface, spacing_mm: float, tolerance_mm: float, rng: np.random.Generator,
                  progress: Callable[[str], object] | None) -> None:
         self.full, self.spacing_mm, self.tolerance_mm, self.rng = full, spacing_mm, tolerance_mm, rng
+        self.held_mm = tolerance_mm - ROUNDING_MM  # what the measured distance must stay within
         self.progress = progress
         self.attempts: list[Attempt] = []
 
@@ -176,6 +183,9 @@ class _Search:
             verdict = attempt.failed or "holds"
             measured = "" if attempt.distance_mm is None else f", {attempt.distance_mm:.4f} mm ({attempt.measured})"
             self.progress(f"  decimate: {attempt.triangles:,} triangles{measured}: {verdict}")
+
+    def _beyond(self, distance_mm: float) -> str:
+        return f"{distance_mm:.4f} mm > {self.tolerance_mm:g} mm less the file's rounding ({self.held_mm:.5f} mm)"
 
     def _simplified(self, count: int) -> tuple[np.ndarray, np.ndarray]:
         import fast_simplification
@@ -197,8 +207,8 @@ class _Search:
             if len(points) > SCREEN_SAMPLES:
                 points = points[self.rng.choice(len(points), SCREEN_SAMPLES, replace=False)]
             worst = max(worst, float(target.distances(points).max()))
-        ok = worst <= self.tolerance_mm
-        self._tell(Attempt(len(f), worst, "screen", "" if ok else f"{worst:.4f} mm > {self.tolerance_mm:g} mm"))
+        ok = worst <= self.held_mm
+        self._tell(Attempt(len(f), worst, "screen", "" if ok else self._beyond(worst)))
         return ok
 
     def verify(self, count: int) -> Decimated | None:
@@ -206,8 +216,8 @@ class _Search:
         v, f = self._simplified(count)
         part = TriangleSurface(v, f)
         distance = surface_distance(self.full, part, self.spacing_mm)
-        if distance.max_mm > self.tolerance_mm:
-            self._tell(Attempt(len(f), distance.max_mm, "all", f"{distance.max_mm:.4f} mm > {self.tolerance_mm:g} mm"))
+        if distance.max_mm > self.held_mm:
+            self._tell(Attempt(len(f), distance.max_mm, "all", self._beyond(distance.max_mm)))
             return None
         crossing = self_intersections(v, f)
         if crossing.count:

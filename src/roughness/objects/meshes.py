@@ -30,6 +30,8 @@ from roughness.surface.solid import SolidCheck
 from roughness.surface.stl import require_solid, write_stl
 from roughness.surface.units import CONFIRM
 
+from . import threemf
+
 READ_SUFFIXES = (".stl", ".obj", ".off", ".ply", ".3mf", ".glb", ".gltf")
 WRITE_SUFFIXES = (".stl", ".3mf")
 UNIT_MM = {"mm": 1.0, "millimeter": 1.0, "millimeters": 1.0, "millimetre": 1.0, "cm": 10.0, "centimeter": 10.0,
@@ -302,20 +304,21 @@ def require_mesh_format(path: str | Path, parameter: str = "out") -> Path:
 
 def write_mesh(mesh, path: str | Path, overwrite: bool = False, parameter: str = "out",
                progress: Callable[[float], object] | None = None) -> Written:
-    """Write ``mesh`` as binary STL (streamed) or 3MF (mm), atomically, after the independent check of the mesh as
-    the file will hold it (``roughness.surface.solid``: float32 corners in an STL, float64 in a 3MF): SimulationError,
-    and nothing written, unless it is a closed solid; refused if the file exists and not ``overwrite``.
-    ``progress``: called with the fraction written (an STL after each chunk, a 3MF once at the end)."""
+    """Write ``mesh`` as binary STL or 3MF (mm; both streamed, a 3MF compact: ``threemf``), atomically, after the
+    independent check of the mesh as the file will hold it (``roughness.surface.solid``: float32 corners in an STL,
+    the 3MF's rounded ones in float64): SimulationError, and nothing written, unless it is a closed solid; refused if
+    the file exists and not ``overwrite``. ``progress``: called with the fraction written after each chunk."""
     path = require_mesh_format(path, parameter)
-    stl = path.suffix.lower() == ".stl"
     vertices, faces = np.asarray(mesh.vertices), np.asarray(mesh.faces)
-    check = require_solid(vertices, faces, str(path), np.float32 if stl else np.float64)
-    if stl:
+    if path.suffix.lower() == ".stl":
+        check = require_solid(vertices, faces, str(path), np.float32)
         atomic_write(path, lambda tmp: _write_stl(vertices, faces, tmp, progress), overwrite)
     else:
-        atomic_write(path, lambda tmp: _write_3mf(vertices, faces, tmp), overwrite)
-        if progress is not None:
-            progress(1.0)
+        vertices, faces = threemf.ordered(vertices, faces)
+        level = threemf.decimals_needed(vertices, faces)
+        vertices = threemf.rounded(vertices, level)
+        check = require_solid(vertices, faces, str(path), np.float64)
+        atomic_write(path, lambda tmp: threemf.write_3mf(tmp, vertices, faces, level, progress), overwrite)
     return Written(str(path), len(faces), os.path.getsize(path), check)
 
 
@@ -323,15 +326,6 @@ def _write_stl(vertices: np.ndarray, faces: np.ndarray, tmp: str,
                progress: Callable[[float], object] | None = None) -> None:
     with open(tmp, "wb") as f:
         write_stl(f, vertices, faces, b"roughness textured object, mm", progress)
-
-
-def _write_3mf(vertices: np.ndarray, faces: np.ndarray, tmp: str) -> None:
-    import trimesh
-
-    plain = trimesh.Trimesh(vertices, faces, process=False)
-    plain.units = "millimeters"
-    with open(tmp, "wb") as f:
-        f.write(trimesh.exchange.threemf.export_3MF(plain))
 
 
 def stl_bytes(triangles: int) -> int:

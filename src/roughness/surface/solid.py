@@ -81,7 +81,25 @@ def _weld(points: np.ndarray) -> np.ndarray:
     return index
 
 
+def fragile_vertices(vertices: np.ndarray, faces: np.ndarray, precision: type = np.float64) -> np.ndarray:
+    """Which vertices (a boolean mask) the file's ``precision`` welds onto another one or leaves at a corner of a
+    zero-area triangle: where the mesh as written stops being the mesh (``vertices`` (n, 3) mm as the file holds
+    them, ``faces`` (m, 3))."""
+    faces = np.asarray(faces, dtype=np.int64)
+    rounded = np.asarray(vertices, dtype=float).astype(precision) + precision(0)
+    weld = _weld(rounded)
+    fragile = np.bincount(weld, minlength=len(rounded))[weld] > 1
+    for s in range(0, len(faces), CHUNK):
+        part = faces[s:s + CHUNK]
+        fragile[part[_zero_area_mask(rounded[part], weld[part])].ravel()] = True
+    return fragile
+
+
 def _zero_area(corners: np.ndarray, welded: np.ndarray) -> int:
+    return int(np.count_nonzero(_zero_area_mask(corners, welded)))
+
+
+def _zero_area_mask(corners: np.ndarray, welded: np.ndarray) -> np.ndarray:
     """Triangles (corners (m, 3, 3) at the file's precision) with welded corners, or collinear ones within the
     rounding of their coordinates."""
     c = corners.astype(float)
@@ -89,7 +107,7 @@ def _zero_area(corners: np.ndarray, welded: np.ndarray) -> int:
     longest = np.linalg.norm(c[:, [1, 2, 0]] - c, axis=2).max(axis=1)
     ulp = np.spacing(np.abs(corners).max(axis=(1, 2))).astype(float)
     collapsed = (welded[:, 0] == welded[:, 1]) | (welded[:, 1] == welded[:, 2]) | (welded[:, 2] == welded[:, 0])
-    return int(np.count_nonzero(collapsed | (twice_area <= ZERO_AREA_ULPS * ulp * longest)))
+    return collapsed | (twice_area <= ZERO_AREA_ULPS * ulp * longest)
 
 
 def _edge_defects(faces: np.ndarray) -> tuple[int, int, int]:
