@@ -109,18 +109,17 @@ def _tripwires(monkeypatch) -> None:
     def tripped(*args, **kwargs):
         raise AssertionError("bad input reached a heavy computation")
 
+    # the modules themselves, not attribute chains from the package (the studio's tests leave roughness without
+    # its attribute ``objects``, so ``roughness.objects.texturing`` failed in a run that took them first)
+    from roughness.dataset import build
+    from roughness.design import hidden_shapes
+    from roughness.objects import texturing
     from roughness.simulate.model import Simulator
 
     monkeypatch.setattr(Simulator, "run", tripped)
-    import roughness.dataset.build
-
-    monkeypatch.setattr(roughness.dataset.build, "build", tripped)
-    import roughness.objects.texturing
-
-    monkeypatch.setattr(roughness.objects.texturing, "texture_mesh", tripped)
-    import roughness.design.hidden_shapes
-
-    monkeypatch.setattr(roughness.design.hidden_shapes, "hidden_plate", tripped)
+    monkeypatch.setattr(build, "build", tripped)
+    monkeypatch.setattr(texturing, "texture_mesh", tripped)
+    monkeypatch.setattr(hidden_shapes, "hidden_plate", tripped)
 
 
 def _source_copy(dest: Path) -> Path:

@@ -36,9 +36,11 @@ FEM_NOISE = 1e-3
 FEM = ("jnd.", "homogeneity.fem.")  # prefixes of the keys answered by the FEM
 # tune's lines: the search corrects its factor by the FEM's answer, so the factor and the surrogate's V at it move
 # with the FEM's V, and in a whole CI run they moved more than FEM_NOISE (the tune.jnd line's surrogate V 0.1454 alone,
-# 0.1450 in the whole run). Cause not found: docs/how-to/fem.md's example gave V = 0.100630290733 with a fresh and a
-# cached mesh, one and two BLAS threads, alone and after another FEM run in the same process (checked 2026-11-28);
-# the 0.10084 once seen "after other FEM runs" did not come back.
+# 0.1450 in the whole run). Likely cause: the mesh. One machine held three meshes of the default fine block under one
+# cache key (496,845 tetrahedra, as made in every trial since; 496,020 in the home cache; a third in a failed CI run,
+# its flat state 1% off), from the same surface. TetGen gave the same mesh in 40 trials on 2026-11-28 (fresh
+# processes, threads, after other meshes, heap garbage, concurrent rand(), flush-to-zero, hash seeds, tetgen 0.8.3 and
+# 0.8.4), so what makes another one is not known; test_spectral's flat-state test names the mesh when it fails.
 TUNE_NOISE = 5e-3
 TUNE = ("tune.lambda", "tune.jnd")
 NUMBER = r"[−+-]?\d[\d,]*(?:\.\d+)?"

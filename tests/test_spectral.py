@@ -287,9 +287,25 @@ def test_shipped_flat_state_is_the_fem_blocks():
     from roughness.simulate.spectral.flat_state import block_flat_state, computed
 
     shipped, fem = block_flat_state(SimConfig()), computed(SimConfig())
-    assert np.allclose(shipped.strain, fem.strain, rtol=0, atol=1e-5)  # the table is rounded to 1e-6
-    assert shipped.pressure_mpa == pytest.approx(fem.pressure_mpa, abs=1e-5)
+    agree = (np.allclose(shipped.strain, fem.strain, rtol=0, atol=1e-5)  # the table is rounded to 1e-6
+             and shipped.pressure_mpa == pytest.approx(fem.pressure_mpa, abs=1e-5))
+    assert agree, _which_mesh(SimConfig(fidelity="fine").resolved(None).mesh_spec())
     assert 1.2 < shipped.pressure_mpa / 0.1 < 1.35  # the free sides gather the load toward the middle
+
+
+def _which_mesh(spec) -> str:
+    """Which mesh the FEM used, for a failure's message: the session cache's (its tetrahedra and digest) against one
+    made now. Once in a whole CI run the flat state came out 1% off, from a mesh of the same key but other
+    tetrahedra (three such meshes of the default fine block were seen on one machine; the cause is not known)."""
+    import hashlib
+
+    from roughness.simulate import mesh as meshing
+
+    def described(m) -> str:
+        return f"{len(m.tets):,} tetrahedra, digest {hashlib.sha1(m.tets.tobytes()).hexdigest()[:12]}"
+
+    return (f"the FEM's flat state differs from the shipped table: the cached mesh has "
+            f"{described(meshing.build(spec))}; meshed now, {described(meshing.build(spec, cache=False))}")
 
 
 def test_variation_interpolates_as_map_coordinates():
