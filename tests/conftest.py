@@ -109,8 +109,8 @@ def _tripwires(monkeypatch) -> None:
     def tripped(*args, **kwargs):
         raise AssertionError("bad input reached a heavy computation")
 
-    # the modules themselves, not attribute chains from the package (the studio's tests leave roughness without
-    # its attribute ``objects``, so ``roughness.objects.texturing`` failed in a run that took them first)
+    # the modules themselves, not attribute chains from the package (which once failed after the studio's tests:
+    # studio_helpers.package_kept)
     from roughness.dataset import build
     from roughness.design import hidden_shapes
     from roughness.objects import texturing

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import sys
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager, contextmanager
 from dataclasses import dataclass
@@ -41,11 +42,26 @@ class Studio:
         return User(httpx.AsyncClient(transport=httpx.ASGITransport(core.app), base_url="http://test"))
 
 
+@contextmanager
+def package_kept():
+    """NiceGUI's reset (``nicegui_reset_globals``) removes from ``sys.modules`` the module of every page function and
+    all its parents: ``roughness`` itself. The next import then made a second package ``roughness`` without the
+    attributes of the subpackages already imported (``roughness.objects``), and whatever ran after a studio test
+    reached them in vain. The package and its modules outside the studio are put back; the studio's go, as NiceGUI
+    intends."""
+    kept = {name: module for name, module in sys.modules.items()
+            if name.split(".")[0] == "roughness" and not name.startswith("roughness.studio")}
+    try:
+        yield
+    finally:
+        sys.modules.update(kept)
+
+
 @asynccontextmanager
 async def running_studio(settings: StudioSettings = StudioSettings(show=False)) -> AsyncIterator[Studio]:
     """The studio built on a reset NiceGUI, served to an in-process client (nicegui.testing.user_simulation, with
     the studio's own app instead of a root function)."""
-    with nicegui_reset_globals():
+    with package_kept(), nicegui_reset_globals():
         os.environ["NICEGUI_USER_SIMULATION"] = "true"
         try:
             prepare_simulation()
