@@ -1,6 +1,8 @@
 """Tactile images: a 3-colour picture becomes a plate whose regions' roughness separates (surrogate only: seconds)."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -180,6 +182,35 @@ def test_with_a_printer_the_plate_is_composed_at_the_textures_pixel():
     assert plate_pixel(None, (40, 60, 3), 60.0, [], fdm) == (PIXEL_MM, None)  # lines only: no texture to keep
     pixel, note = plate_pixel(None, (400, 400, 3), 150.0, [tile], fdm)  # 9 M pixels at 0.05 mm, 2.25 M at 0.1
     assert pixel == PIXEL_MM and "too many" in note
+
+
+def test_the_key_strip_counts_with_the_plate_before_any_palette(tmp_path, capsys):
+    """The outlined drawing of the manual at 120 mm with a printer and a key: the plate alone fits at the textures'
+    0.05 mm (3.84 M pixels) but not with its 25 mm key strip (5.04 M), which was refused after the palette's FEM.
+    The key is now counted: the printer's plate stays at 0.1 mm with the note, and a --pixel-mm that cannot hold
+    plate and key is refused before any palette, naming the key."""
+    from roughness.cli import main
+    from roughness.design.colours import cluster_colours
+    from roughness.design.key import SWATCH_MM, key_spec
+    from roughness.design.layout import plan_layout
+    from roughness.design.tactile_image import PIXEL_MM, key_height, plate_pixel, plate_shape, read_image
+    from roughness.surface.printing import PROFILES
+
+    picture = str(Path(__file__).parents[1] / "examples" / "design" / "outlined.png")
+    found = cluster_colours(read_image(picture))
+    layout = plan_layout(found, 120.0 / found.labels.shape[1], 6.35)
+    key_mm = key_height(layout, key_spec(found), 120.0)
+    assert len(layout.textured) == 3 and key_mm == pytest.approx(SWATCH_MM + 2 * 5.0)  # three entries in one row
+    plate_shape(found.labels.shape, 120.0, 0.05)  # the plate alone fits
+    with pytest.raises(InputError, match="with its key"):
+        plate_shape(found.labels.shape, 120.0, 0.05, key_mm=key_mm)
+    tile = standard_texture(1.0)
+    assert plate_pixel(None, found.labels.shape, 120.0, [tile], PROFILES["fdm-0.4-0.2"])[0] == tile.pixel_mm
+    pixel, note = plate_pixel(None, found.labels.shape, 120.0, [tile], PROFILES["fdm-0.4-0.2"], key_mm)
+    assert pixel == PIXEL_MM and "too many" in note
+    code = main(["tactile-image", picture, "--size-mm", "120", "--pixel-mm", "0.05", "--key", "--out",
+                 str(tmp_path / "plate")])
+    assert code == 2 and "with its key" in capsys.readouterr().err and not (tmp_path / "plate").exists()
 
 
 def two_halves() -> np.ndarray:

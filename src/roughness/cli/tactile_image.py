@@ -147,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
     """Cluster the picture's colours, find a texture for each, compose and map the plate, write it, report."""
     from roughness.core.files import check_distinct, check_output_folder
     from roughness.design.evaluation import Evaluator
-    from roughness.design.tactile_image import PIXEL_MM, plate_pixel, plate_shape, tactile_image
+    from roughness.design.tactile_image import PIXEL_MM, key_height, plate_pixel, plate_shape, tactile_image
 
     check_distinct({"--out": args.out}, {"IMAGE": args.image, "--palette": args.palette, "--model": args.model,
                                          "--printer": args.printer})
@@ -160,20 +160,22 @@ def run(args: argparse.Namespace) -> int:
         args.size_mm = page_width(args.page, found.labels.shape)
         log(args, f"tactile-image: a plate {args.size_mm:.1f} mm wide fits the {args.page} page")
     evaluator = Evaluator(args.model, args.verify, printer=printer)
-    # the plate's size, checked before any palette is made
-    plate_shape(found.labels.shape, args.size_mm, args.pixel_mm or PIXEL_MM, args.step_mm, evaluator.footprint_mm)
     layout = _layout(args, found)
     key = None
     if args.key or args.key_labels or args.braille_table:
         from roughness.design.key import key_spec
 
         key = key_spec(found, args.key_labels, args.braille_table)
+    # the plate's size with its key, checked before any palette is made
+    key_mm = key_height(layout, key, args.size_mm)
+    plate_shape(found.labels.shape, args.size_mm, args.pixel_mm or PIXEL_MM, args.step_mm, evaluator.footprint_mm,
+                key_mm)
     # a picture of lines on a flat background needs no palette
     textures = _textures(args, len(layout.textured), evaluator) if layout.textured else _Textures([], None)
     log(args, "tactile-image: composing the plate, mapping its roughness (surrogate), rendering its look"
         + ("; FEM strain image" if args.strain else ""))
     pixel_mm, pixel_note = plate_pixel(args.pixel_mm, found.labels.shape, args.size_mm,
-                                       [hm for _, hm, _ in textures.members], evaluator.printer)
+                                       [hm for _, hm, _ in textures.members], evaluator.printer, key_mm)
     plate = tactile_image(found, textures.members, args.size_mm, pixel_mm, args.outline_mm,
                           args.outline_height_mm, args.step_mm, args.strain, evaluator, _Progress(args),
                           layout=layout, key=key, smooth_edges=not args.sharp_edges, merge_small=args.merge_small)

@@ -338,8 +338,6 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
 
         size_mm = page_width(page, rgb.shape)
     evaluator = evaluator_arg(model, verify, printer)
-    _tactile.plate_shape(rgb.shape, size_mm, _tactile.PIXEL_MM if pixel_mm is None else pixel_mm, step_mm,
-                         evaluator.footprint_mm)  # refused before any palette
     lines = flag("lines", lines)
     style = _lines.LineStyle(line_bar_mm, line_height_mm, line_gap_mm)
     layout = plan_layout(found, positive("size_mm", size_mm) / rgb.shape[1],
@@ -350,6 +348,9 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         from .key import key_spec
 
         spec = key_spec(found, key_labels, braille_table)
+    key_mm = _tactile.key_height(layout, spec, size_mm)
+    _tactile.plate_shape(rgb.shape, size_mm, _tactile.PIXEL_MM if pixel_mm is None else pixel_mm, step_mm,
+                         evaluator.footprint_mm, key_mm)  # refused before any palette
     with _renamed(palette="textures", pixel_mm="texture_pixel_mm"):  # the command line's --palette, this pixel
         chosen = _plate_textures(textures, texture_pixel_mm, units_ok) if textures is not None else None
     if chosen is None and not layout.textured:  # lines on a flat background: no palette
@@ -358,7 +359,7 @@ def tactile_image(picture: np.ndarray | str | Path, textures: str | Path | Seque
         made = _palette.family_palette(k or max(2, len(layout.textured)), min_jnd, family, "height", evaluator)
         chosen = [(m.name, m.heightmap, m.fem.roughness) for m in made.members]
     plate_pixel_mm, note = _tactile.plate_pixel(pixel_mm, rgb.shape, size_mm, [hm for _, hm, _ in chosen],
-                                                evaluator.printer)
+                                                evaluator.printer, key_mm)
     plate = _tactile.tactile_image(found, chosen, size_mm, plate_pixel_mm, outline_mm, outline_height_mm, step_mm,
                                    strain, evaluator, layout=layout, key=spec,
                                    smooth_edges=flag("smooth_edges", smooth_edges),

@@ -85,13 +85,15 @@ def key_entries(regions: list[int], labels: dict[int, str], table: str | None
     return out
 
 
-def key_strip(entries: list[tuple[int, str, list[tuple[int, ...]]]], textures: list[Heightmap | None],
-              width_mm: float, top_mm: float, pixel_mm: float, background: int,
-              style: BrailleStyle) -> tuple[np.ndarray, np.ndarray, list[KeyEntry]]:
-    """The key strip's relief (mm) and region labels (``background`` between entries, -1 under the braille: no
-    region's footprint) for a plate ``width_mm`` wide whose picture ends at ``top_mm``, and where each entry went;
-    InputError if an entry is wider than the plate."""
-    nx = round(width_mm / pixel_mm)
+def key_height_mm(entries: list[tuple[int, str, list[tuple[int, ...]]]], width_mm: float, style: BrailleStyle) -> float:
+    """Height (mm) of the key strip of ``entries`` (``key_entries``) on a plate ``width_mm`` wide."""
+    return _placed(entries, width_mm, style)[1]
+
+
+def _placed(entries: list[tuple[int, str, list[tuple[int, ...]]]], width_mm: float, style: BrailleStyle
+            ) -> tuple[list[tuple[int, str, list[tuple[int, ...]], float, float]], float]:
+    """Each entry with the corner of its sample (mm from the strip's corner), in rows across the plate, and the
+    strip's height (mm); InputError if an entry is wider than the plate."""
     placed, x, y = [], KEY_GAP_MM, KEY_GAP_MM
     for region, label, cells in entries:
         wide = SWATCH_MM + LABEL_GAP_MM + style.width_mm(len(cells))
@@ -102,7 +104,18 @@ def key_strip(entries: list[tuple[int, str, list[tuple[int, ...]]]], textures: l
             x, y = KEY_GAP_MM, y + SWATCH_MM + KEY_GAP_MM
         placed.append((region, label, cells, x, y))
         x += wide + KEY_GAP_MM
-    ny = math.ceil((y + SWATCH_MM + KEY_GAP_MM) / pixel_mm)
+    return placed, y + SWATCH_MM + KEY_GAP_MM
+
+
+def key_strip(entries: list[tuple[int, str, list[tuple[int, ...]]]], textures: list[Heightmap | None],
+              width_mm: float, top_mm: float, pixel_mm: float, background: int,
+              style: BrailleStyle) -> tuple[np.ndarray, np.ndarray, list[KeyEntry]]:
+    """The key strip's relief (mm) and region labels (``background`` between entries, -1 under the braille: no
+    region's footprint) for a plate ``width_mm`` wide whose picture ends at ``top_mm``, and where each entry went;
+    InputError if an entry is wider than the plate."""
+    nx = round(width_mm / pixel_mm)
+    placed, height_mm = _placed(entries, width_mm, style)
+    ny = math.ceil(height_mm / pixel_mm)
     labels = np.full((ny, nx), background)
     swatch = round(SWATCH_MM / pixel_mm)
     for region, _, _, x0, y0 in placed:

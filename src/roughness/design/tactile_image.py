@@ -27,6 +27,7 @@ them) are compared with every other region's, in look JND (1: the assumed visibi
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -45,7 +46,7 @@ from roughness.surface.heightmap import Heightmap, pixel_size
 from .colours import TOLERANCE, PictureColours, cluster_colours, hex_colour
 from .edges import smooth_labels, smooth_mask
 from .evaluation import Evaluator
-from .key import KeyEntry, KeySpec, key_entries, key_strip
+from .key import KeyEntry, KeySpec, key_entries, key_height_mm, key_strip
 from .layout import FLAT, Layout
 from .lines import fill_lines, line_relief
 from .look import RegionLooks, region_looks
@@ -243,19 +244,20 @@ def plate_labels(labels: np.ndarray, width_mm: float, pixel_mm: float) -> np.nda
 
 
 def plate_pixel(pixel_mm: float | None, picture_shape: tuple[int, ...], width_mm: float,
-                textures: Sequence[Heightmap], printer: object = None) -> tuple[float, str | None]:
+                textures: Sequence[Heightmap], printer: object = None, key_mm: float = 0.0) -> tuple[float, str | None]:
     """The plate's pixel (mm), and a note when it is not the default: ``pixel_mm`` if given; with a printer, the
     textures' finest pixel where it is finer than PIXEL_MM and the plate stays within MAX_PLATE_PIXELS, since a
     palette verified as printed at its own pixel prints alike only at that pixel (the bead erodes bumps resampled
     coarser more: a four-colour fdm-0.4-0.2 palette 2.04 JND apart as printed tiles came 1.81 apart on a 0.1 mm plate
-    and 2.02 at 0.05 mm, studies/results/print_tactile_image.md); else PIXEL_MM."""
+    and 2.02 at 0.05 mm, studies/results/print_tactile_image.md); else PIXEL_MM. ``key_mm``: the key strip's height
+    (``key_height``), counted with the plate."""
     if pixel_mm is not None:
         return pixel_size(pixel_mm), None
     finest = min((t.pixel_mm for t in textures), default=PIXEL_MM)
     if printer is None or finest >= PIXEL_MM:
         return PIXEL_MM, None
     try:
-        plate_shape(picture_shape, width_mm, finest)
+        plate_shape(picture_shape, width_mm, finest, key_mm=key_mm)
     except InputError:
         return PIXEL_MM, (f"the plate is composed at {PIXEL_MM:g} mm pixels: at the textures' {finest:g} mm it would "
                           "hold too many; the printer's model then erodes the textures more than their verification "
@@ -265,9 +267,10 @@ def plate_pixel(pixel_mm: float | None, picture_shape: tuple[int, ...], width_mm
 
 
 def plate_shape(picture_shape: tuple[int, ...], width_mm: float, pixel_mm: float, step_mm: float | None = None,
-                footprint_mm: float | None = None) -> tuple[int, int]:
-    """(ny, nx) plate pixels for a picture (h, w, ...); InputError above MAX_PLATE_PIXELS, or (given the map's
-    ``step_mm`` and ``footprint_mm``) above MAX_MAP_POSITIONS: checked before a palette is made or a plate composed."""
+                footprint_mm: float | None = None, key_mm: float = 0.0) -> tuple[int, int]:
+    """(ny, nx) plate pixels for a picture (h, w, ...); InputError above MAX_PLATE_PIXELS (with a key strip
+    ``key_mm`` tall below it: ``key_height``), or (given the map's ``step_mm`` and ``footprint_mm``) above
+    MAX_MAP_POSITIONS: checked before a palette is made or a plate composed."""
     from roughness.surrogate.roughness_map import centre_count
 
     width_mm, pixel_mm = positive("size_mm", width_mm), pixel_size(pixel_mm)
@@ -277,13 +280,26 @@ def plate_shape(picture_shape: tuple[int, ...], width_mm: float, pixel_mm: float
     check_size(f"pixels across a {width_mm:g} mm plate at {pixel_mm:g} mm", across, MAX_PLATE_PIXELS, "size_mm")
     nx = round(across)
     ny = max(2, round(nx * h / w))
-    check_size(f"pixels of a {width_mm:g} mm plate at {pixel_mm:g} mm (use larger pixels or a smaller plate)",
-               nx * ny, MAX_PLATE_PIXELS, "size_mm")
+    key_rows = math.ceil(key_mm / pixel_mm) if key_mm > 0 else 0
+    check_size(f"pixels of a {width_mm:g} mm plate{' with its key' if key_rows else ''} at {pixel_mm:g} mm (use larger "
+               "pixels or a smaller plate)", nx * (ny + key_rows), MAX_PLATE_PIXELS, "size_mm")
     if step_mm is not None and footprint_mm is not None:
         check_size(f"footprint positions of its roughness map in steps of {step_mm:g} mm",
                    centre_count(nx * pixel_mm, footprint_mm, step_mm, False)
                    * centre_count(ny * pixel_mm, footprint_mm, step_mm, False), MAX_MAP_POSITIONS, "step_mm")
     return ny, nx
+
+
+def key_height(layout: Layout, key: KeySpec | None, width_mm: float) -> float:
+    """Height (mm) of the key strip that a plate ``width_mm`` wide carries below ``layout``'s picture (0 without a
+    key): an entry per textured region, as ``tactile_image`` lays them out; counted with the plate's pixels before
+    any palette is made."""
+    if key is None:
+        return 0.0
+    textured = set(layout.textured)
+    regions = [n for n, c in enumerate(layout.regions) if c in textured]
+    labels = {n: key.labels[c] for n, c in enumerate(layout.regions) if c in key.labels}
+    return key_height_mm(key_entries(regions, labels, key.table), width_mm, key.style)
 
 
 def check_outline(outline_mm: object, outline_height_mm: object) -> None:
