@@ -142,3 +142,21 @@ def test_decimated_part_feels_the_same():
     change = feel_change(full, trimesh.Trimesh(found.vertices, found.faces, process=False), spacing_mm=12.0)
     assert change.points >= 6 and change.max_jnd <= SAME_FEEL_JND and change.same
     assert np.isfinite(change.max_jnd_stderr) and change.median_v > 0
+
+
+def test_a_candidate_the_screen_passed_but_all_samples_refuse_is_bisected_past(textured, monkeypatch):
+    """With a screen of 20 samples the screen lets through candidates that fail when every sample is measured (here
+    all of them); the search then bisects between the largest of those and the full mesh, all measured, and
+    returns the fewest triangles that held, with every attempt listed."""
+    from roughness.objects import decimate as module
+
+    monkeypatch.setattr(module, "SCREEN_SAMPLES", 20)
+    found = decimate(textured.vertices, textured.faces, 0.01)
+    assert found.distance.max_mm <= 0.01 - module.ROUNDING_MM and found.check.closed
+    assert found.triangles < len(textured.faces)
+    verified = [a for a in found.attempts if a.measured == "all"]
+    refused = [a.triangles for a in verified if a.failed]
+    held = [a.triangles for a in verified if not a.failed]
+    assert refused and found.triangles == min(held)
+    assert max(r for r in refused if r < found.triangles) < found.triangles  # bisected up from a refused count
+    assert found.attempts[-1] is verified[-1] or found.attempts[-1].measured == "screen"
