@@ -22,7 +22,6 @@ import json
 import os
 import platform
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -57,14 +56,6 @@ def textured(part: str):
     return result.mesh, time.perf_counter() - start
 
 
-@dataclass(frozen=True)
-class Mesh:
-    """Vertices (n, 3) mm and faces, as ``write_mesh`` takes them."""
-
-    vertices: np.ndarray
-    faces: np.ndarray
-
-
 def cached(path: Path, make):
     """The JSON record at ``path``, made (and written) by ``make()`` if absent."""
     if path.exists():
@@ -77,6 +68,8 @@ def cached(path: Path, make):
 def written_3mf(folder: Path, name: str, npz: Path) -> dict:
     """The 3MF of the mesh in ``npz`` written as ``folder``/``name``.3mf by ``meshes.write_mesh``: its bytes and
     seconds, cached in ``name``_3mf.json and written again if the writer (``WRITER``) changed."""
+    import trimesh
+
     from roughness.objects.meshes import write_mesh
 
     path = folder / f"{name}_3mf.json"
@@ -84,7 +77,7 @@ def written_3mf(folder: Path, name: str, npz: Path) -> dict:
         return json.loads(path.read_text())
     data = np.load(npz)
     start = time.perf_counter()
-    written = write_mesh(Mesh(data["vertices"], data["faces"]), folder / f"{name}.3mf", overwrite=True)
+    written = write_mesh(trimesh.Trimesh(data["vertices"], data["faces"], process=False), folder / f"{name}.3mf", overwrite=True)
     record = {"writer": WRITER, "3mf_bytes": written.bytes, "write_3mf_s": time.perf_counter() - start}
     path.write_text(json.dumps(record, indent=1) + "\n")
     return record

@@ -97,11 +97,12 @@ def write_3mf(path: str, vertices: np.ndarray, faces: np.ndarray, level: np.ndar
     steps = max(math.ceil(len(vertices) / CHUNK) + math.ceil(len(faces) / CHUNK), 1)
     written = iter(range(1, steps + 1))
 
-    def rows(model, array: np.ndarray, lines: list[str], which: np.ndarray) -> None:
+    def rows(model, array: np.ndarray, lines: list[str], which: np.ndarray | None = None) -> None:
+        """``array``'s rows, each formatted by ``lines[which[row]]`` (``lines[0]`` if ``which`` is None)."""
         for start in range(0, len(array), CHUNK):
             chunk = array[start:start + CHUNK].tolist()
-            model.write("".join(lines[k] % tuple(r) for r, k in zip(chunk, which[start:start + CHUNK].tolist()))
-                        .encode())
+            picks = [0] * len(chunk) if which is None else which[start:start + CHUNK].tolist()
+            model.write("".join(lines[k] % tuple(r) for r, k in zip(chunk, picks)).encode())
             if progress is not None:
                 progress(next(written) / steps)
 
@@ -113,7 +114,7 @@ def write_3mf(path: str, vertices: np.ndarray, faces: np.ndarray, level: np.ndar
             numbers = ["%.17g" if d is None else f"%.{d}f" for d in DECIMALS]
             rows(model, vertices, [f'<vertex x="{n}" y="{n}" z="{n}"/>' for n in numbers], level)
             model.write(MODEL_MIDDLE.encode())
-            rows(model, faces, ['<triangle v1="%d" v2="%d" v3="%d"/>'], np.zeros(len(faces), dtype=np.int64))
+            rows(model, faces, ['<triangle v1="%d" v2="%d" v3="%d"/>'])
             model.write(MODEL_TAIL.encode())
 
 def _curve_order(points: np.ndarray) -> np.ndarray:
